@@ -1,0 +1,229 @@
+"""Skinny's body as numbers: DOF names, joint axes and ranges, segment lengths, and
+analytic kinematics. Pure NumPy (no mujoco import): this is the contract that the
+MJCF files in ``models/skinny/``, the trajectories and the feedback controller share.
+A test checks that MuJoCo's forward kinematics and site Jacobians agree with it.
+
+Frame: z up, Skinny faces -y, so his right arm hangs on the -x side and the frontal
+plane is x-z. Every arm rotation is intrinsic (MuJoCo composes a body's hinges in
+the order they are declared): R = R(a1, q1) R(a2, q2) ... with axes in the local frame.
+The arm hangs straight down at q = 0.
+
+2D (4 DOF), per arm: shoulder abduction theta (0 = arm down, pi/2 = horizontal,
+pi = straight up) and elbow flexion phi in the same frontal plane (0 = straight,
+positive continues the abduction direction, so with the arm raised the forearm folds
+over towards the head, as in the M of YMCA).
+3D (8 DOF), per arm: shoulder abduction, shoulder flexion (forward swing about the
+abducted arm's x axis), shoulder rotation (about the upper arm's long axis), elbow
+flexion. Flexion is the middle of the three shoulder hinges; its range stays well
+inside +-90 deg, where the first and third axes would align (gimbal lock).
+The left arm is the mirror image of the right across x = 0: its axes are -M a with
+M = diag(-1, 1, 1), so equal joint angles give mirror-image poses.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+SIDES = ("right", "left")
+SHOULDER_HEIGHT_M = 1.42
+SHOULDER_HALF_WIDTH_M = 0.19
+UPPER_ARM_LENGTH_M = 0.30
+FOREARM_LENGTH_M = 0.27
+HAND_LENGTH_M = 0.18
+_MIRROR = np.diag([-1.0, 1.0, 1.0])
+_DOWN = np.array([0.0, 0.0, -1.0])
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """One hinge of the right arm; the left arm's twin is derived by mirroring."""
+
+    name: str  # without the side prefix, e.g. "shoulder_abduction"
+    segment: str  # "upper_arm" or "forearm": the body the hinge moves
+    axis_right: tuple[float, float, float]  # local axis for the right arm
+    range_rad: tuple[float, float]
+
+
+_ABDUCTION = JointSpec("shoulder_abduction", "upper_arm", (0.0, 1.0, 0.0), (0.0, np.pi))
+_FLEXION = JointSpec(
+    "shoulder_flexion", "upper_arm", (-1.0, 0.0, 0.0), (-np.pi / 4, 5 * np.pi / 12)
+)
+_ROTATION = JointSpec(
+    "shoulder_rotation", "upper_arm", (0.0, 0.0, 1.0), (-np.pi / 2, np.pi / 2)
+)
+_ELBOW_2D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, np.pi))
+_ELBOW_3D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, 5 * np.pi / 6))
+
+ARM_JOINTS = {4: (_ABDUCTION, _ELBOW_2D), 8: (_ABDUCTION, _FLEXION, _ROTATION, _ELBOW_3D)}
+
+
+def _check_dof(dof: int) -> int:
+    if dof not in ARM_JOINTS:
+        raise ValueError(f"dof must be 4 (2D) or 8 (3D), got {dof!r}")
+    return dof
+
+
+def joint_axis(spec: JointSpec, side: str) -> np.ndarray:
+    """Local hinge axis (3,) of ``spec`` on arm ``side`` ("right" or "left")."""
+    axis = np.asarray(spec.axis_right, dtype=float)
+    return axis if side == "right" else -_MIRROR @ axis
+
+
+def dof_names(dof: int) -> tuple[str, ...]:
+    """Ordered DOF (joint and actuator) names: right arm first, then left."""
+    return tuple(f"{side}_{j.name}" for side in SIDES for j in ARM_JOINTS[_check_dof(dof)])
+
+
+def joint_ranges(dof: int) -> np.ndarray:
+    """Joint ranges, (n_dof, 2) radians, in :func:`dof_names` order."""
+    specs = ARM_JOINTS[_check_dof(dof)]
+    return np.array([j.range_rad for _ in SIDES for j in specs], dtype=float)
+
+
+def signal_names(dof: int, signals: str) -> tuple[str, ...]:
+    """Names of the position signals: joint angles, or Cartesian components of the
+    elbow relative to the shoulder and the wrist relative to the elbow
+    (x, z in 2D; x, y, z in 3D), right arm first."""
+    if signals == "joint":
+        return dof_names(dof)
+    if signals != "cartesian":
+        raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
+    axes = "xz" if _check_dof(dof) == 4 else "xyz"
+    return tuple(
+        f"{side}_{point}_{a}" for side in SIDES for point in ("elbow", "wrist") for a in axes
+    )
+
+
+def n_signals(dof: int, signals: str) -> int:
+    return len(signal_names(dof, signals))
+
+
+def normalize_angles(q: np.ndarray, dof: int) -> np.ndarray:
+    """Joint angles (..., n_dof) rad -> normalized (-1 at the lower limit, +1 at the upper)."""
+    lo, hi = joint_ranges(dof).T
+    return 2.0 * (np.asarray(q) - lo) / (hi - lo) - 1.0
+
+
+def denormalize_angles(q_norm: np.ndarray, dof: int) -> np.ndarray:
+    """Inverse of :func:`normalize_angles`: normalized (..., n_dof) -> radians."""
+    lo, hi = joint_ranges(dof).T
+    return lo + (np.asarray(q_norm) + 1.0) * (hi - lo) / 2.0
+
+
+def _axis_angle(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) about a unit ``axis`` (3,) by ``angle`` (...) rad."""
+    c, s = np.cos(angle)[..., None, None], np.sin(angle)[..., None, None]
+    k = np.array(
+        [[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]]
+    )
+    return np.eye(3) + s * k + (1.0 - c) * (k @ k)
+
+
+def _arm_frames(q_arm: np.ndarray, dof: int, side: str):
+    """World axes of each hinge and the upper-arm / forearm rotations for one arm.
+
+    q_arm: (T, n_arm) radians. Returns axes (T, n_arm, 3), R_upper (T, 3, 3),
+    R_forearm (T, 3, 3).
+    """
+    specs = ARM_JOINTS[dof]
+    rot = np.broadcast_to(np.eye(3), (q_arm.shape[0], 3, 3)).copy()
+    axes = np.empty((q_arm.shape[0], len(specs), 3))
+    r_upper = rot
+    for i, spec in enumerate(specs):
+        if spec.segment == "forearm" and (i == 0 or specs[i - 1].segment == "upper_arm"):
+            r_upper = rot.copy()
+        a = joint_axis(spec, side)
+        axes[:, i] = rot @ a
+        rot = rot @ _axis_angle(a, q_arm[:, i])
+    return axes, r_upper, rot
+
+
+def segment_vectors(q: np.ndarray, dof: int) -> np.ndarray:
+    """Elbow-relative-to-shoulder and wrist-relative-to-elbow vectors in metres.
+
+    q: (T, n_dof) or (n_dof,) joint angles, rad. Returns (T, 2 arms, 2 segments, 3)
+    (or (2, 2, 3) for a single pose); arms right, left; segments upper arm, forearm.
+    """
+    q = np.asarray(q, dtype=float)
+    single = q.ndim == 1
+    q2 = np.atleast_2d(q)
+    n_arm = len(ARM_JOINTS[_check_dof(dof)])
+    if q2.shape[-1] != 2 * n_arm:
+        raise ValueError(f"expected {2 * n_arm} joint angles for dof={dof}, got {q2.shape[-1]}")
+    out = np.empty((q2.shape[0], 2, 2, 3))
+    for k, side in enumerate(SIDES):
+        _, r_upper, r_fore = _arm_frames(q2[:, k * n_arm : (k + 1) * n_arm], dof, side)
+        out[:, k, 0] = UPPER_ARM_LENGTH_M * (r_upper @ _DOWN)
+        out[:, k, 1] = FOREARM_LENGTH_M * (r_fore @ _DOWN)
+    return out[0] if single else out
+
+
+def shoulder_positions() -> np.ndarray:
+    """World positions (2 arms, 3) of the right and left shoulder joint centres, m."""
+    return np.array(
+        [[-SHOULDER_HALF_WIDTH_M, 0.0, SHOULDER_HEIGHT_M], [SHOULDER_HALF_WIDTH_M, 0.0, SHOULDER_HEIGHT_M]]
+    )
+
+
+def arm_points(q: np.ndarray, dof: int) -> np.ndarray:
+    """World positions (..., 2 arms, 3 points: shoulder, elbow, wrist, 3) in metres."""
+    seg = segment_vectors(q, dof)
+    shoulder = np.broadcast_to(shoulder_positions(), seg.shape[:-2] + (3,))
+    elbow = shoulder + seg[..., 0, :]
+    wrist = elbow + seg[..., 1, :]
+    return np.stack([shoulder, elbow, wrist], axis=-2)
+
+
+def _cartesian_components(dof: int) -> list[int]:
+    return [0, 2] if dof == 4 else [0, 1, 2]
+
+
+def cartesian_signals(q: np.ndarray, dof: int) -> np.ndarray:
+    """Normalized Cartesian signals (..., n_signals) in [-1, 1]: each segment vector
+    divided by its length, components as in :func:`signal_names`."""
+    seg = segment_vectors(q, dof)
+    seg = seg / np.array([UPPER_ARM_LENGTH_M, FOREARM_LENGTH_M])[:, None]
+    seg = seg[..., _cartesian_components(dof)]
+    return seg.reshape(seg.shape[:-3] + (-1,))
+
+
+def position_signals(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
+    """Normalized position signals (..., n_signals) for joint angles q (..., n_dof) rad."""
+    if signals == "joint":
+        return normalize_angles(q, dof)
+    if signals == "cartesian":
+        return cartesian_signals(q, dof)
+    raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
+
+
+def signal_jacobian(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
+    """d(normalized signal)/d(joint angle), (..., n_signals, n_dof) per radian.
+
+    Joint signals: a constant diagonal 2 / (hi - lo). Cartesian: each column is the
+    hinge's world axis crossed with the normalized segment vector it moves.
+    """
+    q = np.asarray(q, dtype=float)
+    single = q.ndim == 1
+    q2 = np.atleast_2d(q)
+    n_dof = _check_dof(dof)
+    if signals == "joint":
+        lo, hi = joint_ranges(dof).T
+        jac = np.broadcast_to(np.diag(2.0 / (hi - lo)), (q2.shape[0], n_dof, n_dof)).copy()
+        return jac[0] if single else jac
+    comps = _cartesian_components(dof)
+    nc = len(comps)
+    n_arm = n_dof // 2
+    jac = np.zeros((q2.shape[0], 2 * 2 * nc, n_dof))
+    for k, side in enumerate(SIDES):
+        qa = q2[:, k * n_arm : (k + 1) * n_arm]
+        axes, r_upper, r_fore = _arm_frames(qa, dof, side)
+        upper = r_upper @ _DOWN
+        fore = r_fore @ _DOWN
+        for i, spec in enumerate(ARM_JOINTS[dof]):
+            col = k * n_arm + i
+            if spec.segment == "upper_arm":
+                jac[:, k * 2 * nc : k * 2 * nc + nc, col] = np.cross(axes[:, i], upper)[:, comps]
+            jac[:, k * 2 * nc + nc : (k + 1) * 2 * nc, col] = np.cross(axes[:, i], fore)[:, comps]
+    return jac[0] if single else jac
