@@ -1,0 +1,144 @@
+"""The ``skinny`` command line.
+
+Every sub-command imports what it needs when it runs, so ``skinny --help`` is quick.
+User errors (bad files, names, parameters) end with one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from skinny_mj.errors import SkinnyInputError
+
+DEFAULT_RESULTS = Path("results")
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text}")
+    return value
+
+
+def _nonnegative_float(text: str) -> float:
+    value = float(text)
+    if not value >= 0.0:  # also refuses NaN
+        raise argparse.ArgumentTypeError(f"must be a number >= 0, got {text}")
+    return value
+
+
+def _add_movement_args(p: argparse.ArgumentParser, *, default: str | None = "ymca") -> None:
+    p.add_argument(
+        "--trajectory",
+        default=default,
+        required=default is None,
+        help="movement name (see `skinny trajectory list`) or a file: .npz/.csv trajectory, "
+        ".amc (with --asf) or .bvh motion capture (default: %(default)s)",
+    )
+    p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc trajectory")
+    p.add_argument("--speed", type=float, default=1.0, help="speed factor, e.g. 0.5 or 1.5")
+    p.add_argument("--reps", type=_positive_int, default=1, help="repetitions of the movement")
+
+
+def _add_plant_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--dof", type=int, choices=(4, 8), default=4, help="4 = 2D, 8 = 3D")
+    p.add_argument(
+        "--signals",
+        choices=("joint", "cartesian"),
+        default="cartesian",
+        help="position signals the controller sees (default: %(default)s)",
+    )
+
+
+def _timestamped(kind: str) -> Path:
+    from datetime import datetime
+
+    return DEFAULT_RESULTS / kind / datetime.now().strftime("%Y%m%d-%H%M%S")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="skinny",
+        description="Skinny-MJ: echo state networks learn to make a MuJoCo torso imitate YMCA.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("demo", help="train with the defaults (paper E, exp. 5) and show the result")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, help="output folder (default: results/demo/<time>)")
+
+    p = sub.add_parser("track", help="run the analytic ideal controller through the task")
+    _add_plant_args(p)
+    _add_movement_args(p)
+    p.add_argument("--sensor-noise", type=_nonnegative_float, default=0.01)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, help="output folder (default: results/track/<time>)")
+
+    p = sub.add_parser("train", help="train an ESN inverse model (FEL or true target)")
+    _add_plant_args(p)
+    _add_movement_args(p)
+    p.add_argument("--method", choices=("original", "new", "true-target"), default="new")
+    p.add_argument("--beta", type=float, default=0.1, help="β of the new method, in (0, 1]")
+    p.add_argument("--cycles", type=_positive_int, help="learning cycles per epoch")
+    p.add_argument("--epochs", type=_positive_int, default=10)
+    p.add_argument("--reservoir", type=int, default=200, help="reservoir size N")
+    p.add_argument("--spectral-radius", type=float, default=0.5)
+    p.add_argument("--noise", type=float, help="reservoir noise level ν (default by method)")
+    p.add_argument("--readout", choices=("pinv", "ridge"), default="pinv")
+    p.add_argument("--ridge", type=float, default=1e-6, help="λ for --readout ridge")
+    p.add_argument("--sensor-noise", type=_nonnegative_float, default=0.01)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, help="output folder (default: results/train/<time>)")
+
+    p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
+    p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny train`")
+    _add_movement_args(p)
+    p.add_argument("--sensor-noise", type=_nonnegative_float, default=0.01)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, help="output folder (default: results/test/<time>)")
+
+    p = sub.add_parser("trajectory", help="list or export movements")
+    tsub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    tsub.add_parser("list", help="list the built-in movements")
+    e = tsub.add_parser("export", help="write a movement to .npz or .csv")
+    e.add_argument("name")
+    e.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    e.add_argument("--asf", type=Path)
+    e.add_argument("--speed", type=float, default=1.0)
+    e.add_argument("--reps", type=_positive_int, default=1)
+    e.add_argument("--out", type=Path, required=True, help="FILE.npz or FILE.csv")
+
+    p = sub.add_parser("render", help="render Skinny to a PNG (needs MUJOCO_GL=egl)")
+    p.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    p.add_argument("--trajectory", help="pose Skinny at a movement's frame (default: rest pose)")
+    p.add_argument("--frame", type=int, default=0)
+    p.add_argument("--width", type=_positive_int, default=640)
+    p.add_argument("--height", type=_positive_int, default=480)
+    p.add_argument("--out", type=Path, required=True)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
+    os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
+    from skinny_mj import commands
+
+    handler = getattr(commands, f"cmd_{args.command}")
+    try:
+        return int(handler(args) or 0)
+    except SkinnyInputError as err:
+        print(f"skinny {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,310 @@
+"""One run as one rerun recording (``.rrd``, rerun-sdk 0.41).
+
+Layout of the entity tree (``rerun run.rrd`` opens on the saved default blueprint):
+
+- ``/skinny/<side>/<joint>/{desired,actual,command}``: joint angles in degrees and the
+  normalized velocity command, on the timelines ``step`` (control step) and ``time`` (s).
+- ``/signals/<signal>/{desired,actual,sensed}``: the normalized position signals.
+- ``/pose/{desired,actual}``: both arms as 3D line strips (shoulder, elbow, wrist) in
+  world metres; ``/pose/torso`` and ``/pose/head`` are static.
+- ``/curves/<name>``: learning curves on their own timeline ``epoch``.
+- ``/info``: a static Markdown document with the DOFs, their ranges and the metadata.
+
+Determinism: log time and log tick are off, every series is sent columnar with explicit
+timelines, the recording id is a hash of the inputs and the blueprint's view and
+container ids are derived from their names, so two writes of the same run hold the same
+data (``rerun rrd compare`` passes). The bytes still differ: rerun 0.41 mints chunk and
+row ids (TUIDs) from the clock, gives the blueprint store a random id and writes chunks
+from a background thread, and none of that can be set from the Python API.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import uuid
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skinny_mj import body
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.io import atomic_path
+
+DESIRED_RGB = (40, 120, 230)
+ACTUAL_RGB = (240, 120, 30)
+SENSED_RGB = (150, 150, 150)
+COMMAND_RGB = (90, 170, 90)
+TORSO_RGB = (170, 170, 170)
+PELVIS_HEIGHT_M = 0.95
+HEAD_CENTRE_M = (0.0, 0.0, 1.64)
+HEAD_HALF_SIZES_M = (0.08, 0.095, 0.115)
+_ROLE_RGB = {"desired": DESIRED_RGB, "actual": ACTUAL_RGB, "sensed": SENSED_RGB,
+             "command": COMMAND_RGB}
+
+
+def _as_2d(name: str, a: np.ndarray, rows: int, cols: int) -> np.ndarray:
+    a = np.asarray(a, dtype=np.float64)
+    if a.shape != (rows, cols):
+        raise SkinnyInputError(f"{name} must have shape ({rows}, {cols}), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise SkinnyInputError(f"{name} contains NaN or inf")
+    return a
+
+
+def _recording_id(arrays: Sequence[np.ndarray | None], text: str) -> str:
+    """A UUID made from the inputs, so the same run always gets the same recording id."""
+    h = hashlib.sha256(text.encode("utf-8"))
+    for a in arrays:
+        if a is not None:
+            h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    return str(uuid.UUID(bytes=h.digest()[:16]))
+
+
+def _dof_entity(name: str) -> str:
+    side, _, joint = name.partition("_")
+    return f"/skinny/{side}/{joint}" if side in body.SIDES and joint else f"/skinny/{name}"
+
+
+def _info_markdown(title: str, dof: int, dof_names: Sequence[str], signal_names: Sequence[str],
+                   dt: float, steps: int, metadata: Mapping[str, Any]) -> str:
+    lines = [f"# {title or 'Skinny-MJ run'}", "",
+             f"{dof} DOF, {steps} steps of {dt * 1000:g} ms ({steps * dt:.2f} s).", "",
+             "| DOF | range (deg) |", "|---|---|"]
+    ranges = np.degrees(body.joint_ranges(dof)) if dof in body.ARM_JOINTS else None
+    for i, name in enumerate(dof_names):
+        rng = "?" if ranges is None else f"{ranges[i, 0]:.0f} .. {ranges[i, 1]:.0f}"
+        lines.append(f"| {name} | {rng} |")
+    lines += ["", "Signals: " + ", ".join(signal_names), "", "## Metadata", "", "```json",
+              json.dumps(dict(metadata), indent=2, sort_keys=True, default=str), "```"]
+    return "\n".join(lines)
+
+
+def _blueprint(has_curves: bool, application_id: str):
+    import rerun.blueprint as rrb
+
+    def named(item, name: str):
+        item.id = uuid.uuid5(uuid.NAMESPACE_URL, f"{application_id}/blueprint/{name}")
+        return item
+
+    right = named(rrb.TimeSeriesView(origin="/skinny/right", name="right arm"), "right")
+    left = named(rrb.TimeSeriesView(origin="/skinny/left", name="left arm"), "left")
+    tabs = [named(rrb.TimeSeriesView(origin="/signals", name="signals"), "signals")]
+    if has_curves:
+        tabs.append(named(rrb.TimeSeriesView(origin="/curves", name="learning curves"),
+                          "curves"))
+    tabs.append(named(rrb.TextDocumentView(origin="/info", name="info"), "info"))
+    pose = named(rrb.Spatial3DView(origin="/pose", name="pose"), "pose")
+    series = named(rrb.Vertical(right, left, named(rrb.Tabs(*tabs), "tabs")), "series")
+    root = named(rrb.Horizontal(pose, series, column_shares=[2, 3]), "root")
+    return rrb.Blueprint(root, collapse_panels=False)
+
+
+def _send_series(rec, entity: str, values: np.ndarray, steps: np.ndarray, dt: float) -> None:
+    import rerun as rr
+
+    rec.send_columns(
+        entity,
+        indexes=[rr.TimeColumn("step", sequence=steps),
+                 rr.TimeColumn("time", duration=steps * dt)],
+        columns=rr.Scalars.columns(scalars=values),
+    )
+
+
+def _send_pose(rec, entity: str, angles: np.ndarray, dof: int, dt: float, rgb) -> None:
+    import rerun as rr
+
+    points = body.arm_points(angles, dof)  # (T, 2 arms, 3 points, 3)
+    n_steps = points.shape[0]
+    steps = np.arange(n_steps)
+    rec.log(entity, rr.LineStrips3D.from_fields(colors=[rgb], radii=[0.012]), static=True)
+    rec.send_columns(
+        entity,
+        indexes=[rr.TimeColumn("step", sequence=steps),
+                 rr.TimeColumn("time", duration=steps * dt)],
+        columns=rr.LineStrips3D.columns(strips=points.reshape(-1, 3, 3)).partition(
+            lengths=np.full(n_steps, 2)),
+    )
+
+
+def _log_body(rec) -> None:
+    import rerun as rr
+
+    shoulders = body.shoulder_positions()
+    neck = shoulders.mean(axis=0)
+    pelvis = np.array([0.0, 0.0, PELVIS_HEIGHT_M])
+    hips = pelvis + np.array([[-0.12, 0.0, 0.0], [0.12, 0.0, 0.0]])
+    rec.log("/pose/torso", rr.LineStrips3D(
+        [shoulders, [neck, pelvis], hips], colors=[TORSO_RGB], radii=[0.02]), static=True)
+    rec.log("/pose/head", rr.Ellipsoids3D(
+        centers=[HEAD_CENTRE_M], half_sizes=[HEAD_HALF_SIZES_M], colors=[TORSO_RGB]),
+        static=True)
+
+
+def write_recording(
+    path: str | Path,
+    *,
+    dt: float,
+    dof: int,
+    dof_names: Sequence[str],
+    signal_names: Sequence[str],
+    desired_angles: np.ndarray,
+    actual_angles: np.ndarray,
+    commands: np.ndarray,
+    desired_signals: np.ndarray,
+    actual_signals: np.ndarray,
+    sensed_signals: np.ndarray | None = None,
+    title: str = "",
+    metadata: Mapping[str, Any] | None = None,
+    curves: Mapping[str, np.ndarray] | None = None,
+    application_id: str = "skinny-mj",
+) -> Path:
+    """Write one run as an ``.rrd`` file (atomically) with a default blueprint.
+
+    Parameters
+    ----------
+    path : output file, conventionally ``run.rrd``.
+    dt : control step, s.
+    dof : 4 (2D) or 8 (3D); used for the arm drawing and the joint ranges.
+    dof_names : (n_dof,) names in :func:`skinny_mj.body.dof_names` order.
+    signal_names : (n_sig,) names of the position signals.
+    desired_angles, actual_angles : (T, n_dof) joint angles, rad.
+    commands : (T-1, n_dof) normalized velocity commands in [-1, 1]; command t moves
+        the plant from step t to t+1.
+    desired_signals, actual_signals : (T, n_sig) normalized position signals.
+    sensed_signals : optional (T, n_sig) noisy signals the controller saw.
+    title : shown in the info document and as the recording name.
+    metadata : JSON-able facts about the run (config, metrics), shown in the info document.
+    curves : name -> (E,) per-epoch values, or (R, E) for R runs; logged on timeline
+        ``epoch`` under ``/curves/<name>`` (``/curves/<name>/run_<r>`` for 2-D).
+    application_id : rerun application id.
+
+    Returns
+    -------
+    The path written.
+    """
+    import rerun as rr
+
+    dof_names, signal_names = list(dof_names), list(signal_names)
+    if dt <= 0:
+        raise SkinnyInputError(f"dt must be positive, got {dt}")
+    n_dof, n_sig = len(dof_names), len(signal_names)
+    desired_angles = np.asarray(desired_angles, dtype=np.float64)
+    n_steps = desired_angles.shape[0] if desired_angles.ndim == 2 else 0
+    if n_steps < 2:
+        raise SkinnyInputError(f"need at least 2 steps, desired_angles has shape "
+                               f"{desired_angles.shape}")
+    desired_angles = _as_2d("desired_angles", desired_angles, n_steps, n_dof)
+    actual_angles = _as_2d("actual_angles", actual_angles, n_steps, n_dof)
+    commands = _as_2d("commands", commands, n_steps - 1, n_dof)
+    desired_signals = _as_2d("desired_signals", desired_signals, n_steps, n_sig)
+    actual_signals = _as_2d("actual_signals", actual_signals, n_steps, n_sig)
+    if sensed_signals is not None:
+        sensed_signals = _as_2d("sensed_signals", sensed_signals, n_steps, n_sig)
+    curve_arrays = {k: np.atleast_1d(np.asarray(v, dtype=np.float64))
+                    for k, v in (curves or {}).items()}
+    for k, v in curve_arrays.items():
+        if v.ndim > 2:
+            raise SkinnyInputError(f"curve {k!r} must be (E,) or (R, E), got {v.shape}")
+    metadata = dict(metadata or {})
+    info = _info_markdown(title, dof, dof_names, signal_names, dt, n_steps, metadata)
+    rec_id = _recording_id(
+        [desired_angles, actual_angles, commands, desired_signals, actual_signals,
+         sensed_signals, *curve_arrays.values()],
+        json.dumps([dt, dof, dof_names, signal_names, title, application_id,
+                    sorted(curve_arrays)]) + info,
+    )
+
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        rec = rr.RecordingStream(application_id, recording_id=rec_id, send_properties=False)
+        rec.set_log_time_enabled(False)
+        rec.set_log_tick_enabled(False)
+        rec.save(tmp, default_blueprint=_blueprint(bool(curve_arrays), application_id))
+        if title:
+            rec.send_recording_name(title)
+        rec.log("/info", rr.TextDocument(info, media_type=rr.MediaType.MARKDOWN), static=True)
+        _log_body(rec)
+        steps = np.arange(n_steps)
+        roles = [("desired", desired_angles), ("actual", actual_angles)]
+        for i, name in enumerate(dof_names):
+            entity = _dof_entity(name)
+            for role, angles in roles:
+                _log_style(rec, f"{entity}/{role}", f"{role} (deg)", _ROLE_RGB[role])
+                _send_series(rec, f"{entity}/{role}", np.degrees(angles[:, i]), steps, dt)
+            _log_style(rec, f"{entity}/command", "command (normalized)", COMMAND_RGB)
+            _send_series(rec, f"{entity}/command", commands[:, i], steps[:-1], dt)
+        sig_roles = [("desired", desired_signals), ("actual", actual_signals)]
+        if sensed_signals is not None:
+            sig_roles.append(("sensed", sensed_signals))
+        for j, name in enumerate(signal_names):
+            for role, sig in sig_roles:
+                _log_style(rec, f"/signals/{name}/{role}", role, _ROLE_RGB[role])
+                _send_series(rec, f"/signals/{name}/{role}", sig[:, j], steps, dt)
+        _send_pose(rec, "/pose/desired", desired_angles, dof, dt, DESIRED_RGB)
+        _send_pose(rec, "/pose/actual", actual_angles, dof, dt, ACTUAL_RGB)
+        for name, values in curve_arrays.items():
+            rows = [values] if values.ndim == 1 else list(values)
+            for r, row in enumerate(rows):
+                entity = f"/curves/{name}" if values.ndim == 1 else f"/curves/{name}/run_{r}"
+                rec.send_columns(entity,
+                                 indexes=[rr.TimeColumn("epoch", sequence=np.arange(len(row)))],
+                                 columns=rr.Scalars.columns(scalars=row))
+        rec.flush()
+        rec.disconnect()
+    return path
+
+
+def _log_style(rec, entity: str, label: str, rgb) -> None:
+    import rerun as rr
+
+    rec.log(entity, rr.SeriesLines(colors=[rgb], names=[label]), static=True)
+
+
+def recording_entities(path: str | Path) -> list[str]:
+    """Sorted entity paths of the recording store in ``path`` (rerun's own reader)."""
+    from rerun.chunk import RrdReader
+
+    return sorted({chunk.entity_path for chunk in RrdReader(str(path)).stream()})
+
+
+def read_recording_series(path: str | Path, entity: str, timeline: str | None = None
+                          ) -> np.ndarray:
+    """Read one scalar series back with rerun's reader.
+
+    Parameters
+    ----------
+    path : an ``.rrd`` written by :func:`write_recording`.
+    entity : entity path, e.g. ``/skinny/right/shoulder_abduction/actual``.
+    timeline : index to order by; default ``step`` (``epoch`` under ``/curves``).
+
+    Returns
+    -------
+    (n,) float64 values ordered by the timeline.
+    """
+    from rerun.chunk import RrdReader
+
+    path = Path(path)
+    if not path.is_file():
+        raise SkinnyInputError("no such recording", path=path)
+    if timeline is None:
+        timeline = "epoch" if entity.startswith("/curves") else "step"
+    index: list[np.ndarray] = []
+    values: list[np.ndarray] = []
+    for chunk in RrdReader(str(path)).stream():
+        if chunk.entity_path != entity or chunk.is_static:
+            continue
+        batch = chunk.to_record_batch()
+        names = batch.schema.names
+        if timeline not in names or "Scalars:scalars" not in names:
+            continue
+        index.append(batch.column(timeline).to_numpy(zero_copy_only=False).astype(np.int64))
+        lists = batch.column("Scalars:scalars").to_pylist()
+        values.append(np.array([v[0] if v else np.nan for v in lists], dtype=np.float64))
+    if not values:
+        raise SkinnyInputError(f"no scalar series {entity!r} on timeline {timeline!r}",
+                               path=path)
+    idx, val = np.concatenate(index), np.concatenate(values)
+    return val[np.argsort(idx, kind="stable")]

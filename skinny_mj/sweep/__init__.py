@@ -1,0 +1,1 @@
+"""Helpers of the experiment engine (:mod:`skinny_mj.experiment`)."""
