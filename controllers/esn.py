@@ -1,0 +1,390 @@
+"""Echo state network (Jaeger) with a leading run axis.
+
+R independent networks ("runs", each with its own weights drawn from its own
+``Generator``) step in lockstep: states are ``(R, N)``, weights ``(R, ...)``. Run ``r``
+of a batch produces exactly the numbers of a single network built from run ``r``'s
+generator, so batching is a speed-up, never a change of the experiment.
+
+Update (Jaeger's toolbox, SPEC §3/§5)::
+
+    x(t) = (1 - a) x(t-1) + a tanh(W_in [u(t); 1] + W x(t-1) + W_back y(t-1)) + nu(t)
+    y(t) = f_out(W_out [x(t); u(t); 1])
+
+with leak rate ``a`` (1 = the thesis), reservoir noise ``nu`` uniform in
+``[-level/2, level/2]`` (default; "0.2 effectively adds 10 % noise") or Gaussian with
+std ``level``, and ``f_out`` = tanh (targets fitted through atanh) or identity.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse
+import scipy.sparse.linalg
+
+from controllers._io import atomic_path
+
+_NOISE_KINDS = ("uniform", "gaussian")
+_ACTIVATIONS = ("tanh", "identity")
+_READOUTS = ("pinv", "ridge")
+_DTYPES = ("float64", "float32")
+_NOISE_BLOCK = 256  # noise is drawn per run in blocks of this many steps
+_SPARSE_BELOW = 0.25  # use a block-diagonal sparse matrix below this connectivity
+_EXACT_EIG_MAX_N = 500  # exact eigenvalues up to this size, ARPACK above
+
+
+@dataclass(frozen=True)
+class ESNConfig:
+    """Hyper-parameters of an echo state network (defaults: Jaeger's toolbox, SPEC §5).
+
+    Attributes
+    ----------
+    n_inputs, n_outputs : sizes of u and y.
+    n_reservoir : N, number of tanh units.
+    spectral_radius : largest |eigenvalue| of W after rescaling (>= 0).
+    connectivity : fraction of nonzero reservoir weights; None means min(1, 10/N).
+    input_scaling : W_in ~ U[-s, s] (dense; the bias input column included).
+    bias : value of the constant bias input.
+    leak_rate : a in (0, 1]; 1 is the standard (non-leaky) ESN.
+    noise_level : nu >= 0, reservoir state noise added after tanh.
+    noise_kind : "uniform" (U[-nu/2, nu/2]) or "gaussian" (std nu).
+    output_feedback : add W_back y(t-1) ~ U[-s, s] with s = feedback_scaling.
+    readout_activation : "tanh" (targets through atanh, clipped to +-target_clip)
+        or "identity".
+    readout : "pinv" (Moore-Penrose, the thesis) or "ridge" (ridge_lambda).
+    dtype : "float64" or "float32".
+    """
+
+    n_inputs: int
+    n_outputs: int
+    n_reservoir: int = 200
+    spectral_radius: float = 0.5
+    connectivity: float | None = None
+    input_scaling: float = 1.0
+    bias: float = 1.0
+    leak_rate: float = 1.0
+    noise_level: float = 0.0
+    noise_kind: str = "uniform"
+    output_feedback: bool = False
+    feedback_scaling: float = 1.0
+    readout_activation: str = "tanh"
+    readout: str = "pinv"
+    ridge_lambda: float = 1e-6
+    target_clip: float = 0.99
+    dtype: str = "float64"
+
+    def __post_init__(self) -> None:
+        checks = [
+            (self.n_inputs >= 1, f"n_inputs must be >= 1, got {self.n_inputs}"),
+            (self.n_outputs >= 1, f"n_outputs must be >= 1, got {self.n_outputs}"),
+            (self.n_reservoir >= 1, f"reservoir size N must be >= 1, got {self.n_reservoir}"),
+            (
+                np.isfinite(self.spectral_radius) and self.spectral_radius >= 0,
+                f"spectral radius must be >= 0, got {self.spectral_radius}",
+            ),
+            (
+                self.connectivity is None or 0 < self.connectivity <= 1,
+                f"connectivity must be in (0, 1], got {self.connectivity}",
+            ),
+            (self.input_scaling >= 0, f"input scaling must be >= 0, got {self.input_scaling}"),
+            (0 < self.leak_rate <= 1, f"leak rate must be in (0, 1], got {self.leak_rate}"),
+            (
+                np.isfinite(self.noise_level) and self.noise_level >= 0,
+                f"noise level must be >= 0, got {self.noise_level}",
+            ),
+            (self.noise_kind in _NOISE_KINDS, f"noise kind must be one of {_NOISE_KINDS}, "
+             f"got {self.noise_kind!r}"),
+            (self.readout_activation in _ACTIVATIONS, f"readout activation must be one of "
+             f"{_ACTIVATIONS}, got {self.readout_activation!r}"),
+            (self.readout in _READOUTS, f"readout must be one of {_READOUTS}, "
+             f"got {self.readout!r}"),
+            (self.ridge_lambda >= 0, f"ridge lambda must be >= 0, got {self.ridge_lambda}"),
+            (0 < self.target_clip < 1, f"target clip must be in (0, 1), got {self.target_clip}"),
+            (self.dtype in _DTYPES, f"dtype must be one of {_DTYPES}, got {self.dtype!r}"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise ValueError(message)
+
+    @property
+    def density(self) -> float:
+        """Fraction of nonzero reservoir weights actually used."""
+        if self.connectivity is not None:
+            return float(self.connectivity)
+        return min(1.0, 10.0 / self.n_reservoir)
+
+    @property
+    def n_extended(self) -> int:
+        """Length D of the extended state [x; u; 1] the readout sees."""
+        return self.n_reservoir + self.n_inputs + 1
+
+
+def run_generators(seed: int | None, n_runs: int) -> list[np.random.Generator]:
+    """One independent Generator per run, spawned from ``seed``."""
+    return [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(n_runs)]
+
+
+def spectral_radius(w: np.ndarray) -> float:
+    """Largest absolute eigenvalue of a square matrix ``w`` (N, N)."""
+    n = w.shape[0]
+    if n <= _EXACT_EIG_MAX_N:
+        return float(np.max(np.abs(np.linalg.eigvals(w))))
+    try:
+        vals = scipy.sparse.linalg.eigs(
+            scipy.sparse.csr_array(w), k=6, which="LM", v0=np.ones(n), ncv=min(n - 1, 60),
+            return_eigenvectors=False,
+        )  # several eigenvalues and a wide Krylov space: k=1 can stop on a runner-up
+        return float(np.max(np.abs(vals)))
+    except scipy.sparse.linalg.ArpackNoConvergence:
+        return float(np.max(np.abs(np.linalg.eigvals(w))))
+
+
+def _draw_weights(cfg: ESNConfig, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    n = cfg.n_reservoir
+    mask = rng.random((n, n)) < cfg.density
+    w = np.where(mask, rng.uniform(-0.5, 0.5, (n, n)), 0.0)
+    radius = spectral_radius(w)
+    if radius > 0:
+        w *= cfg.spectral_radius / radius
+    w_in = cfg.input_scaling * rng.uniform(-1.0, 1.0, (n, cfg.n_inputs + 1))
+    w_back = cfg.feedback_scaling * rng.uniform(-1.0, 1.0, (n, cfg.n_outputs))
+    if not cfg.output_feedback:
+        w_back[:] = 0.0
+    return {"W": w, "W_in": w_in, "W_back": w_back}
+
+
+class ESN:
+    """R echo state networks stepping in lockstep.
+
+    Parameters
+    ----------
+    cfg : ESNConfig
+    n_runs : R, number of independent networks.
+    seed : seeds the per-run generators (``run_generators(seed, n_runs)``).
+    rngs : alternatively one Generator per run (weights, then reservoir noise).
+
+    Attributes
+    ----------
+    W : (R, N, N) reservoir weights.  W_in : (R, N, n_in + 1), last column = bias.
+    W_back : (R, N, n_out).  W_out : (R, n_out, D) readout, zero until fitted.
+    x : (R, N) reservoir state.  y : (R, n_out) last output (or teacher).
+    extended : (R, D) the last [x; u; bias] (what ``fit`` regresses on).
+    """
+
+    def __init__(
+        self,
+        cfg: ESNConfig,
+        n_runs: int = 1,
+        seed: int | None = None,
+        rngs: Sequence[np.random.Generator] | None = None,
+    ) -> None:
+        if n_runs < 1:
+            raise ValueError(f"n_runs must be >= 1, got {n_runs}")
+        if rngs is None:
+            rngs = run_generators(seed, n_runs)
+        if len(rngs) != n_runs:
+            raise ValueError(f"got {len(rngs)} generators for {n_runs} runs")
+        self.cfg = cfg
+        self.n_runs = n_runs
+        self.rngs = list(rngs)
+        self.dtype = np.dtype(cfg.dtype)
+        drawn = [_draw_weights(cfg, g) for g in self.rngs]
+        self._set_weights(
+            np.stack([d["W"] for d in drawn]),
+            np.stack([d["W_in"] for d in drawn]),
+            np.stack([d["W_back"] for d in drawn]),
+            np.zeros((n_runs, cfg.n_outputs, cfg.n_extended)),
+        )
+        self.reset()
+
+    # -- weights -------------------------------------------------------------------
+    def _set_weights(self, w, w_in, w_back, w_out) -> None:
+        dt = self.dtype
+        self.W, self.W_in = w.astype(dt), w_in.astype(dt)
+        self.W_back, self.W_out = w_back.astype(dt), w_out.astype(dt)
+        self._sparse = None
+        if self.cfg.density < _SPARSE_BELOW:
+            self._sparse = scipy.sparse.block_diag(
+                [scipy.sparse.csr_array(m) for m in self.W], format="csr"
+            ).astype(dt)
+
+    def _noise(self) -> np.ndarray:
+        if self._noise_pos >= _NOISE_BLOCK:
+            n, level = self.cfg.n_reservoir, self.cfg.noise_level
+            if self.cfg.noise_kind == "uniform":
+                blocks = [(g.random((_NOISE_BLOCK, n)) - 0.5) * level for g in self.rngs]
+            else:
+                blocks = [g.standard_normal((_NOISE_BLOCK, n)) * level for g in self.rngs]
+            self._noise_buf = np.stack(blocks, axis=1).astype(self.dtype)  # (B, R, N)
+            self._noise_pos = 0
+        self._noise_pos += 1
+        return self._noise_buf[self._noise_pos - 1]
+
+    # -- verbs ---------------------------------------------------------------------
+    def reset(self) -> None:
+        """Reservoir state and last output to zero (noise streams continue)."""
+        r, cfg = self.n_runs, self.cfg
+        self.x = np.zeros((r, cfg.n_reservoir), self.dtype)
+        self.y = np.zeros((r, cfg.n_outputs), self.dtype)
+        self.extended = np.zeros((r, cfg.n_extended), self.dtype)
+        if not hasattr(self, "_noise_pos"):
+            self._noise_pos = _NOISE_BLOCK
+
+    def step(
+        self, u: np.ndarray, noise: bool = True, feedback: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Advance one step.
+
+        Parameters
+        ----------
+        u : (R, n_in) input.
+        noise : add reservoir noise (if the config's level is > 0).
+        feedback : (R, n_out) teacher value for y(t-1) (teacher forcing); None uses
+            the network's own last output.
+
+        Returns
+        -------
+        y : (R, n_out) output.
+        """
+        cfg = self.cfg
+        u = np.asarray(u, self.dtype).reshape(self.n_runs, cfg.n_inputs)
+        u1 = np.concatenate([u, np.full((self.n_runs, 1), cfg.bias, self.dtype)], axis=1)
+        if self._sparse is not None:
+            pre = (self._sparse @ self.x.reshape(-1)).reshape(self.x.shape)
+        else:
+            pre = np.matmul(self.W, self.x[..., None])[..., 0]
+        pre += np.matmul(self.W_in, u1[..., None])[..., 0]
+        if cfg.output_feedback:
+            y_prev = self.y if feedback is None else np.asarray(feedback, self.dtype)
+            pre += np.matmul(self.W_back, y_prev[..., None])[..., 0]
+        x = np.tanh(pre)
+        if cfg.leak_rate != 1.0:
+            x = (1.0 - cfg.leak_rate) * self.x + cfg.leak_rate * x
+        if noise and cfg.noise_level > 0:
+            x = x + self._noise()
+        self.x = x
+        self.extended = np.concatenate([x, u1], axis=1)
+        self.y = self._activate(np.matmul(self.W_out, self.extended[..., None])[..., 0])
+        return self.y
+
+    def run(
+        self,
+        inputs: np.ndarray,
+        noise: bool = True,
+        teacher: np.ndarray | None = None,
+        washout: int = 0,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Drive the networks with ``inputs`` (R, T, n_in) from the current state.
+
+        ``teacher`` (R, T, n_out) forces the fed-back output: step t sees teacher[t-1]
+        (the current ``y`` at t = 0), and afterwards ``y`` holds teacher[T-1] so a free
+        run can continue. Returns outputs Y (R, T - washout, n_out) and extended
+        states X (R, T - washout, D).
+        """
+        inputs = np.asarray(inputs)
+        n_steps = inputs.shape[1]
+        ys = np.empty((self.n_runs, n_steps, self.cfg.n_outputs), self.dtype)
+        xs = np.empty((self.n_runs, n_steps, self.cfg.n_extended), self.dtype)
+        for t in range(n_steps):
+            fb = None if teacher is None or t == 0 else teacher[:, t - 1]
+            ys[:, t] = self.step(inputs[:, t], noise=noise, feedback=fb)
+            xs[:, t] = self.extended
+        if teacher is not None:
+            self.y = np.asarray(teacher[:, -1], self.dtype).copy()
+        return ys[:, washout:], xs[:, washout:]
+
+    def _activate(self, z: np.ndarray) -> np.ndarray:
+        return np.tanh(z) if self.cfg.readout_activation == "tanh" else z
+
+    def readout(self, states: np.ndarray) -> np.ndarray:
+        """Outputs (R, T, n_out) of the current readout for extended states (R, T, D)."""
+        return self._activate(np.einsum("rtd,rod->rto", states, self.W_out))
+
+    def fit(
+        self,
+        states: np.ndarray,
+        targets: np.ndarray,
+        washout: int = 0,
+        runs: np.ndarray | None = None,
+    ) -> None:
+        """Fit W_out per run: (W_out)^T = M^+ S (pinv) or ridge via Cholesky.
+
+        Parameters
+        ----------
+        states : (R, T, D) extended states M.
+        targets : (R, T, n_out) desired outputs (through atanh for a tanh readout).
+        washout : leading steps to drop.
+        runs : (R,) bool, which runs to refit (others keep their readout).
+        """
+        m = np.asarray(states, np.float64)[:, washout:]
+        s = np.asarray(targets, np.float64)[:, washout:]
+        if self.cfg.readout_activation == "tanh":
+            clip = self.cfg.target_clip
+            s = np.arctanh(np.clip(s, -clip, clip))
+        selected = np.ones(self.n_runs, bool) if runs is None else np.asarray(runs, bool)
+        idx = np.flatnonzero(selected)
+        if idx.size == 0:
+            return
+        if self.cfg.readout == "pinv":
+            w_t = np.linalg.pinv(m[idx]) @ s[idx]  # (r, D, n_out)
+        else:
+            w_t = np.stack([ridge_solve(m[i], s[i], self.cfg.ridge_lambda) for i in idx])
+        self.W_out[idx] = np.swapaxes(w_t, 1, 2).astype(self.dtype)
+
+    # -- health and persistence ----------------------------------------------------
+    def diverged(self) -> list[str | None]:
+        """Per run: None if healthy, else why it diverged (non-finite or saturated)."""
+        reasons: list[str | None] = []
+        for r in range(self.n_runs):
+            if not (np.all(np.isfinite(self.x[r])) and np.all(np.isfinite(self.W_out[r]))):
+                reasons.append("non-finite reservoir state or readout (NaN/inf)")
+            elif np.mean(np.abs(self.x[r])) > 0.999:
+                reasons.append(f"saturated reservoir: mean |x| = {np.mean(np.abs(self.x[r])):.4f}")
+            else:
+                reasons.append(None)
+        return reasons
+
+    def is_diverged(self) -> np.ndarray:
+        """(R,) bool: NaN/inf in state or readout, or saturation (mean |x| > 0.999)."""
+        return np.array([reason is not None for reason in self.diverged()])
+
+    def save(self, path: str | Path) -> None:
+        """Write weights + config JSON to an .npz (no pickle), atomically."""
+        with atomic_path(Path(path)) as tmp, open(tmp, "wb") as fh:
+            np.savez(
+                fh, config=np.array(json.dumps(asdict(self.cfg))), W=self.W, W_in=self.W_in,
+                W_back=self.W_back, W_out=self.W_out, x=self.x, y=self.y,
+            )
+
+    @classmethod
+    def load(cls, path: str | Path, seed: int | None = None) -> ESN:
+        """Read an .npz written by :meth:`save`; ``seed`` seeds future noise."""
+        with np.load(Path(path), allow_pickle=False) as data:
+            cfg = ESNConfig(**json.loads(str(data["config"])))
+            arrays = {k: data[k] for k in ("W", "W_in", "W_back", "W_out", "x", "y")}
+        n_runs = arrays["W"].shape[0]
+        esn = cls.__new__(cls)
+        esn.cfg, esn.n_runs, esn.dtype = cfg, n_runs, np.dtype(cfg.dtype)
+        esn.rngs = run_generators(seed, n_runs)
+        esn._set_weights(arrays["W"], arrays["W_in"], arrays["W_back"], arrays["W_out"])
+        esn.reset()
+        esn.x, esn.y = arrays["x"].astype(esn.dtype), arrays["y"].astype(esn.dtype)
+        return esn
+
+
+def ridge_solve(m: np.ndarray, s: np.ndarray, ridge_lambda: float) -> np.ndarray:
+    """Solve (M^T M + lambda I) W = M^T S by Cholesky; M (T, D), S (T, n) -> W (D, n)."""
+    gram = m.T @ m + ridge_lambda * np.eye(m.shape[1])
+    try:
+        return scipy.linalg.cho_solve(scipy.linalg.cho_factor(gram), m.T @ s)
+    except np.linalg.LinAlgError:
+        # lambda too small for a rank-deficient M (e.g. a constant-zero input): solve the
+        # same problem as least squares on [M; sqrt(lambda) I], which needs no PD Gram.
+        aug_m = np.vstack([m, np.sqrt(ridge_lambda) * np.eye(m.shape[1])])
+        aug_s = np.vstack([s, np.zeros((m.shape[1], s.shape[1]))])
+        return np.linalg.lstsq(aug_m, aug_s, rcond=None)[0]

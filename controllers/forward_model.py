@@ -1,0 +1,82 @@
+"""ESN forward model (paper A): input [s_in(t); command(t)] -> predicted s(t+1).
+
+Modes: "parallel" (trained alongside FEL on every learning cycle), "serial"
+(pre-trained on the desired movement with its true commands, then frozen) and
+"hybrid" (pre-trained, then trained on like parallel). ``s_in`` is the sensed
+signal as the internal models see it, i.e. delayed by ``delay_steps``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controllers.esn import ESN
+from controllers.metrics import nrmse
+
+MODES = ("parallel", "serial", "hybrid")
+
+
+class ForwardModel:
+    """Wraps an :class:`ESN` with n_inputs = n_sig + n_dof and n_outputs = n_sig.
+
+    Parameters
+    ----------
+    esn : the network (R runs, like the inverse model it serves).
+    mode : "parallel", "serial" or "hybrid".
+    """
+
+    def __init__(self, esn: ESN, mode: str = "serial") -> None:
+        if mode not in MODES:
+            raise ValueError(f"forward model mode must be one of {MODES}, got {mode!r}")
+        self.esn, self.mode = esn, mode
+
+    def step(self, sensed: np.ndarray, command: np.ndarray, noise: bool = True) -> np.ndarray:
+        """Prediction (R, n_sig) of the next position from sensed (R, n_sig) and
+        command (R, n_dof)."""
+        return self.esn.step(np.concatenate([sensed, command], axis=1), noise=noise)
+
+    def fit_rollout(self, ro, runs: np.ndarray | None = None) -> None:
+        """Fit on one FEL cycle: states ``ro.fm_states`` -> next sensed positions."""
+        self.esn.fit(ro.fm_states, ro.sensed[:, 1:], runs=runs)
+
+    def sequence_inputs(
+        self, positions: np.ndarray, commands: np.ndarray, delay_steps: int = 0
+    ) -> np.ndarray:
+        """Inputs (T-1, n_sig + n_dof) [p(max(t - delay, 0)); c(t)] for positions
+        (T, n_sig) and commands (T-1, n_dof)."""
+        idx = np.maximum(np.arange(commands.shape[0]) - delay_steps, 0)
+        return np.concatenate([positions[idx], commands], axis=1)
+
+    def pretrain(
+        self,
+        desired: np.ndarray,
+        true_commands: np.ndarray,
+        delay_steps: int = 0,
+        noise: bool = True,
+    ) -> np.ndarray:
+        """Pre-train on the desired movement (T, n_sig) with its true commands
+        (T-1, n_dof): reset, one washout pass, one pass whose states are fitted to
+        d(t+1). Returns the prediction NRMSE (R,) of the fitted readout on that pass."""
+        inputs = self.sequence_inputs(desired, true_commands, delay_steps)
+        batch = np.broadcast_to(inputs, (self.esn.n_runs, *inputs.shape))
+        self.esn.reset()
+        self.esn.run(batch, noise=noise)
+        _, states = self.esn.run(batch, noise=noise)
+        targets = np.broadcast_to(desired[1:], (self.esn.n_runs, *desired[1:].shape))
+        self.esn.fit(states, targets)
+        return nrmse(self.esn.readout(states), desired[1:])
+
+    def prediction_error(self, desired: np.ndarray, true_commands: np.ndarray,
+                         delay_steps: int = 0) -> np.ndarray:
+        """Free prediction NRMSE (R,) on a movement, noise off, after a washout pass."""
+        inputs = self.sequence_inputs(desired, true_commands, delay_steps)
+        batch = np.broadcast_to(inputs, (self.esn.n_runs, *inputs.shape))
+        self.esn.reset()
+        self.esn.run(batch, noise=False)
+        predicted, _ = self.esn.run(batch, noise=False)
+        return nrmse(predicted, desired[1:])
+
+
+def rollout_prediction_error(ro) -> np.ndarray:
+    """Prediction NRMSE (R,) of p(t) against the noise-free positions in a FEL rollout."""
+    return nrmse(ro.predictions[:, 1:], ro.true_signals[:, 1:])

@@ -1,0 +1,38 @@
+"""NRMSE as the thesis computes it, batched over runs.
+
+NRMSE = sqrt(MSE) / (y_max - y_min), per signal over time, then averaged over
+signals (SPEC §3/§5). Signals live in (-1, 1), so the range is 2: 0 is perfect,
+about 0.5 random, 1 opposite.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def nrmse(actual: np.ndarray, target: np.ndarray, value_range: float = 2.0) -> np.ndarray:
+    """Mean over signals of sqrt(mean over time of (actual - target)^2) / value_range.
+
+    Parameters
+    ----------
+    actual : (..., T, n) produced signals (leading axes, e.g. runs, are kept).
+    target : broadcastable to ``actual``, e.g. (T, n) shared by all runs.
+
+    Returns
+    -------
+    (...) NRMSE, one value per leading index (a float for 2-D input).
+    """
+    diff = np.asarray(actual, float) - np.asarray(target, float)
+    per_signal = np.sqrt(np.mean(diff**2, axis=-2)) / value_range
+    return per_signal.mean(axis=-1)
+
+
+def position_nrmse(true_signals: np.ndarray, desired: np.ndarray) -> np.ndarray:
+    """Position error (R,): noise-free plant signals (R, T, n_sig) at t = 1..T-1 vs
+    desired (T, n_sig) at the same steps (t = 0 is the shared first pose)."""
+    return nrmse(np.asarray(true_signals)[..., 1:, :], np.asarray(desired)[1:])
+
+
+def motor_nrmse(commands: np.ndarray, true_commands: np.ndarray) -> np.ndarray:
+    """Motor error (R,): commands (R, T-1, n_dof) vs true commands (T-1, n_dof)."""
+    return nrmse(commands, true_commands)

@@ -1,0 +1,269 @@
+"""One training run of an ESN inverse model on the MuJoCo plant, and its test.
+
+This is the glue between the pure-NumPy learning in ``controllers/`` and the plant:
+it builds the movement, the plant (:class:`skinny_mj.plant.BatchPlant`, or the
+dm_control environment through :class:`skinny_mj.plant.EnvPlant`), the ESN, runs
+feedback-error learning (original or new β method) or the true-target architecture,
+and tests the trained network with the feedback controller off (K = 0).
+
+Seeds: a run's seed s spawns two streams, ``SeedSequence(s).spawn(2)``: the ESN's
+Generator (weights, then reservoir noise) and the plant's sensor-noise seed. So a run
+is reproduced from (config, seed) alone, whichever plant path runs it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from controllers import fel
+from controllers.esn import ESN, ESNConfig
+from controllers.true_target import TrueTargetConfig, train_true_target
+from skinny_mj.errors import SkinnyInputError
+
+METHODS = ("original", "new", "true-target")
+#: Learning cycles per epoch the paper derived from its Figure 3 (paper E, Table 1).
+PAPER_CYCLES_FOR_BETA = {0.3: 2, 0.1: 3, 0.05: 6}
+#: Reservoir noise the paper chose per method (paper E, Fig. 5).
+DEFAULT_NOISE = {"original": 0.03, "new": 0.2, "true-target": 0.2}
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """One training run. Defaults: paper E experiment 5 (2D, Cartesian, N = 200,
+    spectral radius 0.5, reservoir noise 0.2, β = 0.1 with 3 learning cycles per
+    epoch, 10 epochs, K 1 → 0, sensor noise 0.01)."""
+
+    dof: int = 4
+    signals: str = "cartesian"
+    trajectory: str = "ymca"
+    asf: str | None = None
+    speed: float = 1.0
+    reps: int = 1
+    method: str = "new"
+    beta: float = 0.1
+    cycles: int | None = None  # learning cycles per epoch (new method); None: from β
+    epochs: int = 10
+    reservoir: int = 200
+    spectral_radius: float = 0.5
+    noise: float | None = None  # reservoir noise ν; None: DEFAULT_NOISE[method]
+    readout: str = "pinv"
+    ridge: float = 1e-6
+    sensor_noise: float = 0.01
+    tt_cycles: int = 50  # true-target, new method: cycles (paper D: 50 rounds)
+    plant: str = "batch"  # "batch" (MjData stepped directly) or "env" (dm_control)
+
+    def __post_init__(self) -> None:
+        checks = [
+            (self.method in METHODS, f"method must be one of {METHODS}, got {self.method!r}"),
+            (0 < self.beta <= 1, f"--beta must be in (0, 1], got {self.beta}"),
+            (self.cycles is None or self.cycles >= 1, f"--cycles must be >= 1, got {self.cycles}"),
+            (self.epochs >= 1, f"--epochs must be >= 1, got {self.epochs}"),
+            (self.reservoir >= 1, f"--reservoir must be >= 1, got {self.reservoir}"),
+            (
+                math.isfinite(self.spectral_radius) and self.spectral_radius >= 0,
+                f"--spectral-radius must be >= 0, got {self.spectral_radius}",
+            ),
+            (
+                self.noise is None or (math.isfinite(self.noise) and self.noise >= 0),
+                f"--noise must be >= 0, got {self.noise}",
+            ),
+            (self.readout in ("pinv", "ridge"), f"--readout must be pinv or ridge, got "
+             f"{self.readout!r}"),
+            (self.ridge >= 0, f"--ridge must be >= 0, got {self.ridge}"),
+            (self.reps >= 1, f"--reps must be >= 1, got {self.reps}"),
+            (self.plant in ("batch", "env"), f"plant must be 'batch' or 'env', got {self.plant!r}"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise SkinnyInputError(message)
+
+    @property
+    def noise_level(self) -> float:
+        return DEFAULT_NOISE[self.method] if self.noise is None else self.noise
+
+    @property
+    def learning_cycles(self) -> int:
+        """Learning cycles per epoch: 1 for the original method; for the new method the
+        paper's Table 1 where it has β, else enough cycles for (1 − β)^n to fall below
+        5 % over all epochs (which reproduces the table for β = 0.1 and 0.05)."""
+        if self.cycles is not None:
+            return self.cycles
+        if self.method != "new":
+            return 1
+        for beta, cycles in PAPER_CYCLES_FOR_BETA.items():
+            if abs(self.beta - beta) < 1e-12:
+                return cycles
+        if self.beta >= 1:
+            return 1
+        total = math.ceil(math.log(0.05) / math.log(1.0 - self.beta))
+        return max(1, math.ceil(total / self.epochs))
+
+
+def run_streams(seed: int) -> tuple[np.random.Generator, int]:
+    """The ESN's Generator and the plant's sensor-noise seed for run ``seed``."""
+    esn_ss, plant_ss = np.random.SeedSequence(seed).spawn(2)
+    return np.random.default_rng(esn_ss), int(plant_ss.generate_state(1, np.uint64)[0])
+
+
+def load_trajectory(cfg: TrainConfig):
+    """The movement of one repetition (at cfg.speed) and its retarget report."""
+    from skinny_mj.trajectories import load_movement
+
+    return load_movement(cfg.trajectory, cfg.dof, asf=cfg.asf, speed=cfg.speed)
+
+
+def make_plant(cfg_dof: int, signals: str, trajectory, seed: int, sensor_noise: float,
+               max_speed_rad_s: np.ndarray, kind: str = "batch"):
+    """A one-run plant imitating ``trajectory`` (BatchPlant or the dm_control path)."""
+    from skinny_mj.plant import BatchPlant, EnvPlant
+    from skinny_mj.task import load
+
+    if kind == "env":
+        env = load(cfg_dof, signals, trajectory, sensor_noise=sensor_noise, seed=seed,
+                   max_speed_rad_s=max_speed_rad_s)
+        return EnvPlant(env)
+    return BatchPlant(cfg_dof, signals, trajectory, n_runs=1, seeds=[seed],
+                      sensor_noise=sensor_noise, max_speed_rad_s=max_speed_rad_s)
+
+
+def esn_config(cfg: TrainConfig, n_signals: int) -> ESNConfig:
+    try:
+        return ESNConfig(
+            n_inputs=2 * n_signals, n_outputs=cfg.dof, n_reservoir=cfg.reservoir,
+            spectral_radius=cfg.spectral_radius, noise_level=cfg.noise_level,
+            readout=cfg.readout, ridge_lambda=cfg.ridge,
+        )
+    except ValueError as err:
+        raise SkinnyInputError(str(err)) from None
+
+
+@dataclass
+class TestOutcome:
+    """A closed-loop test (K = 0) of a trained network on one movement."""
+
+    position_nrmse: float | None
+    motor_nrmse: float | None
+    failed: bool
+    fail_reason: str | None
+    rollout: fel.Rollout = field(repr=False)
+    trajectory: Any = field(repr=False)
+    desired: np.ndarray = field(repr=False)
+    true_commands: np.ndarray = field(repr=False)
+
+
+def test_network(esn: ESN, trajectory, signals: str, seed: int, sensor_noise: float,
+                 max_speed_rad_s: np.ndarray, plant_kind: str = "batch") -> TestOutcome:
+    """Reset, one cycle with the feedback controller off, no learning, no noise."""
+    from skinny_mj.ideal import true_commands
+
+    plant = make_plant(trajectory.dof, signals, trajectory, seed, sensor_noise,
+                       max_speed_rad_s, plant_kind)
+    desired = trajectory.position_signals(signals)
+    commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
+    ev = fel.evaluate(esn, plant, desired, true_commands=commands)
+    failed = bool(ev.failed[0])
+    return TestOutcome(
+        position_nrmse=None if failed else float(ev.position_nrmse[0]),
+        motor_nrmse=None if failed else float(ev.motor_nrmse[0]),
+        failed=failed, fail_reason=ev.fail_reason[0], rollout=ev.rollout,
+        trajectory=trajectory, desired=desired, true_commands=commands,
+    )
+
+
+@dataclass
+class TrainOutcome:
+    """Everything one run produced: metrics (JSON-ready), the network, the test."""
+
+    config: TrainConfig
+    seed: int
+    metrics: dict
+    esn: ESN = field(repr=False)
+    test: TestOutcome = field(repr=False)
+    max_speed_rad_s: np.ndarray = field(repr=False)
+
+    @property
+    def failed(self) -> bool:
+        return bool(self.metrics["failed"])
+
+
+def train(cfg: TrainConfig, seed: int = 0,
+          progress: Callable[[int, int], None] | None = None) -> TrainOutcome:
+    """Train one ESN inverse model with ``cfg`` and test it on one repetition.
+
+    ``progress(done, total)`` is called after every cycle (for a progress bar).
+    """
+    from skinny_mj.ideal import max_speeds, true_commands
+
+    start = time.perf_counter()
+    trajectory, report = load_trajectory(cfg)
+    training = trajectory.repeat(cfg.reps) if cfg.reps > 1 else trajectory
+    # Full scale: twice the fastest speed of each DOF in ONE repetition of the movement.
+    max_speed = max_speeds(trajectory.angles, trajectory.dt)
+    esn_rng, plant_seed = run_streams(seed)
+    n_signals = trajectory.position_signals(cfg.signals).shape[1]
+    esn = ESN(esn_config(cfg, n_signals), rngs=[esn_rng])
+    desired = training.position_signals(cfg.signals)
+    commands = true_commands(training.angles, max_speed, training.dt)
+    metrics: dict[str, Any] = {"train": {}}
+
+    if cfg.method == "true-target":
+        tt = TrueTargetConfig(method="new", beta=cfg.beta, cycles=cfg.tt_cycles,
+                              noise=cfg.noise_level > 0)
+        total = 1
+        result = train_true_target(esn, desired, commands, tt)
+        metrics["train"] = {"motor_nrmse": float(result.motor_nrmse[0])}
+        _report(progress, 1, total)
+    else:
+        fcfg = fel.FELConfig(method=cfg.method, beta=cfg.beta,
+                             learning_cycles=cfg.learning_cycles, epochs=cfg.epochs)
+        per_epoch = fcfg.learning_cycles + 2
+        total = cfg.epochs * per_epoch
+        plant = make_plant(cfg.dof, cfg.signals, training, plant_seed, cfg.sensor_noise,
+                           max_speed, cfg.plant)
+
+        def tick(epoch: int, cycle: int) -> None:
+            _report(progress, epoch * per_epoch + cycle + 1, total)
+
+        result = fel.train(esn, plant, desired, fcfg, true_commands=commands, progress=tick)
+        curve = result.to_dict()
+        metrics["train"] = {
+            "gains": curve["gains"],
+            "position_nrmse": curve["position_nrmse"][0],
+            "motor_nrmse": curve["motor_nrmse"][0],
+        }
+        if result.failed[0]:
+            metrics.update(failed=True, fail_reason=result.fail_reason[0],
+                           fail_epoch=result.fail_epoch[0])
+
+    test = test_network(esn, trajectory, cfg.signals, plant_seed, cfg.sensor_noise,
+                        max_speed, cfg.plant)
+    if not metrics.get("failed") and test.failed:
+        metrics.update(failed=True, fail_reason=f"test: {test.fail_reason}")
+    metrics.setdefault("failed", False)
+    metrics["test"] = {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse}
+    metrics.update(
+        config={**asdict(cfg), "learning_cycles": cfg.learning_cycles,
+                "noise_level": cfg.noise_level},
+        seed=seed,
+        steps_per_cycle=len(desired),
+        max_speed_rad_s=[float(v) for v in max_speed],
+        clipped_samples=int(report.clipped_samples),
+        wall_s=time.perf_counter() - start,
+    )
+    return TrainOutcome(cfg, seed, metrics, esn, test, max_speed)
+
+
+def _report(progress: Callable[[int, int], None] | None, done: int, total: int) -> None:
+    if progress is not None:
+        progress(done, total)
+
+
+def with_overrides(cfg: TrainConfig, **changes: Any) -> TrainConfig:
+    """``cfg`` with some fields replaced (validated again)."""
+    return replace(cfg, **{k: v for k, v in changes.items() if v is not None})

@@ -1,0 +1,155 @@
+"""ESN contracts: spectral radius, echo states, readouts, lockstep runs, persistence."""
+
+import numpy as np
+import pytest
+
+from controllers.esn import ESN, ESNConfig, ridge_solve, run_generators, spectral_radius
+
+
+def _inputs(n_runs=1, n_steps=60, n_in=3, seed=0):
+    return np.random.default_rng(seed).uniform(-1, 1, (n_runs, n_steps, n_in))
+
+
+@pytest.mark.parametrize("n, radius", [(50, 0.5), (200, 0.1), (600, 0.9)])
+def test_spectral_radius_is_as_set(n, radius):
+    esn = ESN(ESNConfig(2, 1, n_reservoir=n, spectral_radius=radius), n_runs=2, seed=1)
+    for w in esn.W:
+        assert np.max(np.abs(np.linalg.eigvals(w))) == pytest.approx(radius, rel=1e-6)
+        assert np.count_nonzero(w) / n**2 == pytest.approx(min(1, 10 / n), rel=0.3)
+
+
+def test_echo_state_property_two_initial_states_converge():
+    esn = ESN(ESNConfig(3, 1, n_reservoir=100, spectral_radius=0.8), seed=2)
+    u = _inputs(n_steps=200)
+    esn.x = np.random.default_rng(5).uniform(-1, 1, esn.x.shape)
+    _, xa = esn.run(u, noise=False)
+    esn.reset()
+    _, xb = esn.run(u, noise=False)
+    start = np.abs(xa[0, 0] - xb[0, 0]).max()
+    end = np.abs(xa[0, -1] - xb[0, -1]).max()
+    assert start > 1e-2 and end < 1e-8
+
+
+def test_pinv_readout_matches_closed_form_and_atanh_round_trips():
+    esn = ESN(ESNConfig(3, 2, n_reservoir=40), seed=3)
+    _, x = esn.run(_inputs())
+    w_true = np.random.default_rng(0).normal(0, 0.3, (2, x.shape[-1]))
+    targets = np.tanh(x @ w_true.T)  # reachable through the tanh readout
+    esn.fit(x, targets)
+    expected = (np.linalg.pinv(x[0]) @ np.arctanh(targets[0])).T
+    np.testing.assert_allclose(esn.W_out[0], expected, atol=1e-10)
+    np.testing.assert_allclose(esn.readout(x), targets, atol=1e-8)
+
+
+def test_ridge_matches_normal_equations_and_tends_to_pinv():
+    cfg = ESNConfig(3, 2, n_reservoir=30, readout="ridge", ridge_lambda=0.5,
+                    readout_activation="identity")
+    esn = ESN(cfg, seed=4)
+    _, x = esn.run(_inputs(n_steps=100))
+    y = np.random.default_rng(1).normal(size=(1, 100, 2))
+    esn.fit(x, y)
+    m = x[0]
+    closed = np.linalg.solve(m.T @ m + 0.5 * np.eye(m.shape[1]), m.T @ y[0])
+    np.testing.assert_allclose(esn.W_out[0], closed.T, atol=1e-10)
+    pinv = np.linalg.pinv(m) @ y[0]
+    far = np.abs(ridge_solve(m, y[0], 1e-2) - pinv).max()
+    near = np.abs(ridge_solve(m, y[0], 1e-9) - pinv).max()
+    assert near < 1e-4 < far
+
+
+def test_targets_beyond_one_are_clipped_before_atanh():
+    esn = ESN(ESNConfig(3, 1, n_reservoir=20), seed=5)
+    _, x = esn.run(_inputs())
+    esn.fit(x, np.full((1, x.shape[1], 1), 1.7))
+    assert np.all(np.isfinite(esn.W_out))
+    np.testing.assert_allclose(esn.readout(x), 0.99, atol=1e-6)
+
+
+@pytest.mark.parametrize("connectivity", [None, 0.5])  # sparse and dense reservoir paths
+def test_lockstep_runs_equal_single_runs(connectivity):
+    cfg = ESNConfig(3, 2, n_reservoir=80, noise_level=0.2, connectivity=connectivity)
+    n_runs = 3
+    batch = ESN(cfg, n_runs=n_runs, seed=11)
+    u = _inputs(n_runs=n_runs, n_steps=300)  # > one noise block
+    yb, xb = batch.run(u)
+    batch.fit(xb, np.tanh(xb[..., :2]))
+    yb2, _ = batch.run(u)
+    for r, gen in enumerate(run_generators(11, n_runs)):
+        single = ESN(cfg, n_runs=1, rngs=[gen])
+        ys, xs = single.run(u[r : r + 1])
+        single.fit(xs, np.tanh(xs[..., :2]))
+        ys2, _ = single.run(u[r : r + 1])
+        np.testing.assert_allclose(ys[0], yb[r], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(ys2[0], yb2[r], rtol=0, atol=1e-12)
+    assert not np.allclose(yb2[0], yb2[1])  # runs really differ
+
+
+def test_gaussian_and_uniform_noise_have_the_documented_spread():
+    for kind, std in [("uniform", 0.2 / np.sqrt(12)), ("gaussian", 0.2)]:
+        cfg = ESNConfig(1, 1, n_reservoir=200, spectral_radius=0.0, noise_level=0.2,
+                        noise_kind=kind, input_scaling=0.0)
+        esn = ESN(cfg, seed=6)
+        _, x = esn.run(np.zeros((1, 100, 1)))
+        assert np.std(x[0, :, :200]) == pytest.approx(std, rel=0.05)
+        if kind == "uniform":
+            assert np.abs(x[0, :, :200]).max() <= 0.1
+
+
+def test_output_feedback_teacher_forcing():
+    cfg = ESNConfig(1, 1, n_reservoir=30, output_feedback=True, readout_activation="identity")
+    esn = ESN(cfg, seed=7)
+    u = _inputs(n_steps=20, n_in=1)
+    teacher = np.sin(np.arange(20))[None, :, None] * 0.5
+    _, x_forced = esn.run(u, noise=False, teacher=teacher)
+    assert esn.y[0, 0] == teacher[0, -1, 0]
+    esn.reset()
+    _, x_free = esn.run(u, noise=False)
+    assert np.allclose(x_forced[0, 0], x_free[0, 0])  # same first step (y = 0)
+    assert not np.allclose(x_forced[0, 5], x_free[0, 5])
+
+
+def test_divergence_detection_and_save_load(tmp_path):
+    esn = ESN(ESNConfig(3, 2, n_reservoir=25, noise_level=0.1), n_runs=3, seed=8)
+    _, x = esn.run(_inputs(n_runs=3))
+    esn.fit(x, np.tanh(x[..., :2]))
+    assert not esn.is_diverged().any()
+    path = tmp_path / "model.npz"
+    esn.save(path)
+    loaded = ESN.load(path)
+    u = _inputs(n_runs=3, seed=1)
+    y1, _ = esn.run(u, noise=False)
+    y2, _ = loaded.run(u, noise=False)
+    np.testing.assert_array_equal(y1, y2)
+    assert loaded.cfg == esn.cfg
+    esn.x[1] = 1.0
+    esn.W_out[2, 0, 0] = np.nan
+    reasons = esn.diverged()
+    assert reasons[0] is None and "saturated" in reasons[1] and "NaN" in reasons[2]
+    np.testing.assert_array_equal(esn.is_diverged(), [False, True, True])
+
+
+def test_float32_runs():
+    esn = ESN(ESNConfig(3, 2, n_reservoir=20, dtype="float32"), seed=9)
+    y, x = esn.run(_inputs())
+    assert y.dtype == np.float32 and x.dtype == np.float32
+
+
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [
+        ({"n_reservoir": 0}, "reservoir size"),
+        ({"spectral_radius": -0.1}, "spectral radius"),
+        ({"noise_level": -1.0}, "noise level"),
+        ({"noise_kind": "pink"}, "noise kind"),
+        ({"readout": "lasso"}, "readout"),
+        ({"readout_activation": "relu"}, "readout activation"),
+    ],
+)
+def test_bad_config_reads_well(kwargs, words):
+    with pytest.raises(ValueError, match=words):
+        ESNConfig(2, 1, **kwargs)
+
+
+def test_spectral_radius_helper_large_matrix_uses_arpack():
+    w = np.diag(np.linspace(-0.3, 0.7, 600))
+    assert spectral_radius(w) == pytest.approx(0.7, rel=1e-8)

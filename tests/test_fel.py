@@ -1,0 +1,118 @@
+"""Feedback-error learning on the toy plant: learns, beta=1 is the original, lockstep."""
+
+import numpy as np
+import pytest
+
+from controllers.esn import ESN, ESNConfig, run_generators
+from controllers.feedback import FeedbackController
+from controllers.fel import PAPER_E, FELConfig, evaluate, rollout, train
+from controllers.metrics import nrmse, position_nrmse
+from controllers.plant import ToyPlant, toy_movement
+
+LIMITS = np.tile([0.0, np.pi], (4, 1))
+
+
+def _setup(n_runs=2, n_steps=80, noise=0.2, seed=0, plant_rngs=None):
+    q, speed, commands = toy_movement(n_steps, 4, seed=0)
+    plant = ToyPlant(n_runs, q[0], LIMITS, speed, seed=seed, rngs=plant_rngs)
+    desired = plant.signals_of(q)
+    cfg = ESNConfig(8, 4, n_reservoir=60, noise_level=noise)
+    return plant, desired, commands, cfg
+
+
+def test_rollout_shapes_and_y_est():
+    plant, desired, _, cfg = _setup()
+    esn = ESN(cfg, n_runs=2, seed=1)
+    ro = rollout(esn, plant, desired, 1.0)
+    t = len(desired)
+    assert ro.commands.shape == (2, t - 1, 4) and ro.u_error.shape == (2, t, 4)
+    assert ro.sensed.shape == ro.true_signals.shape == (2, t, 4)
+    np.testing.assert_allclose(ro.y_est, ro.commands + ro.u_error[:, 1:])
+    # untrained readout is zero: the commands are pure feedback, and with K = 1 and a
+    # noise-free sensor the one-step correction puts the plant on d(t) at t + 1
+    assert np.all(ro.y_esn == 0)
+    plant.sensor_noise_std = 0.0
+    ro = rollout(esn, plant, desired, 1.0, feedback=FeedbackController(damping=0.0))
+    expected = np.broadcast_to(desired[1:-1], (2, t - 2, 4))
+    np.testing.assert_allclose(ro.true_signals[:, 2:], expected, atol=1e-12)
+    assert position_nrmse(ro.true_signals, desired).max() > 0.005  # but one step late
+
+
+def test_fel_reduces_test_error_over_epochs():
+    plant, desired, commands, cfg = _setup(n_runs=3)
+    fel = FELConfig("new", beta=0.1, learning_cycles=3, epochs=6)
+    esn = ESN(cfg, n_runs=3, seed=2)
+    untrained = evaluate(esn, plant, desired, commands)
+    result = train(esn, plant, desired, fel, true_commands=commands)
+    trained = evaluate(esn, plant, desired, commands)
+    assert not result.failed.any()
+    assert np.all(trained.position_nrmse < 0.5 * untrained.position_nrmse)
+    assert np.all(trained.motor_nrmse < 0.5 * untrained.motor_nrmse)
+    assert np.all(np.isfinite(result.position_nrmse))
+
+
+def test_beta_one_equals_original():
+    plant, desired, _, cfg = _setup(seed=4)
+    results = []
+    for fel in (FELConfig("original", 1.0, 1, epochs=3), FELConfig("new", 1.0, 1, epochs=3)):
+        plant, *_ = _setup(seed=4)
+        esn = ESN(cfg, n_runs=2, seed=3)
+        results.append((train(esn, plant, desired, fel).position_nrmse, esn.W_out.copy()))
+    np.testing.assert_array_equal(results[0][0], results[1][0])
+    np.testing.assert_array_equal(results[0][1], results[1][1])
+
+
+def test_lockstep_training_equals_single_runs():
+    n_runs = 3
+    plant, desired, _, cfg = _setup(n_runs=n_runs, plant_rngs=run_generators(9, n_runs))
+    fel = FELConfig("new", 0.3, 2, epochs=2)
+    batch = ESN(cfg, n_runs=n_runs, seed=5)
+    curve = train(batch, plant, desired, fel).position_nrmse
+    for r, (gen, pgen) in enumerate(zip(run_generators(5, n_runs), run_generators(9, n_runs),
+                                        strict=True)):
+        single_plant, *_ = _setup(n_runs=1, plant_rngs=[pgen])
+        single = ESN(cfg, rngs=[gen])
+        single_curve = train(single, single_plant, desired, fel).position_nrmse
+        np.testing.assert_allclose(single_curve[0], curve[r], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(single.W_out[0], batch.W_out[r], rtol=0, atol=1e-12)
+
+
+def test_diverged_run_is_marked_failed_and_others_continue():
+    plant, desired, _, cfg = _setup(n_runs=2)
+    esn = ESN(cfg, n_runs=2, seed=6)
+    ticks = []
+    esn.W_in[1] *= 1e4  # run 1 saturates its reservoir
+    result = train(esn, plant, desired, FELConfig("new", 0.1, 2, epochs=2),
+                   progress=lambda e, c: ticks.append((e, c)))
+    assert result.failed.tolist() == [False, True]
+    assert "saturated" in result.fail_reason[1] and result.fail_epoch[1] == 0
+    assert np.all(np.isfinite(result.position_nrmse[0]))
+    d = result.to_dict()
+    assert d["position_nrmse"][1] == [None, None] and d["failed"] == [False, True]
+    assert ticks == [(e, c) for e in range(2) for c in range(4)]
+
+
+def test_delay_line_feeds_the_model_old_positions_only():
+    plant, desired, _, cfg = _setup(n_runs=1, noise=0.0)
+    esn = ESN(cfg, seed=7)
+    ro = rollout(esn, plant, desired, 1.0, delay_steps=3)
+    sensed_part = ro.states[0, :, cfg.n_reservoir + 4 : cfg.n_reservoir + 8]
+    np.testing.assert_allclose(sensed_part[5], ro.sensed[0, 2])
+    np.testing.assert_allclose(sensed_part[1], ro.sensed[0, 0])
+
+
+def test_paper_e_presets_and_config_validation():
+    assert PAPER_E[1].fel.effective_beta == 1.0 and PAPER_E[2].repetitions == 5
+    assert [PAPER_E[i].fel.learning_cycles for i in (4, 5, 6)] == [2, 3, 6]
+    assert FELConfig("original", beta=0.1).effective_beta == 1.0
+    with pytest.raises(ValueError, match="beta"):
+        FELConfig("new", beta=0.0)
+    with pytest.raises(ValueError, match="method"):
+        FELConfig("magic")
+
+
+def test_nrmse_definition():
+    target = np.zeros((10, 2))
+    actual = np.stack([np.full(10, 0.2), np.full(10, -0.4)], axis=1)
+    assert nrmse(actual, target) == pytest.approx((0.1 + 0.2) / 2)
+    assert nrmse(np.stack([actual, target]), target).tolist() == pytest.approx([0.15, 0.0])
