@@ -1,0 +1,27 @@
+"""Movements for Skinny to imitate: the :class:`Trajectory` value, the synthesized YMCA
+and its derived movements (paper C), and motion capture (ASF/AMC, BVH) retargeted
+onto Skinny's joints. Pure NumPy/SciPy: no mujoco, no dm_control.
+
+>>> from skinny_mj.trajectories import get, load_movement
+>>> traj = get("ymca", dof=4)                      # 313 steps at 50 Hz
+>>> traj, report = load_movement("clip.amc", dof=8, asf="subject.asf")  # doctest: +SKIP
+"""
+
+from skinny_mj.trajectories.library import get, load_movement, names
+from skinny_mj.trajectories.retarget import ArmClip, RetargetReport, retarget
+from skinny_mj.trajectories.trajectory import Trajectory, excerpt
+from skinny_mj.trajectories.ymca import key_poses, letter_end_steps, ymca
+
+__all__ = [
+    "ArmClip",
+    "RetargetReport",
+    "Trajectory",
+    "excerpt",
+    "get",
+    "key_poses",
+    "letter_end_steps",
+    "load_movement",
+    "names",
+    "retarget",
+    "ymca",
+]

@@ -1,0 +1,328 @@
+"""The :class:`Trajectory` value: joint angles over time, and its file formats.
+
+A trajectory is what Skinny is asked to imitate: ``angles`` (T, n_dof) in radians at a
+fixed step ``dt`` (0.02 s = 50 Hz), columns in :func:`skinny_mj.body.dof_names` order.
+It is immutable; every operation returns a new one.
+
+Files: ``.npz`` (arrays ``angles`` and ``meta``, a JSON string; loaded with
+``allow_pickle=False``) and ``.csv`` (a ``# dt=...`` comment line, a header with the
+DOF names, one row per step, floats written with 17 significant digits so that the
+round trip is exact). Every malformed file raises :class:`SkinnyInputError` naming
+the file and, for CSV, the line.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from skinny_mj import body
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.io import atomic_path, atomic_write_text
+
+DEFAULT_DT_S = 0.02
+MIN_SPEED, MAX_SPEED = 0.0, 10.0  # resample(speed) accepts MIN_SPEED < speed <= MAX_SPEED
+_FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """Joint angles over time for Skinny's 2D (dof=4) or 3D (dof=8) body.
+
+    Parameters
+    ----------
+    angles : (T, n_dof) joint angles, rad, columns in ``body.dof_names(dof)`` order.
+    dt : time step, s (default 0.02 = 50 Hz).
+    name : a label (used in file metadata and recordings).
+    """
+
+    angles: np.ndarray
+    dt: float = DEFAULT_DT_S
+    name: str = "trajectory"
+
+    def __post_init__(self) -> None:
+        try:
+            a = np.array(self.angles, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise SkinnyInputError(
+                f"trajectory {self.name!r}: angles are not numbers ({exc})"
+            ) from None
+        if a.ndim != 2 or a.shape[0] < 1:
+            raise SkinnyInputError(
+                f"trajectory {self.name!r}: angles must be (T>=1, n_dof), got shape {a.shape}"
+            )
+        if a.shape[1] not in body.ARM_JOINTS:
+            raise SkinnyInputError(
+                f"trajectory {self.name!r}: {a.shape[1]} columns, expected 4 (2D) or 8 (3D) DOFs"
+            )
+        if not np.all(np.isfinite(a)):
+            t, j = np.argwhere(~np.isfinite(a))[0]
+            raise SkinnyInputError(
+                f"trajectory {self.name!r}: non-finite angle at step {t}, DOF {j}"
+            )
+        dt = float(self.dt)
+        if not (math.isfinite(dt) and dt > 0):
+            raise SkinnyInputError(f"trajectory {self.name!r}: dt must be > 0 s, got {self.dt!r}")
+        a.setflags(write=False)
+        object.__setattr__(self, "angles", a)
+        object.__setattr__(self, "dt", dt)
+        object.__setattr__(self, "name", str(self.name))
+
+    # -- basic properties -------------------------------------------------------------
+    @property
+    def dof(self) -> int:
+        """4 (2D) or 8 (3D)."""
+        return int(self.angles.shape[1])
+
+    @property
+    def dof_names(self) -> tuple[str, ...]:
+        return body.dof_names(self.dof)
+
+    def __len__(self) -> int:
+        return int(self.angles.shape[0])
+
+    @property
+    def duration_s(self) -> float:
+        """Number of steps times dt (313 steps at 0.02 s = 6.26 s)."""
+        return len(self) * self.dt
+
+    def __repr__(self) -> str:
+        return f"Trajectory(name={self.name!r}, steps={len(self)}, dof={self.dof}, dt={self.dt})"
+
+    # -- signals ----------------------------------------------------------------------
+    def position_signals(self, signals: str = "joint") -> np.ndarray:
+        """Normalized position signals (T, n_signals), see ``body.position_signals``."""
+        if signals not in ("joint", "cartesian"):
+            raise SkinnyInputError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
+        return body.position_signals(self.angles, self.dof, signals)
+
+    def velocities(self) -> np.ndarray:
+        """Joint velocities (T-1, n_dof), rad/s: forward differences / dt."""
+        return np.diff(self.angles, axis=0) / self.dt
+
+    def max_speed_rad_s(self) -> np.ndarray:
+        """Fastest absolute speed per DOF, (n_dof,) rad/s (zeros for a single step)."""
+        v = self.velocities()
+        return np.abs(v).max(axis=0) if len(v) else np.zeros(self.dof)
+
+    # -- transformations --------------------------------------------------------------
+    def resample(self, speed: float) -> Trajectory:
+        """Play the movement ``speed`` times as fast: ``round(T / speed)`` steps, same dt.
+
+        Shape-preserving cubic (PCHIP) interpolation in time, end poses kept, so a
+        trajectory inside the joint ranges stays inside them. speed 0.5 doubles the steps.
+        """
+        try:
+            speed = float(speed)
+        except (TypeError, ValueError):
+            raise SkinnyInputError(f"speed must be a number, got {speed!r}") from None
+        if not (math.isfinite(speed) and MIN_SPEED < speed <= MAX_SPEED):
+            raise SkinnyInputError(
+                f"speed must be in ({MIN_SPEED:g}, {MAX_SPEED:g}], got {speed:g}"
+            )
+        if speed == 1.0 or len(self) < 2:
+            return self
+        from scipy.interpolate import PchipInterpolator
+
+        n = max(2, int(round(len(self) / speed)))
+        src = np.arange(len(self), dtype=float)
+        dst = np.linspace(0.0, len(self) - 1.0, n)
+        angles = PchipInterpolator(src, self.angles, axis=0)(dst)
+        return Trajectory(angles, self.dt, f"{self.name}@{speed:g}")
+
+    def repeat(self, n: int) -> Trajectory:
+        """The movement ``n`` times in a row ((n*T, n_dof))."""
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+            raise SkinnyInputError(f"repetitions must be an integer >= 1, got {n!r}")
+        if n == 1:
+            return self
+        return Trajectory(np.tile(self.angles, (int(n), 1)), self.dt, f"{self.name}x{n}")
+
+    def reversed(self) -> Trajectory:
+        """The movement played backwards."""
+        return Trajectory(self.angles[::-1], self.dt, f"{self.name}-reversed")
+
+    def concat(self, other: Trajectory) -> Trajectory:
+        """This movement followed by ``other`` (same dof and dt)."""
+        if not isinstance(other, Trajectory):
+            return NotImplemented
+        if other.dof != self.dof:
+            raise SkinnyInputError(f"cannot join dof={self.dof} and dof={other.dof} trajectories")
+        if not math.isclose(other.dt, self.dt, rel_tol=1e-9):
+            raise SkinnyInputError(f"cannot join dt={self.dt} s and dt={other.dt} s trajectories")
+        return Trajectory(
+            np.concatenate([self.angles, other.angles]), self.dt, f"{self.name}+{other.name}"
+        )
+
+    __add__ = concat
+
+    def with_name(self, name: str) -> Trajectory:
+        return Trajectory(self.angles, self.dt, name)
+
+    def clip_to_range(self) -> tuple[Trajectory, int]:
+        """Clip every angle into ``body.joint_ranges``; returns the clipped trajectory and
+        the number of (step, DOF) samples that were outside."""
+        lo, hi = body.joint_ranges(self.dof).T
+        outside = int(np.count_nonzero((self.angles < lo) | (self.angles > hi)))
+        if outside == 0:
+            return self, 0
+        return Trajectory(np.clip(self.angles, lo, hi), self.dt, self.name), outside
+
+    # -- files ------------------------------------------------------------------------
+    def save(self, path: str | Path) -> Path:
+        """Write ``.npz`` or ``.csv`` (chosen by the suffix) atomically."""
+        path = Path(path)
+        suffix = path.suffix.lower()
+        if suffix == ".npz":
+            meta = {
+                "format_version": _FORMAT_VERSION,
+                "name": self.name,
+                "dt": self.dt,
+                "dof": self.dof,
+                "dof_names": list(self.dof_names),
+            }
+            with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+                np.savez(fh, angles=self.angles, meta=np.array(json.dumps(meta)))
+            return path
+        if suffix == ".csv":
+            buf = io.StringIO()
+            buf.write(f"# skinny-mj trajectory; name={self.name}; dt={self.dt!r}; dof={self.dof}\n")
+            buf.write(",".join(self.dof_names) + "\n")
+            np.savetxt(buf, self.angles, fmt="%.17g", delimiter=",")
+            atomic_write_text(path, buf.getvalue())
+            return path
+        raise SkinnyInputError("trajectory files must end in .npz or .csv", path=path)
+
+    @classmethod
+    def load(cls, path: str | Path, dof: int | None = None) -> Trajectory:
+        """Read a ``.npz`` or ``.csv`` trajectory; ``dof`` (if given) must match the file."""
+        path = Path(path)
+        if not path.is_file():
+            raise SkinnyInputError("no such trajectory file", path=path)
+        suffix = path.suffix.lower()
+        if suffix == ".npz":
+            traj = _load_npz(path)
+        elif suffix == ".csv":
+            traj = _load_csv(path)
+        else:
+            raise SkinnyInputError("trajectory files must end in .npz or .csv", path=path)
+        if dof is not None and traj.dof != dof:
+            raise SkinnyInputError(
+                f"DOF mismatch: file has {traj.dof} DOFs, dof={dof} was asked for", path=path
+            )
+        return traj
+
+
+def _load_npz(path: Path) -> Trajectory:
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            if "angles" not in data.files or "meta" not in data.files:
+                raise SkinnyInputError("npz needs arrays 'angles' and 'meta'", path=path)
+            angles = np.asarray(data["angles"])
+            meta = json.loads(str(data["meta"]))
+    except SkinnyInputError:
+        raise
+    except (OSError, ValueError, EOFError) as exc:  # zip errors, pickled objects, bad JSON
+        raise SkinnyInputError(f"not a readable trajectory npz ({exc})", path=path) from None
+    if not isinstance(meta, dict):
+        raise SkinnyInputError("'meta' must be a JSON object", path=path)
+    if angles.ndim != 2 or angles.shape[1] not in body.ARM_JOINTS:
+        raise SkinnyInputError(f"angles must be (T, 4 or 8), got shape {angles.shape}", path=path)
+    names = meta.get("dof_names")
+    if names is not None and tuple(names) != body.dof_names(angles.shape[1]):
+        raise SkinnyInputError(f"DOF names {names} do not match dof={angles.shape[1]}", path=path)
+    if meta.get("dof", angles.shape[1]) != angles.shape[1]:
+        raise SkinnyInputError(
+            f"meta says dof={meta['dof']} but angles have {angles.shape[1]} columns", path=path
+        )
+    if not np.issubdtype(angles.dtype, np.number):
+        raise SkinnyInputError(f"angles must be numbers, got dtype {angles.dtype}", path=path)
+    bad = np.argwhere(~np.isfinite(angles))
+    if len(bad):
+        raise SkinnyInputError(f"non-finite angle at step {bad[0][0]}, DOF {bad[0][1]}", path=path)
+    try:
+        return Trajectory(angles, meta.get("dt", DEFAULT_DT_S), meta.get("name", path.stem))
+    except SkinnyInputError as exc:
+        raise SkinnyInputError(str(exc), path=path) from None
+
+
+def _parse_comment(text: str) -> dict[str, str]:
+    out = {}
+    for part in text.lstrip("#").split(";"):
+        if "=" in part:
+            key, value = part.split("=", 1)
+            out[key.strip()] = value.strip()
+    return out
+
+
+def _load_csv(path: Path) -> Trajectory:
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SkinnyInputError(f"cannot read ({exc})", path=path) from None
+    meta: dict[str, str] = {}
+    header: list[str] | None = None
+    rows: list[list[float]] = []
+    for lineno, raw in enumerate(lines, start=1):
+        line = raw.strip()
+        if not line:
+            continue
+        if line.startswith("#"):
+            meta.update(_parse_comment(line))
+            continue
+        cells = [c.strip() for c in line.split(",")]
+        if header is None:
+            header = cells
+            n = len(header)
+            if n not in body.ARM_JOINTS or tuple(header) != body.dof_names(n):
+                raise SkinnyInputError(
+                    f"header must be the DOF names of dof=4 {list(body.dof_names(4))} or "
+                    f"dof=8, got {header}",
+                    path=path,
+                    line=lineno,
+                )
+            continue
+        if len(cells) != len(header):
+            raise SkinnyInputError(
+                f"{len(cells)} columns, expected {len(header)}", path=path, line=lineno
+            )
+        try:
+            values = [float(c) for c in cells]
+        except ValueError:
+            bad = next(c for c in cells if not _is_float(c))
+            raise SkinnyInputError(f"not a number: {bad!r}", path=path, line=lineno) from None
+        if not all(math.isfinite(v) for v in values):
+            raise SkinnyInputError("NaN or infinite angle", path=path, line=lineno)
+        rows.append(values)
+    if header is None or not rows:
+        raise SkinnyInputError("no header or no data rows", path=path)
+    try:
+        dt = float(meta.get("dt", DEFAULT_DT_S))
+        return Trajectory(np.array(rows), dt, meta.get("name", path.stem))
+    except (SkinnyInputError, ValueError) as exc:
+        raise SkinnyInputError(str(exc), path=path) from None
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def excerpt(traj: Trajectory, start_s: float, duration_s: float) -> Trajectory:
+    """Steps of ``traj`` from ``start_s`` for ``duration_s`` seconds (both >= 0, inside)."""
+    start = int(round(float(start_s) / traj.dt))
+    n = int(round(float(duration_s) / traj.dt))
+    if start < 0 or n < 1 or start + n > len(traj):
+        raise SkinnyInputError(
+            f"excerpt {start_s:g} s + {duration_s:g} s is outside {traj.name!r} "
+            f"(0-{traj.duration_s:g} s)"
+        )
+    return Trajectory(traj.angles[start : start + n], traj.dt, f"{traj.name}[{start_s:g}s]")
