@@ -353,12 +353,14 @@ class ESN:
         """(R,) bool: NaN/inf in state or readout, or saturation (mean |x| > 0.999)."""
         return np.array([reason is not None for reason in self.diverged()])
 
-    def save(self, path: str | Path) -> None:
-        """Write weights + config JSON to an .npz (no pickle), atomically."""
+    def save(self, path: str | Path, metadata: dict | None = None) -> None:
+        """Write weights + config JSON (+ a JSON ``metadata`` dict, e.g. the plant the
+        network was trained on) to an .npz (no pickle), atomically."""
         with atomic_path(Path(path)) as tmp, open(tmp, "wb") as fh:
             np.savez(
                 fh, config=np.array(json.dumps(asdict(self.cfg))), W=self.W, W_in=self.W_in,
                 W_back=self.W_back, W_out=self.W_out, x=self.x, y=self.y,
+                metadata=np.array(json.dumps(metadata or {})),
             )
 
     @classmethod
@@ -375,6 +377,12 @@ class ESN:
         esn.reset()
         esn.x, esn.y = arrays["x"].astype(esn.dtype), arrays["y"].astype(esn.dtype)
         return esn
+
+
+def read_metadata(path: str | Path) -> dict:
+    """The ``metadata`` dict saved with a network by :meth:`ESN.save` ({} if none)."""
+    with np.load(Path(path), allow_pickle=False) as data:
+        return json.loads(str(data["metadata"])) if "metadata" in data.files else {}
 
 
 def ridge_solve(m: np.ndarray, s: np.ndarray, ridge_lambda: float) -> np.ndarray:

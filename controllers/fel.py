@@ -101,8 +101,9 @@ class Rollout:
     """One cycle of R runs. T = len(desired).
 
     commands (R, T-1, n_dof) as sent; y_esn (R, T-1, n_dof) ESN outputs;
-    u_error (R, T, n_dof); sensed, true_signals (R, T, n_sig); states (R, T-1, D)
-    the inverse model's extended states; fm_states (R, T-1, D_fm) or None;
+    u_error (R, T, n_dof); sensed, true_signals (R, T, n_sig); angles (R, T, n_dof)
+    the plant's joint angles, rad; states (R, T-1, D) the inverse model's extended
+    states; fm_states (R, T-1, D_fm) or None;
     predictions (R, T, n_sig) the forward model's p(t) or None.
     """
 
@@ -111,6 +112,7 @@ class Rollout:
     u_error: np.ndarray
     sensed: np.ndarray
     true_signals: np.ndarray
+    angles: np.ndarray
     states: np.ndarray
     fm_states: np.ndarray | None = None
     predictions: np.ndarray | None = None
@@ -154,6 +156,7 @@ def rollout(
     gain = np.broadcast_to(np.asarray(gain, float), (n_runs,))[:, None]
     sensed = np.empty((n_runs, n_steps, plant.n_signals))
     true = np.empty_like(sensed)
+    angles = np.empty((n_runs, n_steps, plant.n_dof))
     u_error = np.empty((n_runs, n_steps, plant.n_dof))
     commands = np.empty((n_runs, n_steps - 1, plant.n_dof))
     y_esn = np.empty_like(commands)
@@ -163,6 +166,7 @@ def rollout(
     predictions = None if forward is None else np.empty_like(sensed)
     sensed[:, 0] = plant.reset()
     true[:, 0] = plant.true_signals()
+    angles[:, 0] = plant.joint_angles()
     if forward is not None:
         predictions[:, 0] = sensed[:, 0]
     for t in range(n_steps - 1):
@@ -179,8 +183,9 @@ def rollout(
             fm_states[:, t] = forward.esn.extended
         sensed[:, t + 1] = plant.step(commands[:, t])
         true[:, t + 1] = plant.true_signals()
+        angles[:, t + 1] = plant.joint_angles()
     u_error[:, -1] = feedback.u_error(desired[-1], sensed[:, -1], plant)
-    return Rollout(commands, y_esn, u_error, sensed, true, states, fm_states, predictions)
+    return Rollout(commands, y_esn, u_error, sensed, true, angles, states, fm_states, predictions)
 
 
 @dataclass

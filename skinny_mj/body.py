@@ -162,9 +162,8 @@ def segment_vectors(q: np.ndarray, dof: int) -> np.ndarray:
 
 def shoulder_positions() -> np.ndarray:
     """World positions (2 arms, 3) of the right and left shoulder joint centres, m."""
-    return np.array(
-        [[-SHOULDER_HALF_WIDTH_M, 0.0, SHOULDER_HEIGHT_M], [SHOULDER_HALF_WIDTH_M, 0.0, SHOULDER_HEIGHT_M]]
-    )
+    half, height = SHOULDER_HALF_WIDTH_M, SHOULDER_HEIGHT_M
+    return np.array([[-half, 0.0, height], [half, 0.0, height]])
 
 
 def arm_points(q: np.ndarray, dof: int) -> np.ndarray:

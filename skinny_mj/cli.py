@@ -112,6 +112,18 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--reps", type=_positive_int, default=1)
     e.add_argument("--out", type=Path, required=True, help="FILE.npz or FILE.csv")
 
+    p = sub.add_parser("experiment", help="reproduce a paper's table and figures (a sweep)")
+    p.add_argument("name", help="experiment name, or `list`")
+    p.add_argument("--runs", type=_positive_int, help="runs per row (default: the paper's)")
+    p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
+    p.add_argument("--out", type=Path, help="output folder (default: results/<name>/<time>)")
+    p.add_argument("--resume", action="store_true", help="skip runs already in --out")
+    p.add_argument("--quick", action="store_true", help="a smoke test: few runs, few epochs")
+    p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
+    p.add_argument("--movement", help="train/test on another movement (name or file)")
+    p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc --movement")
+    p.add_argument("--rows", help="comma-separated row ids to run (default: all)")
+
     p = sub.add_parser("render", help="render Skinny to a PNG (needs MUJOCO_GL=egl)")
     p.add_argument("--dof", type=int, choices=(4, 8), default=4)
     p.add_argument("--trajectory", help="pose Skinny at a movement's frame (default: rest pose)")

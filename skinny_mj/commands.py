@@ -1,0 +1,317 @@
+"""The handlers behind ``skinny``'s sub-commands (the parser lives in :mod:`skinny_mj.cli`).
+
+Every command computes first and writes last, each file atomically, so a command that
+fails on bad input leaves nothing half-written in ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.io import atomic_write_json
+
+
+def _out_dir(args: argparse.Namespace, kind: str) -> Path:
+    from skinny_mj.cli import _timestamped
+
+    return Path(args.out) if args.out is not None else _timestamped(kind)
+
+
+def _load_movement(args: argparse.Namespace, dof: int):
+    from skinny_mj.trajectories import load_movement
+
+    return load_movement(args.trajectory, dof, asf=args.asf, speed=args.speed, reps=args.reps)
+
+
+def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_angles, commands,
+               desired_signals, actual_signals, sensed_signals=None, title: str = "",
+               metadata: dict | None = None, curves: dict | None = None) -> Path:
+    from skinny_mj import body
+    from skinny_mj.recording import write_recording
+
+    return write_recording(
+        path, dt=0.02, dof=dof, dof_names=list(body.dof_names(dof)),
+        signal_names=list(body.signal_names(dof, signals)), desired_angles=desired_angles,
+        actual_angles=actual_angles, commands=commands, desired_signals=desired_signals,
+        actual_signals=actual_signals, sensed_signals=sensed_signals, title=title,
+        metadata=metadata, curves=curves,
+    )
+
+
+class _Progress:
+    """A tqdm bar on a terminal; silent otherwise (logs stay clean)."""
+
+    def __init__(self, desc: str):
+        self.bar = None
+        self.desc = desc
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, desc=self.desc, unit="cycle", file=sys.stderr,
+                            disable=not sys.stderr.isatty(), leave=False)
+        self.bar.update(done - self.bar.n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+# -- track ------------------------------------------------------------------------------
+def cmd_track(args: argparse.Namespace) -> int:
+    from controllers.metrics import position_nrmse
+    from skinny_mj.ideal import IdealController
+    from skinny_mj.task import load
+
+    traj, report = _load_movement(args, args.dof)
+    env = load(args.dof, args.signals, traj, sensor_noise=args.sensor_noise, seed=args.seed)
+    ctrl = IdealController(traj.angles, env.task.max_speed_rad_s, traj.dt)
+    ts = env.reset()
+    angles, true_sig = [env.physics.joint_angles()], [env.physics.position_signals(args.signals)]
+    sensed, commands = [ts.observation["sensed"]], []
+    while not ts.last():
+        command = ctrl.command(int(ts.observation["step"]), ts.observation["joint_angles"])
+        ts = env.step(command)
+        commands.append(command)
+        angles.append(env.physics.joint_angles())
+        true_sig.append(env.physics.position_signals(args.signals))
+        sensed.append(ts.observation["sensed"])
+    desired = traj.position_signals(args.signals)
+    true_sig = np.array(true_sig)
+    nrmse = float(position_nrmse(true_sig[None], desired)[0])
+    metrics = {
+        "position_nrmse": nrmse, "steps": len(traj), "dof": args.dof, "signals": args.signals,
+        "trajectory": str(args.trajectory), "speed": args.speed, "reps": args.reps,
+        "seed": args.seed, "sensor_noise": args.sensor_noise,
+        "max_speed_rad_s": [float(v) for v in env.task.max_speed_rad_s],
+        "clipped_samples": int(report.clipped_samples), "retarget": report.to_dict(),
+    }
+    out = _out_dir(args, "track")
+    _recording(out / "run.rrd", dof=args.dof, signals=args.signals, desired_angles=traj.angles,
+               actual_angles=np.array(angles), commands=np.array(commands),
+               desired_signals=desired, actual_signals=true_sig, sensed_signals=np.array(sensed),
+               title=f"ideal controller on {traj.name}", metadata=metrics)
+    atomic_write_json(out / "metrics.json", metrics)
+    print(f"track {traj.name}: {args.dof} DOF, {len(traj)} steps, position NRMSE {nrmse:.2e}, "
+          f"clipped samples {report.clipped_samples} -> {out}")
+    return 0
+
+
+# -- train / demo / test ----------------------------------------------------------------
+def _train_config(args: argparse.Namespace):
+    from skinny_mj.training import TrainConfig
+
+    if not 0.0 < args.speed <= 10.0:
+        raise SkinnyInputError(f"--speed must be in (0, 10], got {args.speed}")
+    return TrainConfig(
+        dof=args.dof, signals=args.signals, trajectory=str(args.trajectory),
+        asf=None if args.asf is None else str(args.asf), speed=args.speed, reps=args.reps,
+        method=args.method, beta=args.beta, cycles=args.cycles, epochs=args.epochs,
+        reservoir=args.reservoir, spectral_radius=args.spectral_radius, noise=args.noise,
+        readout=args.readout, ridge=args.ridge, sensor_noise=args.sensor_noise,
+    )
+
+
+def _write_run(out: Path, outcome, title: str) -> None:
+    """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png."""
+    from skinny_mj.plots import learning_curve_png
+
+    test = outcome.test
+    cfg = outcome.config
+    curves = {}
+    train_curve = outcome.metrics["train"].get("position_nrmse")
+    if train_curve:
+        curve = np.array([np.nan if v is None else v for v in train_curve], dtype=float)
+        curves["train_position_nrmse"] = curve
+        learning_curve_png(out / "learning_curve.png", {"position NRMSE (evaluation cycle)": curve},
+                           "position NRMSE", title=title, log_y=True)
+    ro = test.rollout
+    _recording(out / "run.rrd", dof=cfg.dof, signals=cfg.signals,
+               desired_angles=test.trajectory.angles, actual_angles=ro.angles[0],
+               commands=ro.commands[0], desired_signals=test.desired,
+               actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0],
+               title=title, metadata={"test": outcome.metrics["test"], "seed": outcome.seed},
+               curves=curves or None)
+    outcome.esn.save(out / "model.npz", metadata={
+        "dof": cfg.dof, "signals": cfg.signals, "sensor_noise": cfg.sensor_noise,
+        "max_speed_rad_s": [float(v) for v in outcome.max_speed_rad_s],
+        "trained_on": cfg.trajectory, "config": outcome.metrics["config"],
+    })
+    atomic_write_json(out / "metrics.json", outcome.metrics)
+
+
+def _train_and_write(cfg, seed: int, out: Path, title: str):
+    from skinny_mj.training import train
+
+    bar = _Progress(title)
+    try:
+        outcome = train(cfg, seed, progress=bar)
+    finally:
+        bar.close()
+    _write_run(out, outcome, title)
+    return outcome
+
+
+def _fmt(v: float | None) -> str:
+    return "failed" if v is None else f"{v:.4f}"
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    cfg = _train_config(args)
+    out = _out_dir(args, "train")
+    outcome = _train_and_write(cfg, args.seed, out, f"{cfg.method} on {cfg.trajectory}")
+    m = outcome.metrics
+    if outcome.failed:
+        print(f"skinny train: run failed: {m.get('fail_reason')} (details in {out}/metrics.json)",
+              file=sys.stderr)
+        return 1
+    print(f"test position NRMSE {_fmt(m['test']['position_nrmse'])}, motor NRMSE "
+          f"{_fmt(m['test']['motor_nrmse'])}, {m['wall_s']:.1f} s -> {out}")
+    return 0
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    from experiments.paper_e import PAPER_TABLE_2
+    from skinny_mj.training import TrainConfig
+
+    cfg = TrainConfig()  # paper E, experiment 5
+    out = _out_dir(args, "demo")
+    print("Training an ESN inverse model (N = 200) to make 2D Skinny dance YMCA:")
+    print("paper E experiment 5 - new method, beta = 0.1, 3 learning cycles x 10 epochs, "
+          "feedback gain K 1 -> 0, then a test with the feedback controller off.")
+    start = time.perf_counter()
+    outcome = _train_and_write(cfg, args.seed, out, "demo: paper E exp. 5")
+    wall = time.perf_counter() - start
+    m = outcome.metrics
+    paper = PAPER_TABLE_2["5"]
+    rows = [
+        ("test position NRMSE", _fmt(m["test"]["position_nrmse"]), f"{paper[0]:.4f}"),
+        ("test motor NRMSE", _fmt(m["test"]["motor_nrmse"]), f"{paper[2]:.4f}"),
+        ("wall time (s)", f"{wall:.1f}", "-"),
+    ]
+    ours_head = f"ours (seed {args.seed})"
+    print(f"\n| {'':22} | {ours_head:>14} | {'paper (mean of 20)':>18} |")
+    print(f"|{'-' * 24}|{'-' * 16}|{'-' * 20}|")
+    for name, ours, theirs in rows:
+        print(f"| {name:22} | {ours:>14} | {theirs:>18} |")
+    print(f"\nRecording: {out / 'run.rrd'}  (open it with: rerun {out / 'run.rrd'})")
+    print(f"Also: {out / 'metrics.json'}, {out / 'learning_curve.png'}, {out / 'model.npz'}")
+    if outcome.failed:
+        print(f"the run failed: {m.get('fail_reason')}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def cmd_test(args: argparse.Namespace) -> int:
+    from controllers.esn import ESN, read_metadata
+    from skinny_mj.training import run_streams, test_network
+
+    path = Path(args.model)
+    if not path.is_file():
+        raise SkinnyInputError("no such model file", path=path)
+    try:
+        meta = read_metadata(path)
+        esn = ESN.load(path)
+    except (OSError, ValueError, KeyError) as err:
+        raise SkinnyInputError(f"not a model written by `skinny train` ({err})",
+                               path=path) from None
+    if not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
+        raise SkinnyInputError("model has no Skinny metadata (dof, signals, max speed)", path=path)
+    dof, signals = int(meta["dof"]), str(meta["signals"])
+    traj, report = _load_movement(args, dof)
+    _, plant_seed = run_streams(args.seed)
+    test = test_network(esn, traj, signals, plant_seed, args.sensor_noise,
+                        np.asarray(meta["max_speed_rad_s"], dtype=float))
+    metrics: dict[str, Any] = {
+        "model": str(path), "trained_on": meta.get("trained_on"),
+        "trajectory": str(args.trajectory),
+        "dof": dof, "signals": signals, "steps": len(traj), "seed": args.seed,
+        "clipped_samples": int(report.clipped_samples), "failed": test.failed,
+        "fail_reason": test.fail_reason,
+        "test": {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse},
+    }
+    out = _out_dir(args, "test")
+    ro = test.rollout
+    _recording(out / "run.rrd", dof=dof, signals=signals, desired_angles=traj.angles,
+               actual_angles=ro.angles[0], commands=ro.commands[0], desired_signals=test.desired,
+               actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0],
+               title=f"test on {traj.name}", metadata=metrics)
+    atomic_write_json(out / "metrics.json", metrics)
+    if test.failed:
+        print(f"skinny test: the network diverged: {test.fail_reason}", file=sys.stderr)
+        return 1
+    print(f"test on {traj.name}: position NRMSE {_fmt(test.position_nrmse)}, motor NRMSE "
+          f"{_fmt(test.motor_nrmse)} -> {out}")
+    return 0
+
+
+# -- trajectory / render ----------------------------------------------------------------
+def cmd_trajectory(args: argparse.Namespace) -> int:
+    from skinny_mj.trajectories import get, names
+
+    if args.action == "list":
+        for name in names():
+            traj = get(name, 4)
+            print(f"{name:14} {len(traj):5d} steps  {traj.duration_s:6.2f} s")
+        print("speed variants: NAME@0.5, NAME@1.5 (or --speed); repetitions: --reps N")
+        return 0
+    ns = argparse.Namespace(trajectory=args.name, asf=args.asf, speed=args.speed, reps=args.reps)
+    traj, _ = _load_movement(ns, args.dof)
+    out = Path(args.out)
+    if out.suffix.lower() not in (".npz", ".csv"):
+        raise SkinnyInputError("export writes .npz or .csv", path=out)
+    traj.save(out)
+    print(f"wrote {traj.name}: {len(traj)} steps, {args.dof} DOF -> {out}")
+    return 0
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    from skinny_mj.render import render_png
+
+    angles = None
+    if args.trajectory is not None:
+        ns = argparse.Namespace(trajectory=args.trajectory, asf=None, speed=1.0, reps=1)
+        traj, _ = _load_movement(ns, args.dof)
+        if not 0 <= args.frame < len(traj):
+            raise SkinnyInputError(f"--frame must be in [0, {len(traj) - 1}], got {args.frame}")
+        angles = traj.angles[args.frame]
+    path = render_png(args.dof, args.out, width=args.width, height=args.height, angles=angles)
+    print(f"wrote {path}")
+    return 0
+
+
+# -- experiment -------------------------------------------------------------------------
+def cmd_experiment(args: argparse.Namespace) -> int:
+    import experiments
+    from skinny_mj.experiment import default_out_dir, run_sweep
+
+    if args.name == "list":
+        for name in experiments.REGISTRY:
+            print(f"{name:10} {experiments.describe(name)}")
+        return 0
+    module = experiments.get(args.name)
+    only = tuple(r.strip() for r in args.rows.split(",")) if args.rows else None
+    exp = module.build(quick=args.quick, movement=args.movement,
+                       asf=None if args.asf is None else str(args.asf), only=only)
+    out = Path(args.out) if args.out is not None else default_out_dir(exp.name)
+    start = time.perf_counter()
+    results = run_sweep(exp, out, runs=args.runs, workers=args.workers, resume=args.resume,
+                        scheduler=args.scheduler, progress=True)
+    wall = time.perf_counter() - start
+    claims = module.report(results, out)
+    table = (out / "table.md").read_text()
+    summary = f"{table}\n## Claims\n{claims}\n\nwall time {wall:.1f} s\n"
+    from skinny_mj.io import atomic_write_text
+
+    atomic_write_text(out / "claims.md", f"## Claims\n{claims}\n")
+    print(summary)
+    print(f"results: {out}")
+    return 0

@@ -1,0 +1,98 @@
+"""Plant adapters: BatchPlant run r == EnvPlant(seed r), and the command Jacobian."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from skinny_mj import body
+from skinny_mj.plant import BatchPlant, EnvPlant, Plant
+from skinny_mj.task import load
+
+
+@dataclass(frozen=True)
+class StandIn:
+    angles: np.ndarray
+    dof: int
+    dt: float = 0.02
+
+
+def stand_in(dof: int, n: int = 30) -> StandIn:
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    lo, hi = body.joint_ranges(dof).T
+    return StandIn(lo + (hi - lo) * (0.5 + 0.4 * np.sin(2 * np.pi * t + np.arange(dof))), dof)
+
+
+@pytest.mark.parametrize("dof,signals,actuation", [
+    (4, "cartesian", "velocity"), (4, "joint", "velocity"),
+    (8, "cartesian", "velocity"), (8, "joint", "torque"),
+])
+def test_batch_plant_equals_env_plants(dof, signals, actuation):
+    traj = stand_in(dof)
+    seeds = [11, 12, 13]
+    batch = BatchPlant(dof, signals, traj, n_runs=3, seeds=seeds, sensor_noise=0.01,
+                       actuation=actuation)
+    envs = [EnvPlant(load(dof, signals, traj, actuation, 0.01, seed=s)) for s in seeds]
+    assert isinstance(batch, Plant) and isinstance(envs[0], Plant)
+    rng = np.random.default_rng(0)
+    for _episode in range(2):  # the second reset continues each run's noise stream
+        a = batch.reset()
+        b = np.concatenate([e.reset() for e in envs])
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+        for _ in range(len(traj.angles) - 1):
+            u = rng.uniform(-1.2, 1.2, (3, dof))
+            a = batch.step(u)
+            b = np.concatenate([e.step(u[r : r + 1]) for r, e in enumerate(envs)])
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+        for name in ("true_signals", "joint_angles", "command_jacobian"):
+            got = getattr(batch, name)()
+            want = np.concatenate([getattr(e, name)() for e in envs])
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    assert a.shape == (3, batch.n_signals)
+    assert batch.command_jacobian().shape == (3, batch.n_signals, dof)
+
+
+@pytest.mark.parametrize("dof", [4, 8])
+def test_command_jacobian_predicts_a_small_step(dof):
+    plant = BatchPlant(dof, "cartesian", stand_in(dof), n_runs=1, sensor_noise=0.0,
+                       max_speed_rad_s=3.0)  # small steps that stay inside the ranges
+    plant.reset()
+    for _ in range(5):
+        plant.step(np.full((1, dof), 0.3))
+    jac = plant.command_jacobian()[0]
+    before = plant.true_signals()[0]
+    command = np.full(dof, 0.3) + np.random.default_rng(1).uniform(-0.02, 0.02, dof)
+    after = plant.step(command[None])[0]
+    predicted = jac @ command
+    # first-order in the step (0.3 of full scale) plus ~1 % servo lag
+    assert np.abs(after - before - predicted).max() < 0.1 * np.abs(predicted).max()
+    assert np.abs(after - before - predicted).max() < 0.01
+
+
+def test_sensed_minus_true_is_the_noise():
+    plant = BatchPlant(4, "joint", stand_in(4), n_runs=2, seeds=[0, 0], sensor_noise=0.02)
+    sensed = plant.reset()
+    np.testing.assert_array_equal(sensed[0], sensed[1])  # same seed, same stream
+    noise = sensed - plant.true_signals()
+    expected = np.random.default_rng(0).standard_normal(4) * 0.02
+    np.testing.assert_allclose(noise[0], expected, atol=1e-12)
+
+
+def test_env_plant_refuses_to_step_past_the_episode():
+    traj = stand_in(4, n=4)
+    plant = EnvPlant(load(4, trajectory=traj))
+    with pytest.raises(RuntimeError):
+        plant.step(np.zeros((1, 4)))
+    plant.reset()
+    for _ in range(3):
+        plant.step(np.zeros((1, 4)))
+    with pytest.raises(RuntimeError):
+        plant.step(np.zeros((1, 4)))
+    assert plant.reset().shape == (1, plant.n_signals)
+
+
+def test_batch_plant_rejects_wrong_seed_count():
+    with pytest.raises(ValueError):
+        BatchPlant(4, "joint", stand_in(4), n_runs=2, seeds=[1])
