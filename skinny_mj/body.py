@@ -143,21 +143,20 @@ def _arm_frames(q_arm: np.ndarray, dof: int, side: str):
 def segment_vectors(q: np.ndarray, dof: int) -> np.ndarray:
     """Elbow-relative-to-shoulder and wrist-relative-to-elbow vectors in metres.
 
-    q: (T, n_dof) or (n_dof,) joint angles, rad. Returns (T, 2 arms, 2 segments, 3)
-    (or (2, 2, 3) for a single pose); arms right, left; segments upper arm, forearm.
+    q: (..., n_dof) joint angles, rad. Returns (..., 2 arms, 2 segments, 3);
+    arms right, left; segments upper arm, forearm.
     """
     q = np.asarray(q, dtype=float)
-    single = q.ndim == 1
-    q2 = np.atleast_2d(q)
     n_arm = len(ARM_JOINTS[_check_dof(dof)])
-    if q2.shape[-1] != 2 * n_arm:
-        raise ValueError(f"expected {2 * n_arm} joint angles for dof={dof}, got {q2.shape[-1]}")
+    if q.shape[-1] != 2 * n_arm:
+        raise ValueError(f"expected {2 * n_arm} joint angles for dof={dof}, got {q.shape[-1]}")
+    q2 = q.reshape(-1, 2 * n_arm)
     out = np.empty((q2.shape[0], 2, 2, 3))
     for k, side in enumerate(SIDES):
         _, r_upper, r_fore = _arm_frames(q2[:, k * n_arm : (k + 1) * n_arm], dof, side)
         out[:, k, 0] = UPPER_ARM_LENGTH_M * (r_upper @ _DOWN)
         out[:, k, 1] = FOREARM_LENGTH_M * (r_fore @ _DOWN)
-    return out[0] if single else out
+    return out.reshape(q.shape[:-1] + (2, 2, 3))
 
 
 def shoulder_positions() -> np.ndarray:
@@ -198,19 +197,23 @@ def position_signals(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
 
 
 def signal_jacobian(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
-    """d(normalized signal)/d(joint angle), (..., n_signals, n_dof) per radian.
+    """d(normalized signal)/d(joint angle), (..., n_signals, n_dof) per radian, for
+    q (..., n_dof) rad.
 
     Joint signals: a constant diagonal 2 / (hi - lo). Cartesian: each column is the
     hinge's world axis crossed with the normalized segment vector it moves.
     """
     q = np.asarray(q, dtype=float)
-    single = q.ndim == 1
-    q2 = np.atleast_2d(q)
     n_dof = _check_dof(dof)
+    if q.shape[-1] != n_dof:
+        raise ValueError(f"expected {n_dof} joint angles for dof={dof}, got {q.shape[-1]}")
+    lead = q.shape[:-1]
+    q2 = q.reshape(-1, n_dof)
     if signals == "joint":
         lo, hi = joint_ranges(dof).T
-        jac = np.broadcast_to(np.diag(2.0 / (hi - lo)), (q2.shape[0], n_dof, n_dof)).copy()
-        return jac[0] if single else jac
+        return np.broadcast_to(np.diag(2.0 / (hi - lo)), lead + (n_dof, n_dof)).copy()
+    if signals != "cartesian":
+        raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
     comps = _cartesian_components(dof)
     nc = len(comps)
     n_arm = n_dof // 2
@@ -225,4 +228,4 @@ def signal_jacobian(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
             if spec.segment == "upper_arm":
                 jac[:, k * 2 * nc : k * 2 * nc + nc, col] = np.cross(axes[:, i], upper)[:, comps]
             jac[:, k * 2 * nc + nc : (k + 1) * 2 * nc, col] = np.cross(axes[:, i], fore)[:, comps]
-    return jac[0] if single else jac
+    return jac.reshape(lead + jac.shape[1:])

@@ -55,7 +55,8 @@ class TrainConfig:
     readout: str = "pinv"
     ridge: float = 1e-6
     sensor_noise: float = 0.01
-    tt_cycles: int = 50  # true-target, new method: cycles (paper D: 50 rounds)
+    tt_cycles: int = 50  # true-target with β < 1: cycles (paper D: 50 rounds); β = 1: one fit
+    max_speed_from: str | None = None  # movement whose speeds set full scale (None: this one)
     plant: str = "batch"  # "batch" (MjData stepped directly) or "env" (dm_control)
 
     def __post_init__(self) -> None:
@@ -198,13 +199,15 @@ def train(cfg: TrainConfig, seed: int = 0,
 
     ``progress(done, total)`` is called after every cycle (for a progress bar).
     """
-    from skinny_mj.ideal import max_speeds, true_commands
+    from skinny_mj.ideal import true_commands
 
     start = time.perf_counter()
     trajectory, report = load_trajectory(cfg)
     training = trajectory.repeat(cfg.reps) if cfg.reps > 1 else trajectory
-    # Full scale: twice the fastest speed of each DOF in ONE repetition of the movement.
-    max_speed = max_speeds(trajectory.angles, trajectory.dt)
+    # Full scale: twice the fastest speed of each DOF in ONE repetition of the movement
+    # (or of another movement, so that networks trained on different movements share
+    # one command scale, as in paper C).
+    max_speed = full_scale_speeds(cfg, trajectory)
     esn_rng, plant_seed = run_streams(seed)
     n_signals = trajectory.position_signals(cfg.signals).shape[1]
     esn = ESN(esn_config(cfg, n_signals), rngs=[esn_rng])
@@ -213,12 +216,13 @@ def train(cfg: TrainConfig, seed: int = 0,
     metrics: dict[str, Any] = {"train": {}}
 
     if cfg.method == "true-target":
-        tt = TrueTargetConfig(method="new", beta=cfg.beta, cycles=cfg.tt_cycles,
-                              noise=cfg.noise_level > 0)
-        total = 1
-        result = train_true_target(esn, desired, commands, tt)
-        metrics["train"] = {"motor_nrmse": float(result.motor_nrmse[0])}
-        _report(progress, 1, total)
+        tt = TrueTargetConfig(method="original" if cfg.beta >= 1 else "new", beta=cfg.beta,
+                              cycles=cfg.tt_cycles, noise=cfg.noise_level > 0)
+        result = train_true_target(esn, desired, commands, tt,
+                                   one_step=one_step_positions(training, cfg.signals, max_speed))
+        metrics["train"] = {"motor_nrmse": float(result.motor_nrmse[0]),
+                            "position_nrmse": float(result.position_nrmse[0])}
+        _report(progress, 1, 1)
     else:
         fcfg = fel.FELConfig(method=cfg.method, beta=cfg.beta,
                              learning_cycles=cfg.learning_cycles, epochs=cfg.epochs)
@@ -257,6 +261,34 @@ def train(cfg: TrainConfig, seed: int = 0,
         wall_s=time.perf_counter() - start,
     )
     return TrainOutcome(cfg, seed, metrics, esn, test, max_speed)
+
+
+def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
+    """(n_dof,) rad/s: 2 x the fastest speed per DOF of ``trajectory`` (one repetition)
+    or of the movement named by ``cfg.max_speed_from``."""
+    from skinny_mj.ideal import max_speeds
+    from skinny_mj.trajectories import load_movement
+
+    if cfg.max_speed_from is not None:
+        trajectory, _ = load_movement(cfg.max_speed_from, cfg.dof, asf=cfg.asf)
+    return max_speeds(trajectory.angles, trajectory.dt)
+
+
+def one_step_positions(trajectory, signals: str, max_speed_rad_s: np.ndarray):
+    """The true-target architecture's training position error: each teacher-forced
+    command applied for one step from the desired pose q_d(t), through Skinny's
+    kinematics (the servo follows a command to < 1 %; joints clip at their ranges)."""
+    from skinny_mj import body
+
+    dof, dt = trajectory.dof, trajectory.dt
+    lo, hi = body.joint_ranges(dof).T
+    q_from = trajectory.angles[:-1]
+
+    def one_step(_positions: np.ndarray, commands: np.ndarray) -> np.ndarray:
+        q_next = np.clip(q_from + np.clip(commands, -1, 1) * max_speed_rad_s * dt, lo, hi)
+        return body.position_signals(q_next, dof, signals)
+
+    return one_step
 
 
 def _report(progress: Callable[[int, int], None] | None, done: int, total: int) -> None:
