@@ -121,9 +121,13 @@ def _train_config(args: argparse.Namespace):
 
 
 def _write_run(out: Path, outcome, title: str) -> None:
-    """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png."""
+    """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png; for a
+    failed (diverged) run only metrics.json, which says why."""
     from skinny_mj.plots import learning_curve_png
 
+    if outcome.failed:
+        atomic_write_json(out / "metrics.json", outcome.metrics)
+        return
     test = outcome.test
     cfg = outcome.config
     curves = {}

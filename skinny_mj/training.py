@@ -250,7 +250,11 @@ def train(cfg: TrainConfig, seed: int = 0,
     if not metrics.get("failed") and test.failed:
         metrics.update(failed=True, fail_reason=f"test: {test.fail_reason}")
     metrics.setdefault("failed", False)
-    metrics["test"] = {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse}
+    if metrics["failed"]:  # a diverged network has no test result, only its reason
+        metrics["test"] = {"position_nrmse": None, "motor_nrmse": None}
+    else:
+        metrics["test"] = {"position_nrmse": test.position_nrmse,
+                           "motor_nrmse": test.motor_nrmse}
     metrics.update(
         config={**asdict(cfg), "learning_cycles": cfg.learning_cycles,
                 "noise_level": cfg.noise_level},

@@ -1,0 +1,154 @@
+"""The ``skinny`` command line as a user runs it: outputs, exit codes, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skinny_mj.cli import main
+
+CMU = Path(__file__).resolve().parents[2] / "shared" / "mocap" / "cmu"
+DATA = Path(__file__).parent / "data"
+
+
+def run_cli(*argv: str) -> subprocess.CompletedProcess:
+    """Run the installed console script as a user would (new process, no stdin)."""
+    env = {**os.environ, "MUJOCO_GL": "disabled", "OMP_NUM_THREADS": "1"}
+    return subprocess.run(["skinny", *argv], capture_output=True, text=True, env=env,
+                          stdin=subprocess.DEVNULL, timeout=600)
+
+
+@pytest.mark.parametrize("command", ["demo", "track", "train", "test", "trajectory", "render",
+                                     "experiment"])
+def test_every_command_has_help(command, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main([command, "--help"])
+    assert exit_info.value.code == 0
+    assert "usage: skinny" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("dof", [4, 8])
+def test_track_ymca_writes_metrics_and_recording(dof, tmp_path, capsys):
+    out = tmp_path / "track"
+    assert main(["track", "--dof", str(dof), "--out", str(out)]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["dof"] == dof and metrics["steps"] == 313 and metrics["trajectory"] == "ymca"
+    assert metrics["clipped_samples"] == 0
+    assert 0.0 <= metrics["position_nrmse"] <= 0.01
+    assert (out / "run.rrd").stat().st_size > 10_000
+    assert "position NRMSE" in capsys.readouterr().out
+
+
+@pytest.mark.skipif(not CMU.is_dir(), reason="../shared/mocap not beside the repo")
+def test_track_real_motion_capture_3d(tmp_path):
+    out = tmp_path / "mocap"
+    assert main(["track", "--dof", "8", "--trajectory", str(CMU / "md_03.amc"),
+                 "--asf", str(CMU / "moderndance.asf"), "--out", str(out)]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["steps"] == 181  # 434 frames at 120 Hz -> 50 Hz
+    assert metrics["clipped_samples"] == metrics["retarget"]["clipped_samples"] > 0
+    assert metrics["position_nrmse"] <= 0.01
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["track", "--trajectory", "no-such-movement"], "unknown movement"),
+    (["track", "--trajectory", str(DATA / "bad_truncated.amc"),
+      "--asf", str(DATA / "tiny.asf")], "bad_truncated.amc"),
+    (["track", "--trajectory", "ymca", "--speed", "-1"], "speed"),
+    (["train", "--beta", "1.5"], "--beta"),
+    (["train", "--noise", "-0.1"], "--noise"),
+    (["train", "--reservoir", "0"], "--reservoir"),
+    (["test", "--model", "missing.npz"], "missing.npz"),
+])
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(argv, needle, tmp_path):
+    out = tmp_path / "out"
+    result = run_cli(*argv, "--out", str(out))
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0] and "Traceback" not in result.stderr
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_train_then_test_a_saved_model(tmp_path, capsys):
+    trained = tmp_path / "train"
+    assert main(["train", "--epochs", "2", "--seed", "3", "--out", str(trained)]) == 0
+    metrics = json.loads((trained / "metrics.json").read_text())
+    assert metrics["failed"] is False and metrics["seed"] == 3
+    assert len(metrics["train"]["position_nrmse"]) == 2
+    for key in ("position_nrmse", "motor_nrmse"):
+        assert 0.0 < metrics["test"][key] < 1.0
+    for name in ("model.npz", "run.rrd", "learning_curve.png"):
+        assert (trained / name).stat().st_size > 0
+    with np.load(trained / "model.npz", allow_pickle=False) as model:  # no pickle inside
+        assert json.loads(str(model["metadata"]))["dof"] == 4
+
+    tested = tmp_path / "test"
+    assert main(["test", "--model", str(trained / "model.npz"), "--trajectory", "ymca",
+                 "--seed", "3", "--out", str(tested)]) == 0
+    again = json.loads((tested / "metrics.json").read_text())
+    # Same network, same movement, same plant seed: the test is reproduced exactly.
+    assert again["test"] == metrics["test"]
+
+    other = tmp_path / "test-ym"
+    assert main(["test", "--model", str(trained / "model.npz"), "--trajectory", "ym",
+                 "--out", str(other)]) == 0
+    assert json.loads((other / "metrics.json").read_text())["steps"] == 240
+
+
+def test_diverging_network_is_recorded_as_failed(tmp_path):
+    out = tmp_path / "diverged"
+    result = run_cli("train", "--spectral-radius", "100", "--epochs", "2", "--out", str(out))
+    assert result.returncode == 1
+    assert "failed" in result.stderr and "Traceback" not in result.stderr
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["failed"] is True and "saturated" in metrics["fail_reason"]
+    assert metrics["test"] == {"position_nrmse": None, "motor_nrmse": None}
+    assert not (out / "model.npz").exists()
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".csv"])
+def test_trajectory_export_round_trips(suffix, tmp_path, capsys):
+    from skinny_mj.trajectories import Trajectory, get
+
+    path = tmp_path / f"ym{suffix}"
+    assert main(["trajectory", "export", "ym", "--dof", "8", "--out", str(path)]) == 0
+    loaded = Trajectory.load(path)
+    np.testing.assert_allclose(loaded.angles, get("ym", 8).angles, rtol=0, atol=1e-12)
+    assert main(["trajectory", "list"]) == 0
+    assert "y-pure" in capsys.readouterr().out
+
+
+def test_demo_prints_the_table_and_where_the_recording_is(tmp_path):
+    out = tmp_path / "demo"
+    result = run_cli("demo", "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    assert "test position NRMSE" in result.stdout and "paper" in result.stdout
+    assert f"rerun {out / 'run.rrd'}" in result.stdout
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["config"]["method"] == "new" and metrics["config"]["learning_cycles"] == 3
+    assert metrics["test"]["position_nrmse"] < 0.1
+
+
+def test_render_writes_a_picture(tmp_path):
+    pytest.importorskip("OpenGL")
+    env = {**os.environ, "MUJOCO_GL": "egl"}
+    probe = subprocess.run([sys.executable, "-c", "import mujoco.egl; mujoco.egl.GLContext(8, 8)"],
+                           capture_output=True, env=env, timeout=120)
+    if probe.returncode != 0:
+        pytest.skip("no EGL on this machine (MUJOCO_GL=egl cannot make a context)")
+    out = tmp_path / "skinny.png"
+    result = subprocess.run(["skinny", "render", "--dof", "8", "--trajectory", "ymca",
+                             "--frame", "150", "--width", "160", "--height", "120",
+                             "--out", str(out)], capture_output=True, text=True, env=env,
+                            timeout=300)
+    assert result.returncode == 0, result.stderr
+    import matplotlib.image
+
+    image = matplotlib.image.imread(out)
+    assert image.shape[:2] == (120, 160) and image.std() > 0.01
