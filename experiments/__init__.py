@@ -11,6 +11,10 @@ from types import ModuleType
 from skinny_mj.errors import SkinnyInputError
 
 REGISTRY = {
+    "paper-a": "experiments.paper_a",
+    "paper-b": "experiments.paper_b",
+    "paper-c": "experiments.paper_c",
+    "paper-d": "experiments.paper_d",
     "paper-e": "experiments.paper_e",
 }
 

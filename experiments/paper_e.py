@@ -1,21 +1,40 @@
 """Paper E — "a novel training method" (the β-blended target), 2D, Cartesian signals.
 
-Table 2 / Figure 6: experiments 1–6 (original method with 1, 5, 10 repetitions of
-YMCA; new method with β = 0.3, 0.1, 0.05 and the learning cycles per epoch the
-paper derived from its Figure 3), 20 runs each, tested on one YMCA with the
-feedback controller off. Defaults per SPEC §4/§5 (N = 200, spectral radius 0.5,
-reservoir noise 0.03 original / 0.2 new, sensor noise 0.01, 10 epochs, K 1 → 0).
+Rows of one sweep, grouped by id (``--rows table,fig3,fig4,fig5``; or single ids):
 
-The paper's numbers (Table 2) are shown beside ours, labelled; they are never used
-in place of ours.
+- ``table`` (ids ``1``–``6``): Table 1/2 and Figure 6, experiments 1–6 (original
+  method with 1, 5, 10 repetitions of YMCA; new method with β = 0.3, 0.1, 0.05 and
+  the learning cycles per epoch the paper derived from its Figure 3), 20 runs each,
+  tested on one repetition with the feedback controller off.
+- ``fig3`` (``fig3-b0.3`` ...): cycles to convergence of y_used toward the true target
+  for β = 0.3, 0.1, 0.05, 1 with perfect targets and teacher forcing, 400 cycles.
+- ``fig4`` (``fig4-n200`` ...): reservoir size sweep, original method, 5 repetitions,
+  reservoir noise 0.02, 10 runs per size.
+- ``fig5`` (``fig5a-nu0.03``, ``fig5b-nu0.2`` ...): reservoir noise sweep, (a) original
+  method with 5 repetitions, (b) new method β = 0.1 with 1 repetition, N = 200,
+  10 runs per level.
+
+Defaults per SPEC §4/§5 (N = 200, spectral radius 0.5, reservoir noise 0.03 original /
+0.2 new, sensor noise 0.01, 10 epochs, K 1 → 0). ``--movement`` trains and tests every
+row on another movement, e.g. an excerpt of motion capture:
+``--movement /work/shared/mocap/cmu/md_02.amc@start=3,duration=6.26``; the experiment
+is then named ``paper-e-<movement>`` (its own output folder and table heading).
+
+The paper's numbers are shown beside ours, labelled; never in place of ours.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import json
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
+from skinny_mj.errors import SkinnyInputError
 from skinny_mj.experiment import Experiment, Row
 from skinny_mj.training import TrainConfig, train
 
@@ -39,11 +58,17 @@ TABLE_1 = {
     "5": ("new", 0.1, 3, 1),
     "6": ("new", 0.05, 6, 1),
 }
+#: Cycles the paper read off its Figure 3 for each β: Table 1's cycles/epoch x 10 epochs
+#: (β = 1: "only one cycle of training is needed", Fig. 3 caption).
+PAPER_FIG3_CYCLES = {0.3: 20, 0.1: 30, 0.05: 60, 1.0: 1}
+#: Columns of table.md: metric -> header.
+TABLE_COLUMNS = {"position_nrmse": "test position NRMSE", "motor_nrmse": "test motor NRMSE",
+                 "train_wall_s": "train wall (s)", "cycles_to_converge": "Fig. 3 cycles"}
 
 
 @dataclass(frozen=True)
 class Config:
-    """Shared parameters (paper E §4.1); rows vary method, β, cycles and repetitions."""
+    """Shared parameters (paper E §4.1, Figs. 3–5); rows vary the rest."""
 
     dof: int = 4
     signals: str = "cartesian"
@@ -55,7 +80,34 @@ class Config:
     noise_new: float = 0.2
     sensor_noise: float = 0.01
     epochs: int = 10
-    runs: int = 20
+    runs: int = 20  # Table 2 / Fig. 6
+    figure_runs: int = 10  # Figs. 4, 5 ("10 repetitions of each experiment"); Fig. 3 too
+    fig3_betas: tuple[float, ...] = (0.3, 0.1, 0.05, 1.0)
+    fig3_cycles: int = 400
+    #: Fig. 3 "converged": the excess over the final value is below this share of the
+    #: initial excess (so the count does not depend on the ESN's fit floor).
+    fig3_tolerance: float = 0.05
+    fig4_sizes: tuple[int, ...] = (50, 100, 200, 400, 600, 800, 1000)
+    fig4_noise: float = 0.02
+    fig4_reps: int = 5
+    fig5_noise: tuple[float, ...] = (0.0, 0.01, 0.02, 0.03, 0.05, 0.1, 0.2, 0.3, 0.5)
+    fig5a_reps: int = 5
+    fig5b_beta: float = 0.1
+
+    @classmethod
+    def quick(cls, **changes) -> Config:
+        """2 runs of 2 epochs, tiny sweeps (1 repetition in Figs. 4/5a): a smoke test,
+        not a reproduction."""
+        return cls(**{"epochs": 2, "runs": 2, "figure_runs": 2, "fig3_cycles": 20,
+                      "fig4_sizes": (50, 100), "fig4_reps": 1, "fig5_noise": (0.03, 0.2),
+                      "fig5a_reps": 1, **changes})
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Config:
+        """From ``config.json`` (lists back to tuples)."""
+        names = {f.name for f in dataclasses.fields(cls)}
+        return cls(**{k: tuple(v) if isinstance(v, list) else v
+                      for k, v in d.items() if k in names})
 
 
 class RunFailed(RuntimeError):
@@ -63,18 +115,20 @@ class RunFailed(RuntimeError):
 
 
 def train_config(cfg: Config, row: Row) -> TrainConfig:
+    """The training of a FEL row (Table rows, Figs. 4 and 5)."""
     p = row.params
+    default_noise = cfg.noise_new if p["method"] == "new" else cfg.noise_original
     return TrainConfig(
         dof=cfg.dof, signals=cfg.signals, trajectory=cfg.trajectory, asf=cfg.asf,
         reps=p["reps"], method=p["method"], beta=p["beta"], cycles=p["cycles"],
-        epochs=cfg.epochs, reservoir=cfg.reservoir, spectral_radius=cfg.spectral_radius,
-        noise=cfg.noise_new if p["method"] == "new" else cfg.noise_original,
+        epochs=cfg.epochs, reservoir=p.get("reservoir", cfg.reservoir),
+        spectral_radius=cfg.spectral_radius, noise=p.get("noise", default_noise),
         sensor_noise=cfg.sensor_noise,
     )
 
 
-def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    """One training + test run of a Table 1 row; returns the test metrics."""
+def run_fel(cfg: Config, row: Row, seed: int) -> dict:
+    """One training + test run; returns the test metrics."""
     outcome = train(train_config(cfg, row), seed)
     m = outcome.metrics
     if m["failed"]:
@@ -87,55 +141,157 @@ def run_one(cfg: Config, row: Row, seed: int) -> dict:
     }
 
 
-def rows(only: tuple[str, ...] | None = None) -> tuple[Row, ...]:
+def run_convergence(cfg: Config, row: Row, seed: int) -> dict:
+    """Fig. 3: NRMSE(y_used^i, y_true) over ``fig3_cycles`` cycles with perfect targets
+    and teacher forcing (true commands at full scale 2 x the fastest speed)."""
+    from controllers.esn import ESN
+    from controllers.true_target import convergence_curve
+    from skinny_mj.ideal import true_commands
+    from skinny_mj.training import esn_config, full_scale_speeds, load_trajectory, run_streams
+
+    beta = float(row.params["beta"])
+    tcfg = TrainConfig(dof=cfg.dof, signals=cfg.signals, trajectory=cfg.trajectory,
+                       asf=cfg.asf, method="new", beta=beta, reservoir=cfg.reservoir,
+                       spectral_radius=cfg.spectral_radius, noise=0.0)
+    traj, _ = load_trajectory(tcfg)
+    desired = traj.position_signals(cfg.signals)
+    commands = true_commands(traj.angles, full_scale_speeds(tcfg, traj), traj.dt)
+    esn_rng, _ = run_streams(seed)
+    esn = ESN(esn_config(tcfg, desired.shape[1]), rngs=[esn_rng])
+    curve = convergence_curve(esn, desired, commands, beta, int(row.params["cycles"]))[0]
+    return {"cycles_to_converge": cycles_to_converge(curve, cfg.fig3_tolerance),
+            "initial_nrmse": float(curve[0]), "final_nrmse": float(curve[-1]),
+            "convergence_curve": curve}
+
+
+def cycles_to_converge(curve: np.ndarray, tolerance: float) -> int:
+    """Training cycles needed: 1 + the first cycle i whose target y_used^i is within
+    ``tolerance`` x (initial − final) of the final value (β = 1: 1 cycle)."""
+    curve = np.asarray(curve, dtype=float)
+    excess = curve - curve[-1]
+    return int(np.argmax(excess <= tolerance * max(excess[0], 0.0))) + 1
+
+
+def run_one(cfg: Config, row: Row, seed: int) -> dict:
+    """One run of any row (dispatch on the row's kind)."""
+    if row.params.get("kind") == "convergence":
+        return run_convergence(cfg, row, seed)
+    return run_fel(cfg, row, seed)
+
+
+def group_of(row_id: str) -> str:
+    """``table`` for Table rows, else the id's prefix (``fig3``, ``fig4``, ``fig5a`` ...)."""
+    return "table" if row_id in TABLE_1 else row_id.split("-")[0]
+
+
+def all_rows(cfg: Config) -> tuple[Row, ...]:
     out = []
     for row_id, (method, beta, cycles, reps) in TABLE_1.items():
-        if only and row_id not in only:
-            continue
         pos, pos_var, mot, mot_var = PAPER_TABLE_2[row_id]
         out.append(Row(
             row_id, {"method": method, "beta": beta, "cycles": cycles, "reps": reps},
             {"position_nrmse": pos, "position_nrmse_var": pos_var,
              "motor_nrmse": mot, "motor_nrmse_var": mot_var},
         ))
+    for beta in cfg.fig3_betas:
+        paper = {"cycles_to_converge": PAPER_FIG3_CYCLES[beta]} \
+            if beta in PAPER_FIG3_CYCLES else {}
+        out.append(Row(f"fig3-b{beta:g}", {"kind": "convergence", "beta": beta,
+                                           "cycles": cfg.fig3_cycles}, paper,
+                       runs=cfg.figure_runs))
+    for n in cfg.fig4_sizes:
+        out.append(Row(f"fig4-n{n}", {"method": "original", "beta": 1.0, "cycles": 1,
+                                      "reps": cfg.fig4_reps, "reservoir": n,
+                                      "noise": cfg.fig4_noise}, runs=cfg.figure_runs))
+    for nu in cfg.fig5_noise:
+        out.append(Row(f"fig5a-nu{nu:g}", {"method": "original", "beta": 1.0, "cycles": 1,
+                                           "reps": cfg.fig5a_reps, "noise": nu},
+                       runs=cfg.figure_runs))
+    for nu in cfg.fig5_noise:
+        out.append(Row(f"fig5b-nu{nu:g}", {"method": "new", "beta": cfg.fig5b_beta,
+                                           "cycles": None, "reps": 1, "noise": nu},
+                       runs=cfg.figure_runs))
     return tuple(out)
+
+
+def rows(cfg: Config | None = None, only: tuple[str, ...] | None = None) -> tuple[Row, ...]:
+    """The rows, optionally only those named in ``only`` (ids or groups: ``table``,
+    ``fig3``, ``fig4``, ``fig5`` (= ``fig5a`` + ``fig5b``), ``fig5a``, ``fig5b``)."""
+    every = all_rows(Config() if cfg is None else cfg)
+    if not only:
+        return every
+
+    def chosen(row_id: str, entry: str) -> bool:
+        group = group_of(row_id)
+        return entry in (row_id, group, group.rstrip("ab"))
+
+    known = {r.row_id for r in every} | {group_of(r.row_id) for r in every} | {"fig5"}
+    unknown = [e for e in only if e not in known]
+    if unknown:
+        groups = sorted({group_of(r.row_id) for r in every} | {"fig5"})
+        raise SkinnyInputError(f"unknown row(s) {unknown}; groups: {', '.join(groups)}; "
+                               "or row ids such as 5, fig4-n200, fig5b-nu0.2")
+    return tuple(r for r in every if any(chosen(r.row_id, e) for e in only))
+
+
+def movement_slug(movement: str) -> str:
+    """A file-name word for a movement: ``md_02.amc@start=3,duration=6.26`` ->
+    ``md_02_start=3_duration=6.26``."""
+    base, at, spec = str(movement).rpartition("@")
+    stem = Path(base if at else movement).stem
+    return re.sub(r"[^A-Za-z0-9_.+=-]+", "_", stem + ("_" + spec if at else ""))
 
 
 def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
           only: tuple[str, ...] | None = None) -> Experiment:
-    """The sweep; ``quick`` = 2 runs of 2 epochs (a smoke test, not a reproduction)."""
-    cfg = Config(epochs=2, runs=2) if quick else Config()
-    if movement is not None:
-        cfg = Config(**{**cfg.__dict__, "trajectory": movement, "asf": asf})
+    """The sweep; ``quick``: see :meth:`Config.quick`."""
+    cfg = Config.quick() if quick else Config()
+    name = NAME
+    if movement is not None and movement != cfg.trajectory:
+        cfg = dataclasses.replace(cfg, trajectory=str(movement), asf=asf)
+        name = f"{NAME}-{movement_slug(movement)}"
     return Experiment(
-        name=NAME, rows=rows(only), run_one=functools.partial(run_one, cfg), config=cfg,
-        runs=cfg.runs, table_columns=("position_nrmse", "motor_nrmse", "train_wall_s"),
+        name=name, rows=rows(cfg, only), run_one=functools.partial(run_one, cfg),
+        config=cfg, runs=cfg.runs, table_columns=tuple(TABLE_COLUMNS),
+        run_batch=functools.partial(run_batch, cfg),
     )
 
 
 def report(results: dict, out_dir: Path) -> str:
-    """Figure 6 (box plots beside the paper's means) and the paper's claims, checked."""
-    from experiments.claims import claim_lines, values
-    from skinny_mj.plots import boxplot_png
+    """Figures 3–6, one ``.rrd`` of the median run per Table row, the movement line in
+    table.md, the Fig. 3 cycle counts and the paper's claims, checked."""
+    from experiments import paper_e_figures as figs
 
-    for metric in ("position_nrmse", "motor_nrmse"):
-        groups = {f"exp {r}": values(out_dir, r, metric) for r in TABLE_1}
-        ref = {f"exp {r}": PAPER_TABLE_2[r][0 if metric == "position_nrmse" else 2]
-               for r in TABLE_1}
-        groups = {k: v for k, v in groups.items() if v}
-        if groups:
-            boxplot_png(out_dir / f"fig6_{metric}.png", groups, f"test {metric}",
-                        reference={k: ref[k] for k in groups}, title="Paper E, Figure 6")
-    return claim_lines(out_dir, [
-        # The paper's claim is read off its Figure 6(b), the motor error.
-        ("paper: worst run of exp 5 beats the best run of exp 2 (motor, Fig. 6b)",
-         "max", "5", "motor_nrmse", "<", "min", "2"),
-        ("extra: worst run of exp 5 beats the best run of exp 2 (position)",
-         "max", "5", "position_nrmse", "<", "min", "2"),
-        ("median: exp 5 < exp 2 (position)", "median", "5", "position_nrmse", "<", "median", "2"),
-        ("median: exp 2 < exp 1 (position)", "median", "2", "position_nrmse", "<", "median", "1"),
-        ("median: exp 5 < exp 2 (motor)", "median", "5", "motor_nrmse", "<", "median", "2"),
-        ("median: exp 2 < exp 1 (motor)", "median", "2", "motor_nrmse", "<", "median", "1"),
-        ("exp 5 trains in less wall time than exp 2 (mean)",
-         "mean", "5", "train_wall_s", "<", "mean", "2"),
-    ])
+    out_dir = Path(out_dir)
+    cfg = Config.from_dict(json.loads((out_dir / "config.json").read_text())["config"])
+    figs.write_table(results, out_dir, cfg)
+    figs.fig3(out_dir, cfg)
+    figs.fig4(out_dir, cfg)
+    figs.fig5(out_dir, cfg)
+    figs.fig6(out_dir)
+    rrd_lines = figs.median_recordings(out_dir, cfg, [r for r in rows(cfg) if r.row_id in
+                                                      TABLE_1])
+    return "\n".join([figs.claims(out_dir), "", figs.fig3_summary(out_dir, cfg),
+                      "", *rrd_lines])
+
+
+def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
+    """:func:`run_one` for several seeds of one row in lockstep (the engine's fast path,
+    :func:`skinny_mj.training.train_batch`): the same metrics seed by seed, or the
+    exception of a failed run. Convergence rows (Fig. 3) run one seed at a time."""
+    from skinny_mj.training import train_batch
+
+    if row.params.get("kind") == "convergence":
+        out: list = []
+        for seed in seeds:
+            try:
+                out.append(run_convergence(cfg, row, seed))
+            except Exception as exc:  # a run's failure is data
+                out.append(exc)
+        return out
+    return [RunFailed(m.get("fail_reason") or "diverged") if m["failed"] else {
+        "position_nrmse": m["test"]["position_nrmse"],
+        "motor_nrmse": m["test"]["motor_nrmse"],
+        "train_wall_s": m["wall_s"],
+        "train_curve_position_nrmse": m["train"]["position_nrmse"],
+    } for m in (o.metrics for o in train_batch(train_config(cfg, row), seeds))]

@@ -16,7 +16,7 @@ import numpy as np
 from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.trajectories.retarget import RetargetReport, clip_report, range_excess
-from skinny_mj.trajectories.trajectory import Trajectory
+from skinny_mj.trajectories.trajectory import Trajectory, excerpt
 from skinny_mj.trajectories.ymca import letter_end_steps, ymca
 
 
@@ -108,6 +108,39 @@ def _find_asf(amc: Path) -> Path:
     return found[0]
 
 
+_FILE_SUFFIXES = (".npz", ".csv", ".amc", ".bvh")
+_EXCERPT_KEYS = ("start", "duration")
+
+
+def split_excerpt(text: str) -> tuple[str, tuple[float, float | None] | None]:
+    """``"PATH@start=S,duration=D"`` -> ``(PATH, (S, D))`` in seconds.
+
+    The excerpt syntax for movement files: ``@`` after a ``.npz``/``.csv``/``.amc``/
+    ``.bvh`` path, then comma-separated ``start=`` (default 0) and ``duration=``
+    (default: to the end), e.g. ``md_02.amc@start=3,duration=6.26``. Anything else
+    (a library name such as ``ymca@1.5``, a plain path) comes back unchanged with None.
+    """
+    base, at, spec = str(text).rpartition("@")
+    if not at or Path(base).suffix.lower() not in _FILE_SUFFIXES or "=" not in spec:
+        return str(text), None
+    values: dict[str, float] = {}
+    for item in spec.split(","):
+        key, eq, value = (part.strip() for part in item.partition("="))
+        if not eq or key not in _EXCERPT_KEYS or key in values:
+            raise SkinnyInputError(f"bad excerpt {spec!r} in {text!r}: use "
+                                   "PATH@start=SECONDS,duration=SECONDS")
+        try:
+            values[key] = float(value)
+        except ValueError:
+            raise SkinnyInputError(f"excerpt {key}={value!r} is not a number of seconds "
+                                   f"in {text!r}") from None
+    start, duration = values.get("start", 0.0), values.get("duration")
+    if not (np.isfinite(start) and start >= 0) or (
+            duration is not None and not (np.isfinite(duration) and duration > 0)):
+        raise SkinnyInputError(f"excerpt in {text!r} needs start >= 0 and duration > 0 s")
+    return base, (start, duration)
+
+
 def load_movement(
     name_or_path: str | Path,
     dof: int = 4,
@@ -124,11 +157,13 @@ def load_movement(
     Returns the trajectory (clipped into the joint ranges, at ``speed``, ``reps`` times)
     and a :class:`RetargetReport` saying how much was clipped (zero for library names).
     ``fps`` overrides the capture rate of an .amc (default 120 Hz, CMU's) or a .bvh.
+    A file may carry an excerpt, ``PATH@start=S,duration=D`` (see :func:`split_excerpt`);
+    the report then covers the excerpt only.
     """
     _check_dof(dof)
-    text = str(name_or_path)
+    text, window = split_excerpt(str(name_or_path))
     suffix = Path(text).suffix.lower()
-    if suffix not in (".npz", ".csv", ".amc", ".bvh"):
+    if suffix not in _FILE_SUFFIXES:
         base = text.strip().lower().partition("@")[0]
         if base in _MOVEMENTS or not Path(text).exists():
             traj = get(text, dof, speed=speed, reps=reps)
@@ -142,6 +177,8 @@ def load_movement(
         raise SkinnyInputError("no such file", path=path)
     if suffix in (".npz", ".csv"):
         raw = Trajectory.load(path, dof=dof)
+        if window is not None:
+            raw = excerpt(raw, *window)
         clipped, _ = raw.clip_to_range()
         excess = range_excess(raw.angles, dof)
         report = clip_report(excess, dof, source=str(path), source_fps=1.0 / raw.dt)
@@ -157,6 +194,6 @@ def load_movement(
             from skinny_mj.trajectories.bvh import load_bvh
 
             clip = load_bvh(path, fps=fps)
-        traj, report = retarget(clip, dof, cutoff_hz=cutoff_hz)
+        traj, report = retarget(clip, dof, cutoff_hz=cutoff_hz, window_s=window)
     traj = traj.resample(speed).repeat(reps)
     return traj, report

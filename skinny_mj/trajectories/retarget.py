@@ -282,9 +282,18 @@ def resample_to(x: np.ndarray, fps: float, dt: float) -> np.ndarray:
 
 
 def retarget(
-    clip: ArmClip, dof: int = 4, *, cutoff_hz: float = 6.0, dt: float = DEFAULT_DT_S
+    clip: ArmClip,
+    dof: int = 4,
+    *,
+    cutoff_hz: float = 6.0,
+    dt: float = DEFAULT_DT_S,
+    window_s: tuple[float, float | None] | None = None,
 ) -> tuple[Trajectory, RetargetReport]:
     """Joint-angle retargeting of a capture onto Skinny (see the module docstring).
+
+    ``window_s = (start_s, duration_s)`` keeps only that excerpt (duration None: to the
+    end); it is cut after the low-pass and resampling (no filter edge effects) and
+    before clipping, so the report counts the excerpt's clipping only.
 
     Returns the clipped trajectory at ``dt`` and a :class:`RetargetReport`.
     """
@@ -298,8 +307,13 @@ def retarget(
     upper, fore = arm_directions(clip)
     angles, filled = solve_angles(upper, fore, dof)
     angles = resample_to(lowpass(angles, clip.fps, cutoff_hz), clip.fps, dt)
-    angles, excess = clip_continuous(angles, dof)
     name = Path(clip.source).stem
+    if window_s is not None:
+        from skinny_mj.trajectories.trajectory import excerpt
+
+        part = excerpt(Trajectory(angles, dt, name), *window_s)
+        angles, name = np.array(part.angles), part.name
+    angles, excess = clip_continuous(angles, dof)
     clipped = Trajectory(angles, dt, name)
     report = clip_report(
         excess,

@@ -316,13 +316,16 @@ def _is_float(text: str) -> bool:
     return True
 
 
-def excerpt(traj: Trajectory, start_s: float, duration_s: float) -> Trajectory:
-    """Steps of ``traj`` from ``start_s`` for ``duration_s`` seconds (both >= 0, inside)."""
+def excerpt(traj: Trajectory, start_s: float, duration_s: float | None) -> Trajectory:
+    """Steps of ``traj`` from ``start_s`` for ``duration_s`` seconds (both >= 0, inside;
+    ``duration_s`` None: to the end)."""
     start = int(round(float(start_s) / traj.dt))
-    n = int(round(float(duration_s) / traj.dt))
+    n = len(traj) - start if duration_s is None else int(round(float(duration_s) / traj.dt))
     if start < 0 or n < 1 or start + n > len(traj):
+        what = "to the end" if duration_s is None else f"+ {duration_s:g} s"
         raise SkinnyInputError(
-            f"excerpt {start_s:g} s + {duration_s:g} s is outside {traj.name!r} "
+            f"excerpt {start_s:g} s {what} is outside {traj.name!r} "
             f"(0-{traj.duration_s:g} s)"
         )
-    return Trajectory(traj.angles[start : start + n], traj.dt, f"{traj.name}[{start_s:g}s]")
+    label = f"{start_s:g}s" if duration_s is None else f"{start_s:g}s+{duration_s:g}s"
+    return Trajectory(traj.angles[start : start + n], traj.dt, f"{traj.name}[{label}]")

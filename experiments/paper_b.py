@@ -1,0 +1,275 @@
+"""Paper B — bimanual coordination: a forced leading arm, an ESN-driven lagging arm.
+
+Paper B (ICANN 2010) §3-4: 2D body, joint-angle signals; the leading arm is forced to
+raise and lower (elbow still); the lagging arm's inverse model is an ESN with 4 inputs
+(both arms' current joint angles), 100 internal and 2 output nodes, trained by FEL
+(K 1 → 0 linearly, 7 cycles per epoch: 1 washout, 5 learning, 1 evaluation,
+β = 0.01) and tested with the leader at other speeds (one washout + one evaluation
+cycle, K = 0). Patterns: relative phase 0°, 90°, 180°; frequency ratio 1:2, 1:3, 2:3,
+3:5; amplitude ratio 2:1. The paper reports no numbers, only Figure 3 and the
+qualitative claims that :func:`report` checks here with our numbers.
+
+Not stated in paper B (our choices, in :class:`Config`): the number of epochs, runs,
+spectral radius, reservoir noise, the movement's period and amplitude.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from skinny_mj.experiment import Experiment, Row
+
+NAME = "paper-b"
+#: The leader's test speeds (paper B §3, Fig. 3); 1.0 = the trained speed.
+SPEEDS = (1.0, 0.5, 1.5)
+#: What the paper says per pattern (§4, Fig. 3); printed beside our numbers.
+PAPER_SAYS = {
+    "phase0": "generalizes to new speeds almost perfectly",
+    "phase90": "harder to preserve at new speeds: the lagging arm speeds up/slows down "
+               "too little",
+    "phase180": "generalization to new speeds close to perfect (Fig. 3a)",
+    "freq1-2": "learnable; not smooth, but timing at new speeds as good as trained (Fig. 3c)",
+    "freq1-3": "learnable, relatively stable once learned",
+    "freq2-3": "training failed",
+    "freq3-5": "polyrhythm (no specific result reported)",
+    "amp2-1": "easy to learn, generalizes perfectly to new speeds (Fig. 3d)",
+}
+#: Thresholds on the relative shoulder error (RMS error / RMS of the desired swing; 0
+#: perfect, ~1 = standing still at the mean or half a period off) and on the timing.
+GOOD_REL, FAIL_REL, GOOD_LAG_DEG = 0.3, 0.6, 20.0
+
+
+@dataclass(frozen=True)
+class Config:
+    """Paper B §3 values, and our choices where it states none (marked)."""
+
+    reservoir: int = 100  # Fig. 2: L = 100
+    beta: float = 0.01  # §3, eq. (6)
+    learning_cycles: int = 5  # §3: 7 cycles = washout + 5 learning + evaluation
+    epochs: int = 50  # not stated; 10 (papers D/E) leaves 1:2 unlearned at β = 0.01
+    spectral_radius: float = 0.5  # not stated; SPEC §5 default
+    noise: float = 0.2  # not stated; reservoir noise of the new method (papers D/E)
+    sensor_noise: float = 0.01  # SPEC §1
+    leading: str = "right"  # not stated
+    period_s: float = 2.0  # not stated: the leader's period at the trained speed
+    amplitude_deg: float = 40.0  # not stated: leader's shoulder 50°-130°
+    elbow_deg: float = 20.0  # "no movement in the elbow joint"; held at 20°
+    min_leader_periods: int = 3  # one cycle = 3 leader periods (2:3 -> 4)
+    runs: int = 10  # not stated
+
+
+def movement(cfg: Config):
+    from skinny_mj.bimanual import Movement
+
+    return Movement(leading=cfg.leading, period_s=cfg.period_s,
+                    min_leader_periods=cfg.min_leader_periods,
+                    amplitude_deg=cfg.amplitude_deg, elbow_deg=cfg.elbow_deg)
+
+
+def _tag(speed: float) -> str:
+    return f"x{speed:g}"
+
+
+def run_one(cfg: Config, row: Row, seed: int) -> dict:
+    """Train one lagging-arm ESN on ``row``'s pattern, test at every speed in SPEEDS."""
+    import time
+
+    from controllers.esn import ESN, ESNConfig
+    from controllers.fel import FELConfig
+    from skinny_mj import bimanual as bm
+    from skinny_mj.body import position_signals
+    from skinny_mj.training import run_streams
+
+    start = time.perf_counter()
+    pattern, mv = bm.PATTERNS[row.row_id], movement(cfg)
+    esn_rng, plant_seed = run_streams(seed)
+    angles = bm.pattern_angles(pattern, mv)
+    max_speed = bm.body_max_speeds(angles, mv.dt)  # 2x the trained movement's fastest
+    esn = ESN(ESNConfig(4, 2, cfg.reservoir, cfg.spectral_radius, noise_level=cfg.noise),
+              rngs=[esn_rng])
+    plant = bm.BimanualPlant(angles, mv, max_speed, seeds=[plant_seed],
+                             sensor_noise=cfg.sensor_noise)
+    fel_cfg = FELConfig("new", cfg.beta, cfg.learning_cycles, cfg.epochs)
+    tr = bm.train(esn, plant, position_signals(angles, 4, "joint"), fel_cfg)
+    if tr.failed[0]:
+        raise RuntimeError("the lagging arm's ESN diverged during training")
+    out: dict = {"train_position_nrmse": float(tr.position_nrmse[0, -1]),
+                 "train_curve_position_nrmse": [float(v) for v in tr.position_nrmse[0]],
+                 "max_speed_rad_s": [float(v) for v in max_speed], "traces": {}}
+    lead, lag = bm.ARM_DOFS[mv.leading][0], bm.ARM_DOFS[mv.lagging][0]
+    for speed in SPEEDS:
+        q = bm.pattern_angles(pattern, mv, speed)
+        ev = bm.evaluate(esn, bm.BimanualPlant(q, mv, max_speed, seeds=[plant_seed + 1],
+                                               sensor_noise=cfg.sensor_noise),
+                         position_signals(q, 4, "joint"))
+        if ev.failed[0]:
+            raise RuntimeError(f"the lagging arm's ESN diverged in the test at {speed:g}x")
+        actual, desired = ev.rollout.angles[0, :, lag], q[:, lag]
+        period_steps = mv.period_s / (speed * mv.dt) / pattern.frequency_ratio
+        t = _tag(speed)
+        out[f"position_nrmse_{t}"] = float(ev.position_nrmse[0])
+        out[f"motor_nrmse_{t}"] = float(ev.motor_nrmse[0])
+        out[f"relative_error_{t}"] = float(np.sqrt(np.mean((actual - desired) ** 2))
+                                           / np.std(desired))
+        out[f"phase_lag_deg_{t}"] = bm.phase_lag_deg(actual, desired, period_steps)
+        out["traces"][t] = {k: np.round(np.degrees(v), 2).tolist() for k, v in
+                            (("leader", ev.rollout.angles[0, :, lead]),
+                             ("desired", desired), ("actual", actual))}
+    out["wall_s_run"] = time.perf_counter() - start
+    return out
+
+
+def rows(only: tuple[str, ...] | None = None) -> tuple[Row, ...]:
+    from skinny_mj.bimanual import PATTERNS
+
+    return tuple(Row(name, asdict(p)) for name, p in PATTERNS.items()
+                 if not only or name in only)
+
+
+def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
+          only: tuple[str, ...] | None = None) -> Experiment:
+    """The sweep; ``quick`` = 1 run of 2 epochs per pattern (a smoke test).
+
+    ``movement``/``asf`` are not used: paper B's movement is the synthetic raise/lower.
+    """
+    if movement is not None or asf is not None:
+        from skinny_mj.errors import SkinnyInputError
+
+        raise SkinnyInputError("paper-b uses its own raise/lower movement; "
+                               "--movement/--asf do not apply")
+    cfg = Config(epochs=2, runs=1) if quick else Config()
+    columns = [f"{m}_{_tag(s)}" for m in ("relative_error", "phase_lag_deg")
+               for s in SPEEDS] + ["position_nrmse_x1", "motor_nrmse_x1"]
+    return Experiment(name=NAME, rows=rows(only), run_one=functools.partial(run_one, cfg),
+                      config=cfg, runs=cfg.runs, table_columns=tuple(columns))
+
+
+# -- report: figures and claims -------------------------------------------------------
+def _stat(out_dir: Path, row: str, metric: str, stat=np.median) -> float | None:
+    from experiments.claims import values
+
+    v = values(out_dir, row, metric)
+    return float(stat(v)) if v else None
+
+
+def _roughness(out_dir: Path, row: str, tag: str = "x1") -> float | None:
+    """Median over runs of RMS(Δ² actual) / RMS(Δ² desired) of the lagging shoulder
+    (from the stored traces): 1 = as smooth as the target, larger = jerkier. Unlike the
+    motor NRMSE it does not depend on the pattern's command scale."""
+    from skinny_mj.sweep.stats import load_runs
+
+    vals = []
+    for run in load_runs(out_dir):
+        if run.get("row") == row and run.get("status") == "ok":
+            tr = run["metrics"]["traces"][tag]
+            a, d = (np.diff(np.asarray(tr[k]), 2) for k in ("actual", "desired"))
+            vals.append(float(np.sqrt(np.mean(a**2) / np.mean(d**2))))
+    return float(np.median(vals)) if vals else None
+
+
+def _claim(text: str, holds: bool | None, numbers: str) -> str:
+    mark = "n/a" if holds is None else ("holds" if holds else "does NOT hold")
+    return f"- [{mark}] {text}: {numbers}"
+
+
+def claims(out_dir: Path) -> list[str]:
+    """Paper B's claims, each checked on the medians over runs."""
+    def rel(row: str, s: float) -> float | None:
+        return _stat(out_dir, row, f"relative_error_{_tag(s)}")
+
+    def lag(row: str, s: float) -> float | None:
+        return _stat(out_dir, row, f"phase_lag_deg_{_tag(s)}", lambda v: np.median(np.abs(v)))
+
+    def worst_new(row: str, f=rel) -> float | None:
+        vals = [f(row, s) for s in SPEEDS if s != 1.0]
+        return None if None in vals else max(vals)
+
+    def fmt(**kw) -> str:
+        return ", ".join(f"{k} = {'n/a' if v is None else f'{v:.3g}'}" for k, v in kw.items())
+
+    lines = []
+    for row in ("phase0", "phase180", "amp2-1"):
+        w, wl = worst_new(row), worst_new(row, lag)
+        ok = None if w is None else (w < GOOD_REL and wl < GOOD_LAG_DEG)
+        lines.append(_claim(f"{row} generalizes to 0.5x and 1.5x almost perfectly "
+                            f"(rel. error < {GOOD_REL}, |lag| < {GOOD_LAG_DEG:g}°)", ok,
+                            fmt(worst_rel_error=w, worst_abs_lag_deg=wl,
+                                rel_error_x1=rel(row, 1.0))))
+    w90, l90 = worst_new("phase90"), worst_new("phase90", lag)
+    w_in = [worst_new(r) for r in ("phase0", "phase180")]
+    ok = None if None in (w90, *w_in) else (w90 >= GOOD_REL or l90 >= GOOD_LAG_DEG) \
+        and w90 > 2 * max(w_in)
+    lines.append(_claim("90° does not generalize almost perfectly (worst new-speed rel. "
+                        f"error >= {GOOD_REL} or |lag| >= {GOOD_LAG_DEG:g}°) and is worse "
+                        "than 2x in/anti-phase's", ok,
+                        fmt(phase90=w90, phase90_abs_lag_deg=l90, phase0=w_in[0],
+                            phase180=w_in[1])))
+    for row in ("freq1-2", "freq1-3"):
+        r1 = rel(row, 1.0)
+        lines.append(_claim(f"{row} learnable (rel. error at the trained speed < {GOOD_REL})",
+                            None if r1 is None else r1 < GOOD_REL, fmt(rel_error_x1=r1)))
+    l1, lw = lag("freq1-2", 1.0), worst_new("freq1-2", lag)
+    lines.append(_claim(f"freq1-2 well timed (|lag| < {GOOD_LAG_DEG:g}° trained) and as "
+                        f"well at new speeds (within {GOOD_LAG_DEG:g}° of it)",
+                        None if None in (l1, lw) else
+                        (l1 < GOOD_LAG_DEG and lw <= l1 + GOOD_LAG_DEG),
+                        fmt(abs_lag_x1_deg=l1, worst_abs_lag_new_deg=lw)))
+    r12, r0 = _roughness(out_dir, "freq1-2"), _roughness(out_dir, "phase0")
+    lines.append(_claim("freq1-2 not smooth (roughness at 1x, RMS second difference of the "
+                        "actual / desired shoulder angle, above in-phase's)",
+                        None if None in (r12, r0) else r12 > r0, fmt(freq1_2=r12, phase0=r0)))
+    r23 = rel("freq2-3", 1.0)
+    lines.append(_claim(f"freq2-3 fails (rel. error at the trained speed >= {FAIL_REL})",
+                        None if r23 is None else r23 >= FAIL_REL, fmt(rel_error_x1=r23)))
+    return lines
+
+
+def _fig3(path: Path, row: str, traces: dict) -> None:
+    from skinny_mj.io import atomic_path
+    from skinny_mj.plots import _pyplot
+
+    plt = _pyplot()
+    fig, axes = plt.subplots(len(SPEEDS), 1, figsize=(7.0, 2.2 * len(SPEEDS)))
+    for ax, s in zip(axes, SPEEDS, strict=True):
+        tr = traces[_tag(s)]
+        t = np.arange(len(tr["leader"])) * 0.02
+        ax.plot(t, tr["leader"], color="0.6", label="leading arm")
+        ax.plot(t, tr["desired"], "--", color="tab:blue", label="lagging, desired")
+        ax.plot(t, tr["actual"], color="tab:red", label="lagging, actual")
+        ax.set(ylabel="shoulder (°)", title=f"{row}, leader at {s:g}x")
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel("time (s)")
+    axes[0].legend(fontsize=7, loc="upper right")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    plt.close(fig)
+
+
+def report(results: dict, out_dir: Path) -> str:
+    """Fig. 3-style traces (first ok run per pattern), a box plot, the claims."""
+    from skinny_mj.plots import boxplot_png
+    from skinny_mj.sweep.stats import load_runs
+
+    out_dir = Path(out_dir)
+    runs = sorted((r for r in load_runs(out_dir) if r.get("status") == "ok"),
+                  key=lambda r: r["run_index"])
+    done: set[str] = set()
+    for run in runs:
+        if run["row"] not in done and "traces" in run["metrics"]:
+            _fig3(out_dir / f"fig3_{run['row']}.png", run["row"], run["metrics"]["traces"])
+            done.add(run["row"])
+    from experiments.claims import values
+
+    groups = {f"{r} {_tag(s)}": values(out_dir, r, f"relative_error_{_tag(s)}")
+              for r in PAPER_SAYS for s in SPEEDS}
+    groups = {k: v for k, v in groups.items() if v}
+    if groups:
+        boxplot_png(out_dir / "relative_error.png", groups, "relative shoulder error",
+                    title="Paper B: lagging arm, trained (x1) and tested (x0.5, x1.5)")
+    says = "\n".join(f"- {r}: paper: {t}" for r, t in PAPER_SAYS.items())
+    return "\n".join(claims(out_dir)) + "\n\nWhat the paper says (no numbers given):\n" + says

@@ -1,0 +1,264 @@
+"""Paper E's figures, table header, recordings and claims, from a sweep's run files.
+
+Every function reads ``out_dir/runs/*.json`` (never the paper's numbers in place of
+ours) and writes its PNG into ``out_dir``; a figure whose rows did not run is skipped.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from experiments.claims import claim_lines, values
+from experiments.paper_e import (
+    PAPER_FIG3_CYCLES,
+    PAPER_TABLE_2,
+    TABLE_1,
+    TABLE_COLUMNS,
+    Config,
+    group_of,
+    train_config,
+)
+from skinny_mj.experiment import Row
+from skinny_mj.io import atomic_write_text
+from skinny_mj.sweep.stats import load_runs, markdown_table
+
+
+def _ok_runs(out_dir: Path, group: str) -> list[dict]:
+    return [r for r in load_runs(out_dir)
+            if group_of(r["row"]) == group and r.get("status") == "ok"]
+
+
+def _n_failed(out_dir: Path, row_id: str) -> int:
+    return sum(1 for r in load_runs(out_dir) if r["row"] == row_id and r.get("status") != "ok")
+
+
+def _padded(columns: Sequence[list[float]]) -> np.ndarray:
+    """(R, X) from X lists of run values (missing values as NaN)."""
+    r = max([len(c) for c in columns] + [1])
+    out = np.full((r, len(columns)), np.nan)
+    for j, c in enumerate(columns):
+        out[: len(c), j] = c
+    return out
+
+
+def movement_line(cfg: Config) -> str:
+    """Which movement the rows trained and tested on, and how much was clipped."""
+    from skinny_mj.trajectories import load_movement
+
+    traj, rep = load_movement(cfg.trajectory, cfg.dof, asf=cfg.asf)
+    return (f"Movement: `{cfg.trajectory}` ({traj.name}, {len(traj)} steps = "
+            f"{traj.duration_s:.2f} s, {cfg.dof} DOF, {cfg.signals}); clipped into the joint "
+            f"ranges: {rep.clipped_samples} samples in {rep.clipped_steps} steps "
+            f"(max {rep.max_excess_deg:.1f} deg)")
+
+
+def write_table(results: dict, out_dir: Path, cfg: Config) -> Path:
+    """table.md: the movement, then every row (Table 2 rows first), ours beside the paper."""
+    text = (movement_line(cfg) + "\n\n" + markdown_table(results, TABLE_COLUMNS) + "\n\n"
+            "Fig. 3 rows: cycles = training cycles until y_used is within "
+            f"{cfg.fig3_tolerance:g} x its initial excess of the final value; the paper's "
+            "value = Table 1 cycles/epoch x 10 epochs.\n")
+    return atomic_write_text(out_dir / "table.md", text)
+
+
+def fig3(out_dir: Path, cfg: Config) -> Path | None:
+    """Fig. 3: NRMSE(y_used, y_true) per cycle, mean ± sd over runs, per β (log y);
+    dashed lines: the cycles the paper used (Table 1 x 10 epochs)."""
+    from skinny_mj.plots import _pyplot, _save
+
+    runs = _ok_runs(out_dir, "fig3")
+    if not runs:
+        return None
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for beta in sorted({float(r["params"]["beta"]) for r in runs}, reverse=True):
+        curves = np.array([r["metrics"]["convergence_curve"] for r in runs
+                           if float(r["params"]["beta"]) == beta], dtype=float)
+        mean, sd = curves.mean(axis=0), curves.std(axis=0)
+        x = np.arange(1, curves.shape[1] + 1)
+        if not np.any(mean > 0):  # β = 1: y_used = y_true from the first cycle
+            ax.plot([], [], label=f"β = {beta:g} (0 at every cycle)")
+            continue
+        mean = np.where(mean > 0, mean, np.nan)
+        (line,) = ax.plot(x, mean, label=f"β = {beta:g} (n = {len(curves)})")
+        ax.fill_between(x, np.clip(mean - sd, mean * 0.1, None), mean + sd,
+                        color=line.get_color(), alpha=0.2)
+        if beta in PAPER_FIG3_CYCLES:
+            ax.axvline(PAPER_FIG3_CYCLES[beta], color=line.get_color(), ls="--", lw=0.8)
+    ax.set_yscale("log")
+    ax.set(xlabel="training cycle i", ylabel="NRMSE(y_used^i, y_true)",
+           title="Paper E, Figure 3 (dashed: cycles the paper used)")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    return _save(fig, out_dir / "fig3.png")
+
+
+def fig3_summary(out_dir: Path, cfg: Config) -> str:
+    """Cycles each β needs (mean, min–max over runs) beside the paper's Table 1 count."""
+    runs = _ok_runs(out_dir, "fig3")
+    if not runs:
+        return "Fig. 3: no runs"
+    lines = [f"Fig. 3 — training cycles until y_used is within {cfg.fig3_tolerance:g} of its "
+             "initial distance from the final value (perfect targets, teacher forcing):"]
+    for beta in sorted({float(r["params"]["beta"]) for r in runs}, reverse=True):
+        sel = [r["metrics"] for r in runs if float(r["params"]["beta"]) == beta]
+        c = np.array([m["cycles_to_converge"] for m in sel])
+        final = np.array([m["final_nrmse"] for m in sel])
+        paper = PAPER_FIG3_CYCLES.get(beta)
+        lines.append(
+            f"- β = {beta:g}: {c.mean():.1f} cycles (min {c.min()}, max {c.max()}, n = "
+            f"{len(c)}), final NRMSE {final.mean():.2e}; paper: "
+            + ("—" if paper is None else f"{paper}" + (" (1 cycle)" if beta == 1 else
+                                                         f" ({paper // 10} per epoch x 10)")))
+    return "\n".join(lines)
+
+
+def fig4(out_dir: Path, cfg: Config) -> Path | None:
+    """Fig. 4: mean test position NRMSE vs reservoir size (original method, 5 reps)."""
+    from skinny_mj.plots import line_sweep_png
+
+    runs = _ok_runs(out_dir, "fig4")
+    sizes = sorted({int(r["params"]["reservoir"]) for r in runs})
+    if not sizes:
+        return None
+    cols = [values(out_dir, f"fig4-n{n}", "position_nrmse") for n in sizes]
+    failed = sum(_n_failed(out_dir, f"fig4-n{n}") for n in sizes)
+    label = f"original, {cfg.fig4_reps} reps, noise {cfg.fig4_noise:g} (failed runs: {failed})"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return line_sweep_png(out_dir / "fig4.png", sizes, {label: _padded(cols)},
+                              "reservoir size N", "test position NRMSE (mean ± sd)",
+                              title="Paper E, Figure 4 (the paper chose N = 200)", log_x=True)
+
+
+def fig5(out_dir: Path, cfg: Config) -> Path | None:
+    """Fig. 5: mean test position NRMSE vs reservoir noise, (a) original (b) new β."""
+    from skinny_mj.plots import line_sweep_png
+
+    series = {"fig5a": f"(a) original, {cfg.fig5a_reps} reps (paper chose 0.03)",
+              "fig5b": f"(b) new β = {cfg.fig5b_beta:g}, 1 rep (paper chose 0.2)"}
+    levels = sorted({float(r["params"]["noise"]) for g in series for r in _ok_runs(out_dir, g)})
+    if not levels:
+        return None
+    ys = {}
+    for group, label in series.items():
+        cols = [values(out_dir, f"{group}-nu{nu:g}", "position_nrmse") for nu in levels]
+        if any(cols):
+            failed = sum(_n_failed(out_dir, f"{group}-nu{nu:g}") for nu in levels)
+            ys[f"{label}, failed runs: {failed}"] = _padded(cols)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return line_sweep_png(out_dir / "fig5.png", levels, ys, "reservoir noise level ν",
+                              "test position NRMSE (mean ± sd)", title="Paper E, Figure 5")
+
+
+def fig6(out_dir: Path) -> list[Path]:
+    """Fig. 6: box plots of the Table rows beside the paper's means."""
+    from skinny_mj.plots import boxplot_png
+
+    written = []
+    for metric in ("position_nrmse", "motor_nrmse"):
+        groups = {f"exp {r}": values(out_dir, r, metric) for r in TABLE_1}
+        ref = {f"exp {r}": PAPER_TABLE_2[r][0 if metric == "position_nrmse" else 2]
+               for r in TABLE_1}
+        groups = {k: v for k, v in groups.items() if v}
+        if groups:
+            written.append(boxplot_png(out_dir / f"fig6_{metric}.png", groups,
+                                       f"test {metric}", reference={k: ref[k] for k in groups},
+                                       title="Paper E, Figure 6"))
+    return written
+
+
+def _best_level(out_dir: Path, ids: dict[str, float]) -> str:
+    means = {x: float(np.mean(v)) for row, x in ids.items()
+             if (v := values(out_dir, row, "position_nrmse"))}
+    if not means:
+        return "no runs"
+    best = min(means, key=means.get)
+    return f"{best:g} (mean test position NRMSE {means[best]:.4f})"
+
+
+def claims(out_dir: Path) -> str:
+    """The paper's claims, checked on the run files, and the figures' optima."""
+    text = claim_lines(out_dir, [
+        # The paper's claim is read off its Figure 6(b), the motor error.
+        ("paper: worst run of exp 5 beats the best run of exp 2 (motor, Fig. 6b)",
+         "max", "5", "motor_nrmse", "<", "min", "2"),
+        ("extra: worst run of exp 5 beats the best run of exp 2 (position)",
+         "max", "5", "position_nrmse", "<", "min", "2"),
+        ("median: exp 5 < exp 2 (position)", "median", "5", "position_nrmse", "<", "median", "2"),
+        ("median: exp 2 < exp 1 (position)", "median", "2", "position_nrmse", "<", "median", "1"),
+        ("median: exp 5 < exp 2 (motor)", "median", "5", "motor_nrmse", "<", "median", "2"),
+        ("median: exp 2 < exp 1 (motor)", "median", "2", "motor_nrmse", "<", "median", "1"),
+        ("exp 5 trains in less wall time than exp 2 (mean)",
+         "mean", "5", "train_wall_s", "<", "mean", "2"),
+    ])
+    runs = load_runs(out_dir)
+    ids = {g: {r["row"]: float(r["params"].get("reservoir" if g == "fig4" else "noise", 0))
+               for r in runs if group_of(r["row"]) == g} for g in ("fig4", "fig5a", "fig5b")}
+    return "\n".join([
+        text,
+        f"- [info] Fig. 4: best reservoir size {_best_level(out_dir, ids['fig4'])}; "
+        "the paper chose 200",
+        f"- [info] Fig. 5a: best noise, original {_best_level(out_dir, ids['fig5a'])}; "
+        "the paper chose 0.03",
+        f"- [info] Fig. 5b: best noise, new β {_best_level(out_dir, ids['fig5b'])}; "
+        "the paper chose 0.2",
+    ])
+
+
+def median_recordings(out_dir: Path, cfg: Config, table_rows: Sequence[Row]) -> list[str]:
+    """One ``exp<row>_median_seed<seed>.rrd`` per Table row: the run with the median test
+    position NRMSE (lower middle for an even count), re-trained from its seed (runs are
+    deterministic in (config, seed); the lines say whether the re-run matched)."""
+    lines = ["Recordings (median run of each Table row):"]
+    by_row = {r["row"]: [] for r in load_runs(out_dir)}
+    for r in load_runs(out_dir):
+        if r.get("status") == "ok" and r["metrics"].get("position_nrmse") is not None:
+            by_row[r["row"]].append(r)
+    for row in table_rows:
+        ok = sorted(by_row.get(row.row_id, []), key=lambda r: r["metrics"]["position_nrmse"])
+        if not ok:
+            continue
+        run = ok[(len(ok) - 1) // 2]
+        path = out_dir / f"exp{row.row_id}_median_seed{run['seed']}.rrd"
+        for old in out_dir.glob(f"exp{row.row_id}_median_seed*.rrd"):
+            if old != path:
+                old.unlink()
+        if not path.is_file():
+            same = _record_run(path, cfg, row, int(run["seed"]), run["metrics"])
+            note = "re-run identical" if same else "re-run DIFFERS from the sweep's run"
+        else:
+            note = "existing"
+        lines.append(f"- exp {row.row_id}: seed {run['seed']}, test position NRMSE "
+                     f"{run['metrics']['position_nrmse']:.4f} -> {path.name} ({note})")
+    return lines
+
+
+def _record_run(path: Path, cfg: Config, row: Row, seed: int, metrics: dict) -> bool:
+    """Re-train one run, write its test as an .rrd; True when it reproduces ``metrics``."""
+    from skinny_mj import body
+    from skinny_mj.recording import write_recording
+    from skinny_mj.training import train
+
+    outcome = train(train_config(cfg, row), seed)
+    test, tcfg = outcome.test, outcome.config
+    ro = test.rollout
+    curve = outcome.metrics["train"].get("position_nrmse") or []
+    curves = {"train_position_nrmse": np.array([np.nan if v is None else v for v in curve])}
+    write_recording(
+            path, dt=test.trajectory.dt, dof=tcfg.dof, dof_names=list(body.dof_names(tcfg.dof)),
+            signal_names=list(body.signal_names(tcfg.dof, tcfg.signals)),
+            desired_angles=test.trajectory.angles, actual_angles=ro.angles[0],
+            commands=ro.commands[0], desired_signals=test.desired,
+            actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0],
+            title=f"paper E exp {row.row_id}, median run (seed {seed})",
+            metadata={"row": row.row_id, "params": dict(row.params), "seed": seed,
+                      "test": outcome.metrics["test"], "movement": cfg.trajectory},
+            curves=curves if curve else None)
+    return (outcome.metrics["test"]["position_nrmse"] == metrics.get("position_nrmse")
+            and outcome.metrics["test"]["motor_nrmse"] == metrics.get("motor_nrmse"))

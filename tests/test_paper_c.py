@@ -1,0 +1,116 @@
+"""Paper C (generalization): the paper's settings, the measures behind its claims, and
+the whole --quick sweep end to end (train x test matrix, figures, claims)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from experiments import paper_c
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.experiment import run_sweep
+from skinny_mj.ideal import max_speeds
+from skinny_mj.trajectories import get
+
+
+def test_config_is_paper_c_section_3_5():
+    cfg = paper_c.Config()
+    assert (cfg.signals, cfg.reservoir, cfg.spectral_radius, cfg.noise) == ("joint", 1000, 0.1,
+                                                                            0.2)
+    assert (cfg.sensor_noise, cfg.epochs, cfg.learning_cycles) == (0.01, 150, 5)
+    fcfg = paper_c.fel_config(cfg)
+    assert fcfg.effective_beta == 1.0  # u_target = u + u_error(t+1): the original target
+    gains = fcfg.gains()
+    assert gains.shape == (150,) and gains[0] == 1.0
+    np.testing.assert_allclose(gains[1:] / gains[:-1], 0.9)  # -10 % per epoch
+    assert gains[-1] < 1e-6  # "decreased to ~0"
+    tcfg = paper_c.train_config(cfg, "y-pure")
+    assert tcfg.method == "original" and tcfg.learning_cycles == 5 and tcfg.noise_level == 0.2
+
+
+def test_every_network_shares_ymcas_command_scale():
+    from skinny_mj.training import full_scale_speeds
+
+    cfg = paper_c.Config()
+    ymca = max_speeds(get("ymca").angles, 0.02)
+    for movement in ("y", "y-pure", "mirror-left", "ymca@1.5"):
+        own = paper_c.train_config(cfg, movement)
+        np.testing.assert_array_equal(full_scale_speeds(own, get(movement)), ymca)
+    # without the shared scale Y's barely moving elbows would get a far smaller one
+    assert max_speeds(get("y").angles, 0.02)[1] < 0.2 * ymca[1]
+
+
+def test_arm_metrics_tell_the_average_from_the_own_target():
+    desired = get("ymca").angles
+    average = np.tile((desired[:, :2] + desired[:, 2:]) / 2, 2)
+    m = paper_c.arm_metrics(average, desired, 4)
+    assert m["err_vs_avg"] == pytest.approx(0.0, abs=1e-12)
+    assert m["asym_produced"] == pytest.approx(0.0, abs=1e-12)
+    assert m["err_vs_own"] > 0.02 and m["asym_desired"] > 0.05
+    assert m["corr_vs_avg"] == pytest.approx(1.0)
+    own = paper_c.arm_metrics(desired, desired, 4)
+    assert own["err_vs_own"] == 0.0 and own["err_vs_avg"] > 0.02
+
+
+def test_elbow_range_of_the_derived_movements():
+    assert paper_c.elbow_range(get("y-pure").angles, 4) == 0.0
+    y, ymca = (paper_c.elbow_range(get(n).angles, 4) for n in ("y", "ymca"))
+    assert 0 < y < 0.1 * ymca  # Y: "hardly any motion in the elbow"
+
+
+def test_untrained_network_leaves_the_arm_still_at_test():
+    """K = 0 and a zero readout: the commands are zero, so the plant keeps its first pose."""
+    from controllers.esn import ESN
+    from skinny_mj.training import esn_config
+
+    cfg = paper_c.Config(reservoir=30)
+    esn = ESN(esn_config(paper_c.train_config(cfg, "ymca"), 4), seed=0)
+    traj = get("ym")
+    ro, commands = paper_c.evaluate_two_cycles(esn, traj, "joint", 0, 0.01,
+                                           max_speeds(get("ymca").angles, 0.02))
+    assert ro is not None and np.all(ro.commands == 0)
+    assert paper_c.elbow_range(ro.angles[0], 4) < 1e-3
+    assert commands.shape == (len(traj) - 1, 4) and np.abs(commands).max() <= 1
+
+
+def test_build_rows_and_unknown_rows():
+    full = paper_c.build()
+    assert [r.row_id for r in full.rows] == list(paper_c.MOVEMENTS) and full.runs == 10
+    quick = paper_c.build(quick=True, only=("ymca",))
+    assert [r.row_id for r in quick.rows] == ["ymca"] and quick.config.reservoir == 100
+    moved = paper_c.build(quick=True, movement="ymca@0.5")
+    assert paper_c.columns(moved.config)[paper_c.REAL_ID] == "ymca@0.5"
+    with pytest.raises(SkinnyInputError, match="unknown paper-c rows"):
+        paper_c.build(only=("nope",))
+
+
+def test_quick_sweep_end_to_end(tmp_path):
+    exp = paper_c.build(quick=True)
+    results = run_sweep(exp, tmp_path, workers=1, progress=False)
+    assert all(r["n_failed"] == 0 for r in results["rows"])
+    runs = [json.loads(p.read_text()) for p in sorted((tmp_path / "runs").glob("*.json"))]
+    assert len(runs) == len(paper_c.QUICK_TRAIN) * exp.runs
+    cols = list(paper_c.columns(exp.config))
+    for run in runs:
+        m = run["metrics"]
+        for col in cols:
+            assert np.isfinite(m[f"{col}__position_nrmse"]) and 0 <= m[f"{col}__position_nrmse"]
+        assert np.asarray(m["angles__ymca"]).shape == (len(get("ymca")), 4)
+        assert len(m["train_curve_position_nrmse"]) == exp.config.epochs
+        assert 0 < m["peak_rss_mb"] < 2048
+    text = paper_c.report(results, tmp_path)
+    for name in ("matrix_position_nrmse.png", "matrix.md", "train_curves.png", "fig3_ymca.png",
+                 "fig4_ypure_ym.png", "fig6_mirror_left_ymca.png"):
+        assert (tmp_path / name).is_file(), name
+    train, tests, m = paper_c.matrix(paper_c._runs(tmp_path))
+    assert train == list(paper_c.QUICK_TRAIN) and tests == cols and np.isfinite(m).all()
+    assert "Y pure -> YM" in text and "mirror-left -> YMCA" in text
+    assert "[n/a] trained on YMCA, tested on ymca-0.5x" in text  # not in the quick sweep
+    # Even this short training shows paper C's mirror result: a network trained on a
+    # symmetric movement answers YMCA with a symmetric output near the arms' average.
+    mirror = [r["metrics"] for r in runs if r["row"] == "mirror-left"]
+    for mm in mirror:
+        assert mm["ymca__err_vs_avg"] < mm["ymca__err_vs_own"]
+        assert mm["ymca__asym_produced"] < 0.5 * mm["ymca__asym_desired"]

@@ -1,0 +1,119 @@
+"""Paper D module: rows match the paper's design, and a --quick sweep runs end to end."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import experiments
+from experiments import paper_d
+from skinny_mj.experiment import run_sweep
+from skinny_mj.sweep.stats import load_runs, summarize
+
+
+def test_registered_and_described():
+    assert experiments.get("paper-d") is paper_d
+    assert "YMCA" in experiments.describe("paper-d")
+
+
+def test_rows_follow_the_papers_design():
+    cfg = paper_d.Config()
+    assert (cfg.dof, cfg.signals, cfg.spectral_radius, cfg.noise, cfg.sensor_noise,
+            cfg.runs) == (8, "cartesian", 0.5, 0.2, 0.01, 50)
+    got = {}
+    for row in paper_d.rows():
+        c = paper_d.train_configs(cfg, row)
+        tt, fel = c["tt"], c["fel"]
+        assert tt.method == "true-target" and fel.method == row.params["method"]
+        assert tt.noise_level == fel.noise_level and tt.reps == fel.reps
+        assert set(row.paper) == {m for k in paper_d.COLUMNS for m in (k, f"{k}_var")}
+        got[row.row_id] = (fel.method, fel.noise_level, fel.reps, fel.learning_cycles,
+                           tt.beta, fel.beta)
+    assert got == {
+        "1": ("original", 0.0, 1, 1, 1.0, 1.0),
+        "2": ("original", 0.2, 1, 1, 1.0, 1.0),
+        "3a": ("original", 0.2, 5, 1, 1.0, 1.0),
+        "3b": ("original", 0.2, 10, 1, 1.0, 1.0),
+        "4": ("new", 0.2, 1, 5, 0.1, 0.1),
+    }
+    # 50 rounds for the new method in both architectures: 5 cycles x 10 gains, 50 TT rounds.
+    assert cfg.fel_cycles * cfg.gains == cfg.tt_cycles == 50
+    assert [r.row_id for r in paper_d.rows(("2", "4"))] == ["2", "4"]
+
+
+def test_build_options():
+    exp = paper_d.build(quick=True, movement="y", only=("1",))
+    assert exp.runs == 2 and exp.config.gains == 2 and exp.config.tt_cycles == 3
+    assert exp.config.trajectory == "y" and [r.row_id for r in exp.rows] == ["1"]
+    assert exp.name == "paper-d-y" and paper_d.build().name == "paper-d"
+    assert set(paper_d.COLUMNS) <= set(exp.table_columns)
+
+
+@pytest.fixture(scope="module")
+def quick_sweep(tmp_path_factory):
+    out = tmp_path_factory.mktemp("paper_d")
+    exp = paper_d.build(quick=True)
+    results = run_sweep(exp, out, workers=1, progress=False)
+    return exp, out, results
+
+
+def test_quick_sweep_is_complete(quick_sweep):
+    exp, out, results = quick_sweep
+    assert [r["row"] for r in results["rows"]] == list(paper_d.EXPERIMENTS)
+    for row in results["rows"]:
+        assert row["n_ok"] == 2 and row["n_failed"] == 0
+        for metric in (*paper_d.COLUMNS, "fel_motor_test"):
+            st = row["metrics"][metric]
+            if st["n"]:  # a diverged architecture gives None, counted in *_failed
+                assert 0 <= st["mean"] < 1.5
+        assert row["paper"]["tt_position_test"] == paper_d.PAPER_TABLE_1[row["row"]][2][0]
+    table = (out / "table.md").read_text()
+    assert table.count("\n| 3") == 2 and "TT pos test (paper)" in table
+    assert "FEL pos test (ours: mean (var))" in table
+
+
+def test_results_equal_aggregate_of_run_files(quick_sweep):
+    _, out, _ = quick_sweep
+    saved = json.loads((out / "results.json").read_text())
+    runs = load_runs(out)
+    assert len(runs) == 10
+    for row in saved["rows"]:
+        for metric, st in row["metrics"].items():
+            vals = [r["metrics"][metric] for r in runs if r["row"] == row["row"]]
+            assert st == pytest.approx(summarize(vals))
+
+
+def test_both_architectures_are_trained_and_differ(quick_sweep):
+    _, out, _ = quick_sweep
+    for run in load_runs(out):
+        m = run["metrics"]
+        assert m["tt_wall_s"] > 0 and m["fel_wall_s"] > 0
+        if not (m["tt_failed"] or m["fel_failed"]):
+            # Teacher-forced training error is far below the closed-loop test error.
+            assert m["tt_position_train"] < m["tt_position_test"]
+            assert m["tt_position_test"] != m["fel_position_test"]
+
+
+def test_report_writes_figures_and_claims(quick_sweep):
+    _, out, results = quick_sweep
+    text = paper_d.report(results, out)
+    for name in ("fig3_tt_position_test", "fig3_tt_motor_test", "fig3_fel_position_test",
+                 "fig4_right_arm_tt"):
+        assert (out / f"{name}.png").stat().st_size > 1000
+    assert len([ln for ln in text.splitlines() if ln.startswith("- [")]) == \
+        len(paper_d.CLAIMS) + 3
+    assert "reproduce their run files (3/3)" in text and "[holds] the Figure 4" in text
+    assert len(list(out.glob("exp*_tt_average_run.rrd"))) == 3
+    assert "TT: reservoir noise improves testing" in text
+
+
+def test_run_one_is_reproducible_from_its_seed():
+    cfg = paper_d.quick_config(paper_d.Config(reservoir=30))
+    row = paper_d.rows(("2",))[0]
+    a, b = paper_d.run_one(cfg, row, 7), paper_d.run_one(cfg, row, 7)
+    c = paper_d.run_one(cfg, row, 8)
+    keys = [*paper_d.COLUMNS]
+    assert [a[k] for k in keys] == [b[k] for k in keys]
+    assert not np.allclose([a[k] for k in keys], [c[k] for k in keys])
