@@ -9,6 +9,8 @@ as the runs of one batched ESN.
 
     python benchmarks/mackey_glass.py                 # N = 400
     python benchmarks/mackey_glass.py --reservoir 1000
+    python benchmarks/mackey_glass.py --reservoir 1000 --reservoirpy   # + reservoirpy 0.4
+                                                                       # on the same series
 """
 
 from __future__ import annotations
@@ -69,7 +71,14 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--ridge", type=float, default=0.0, help="0 = pseudoinverse")
     p.add_argument("--bias", type=float, default=0.2)
     p.add_argument("--feedback-scaling", type=float, default=0.56)
+    p.add_argument("--reservoirpy", action="store_true",
+                   help="compare with reservoirpy on the same series (skinny_mj.bench)")
     args = p.parse_args(argv)
+    if args.reservoirpy:
+        from skinny_mj.bench import mackey_glass as compare
+
+        print(compare(args.reservoir, args.trials, args.washout, args.train, args.seed))
+        return
     out = run(args)
     print(f"N={args.reservoir} trials={args.trials}: log10 NRMSE_84 = "
           f"{out['log10_nrmse84']:.2f} (Jaeger & Haas 2004, N=1000: about -4.2); "

@@ -124,6 +124,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc --movement")
     p.add_argument("--rows", help="comma-separated row ids to run (default: all)")
 
+    p = sub.add_parser("bench", help="measure the fast path: ratios vs reservoirpy, physics, "
+                       "the naive loop (prints a table)")
+    p.add_argument("--quick", action="store_true", help="short timings; no full paper-E sweep")
+    p.add_argument("--out", type=Path, help="write every figure to FILE.json")
+    p.add_argument("--workers", type=_positive_int,
+                   help="processes for paper_e_full_s (default: all cores)")
+
     p = sub.add_parser("render", help="render Skinny to a PNG (needs MUJOCO_GL=egl)")
     p.add_argument("--dof", type=int, choices=(4, 8), default=4)
     p.add_argument("--trajectory", help="pose Skinny at a movement's frame (default: rest pose)")

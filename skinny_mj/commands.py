@@ -319,3 +319,16 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     print(summary)
     print(f"results: {out}")
     return 0
+
+
+# -- bench ------------------------------------------------------------------------------
+def cmd_bench(args: argparse.Namespace) -> int:
+    from skinny_mj import bench
+    from skinny_mj.io import atomic_write_json
+
+    figures = bench.run(quick=args.quick, workers=args.workers)
+    print(bench.table(figures))
+    if args.out is not None:
+        atomic_write_json(Path(args.out), figures)
+        print(f"wrote {args.out}")
+    return 0

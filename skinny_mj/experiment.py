@@ -32,7 +32,7 @@ from skinny_mj.io import atomic_write_json, atomic_write_text
 from skinny_mj.sweep.stats import aggregate, markdown_table, to_jsonable
 
 __all__ = ["Row", "Experiment", "RunSpec", "run_seed", "run_sweep", "aggregate",
-           "markdown_table", "execute_run", "default_out_dir"]
+           "markdown_table", "execute_run", "execute_batch", "default_out_dir"]
 
 _SAFE_NAME = re.compile(r"^[A-Za-z0-9_.][A-Za-z0-9_.+=-]*$")
 _THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
@@ -40,15 +40,22 @@ _THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 @dataclass(frozen=True)
 class Row:
-    """One row of a paper's table: its id, the parameters that differ, the paper's values."""
+    """One row of a paper's table: its id, the parameters that differ, the paper's values.
+
+    ``runs``: this row's run count when it differs from the experiment's (e.g. a figure
+    the paper ran 10 times beside a table of 20); ``--runs N`` caps it at N.
+    """
 
     row_id: str
     params: Mapping[str, Any] = field(default_factory=dict)
     paper: Mapping[str, float] = field(default_factory=dict)
+    runs: int | None = None
 
     def __post_init__(self) -> None:
         if not _SAFE_NAME.match(self.row_id):
             raise SkinnyInputError(f"row id {self.row_id!r} must be a plain file-name word")
+        if self.runs is not None and self.runs < 1:
+            raise SkinnyInputError(f"row {self.row_id!r}: runs must be >= 1, got {self.runs}")
 
 
 @dataclass(frozen=True)
@@ -59,6 +66,8 @@ class Experiment:
     values are kept in the run file but not aggregated). It is shipped to worker
     processes with cloudpickle, so bind the config with ``functools.partial``.
     ``config`` is a frozen dataclass (or a mapping) recorded in ``config.json``.
+    With ``run_batch``, the engine hands each worker a chunk of one row's seeds to run
+    in lockstep; the run files are the same as with ``run_one``.
     """
 
     name: str
@@ -68,6 +77,10 @@ class Experiment:
     runs: int = 10
     base_seed: int = 0
     table_columns: tuple[str, ...] | None = None
+    #: optional ``run_batch(row, seeds) -> list`` running one row's seeds in lockstep
+    #: (the fast path); element k is seed k's metrics dict, or an Exception for a run
+    #: that failed. Must give the same metrics as ``run_one`` seed by seed.
+    run_batch: Callable[[Row, list[int]], list[Any]] | None = None
 
     def __post_init__(self) -> None:
         if not _SAFE_NAME.match(self.name):
@@ -104,11 +117,41 @@ def _config_dict(experiment: Experiment, runs: int) -> dict[str, Any]:
     return to_jsonable({
         "experiment": experiment.name,
         "config": cfg,
-        "rows": [{"row": r.row_id, "params": dict(r.params), "paper": dict(r.paper)}
-                 for r in experiment.rows],
+        "rows": [{"row": r.row_id, "params": dict(r.params), "paper": dict(r.paper),
+                  **({} if r.runs is None else {"runs": r.runs})} for r in experiment.rows],
         "runs": runs,
         "base_seed": experiment.base_seed,
     })
+
+
+def _record(spec: RunSpec, experiment_name: str) -> dict[str, Any]:
+    return {
+        "experiment": experiment_name, "row": spec.row.row_id, "row_index": spec.row_index,
+        "run_index": spec.run_index, "seed": spec.seed, "params": dict(spec.row.params),
+        "paper": dict(spec.row.paper),
+    }
+
+
+def _finish(record: dict[str, Any], out: Any, tb: str | None = None) -> dict[str, Any]:
+    """Fill a record from a run's output: a metrics mapping, or an exception."""
+    if not isinstance(out, Mapping | BaseException):
+        out = TypeError(f"run_one must return a dict, got {type(out).__name__}")
+    if isinstance(out, BaseException):
+        tb = tb or "".join(traceback.format_exception(out)[-6:])
+        record.update(status="failed", error=f"{type(out).__name__}: {out}",
+                      traceback=tb, metrics={})
+    else:
+        metrics = to_jsonable(dict(out))
+        bad = sorted(k for k, v in out.items() if isinstance(v, float | np.floating)
+                     and not np.isfinite(v))
+        record.update(status="ok", error=None, metrics=metrics, nonfinite_metrics=bad)
+    return record
+
+
+def _stamp(record: dict[str, Any], wall_s: float) -> dict[str, Any]:
+    record["wall_s"] = wall_s
+    record["finished_at"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+    return record
 
 
 def execute_run(run_one: Callable[[Row, int], Mapping[str, Any]], spec: RunSpec,
@@ -116,26 +159,46 @@ def execute_run(run_one: Callable[[Row, int], Mapping[str, Any]], spec: RunSpec,
     """Run one (row, seed) and return its JSON-able record; an exception becomes a
     ``"failed"`` record with the error, never a lost run."""
     start = time.perf_counter()
-    record: dict[str, Any] = {
-        "experiment": experiment_name, "row": spec.row.row_id, "row_index": spec.row_index,
-        "run_index": spec.run_index, "seed": spec.seed, "params": dict(spec.row.params),
-        "paper": dict(spec.row.paper),
-    }
+    record = _record(spec, experiment_name)
     try:
-        out = run_one(spec.row, spec.seed)
-        if not isinstance(out, Mapping):
-            raise TypeError(f"run_one must return a dict, got {type(out).__name__}")
-        metrics = to_jsonable(dict(out))
-        bad = sorted(k for k, v in out.items() if isinstance(v, float | np.floating)
-                     and not np.isfinite(v))
-        record.update(status="ok", error=None, metrics=metrics, nonfinite_metrics=bad)
+        out: Any = run_one(spec.row, spec.seed)
     except Exception as exc:  # a run's failure is data, not a crash
-        tb = traceback.format_exception(exc)
-        record.update(status="failed", error=f"{type(exc).__name__}: {exc}",
-                      traceback="".join(tb[-6:]), metrics={})
-    record["wall_s"] = time.perf_counter() - start
-    record["finished_at"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-    return record
+        out = exc
+    _finish(record, out)
+    return _stamp(record, time.perf_counter() - start)
+
+
+def execute_batch(run_batch: Callable[[Row, list[int]], list[Any]],
+                  run_one: Callable[[Row, int], Mapping[str, Any]], specs: list[RunSpec],
+                  experiment_name: str) -> list[dict[str, Any]]:
+    """Run several seeds of ONE row in lockstep and return one record per seed.
+
+    ``wall_s`` of each record is the batch's wall time divided by its size. If the
+    batch itself raises, its seeds are run one by one with ``run_one`` instead, so a
+    single bad seed cannot lose the others.
+    """
+    rows = {spec.row.row_id for spec in specs}
+    if len(rows) != 1:
+        raise ValueError(f"a batch holds one row, got {sorted(rows)}")
+    start = time.perf_counter()
+    try:
+        outs = list(run_batch(specs[0].row, [spec.seed for spec in specs]))
+        if len(outs) != len(specs):
+            raise ValueError(f"run_batch returned {len(outs)} results for {len(specs)} seeds")
+    except Exception:
+        return [execute_run(run_one, spec, experiment_name) for spec in specs]
+    share = (time.perf_counter() - start) / len(specs)
+    return [_stamp(_finish(_record(spec, experiment_name), out), share)
+            for spec, out in zip(specs, outs, strict=True)]
+
+
+def _batches(specs: list[RunSpec], size: int) -> list[list[RunSpec]]:
+    """Group specs by row, then cut each row's seeds into chunks of at most ``size``."""
+    by_row: dict[str, list[RunSpec]] = {}
+    for spec in specs:
+        by_row.setdefault(spec.row.row_id, []).append(spec)
+    return [group[i:i + size] for group in by_row.values()
+            for i in range(0, len(group), size)]
 
 
 def default_out_dir(experiment_name: str, root: str | Path = "results") -> Path:
@@ -144,7 +207,7 @@ def default_out_dir(experiment_name: str, root: str | Path = "results") -> Path:
     return Path(root) / experiment_name / stamp
 
 
-def _iter_joblib(fn, specs: list[RunSpec], workers: int) -> Iterator[dict[str, Any]]:
+def _iter_joblib(fn, specs: list, workers: int) -> Iterator[Any]:
     from joblib import Parallel, delayed, parallel_config
 
     # One BLAS/OpenMP thread per worker: with several processes, more threads
@@ -154,8 +217,7 @@ def _iter_joblib(fn, specs: list[RunSpec], workers: int) -> Iterator[dict[str, A
         yield from parallel(delayed(fn)(spec) for spec in specs)
 
 
-def _iter_dask(fn, specs: list[RunSpec], workers: int, scheduler: str
-               ) -> Iterator[dict[str, Any]]:
+def _iter_dask(fn, specs: list, workers: int, scheduler: str) -> Iterator[Any]:
     try:
         from dask.distributed import Client, LocalCluster, as_completed
     except ImportError as exc:
@@ -173,7 +235,7 @@ def _iter_dask(fn, specs: list[RunSpec], workers: int, scheduler: str
         raise SkinnyInputError(f"scheduler must be 'local' or an address like "
                                f"tcp://host:8786, got {scheduler!r}")
     try:
-        futures = [client.submit(fn, spec, pure=False, key=f"run-{spec.filename}")
+        futures = [client.submit(fn, spec, pure=False, key=f"run-{_key(spec)}")
                    for spec in specs]
         for future in as_completed(futures):
             yield future.result()
@@ -183,9 +245,14 @@ def _iter_dask(fn, specs: list[RunSpec], workers: int, scheduler: str
             cluster.close()
 
 
+def _key(spec: RunSpec | list[RunSpec]) -> str:
+    return spec.filename if isinstance(spec, RunSpec) else "+".join(s.filename for s in spec)
+
+
 def _run_specs(experiment: Experiment, runs: int) -> list[RunSpec]:
     return [RunSpec(row, i, k, run_seed(experiment.base_seed, i, k))
-            for k in range(runs) for i, row in enumerate(experiment.rows)]
+            for k in range(runs) for i, row in enumerate(experiment.rows)
+            if row.runs is None or k < row.runs]
 
 
 def _prepare_out_dir(experiment: Experiment, out_dir: Path, runs: int, resume: bool) -> None:
@@ -208,7 +275,8 @@ def _prepare_out_dir(experiment: Experiment, out_dir: Path, runs: int, resume: b
 
 def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
               runs: int | None = None, workers: int | None = None, resume: bool = False,
-              scheduler: str | None = None, progress: bool = True) -> dict[str, Any]:
+              scheduler: str | None = None, progress: bool = True,
+              batch_size: int | None = None) -> dict[str, Any]:
     """Run every (row, seed) of ``experiment`` and write its results.
 
     Parameters
@@ -221,6 +289,9 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     scheduler : None (joblib), ``"local"`` (a Dask LocalCluster on 127.0.0.1) or a
         Dask scheduler address ``tcp://host:port``. Same run files either way.
     progress : tqdm bar over runs (with ETA) on stderr.
+    batch_size : with ``experiment.run_batch``, the most seeds of one row a worker runs
+        in lockstep; default ``ceil(runs / workers)`` (each row split over the workers).
+        0 disables the fast path (every run through ``run_one``).
 
     Returns
     -------
@@ -251,25 +322,33 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     specs = _run_specs(experiment, runs)
     if resume:
         specs = [s for s in specs if not (runs_dir / s.filename).is_file()]
-    fn = functools.partial(execute_run, experiment.run_one, experiment_name=experiment.name)
-    results_iter: Iterable[dict[str, Any]]
-    if not specs:
+    jobs: list = specs
+    fn: Callable[[Any], Any] = functools.partial(
+        execute_run, experiment.run_one, experiment_name=experiment.name)
+    if experiment.run_batch is not None and batch_size != 0 and specs:
+        size = batch_size or max(1, -(-runs // workers))
+        jobs = _batches(specs, size)
+        fn = functools.partial(execute_batch, experiment.run_batch, experiment.run_one,
+                               experiment_name=experiment.name)
+    results_iter: Iterable[Any]
+    if not jobs:
         results_iter = ()
     elif scheduler is not None:
-        results_iter = _iter_dask(fn, specs, workers, scheduler)
+        results_iter = _iter_dask(fn, jobs, workers, scheduler)
     elif workers == 1:
-        results_iter = (fn(spec) for spec in specs)
+        results_iter = (fn(job) for job in jobs)
     else:
-        results_iter = _iter_joblib(fn, specs, min(workers, len(specs)))
+        results_iter = _iter_joblib(fn, jobs, min(workers, len(jobs)))
     with tqdm(total=len(specs), desc=experiment.name, unit="run", file=sys.stderr,
               disable=not progress, dynamic_ncols=True) as bar:
-        for record in results_iter:
-            # The parent writes every file, so remote Dask workers need no shared disk.
-            name = f"{record['row']}-{record['seed']}.json"
-            atomic_write_json(runs_dir / name, record)
-            bar.update(1)
-            if record["status"] != "ok":
-                bar.write(f"run {name} failed: {record['error']}", file=sys.stderr)
+        for result in results_iter:
+            for record in result if isinstance(result, list) else [result]:
+                # The parent writes every file, so remote Dask workers need no shared disk.
+                name = f"{record['row']}-{record['seed']}.json"
+                atomic_write_json(runs_dir / name, record)
+                bar.update(1)
+                if record["status"] != "ok":
+                    bar.write(f"run {name} failed: {record['error']}", file=sys.stderr)
 
     results = aggregate(out_dir)
     atomic_write_text(out_dir / "table.md",

@@ -18,9 +18,12 @@ import dm_env
 import mujoco
 import numpy as np
 
+from skinny_mj import body
 from skinny_mj.model import load_model
 from skinny_mj.physics import Layout, servo_ctrl
 from skinny_mj.task import Setup, prepare, widen_ctrlrange
+
+_NOISE_BLOCK = 128  # sensor-noise vectors drawn per run at once
 
 
 @runtime_checkable
@@ -101,6 +104,13 @@ class EnvPlant:
 class BatchPlant:
     """R copies of Skinny as R ``MjData`` of one ``MjModel``, stepped without dm_control.
 
+    The per-step work around the physics is vectorized over R and computes the same
+    numbers with the same floating-point operations as :class:`skinny_mj.physics.Layout`
+    (bit-identical): the servo ctrl, the position signals from ``site_xpos``, and the
+    site Jacobians from ``cdof`` / ``subtree_com`` exactly as MuJoCo's ``mj_jac`` forms
+    them. Sensor noise is drawn from each run's Generator in blocks of
+    ``_NOISE_BLOCK`` vectors, which yields the same sequence as one draw per step.
+
     Parameters
     ----------
     dof, signals, trajectory, actuation, sensor_noise, max_speed_rad_s, speed_factor :
@@ -138,6 +148,45 @@ class BatchPlant:
         self.max_speed_rad_s = self.setup.max_speed_rad_s
         self.signals = signals
         self.n_substeps = int(round(self.dt / self.model.opt.timestep))
+        self._init_fast_path()
+
+    # -- vectorized views ----------------------------------------------------------
+    def _init_fast_path(self) -> None:
+        m, lay = self.model, self.layout
+        # Views into each MjData stay valid for the data's lifetime (no reallocation).
+        self._views = {name: [getattr(d, name) for d in self.data]
+                       for name in ("qpos", "ctrl", "site_xpos", "cdof", "subtree_com")}
+        # (1, ...) views, so one np.concatenate gathers R runs without np.stack's per-run
+        # expand_dims
+        self._rows = {name: [v[None] for v in views] for name, views in self._views.items()}
+        self._sites = lay.site_ids.reshape(-1)  # (6,) arm-major, shoulder/elbow/wrist
+        site_body = m.site_bodyid[self._sites]
+        self._site_root = m.body_rootid[site_body]
+        # dofs on each site's kinematic chain (mj_jac walks the same chain)
+        mask = np.zeros((self._sites.size, m.nv), bool)
+        for k, body_id in enumerate(site_body):
+            b = int(body_id)
+            while b and not m.body_dofnum[b]:
+                b = int(m.body_parentid[b])
+            if b:
+                i = int(m.body_dofadr[b] + m.body_dofnum[b] - 1)
+                while i >= 0:
+                    mask[k, i] = True
+                    i = int(m.dof_parentid[i])
+        self._chain = mask[:, None, :]  # (6, 1, nv)
+        self._comps = np.array(lay._comps)
+        self._lengths = lay._lengths
+        self._scale = self.max_speed_rad_s * self.dt
+        self._noise_buf = np.zeros((0, self.n_runs, self.n_signals))
+        self._noise_pos = 0
+        self._cache: dict[str, np.ndarray] = {}
+
+    def _stacked(self, name: str) -> np.ndarray:
+        arr = self._cache.get(name)
+        if arr is None:
+            arr = np.concatenate(self._rows[name])
+            self._cache[name] = arr
+        return arr
 
     def _forward_without_actuation(self, data: mujoco.MjData) -> None:
         # as dm_control's Physics.reset / after_reset
@@ -148,12 +197,19 @@ class BatchPlant:
         finally:
             self.model.opt.disableflags = flags
 
-    def _sensed(self) -> np.ndarray:
-        noise = np.stack([
-            rng.standard_normal(self.n_signals) * self.setup.sensor_noise for rng in self.rngs
-        ])
-        return self.true_signals() + noise
+    def _draw_noise(self) -> np.ndarray:
+        if self._noise_pos >= self._noise_buf.shape[0]:
+            self._noise_buf = np.stack(
+                [rng.standard_normal((_NOISE_BLOCK, self.n_signals)) for rng in self.rngs],
+                axis=1)  # (B, R, n_signals); same stream as one draw per step
+            self._noise_pos = 0
+        self._noise_pos += 1
+        return self._noise_buf[self._noise_pos - 1]
 
+    def _sensed(self) -> np.ndarray:
+        return self.true_signals() + self._draw_noise() * self.setup.sensor_noise
+
+    # -- Plant protocol --------------------------------------------------------------
     def reset(self) -> np.ndarray:
         for data in self.data:
             mujoco.mj_resetData(self.model, data)
@@ -161,33 +217,60 @@ class BatchPlant:
             self.layout.set_joint_angles(data, self.setup.start_rad)
             data.ctrl[:] = 0.0
             self._forward_without_actuation(data)
+        self._cache = {}
         return self._sensed()
 
     def step(self, command: np.ndarray) -> np.ndarray:
         command = np.asarray(command, dtype=float).reshape(self.n_runs, self.n_dof)
-        ids = self.layout.actuator_ids
-        for r, data in enumerate(self.data):
-            if self.setup.actuation == "torque":
-                ctrl = np.clip(command[r], -1.0, 1.0)
-            else:
-                ctrl = servo_ctrl(command[r], self.layout.joint_angles(data),
-                                  self.max_speed_rad_s, self.layout.range_rad, self.dt)
-            data.ctrl[ids] = ctrl
+        if self.setup.actuation == "torque":
+            ctrl = np.clip(command, -1.0, 1.0)
+        else:
+            ctrl = servo_ctrl(command, self.joint_angles(), self.max_speed_rad_s,
+                              self.layout.range_rad, self.dt)
+        ids, model, extra = self.layout.actuator_ids, self.model, self.n_substeps - 1
+        step1, step2 = mujoco.mj_step1, mujoco.mj_step2
+        for r, (data, ctrl_view) in enumerate(zip(self.data, self._views["ctrl"],
+                                                  strict=True)):
+            ctrl_view[ids] = ctrl[r]
             # dm_control's legacy step: finish the step, keep kinematics in sync with qpos
-            mujoco.mj_step2(self.model, data)
-            if self.n_substeps > 1:
-                mujoco.mj_step(self.model, data, self.n_substeps - 1)
-            mujoco.mj_step1(self.model, data)
+            step2(model, data)
+            if extra:
+                mujoco.mj_step(model, data, extra)
+            step1(model, data)
+        self._cache = {}
         return self._sensed()
 
     def true_signals(self) -> np.ndarray:
-        return np.stack([self.layout.position_signals(d, self.signals) for d in self.data])
+        out = self._cache.get("signals")
+        if out is None:
+            if self.signals == "joint":
+                out = body.normalize_angles(self.joint_angles(), self.n_dof)
+            else:
+                pts = self._stacked("site_xpos")[:, self.layout.site_ids]  # (R, 2, 3, 3)
+                seg = (pts[:, :, 1:] - pts[:, :, :-1]) / self._lengths[:, None]
+                out = seg[..., self._comps].reshape(self.n_runs, -1)
+            self._cache["signals"] = out
+        return out.copy()
 
     def joint_angles(self) -> np.ndarray:
-        return np.stack([self.layout.joint_angles(d) for d in self.data])
+        return self._stacked("qpos")[:, self.layout.qpos_adr]
 
     def command_jacobian(self) -> np.ndarray:
-        scale = self.max_speed_rad_s * self.dt
-        return np.stack([
-            self.layout.signal_jacobian(self.model, d, self.signals) * scale for d in self.data
-        ])
+        n = self.n_runs
+        if self.signals == "joint":
+            lo, hi = self.layout.range_rad.T
+            jac = np.diag(2.0 / (hi - lo)) * self._scale
+            return np.broadcast_to(jac, (n, *jac.shape)).copy()
+        cdof = self._stacked("cdof")  # (R, nv, 6)
+        offset = (self._stacked("site_xpos")[:, self._sites]
+                  - self._stacked("subtree_com")[:, self._site_root])  # (R, 6, 3)
+        a = np.swapaxes(cdof[..., :3], 1, 2)[:, None]  # (R, 1, 3, nv) angular part
+        o = offset[..., None]  # (R, 6, 3, 1)
+        cross = np.stack([a[:, :, 1] * o[:, :, 2] - a[:, :, 2] * o[:, :, 1],
+                          a[:, :, 2] * o[:, :, 0] - a[:, :, 0] * o[:, :, 2],
+                          a[:, :, 0] * o[:, :, 1] - a[:, :, 1] * o[:, :, 0]], axis=2)
+        jac = np.where(self._chain, np.swapaxes(cdof[..., 3:], 1, 2)[:, None] + cross, 0.0)
+        jac = jac[..., self.layout.dof_adr].reshape(n, 2, 3, 3, self.n_dof)
+        seg = (jac[:, :, 1:] - jac[:, :, :-1])[:, :, :, self._comps]
+        seg = seg / self._lengths[None, None, :, None, None]
+        return seg.reshape(n, self.n_signals, self.n_dof) * self._scale

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, replace
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
@@ -265,6 +265,136 @@ def train(cfg: TrainConfig, seed: int = 0,
         wall_s=time.perf_counter() - start,
     )
     return TrainOutcome(cfg, seed, metrics, esn, test, max_speed)
+
+
+def train_batch(cfg: TrainConfig, seeds: Sequence[int],
+                progress: Callable[[int, int], None] | None = None) -> list[TrainOutcome]:
+    """Train R = len(seeds) runs of ``cfg`` in lockstep; run r equals ``train(cfg, seeds[r])``.
+
+    One ESN with R networks (``rngs`` = each seed's :func:`run_streams` Generator) and
+    one :class:`skinny_mj.plant.BatchPlant` with R ``MjData`` (each seed's sensor-noise
+    seed) step together; every per-run number is the one the single run computes.
+    ``metrics["wall_s"]`` is the batch's wall time divided by R (and
+    ``metrics["lockstep_runs"]`` = R). With ``cfg.plant == "env"`` (dm_control, one run
+    per environment) the runs are trained one after another.
+    """
+    from skinny_mj.ideal import true_commands
+    from skinny_mj.plant import BatchPlant
+
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        return []
+    if cfg.plant == "env":
+        return [train(cfg, s, progress) for s in seeds]
+    start = time.perf_counter()
+    n_runs = len(seeds)
+    trajectory, report = load_trajectory(cfg)
+    training = trajectory.repeat(cfg.reps) if cfg.reps > 1 else trajectory
+    max_speed = full_scale_speeds(cfg, trajectory)
+    streams = [run_streams(s) for s in seeds]
+    plant_seeds = [p for _, p in streams]
+    n_signals = trajectory.position_signals(cfg.signals).shape[1]
+    esn = ESN(esn_config(cfg, n_signals), n_runs=n_runs, rngs=[g for g, _ in streams])
+    desired = training.position_signals(cfg.signals)
+    commands = true_commands(training.angles, max_speed, training.dt)
+    train_metrics: list[dict[str, Any]] = [{} for _ in seeds]
+    failures: list[dict[str, Any]] = [{} for _ in seeds]
+    if cfg.method == "true-target":
+        tt = TrueTargetConfig(method="original" if cfg.beta >= 1 else "new", beta=cfg.beta,
+                              cycles=cfg.tt_cycles, noise=cfg.noise_level > 0)
+        result = train_true_target(esn, desired, commands, tt,
+                                   one_step=one_step_positions(training, cfg.signals, max_speed))
+        for r in range(n_runs):
+            train_metrics[r] = {"motor_nrmse": float(result.motor_nrmse[r]),
+                                "position_nrmse": float(result.position_nrmse[r])}
+        _report(progress, 1, 1)
+    else:
+        fcfg = fel.FELConfig(method=cfg.method, beta=cfg.beta,
+                             learning_cycles=cfg.learning_cycles, epochs=cfg.epochs)
+        per_epoch = fcfg.learning_cycles + 2
+        total = cfg.epochs * per_epoch
+        plant = BatchPlant(cfg.dof, cfg.signals, training, n_runs=n_runs, seeds=plant_seeds,
+                           sensor_noise=cfg.sensor_noise, max_speed_rad_s=max_speed)
+
+        def tick(epoch: int, cycle: int) -> None:
+            _report(progress, epoch * per_epoch + cycle + 1, total)
+
+        result = fel.train(esn, plant, desired, fcfg, true_commands=commands, progress=tick)
+        curve = result.to_dict()
+        for r in range(n_runs):
+            train_metrics[r] = {"gains": curve["gains"],
+                                "position_nrmse": curve["position_nrmse"][r],
+                                "motor_nrmse": curve["motor_nrmse"][r]}
+            if result.failed[r]:
+                failures[r] = {"failed": True, "fail_reason": result.fail_reason[r],
+                               "fail_epoch": result.fail_epoch[r]}
+    tests = _test_batch(esn, trajectory, cfg.signals, plant_seeds, cfg.sensor_noise, max_speed)
+    wall_share = (time.perf_counter() - start) / n_runs
+    outcomes = []
+    for r, seed in enumerate(seeds):
+        metrics: dict[str, Any] = {"train": train_metrics[r], **failures[r]}
+        test = tests[r]
+        if not metrics.get("failed") and test.failed:
+            metrics.update(failed=True, fail_reason=f"test: {test.fail_reason}")
+        metrics.setdefault("failed", False)
+        metrics["test"] = {"position_nrmse": test.position_nrmse,
+                           "motor_nrmse": test.motor_nrmse}
+        metrics.update(
+            config={**asdict(cfg), "learning_cycles": cfg.learning_cycles,
+                    "noise_level": cfg.noise_level},
+            seed=seed, steps_per_cycle=len(desired),
+            max_speed_rad_s=[float(v) for v in max_speed],
+            clipped_samples=int(report.clipped_samples), wall_s=wall_share,
+            lockstep_runs=n_runs,
+        )
+        outcomes.append(TrainOutcome(cfg, seed, metrics, esn_run(esn, r), test, max_speed))
+    return outcomes
+
+
+def _test_batch(esn: ESN, trajectory, signals: str, plant_seeds: list[int],
+                sensor_noise: float, max_speed_rad_s: np.ndarray) -> list[TestOutcome]:
+    """:func:`test_network` for R networks in lockstep (one BatchPlant, R seeds)."""
+    from skinny_mj.ideal import true_commands
+    from skinny_mj.plant import BatchPlant
+
+    plant = BatchPlant(trajectory.dof, signals, trajectory, n_runs=esn.n_runs,
+                       seeds=plant_seeds, sensor_noise=sensor_noise,
+                       max_speed_rad_s=max_speed_rad_s)
+    desired = trajectory.position_signals(signals)
+    commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
+    ev = fel.evaluate(esn, plant, desired, true_commands=commands)
+    out = []
+    for r in range(esn.n_runs):
+        failed = bool(ev.failed[r])
+        out.append(TestOutcome(
+            position_nrmse=None if failed else float(ev.position_nrmse[r]),
+            motor_nrmse=None if failed else float(ev.motor_nrmse[r]),
+            failed=failed, fail_reason=ev.fail_reason[r], rollout=rollout_run(ev.rollout, r),
+            trajectory=trajectory, desired=desired, true_commands=commands,
+        ))
+    return out
+
+
+def esn_run(esn: ESN, r: int) -> ESN:
+    """Run ``r`` of a lockstep ESN as a one-run ESN (weights, state, noise stream)."""
+    one = ESN.__new__(ESN)
+    one.cfg, one.n_runs, one.dtype, one.rngs = esn.cfg, 1, esn.dtype, [esn.rngs[r]]
+    one._set_weights(esn.W[r:r + 1], esn.W_in[r:r + 1], esn.W_back[r:r + 1],
+                     esn.W_out[r:r + 1])
+    one.x, one.y = esn.x[r:r + 1].copy(), esn.y[r:r + 1].copy()
+    one.extended = esn.extended[r:r + 1].copy()
+    one._noise_pos = esn._noise_pos
+    if hasattr(esn, "_noise_buf"):
+        one._noise_buf = esn._noise_buf[:, r:r + 1].copy()
+    return one
+
+
+def rollout_run(ro: fel.Rollout, r: int) -> fel.Rollout:
+    """Run ``r`` of a lockstep :class:`controllers.fel.Rollout` (arrays keep R = 1)."""
+    return fel.Rollout(**{
+        f.name: None if getattr(ro, f.name) is None else getattr(ro, f.name)[r:r + 1]
+        for f in fields(ro)
+    })
 
 
 def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:

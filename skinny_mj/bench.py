@@ -1,0 +1,404 @@
+"""``skinny bench``: where the time goes, as ratios measured within one process.
+
+Every figure times both of its sides in the same process, interleaved (A, B, A, B, ...,
+best of each), so a machine shared with other work shifts both sides alike; the load
+average at the start and end is recorded with the figures. Goals (issue 7):
+
+| figure | goal |
+|---|---|
+| ``esn_run_vs_reservoirpy`` N = 200 / 1000 (our steps/s over theirs) | >= 2 / >= 3 |
+| ``control_step_over_physics`` (R = 20 lockstep step over bare C physics) | <= 3 |
+| ``lockstep_speedup`` (20 runs one at a time over the same 20 in lockstep) | >= 3 |
+| ``fast_vs_naive`` (naive run-step cost over the fast path's) | >= 6 |
+| ``paper_e_full_s`` (complete paper-E table, 2 cores) | <= 20 s |
+| ``mackey_glass`` N = 1000, log10 NRMSE_84 | <= -4.5 |
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import tempfile
+import time
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+GOALS = {
+    "esn_run_vs_reservoirpy_N200": (">=", 2.0),
+    "esn_run_vs_reservoirpy_N1000": (">=", 3.0),
+    "control_step_over_physics": ("<=", 3.0),
+    "lockstep_speedup": (">=", 3.0),
+    "fast_vs_naive": (">=", 6.0),
+    "paper_e_full_s": ("<=", 20.0),
+    "mackey_glass_log10_nrmse84": ("<=", -4.5),
+}
+N_RUNS = 20  # R of the lockstep figures
+
+
+def interleaved(fns: dict[str, Callable[[], Any]], repeats: int) -> dict[str, float]:
+    """Best wall time (s) of each callable over ``repeats`` interleaved rounds."""
+    best = {k: np.inf for k in fns}
+    for _ in range(repeats):
+        for key, fn in fns.items():
+            start = time.perf_counter()
+            fn()
+            best[key] = min(best[key], time.perf_counter() - start)
+    return best
+
+
+def _movement(n_steps: int):
+    from skinny_mj.trajectories import excerpt, get
+
+    traj = get("ymca", 4)
+    return excerpt(traj, 0.0, n_steps * traj.dt) if n_steps < len(traj) - 1 else traj
+
+
+# -- figures --------------------------------------------------------------------------
+def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict:
+    """Our ESN's state loop (``ESN.run``, one run) vs reservoirpy 0.4's ``Reservoir.run``:
+    same weights, same input (T, 16), float64; checks the two produce the same states.
+    Also our R = 20 lockstep throughput (run-steps/s), the rate a sweep sees."""
+    from controllers.esn import ESN, ESNConfig
+
+    try:
+        import reservoirpy
+        from reservoirpy.nodes import Reservoir
+    except ImportError:
+        return {"skipped": "reservoirpy not installed: pip install 'skinny-mj[bench]'"}
+    n_in = 16
+    esn = ESN(ESNConfig(n_inputs=n_in, n_outputs=4, n_reservoir=n_reservoir), seed=0)
+    w = esn._sparse if esn._sparse is not None else esn.W[0]
+    theirs = Reservoir(units=n_reservoir, lr=1.0, W=w, Win=esn.W_in[0, :, :-1],
+                       bias=esn.W_in[0, :, -1] * esn.cfg.bias, input_dim=n_in)
+    theirs.initialize(np.zeros((1, n_in)))
+    inputs = np.random.default_rng(1).uniform(-1, 1, (n_steps, n_in))
+
+    def ours() -> np.ndarray:
+        esn.reset()
+        return esn.run(inputs[None], noise=False)[1][0, :, :n_reservoir]
+
+    def rpy() -> np.ndarray:
+        theirs.reset()
+        return theirs.run(inputs)
+
+    lockstep = ESN(esn.cfg, n_runs=N_RUNS, seed=0)
+    batch_inputs = np.broadcast_to(inputs, (N_RUNS, *inputs.shape))
+
+    def ours_lockstep() -> None:
+        lockstep.reset()
+        lockstep.run(batch_inputs, noise=False)
+
+    max_diff = float(np.max(np.abs(ours() - rpy())))
+    best = interleaved({"ours": ours, "reservoirpy": rpy, "lockstep": ours_lockstep}, repeats)
+    return {"N": n_reservoir, "steps": n_steps, "ours_steps_s": n_steps / best["ours"],
+            "reservoirpy_steps_s": n_steps / best["reservoirpy"],
+            "ratio": best["reservoirpy"] / best["ours"], "max_state_diff": max_diff,
+            "ours_lockstep_R20_run_steps_s": N_RUNS * n_steps / best["lockstep"],
+            "lockstep_ratio": N_RUNS * best["reservoirpy"] / best["lockstep"],
+            "reservoirpy_version": reservoirpy.__version__}
+
+
+def _lockstep_parts(n_runs: int, n_steps: int, seed: int = 0):
+    from controllers.esn import ESN
+    from skinny_mj.ideal import max_speeds
+    from skinny_mj.plant import BatchPlant
+    from skinny_mj.training import TrainConfig, esn_config
+
+    traj = _movement(n_steps)
+    speed = max_speeds(traj.angles, traj.dt)
+    desired = traj.position_signals("cartesian")
+    esn = ESN(esn_config(TrainConfig(), desired.shape[1]), n_runs=n_runs, seed=seed)
+    plant = BatchPlant(4, "cartesian", traj, n_runs=n_runs, seeds=range(n_runs),
+                       max_speed_rad_s=speed)
+    return traj, speed, desired, esn, plant
+
+
+def control_step_over_physics(n_steps: int, repeats: int) -> dict:
+    """One full control step of R = 20 runs in lockstep (physics + ESN N = 200 +
+    feedback + FEL bookkeeping, ``fel.rollout``) vs the bare physics of that step:
+    the same R ``MjData`` stepped by ``mujoco.rollout`` in C, no Python in between."""
+    import mujoco
+    from mujoco import rollout as mj_rollout
+
+    from controllers import fel
+
+    _, _, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
+    model = plant.model
+    data = mujoco.MjData(model)  # nthread=0: one MjData steps the R states in turn
+    plant.reset()
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty((N_RUNS, mujoco.mj_stateSize(model, spec)))
+    for r, d in enumerate(plant.data):
+        mujoco.mj_getState(model, d, state[r], spec)
+    ctrl = np.zeros((N_RUNS, len(desired) - 1, model.nu))
+    steps = (len(desired) - 1) * plant.n_substeps
+    runner = mj_rollout.Rollout(nthread=0)
+    best = interleaved({
+        "control": lambda: fel.rollout(esn, plant, desired, 0.5, noise=True),
+        "physics": lambda: runner.rollout([model] * N_RUNS, data, state, ctrl, nstep=steps),
+    }, repeats)
+    runner.close()
+    per = {k: v / (len(desired) - 1) for k, v in best.items()}
+    return {"R": N_RUNS, "substeps": plant.n_substeps, "control_step_us": per["control"] * 1e6,
+            "physics_step_us": per["physics"] * 1e6, "ratio": per["control"] / per["physics"]}
+
+
+def lockstep_speedup(epochs: int, repeats: int) -> dict:
+    """R = 20 paper-E exp-5 trainings (``epochs`` epochs) + tests in lockstep
+    (``train_batch``) vs the same 20 one at a time (``train``); checks identical results."""
+    from skinny_mj.training import TrainConfig, train, train_batch
+
+    cfg = TrainConfig(epochs=epochs)
+    seeds = list(range(N_RUNS))
+    out: dict[str, list] = {}
+    best = interleaved({
+        "lockstep": lambda: out.__setitem__("batch", train_batch(cfg, seeds)),
+        "one_at_a_time": lambda: out.__setitem__("single", [train(cfg, s) for s in seeds]),
+    }, repeats)
+    identical = all(a.metrics["test"] == b.metrics["test"]
+                    and a.metrics["train"] == b.metrics["train"]
+                    for a, b in zip(out["batch"], out["single"], strict=True))
+    return {"R": N_RUNS, "epochs": epochs, "lockstep_s": best["lockstep"],
+            "one_at_a_time_s": best["one_at_a_time"],
+            "ratio": best["one_at_a_time"] / best["lockstep"], "identical": identical}
+
+
+def fast_vs_naive(n_steps: int, repeats: int) -> dict:
+    """Per run-step cost: the naive path (dm_control ``env.step`` through ``EnvPlant``
+    and a one-run Python ESN, ``fel.rollout``) vs the fast path (R = 20 lockstep)."""
+    from controllers import fel
+    from controllers.esn import ESN
+    from skinny_mj.plant import EnvPlant
+    from skinny_mj.task import load
+
+    traj, speed, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
+    env_plant = EnvPlant(load(4, "cartesian", traj, max_speed_rad_s=speed, seed=0))
+    one = ESN(esn.cfg, n_runs=1, seed=0)
+    best = interleaved({
+        "fast": lambda: fel.rollout(esn, plant, desired, 0.5, noise=True),
+        "naive": lambda: fel.rollout(one, env_plant, desired, 0.5, noise=True),
+    }, repeats)
+    steps = len(desired) - 1
+    fast, naive = best["fast"] / (steps * N_RUNS), best["naive"] / steps
+    return {"R": N_RUNS, "fast_run_step_us": fast * 1e6, "naive_run_step_us": naive * 1e6,
+            "ratio": naive / fast}
+
+
+def paper_e_full_s(workers: int | None = None, quick: bool = False,
+                   out_dir: Path | None = None, only: tuple[str, ...] | None = None) -> dict:
+    """Wall time of the complete paper-E table (Table 1 rows 1-6, the paper's 20 runs
+    each = 120 runs; ``only`` picks other rows) on ``workers`` processes (default: all
+    cores) through the engine's fast path, with the peak resident memory of this
+    process and of the largest worker. ``quick`` runs ``build(quick=True)`` instead (a
+    smoke test of this figure, not the figure)."""
+    import experiments
+    from skinny_mj.experiment import run_sweep
+
+    module = experiments.get("paper-e")
+    if only is None:
+        only = tuple(getattr(module, "TABLE_1", {"1": 0, "2": 0, "3": 0, "4": 0, "5": 0,
+                                                 "6": 0}))
+
+    if workers is None:
+        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
+            else (os.cpu_count() or 1)
+    exp = module.build(quick=quick, only=only)
+    with tempfile.TemporaryDirectory(prefix="skinny-bench-") as tmp:
+        out = Path(out_dir or tmp)
+        start = time.perf_counter()
+        run_sweep(exp, out, workers=workers, progress=False)
+        wall = time.perf_counter() - start
+        n_runs = len(list((out / "runs").glob("*.json")))
+    return {"wall_s": wall, "workers": workers, "quick": quick, "rows": len(exp.rows),
+            "runs": n_runs, **peak_memory_mib()}
+
+
+def peak_memory_mib() -> dict:
+    """Peak resident memory (MiB): this process, and the largest of its worker
+    processes (still-running joblib workers read from /proc, finished ones from
+    ``getrusage``)."""
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    child = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    for pid in _descendants(os.getpid()):
+        try:
+            text = Path(f"/proc/{pid}/status").read_text()
+        except OSError:
+            continue
+        for line in text.splitlines():
+            if line.startswith("VmHWM:"):
+                child = max(child, int(line.split()[1]) / 1024)
+    return {"peak_rss_self_mib": own, "peak_rss_worker_mib": child}
+
+
+def _descendants(root: int) -> list[int]:
+    parents: dict[int, list[int]] = {}
+    for entry in Path("/proc").glob("[0-9]*"):
+        try:
+            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        parents.setdefault(int(fields[1]), []).append(int(entry.name))
+    out, todo = [], [root]
+    while todo:
+        kids = parents.get(todo.pop(), [])
+        out += kids
+        todo += kids
+    return out
+
+
+MG_HORIZON = 84
+
+
+def mackey_glass_series(trials: int, length: int, seed: int = 0) -> np.ndarray:
+    """(trials, length) squashed Mackey-Glass series, one attractor trajectory each."""
+    from controllers.esn import run_generators
+    from controllers.mackey_glass import mackey_glass as series
+
+    return np.stack([series(length, g) for g in run_generators(seed, trials)])
+
+
+def _nrmse84(free: np.ndarray, series: np.ndarray, washout: int, n_fit: int) -> float:
+    """Jaeger & Haas's NRMSE_84 over trials: sqrt(mean (y(84) - d(84))^2 / var(d))."""
+    variance = series[:, washout:n_fit].var()
+    err = free[:, MG_HORIZON - 1] - series[:, n_fit + MG_HORIZON - 1]
+    return float(np.sqrt(np.mean(err**2) / variance))
+
+
+def mackey_glass_ours(series: np.ndarray, n_reservoir: int, washout: int = 1000,
+                      seed: int = 0) -> np.ndarray:
+    """Our ESN (Jaeger & Haas's setup: output feedback, leak 0.6, spectral radius
+    0.95, bias 0.2, feedback scaling 0.56, state noise 1e-8, pinv readout), all trials
+    in lockstep; teacher-forced through the series minus the horizon, then 84 free
+    steps. Returns the free run (trials, 84)."""
+    from controllers.esn import ESN, ESNConfig, run_generators
+
+    trials, n_fit = series.shape[0], series.shape[1] - MG_HORIZON
+    cfg = ESNConfig(n_inputs=1, n_outputs=1, n_reservoir=n_reservoir, spectral_radius=0.95,
+                    bias=0.2, leak_rate=0.6, noise_level=1e-8, output_feedback=True,
+                    feedback_scaling=0.56, readout_activation="identity")
+    esn = ESN(cfg, n_runs=trials, rngs=run_generators(seed + 1, trials))
+    teacher = series[:, :n_fit, None]
+    zeros = np.zeros((trials, n_fit, 1))
+    _, states = esn.run(zeros, noise=True, teacher=teacher, washout=washout)
+    esn.fit(states, teacher[:, washout:])
+    esn.reset()
+    esn.run(zeros, noise=False, teacher=teacher)
+    return np.stack([esn.step(np.zeros((trials, 1)), noise=False)[:, 0]
+                     for _ in range(MG_HORIZON)], axis=1)
+
+
+def mackey_glass_reservoirpy(series: np.ndarray, n_reservoir: int, washout: int = 1000,
+                             seed: int = 0) -> np.ndarray:
+    """reservoirpy 0.4's own way on the same series: a ``Reservoir >> Ridge`` trained to
+    map d(t) to d(t + 1) (leak 0.6, spectral radius 0.95, ridge 1e-10), then run in a
+    closed loop for 84 steps from the end of the training data. Returns (trials, 84)."""
+    from reservoirpy.nodes import Reservoir, Ridge
+
+    n_fit = series.shape[1] - MG_HORIZON
+    free = np.empty((series.shape[0], MG_HORIZON))
+    for r, s in enumerate(series):
+        model = Reservoir(n_reservoir, lr=0.6, sr=0.95, input_scaling=1.0,
+                          rc_connectivity=min(1.0, 10 / n_reservoir), seed=seed + r) \
+            >> Ridge(ridge=1e-10)
+        model.fit(s[:n_fit - 1, None], s[1:n_fit, None], warmup=washout)
+        y = s[n_fit - 1:n_fit]
+        for k in range(MG_HORIZON):
+            y = model.step(y)
+            free[r, k] = y[0]
+    return free
+
+
+def mackey_glass(n_reservoir: int, trials: int, washout: int = 1000, train: int = 2000,
+                 seed: int = 0) -> dict:
+    """log10 NRMSE_84 of ours and of reservoirpy on the same ``trials`` series."""
+    series = mackey_glass_series(trials, washout + train + MG_HORIZON, seed)
+    n_fit = washout + train
+    start = time.perf_counter()
+    ours = _nrmse84(mackey_glass_ours(series, n_reservoir, washout, seed), series,
+                    washout, n_fit)
+    out: dict[str, Any] = {"N": n_reservoir, "trials": trials, "train": train,
+                           "ours_log10_nrmse84": float(np.log10(ours)),
+                           "ours_s": time.perf_counter() - start}
+    try:
+        import reservoirpy
+    except ImportError:
+        out["reservoirpy"] = "skipped: reservoirpy not installed"
+        return out
+    start = time.perf_counter()
+    with warnings.catch_warnings():  # its ridge solve warns on ill-conditioned Gram matrices
+        warnings.simplefilter("ignore")
+        free = mackey_glass_reservoirpy(series, n_reservoir, washout, seed)
+    theirs = _nrmse84(free, series, washout, n_fit)
+    out["reservoirpy_version"] = reservoirpy.__version__
+    out.update(reservoirpy_log10_nrmse84=float(np.log10(theirs)),
+               reservoirpy_s=time.perf_counter() - start)
+    return out
+
+
+# -- the command ------------------------------------------------------------------------
+def run(quick: bool = False, workers: int | None = None) -> dict:
+    """Every figure; ``quick`` = shorter timings, fewer trials, no ``paper_e_full_s``."""
+    reps = 2 if quick else 5
+    steps = 100 if quick else 312
+    figures: dict[str, Any] = {"load_avg_start": os.getloadavg()}
+    figures["esn_run_vs_reservoirpy"] = [
+        esn_run_vs_reservoirpy(n, 300 if quick else 1000, reps) for n in (200, 1000)]
+    figures["control_step_over_physics"] = control_step_over_physics(steps, reps)
+    figures["lockstep_speedup"] = lockstep_speedup(1, 1 if quick else 2)
+    figures["fast_vs_naive"] = fast_vs_naive(steps, reps)
+    figures["mackey_glass"] = mackey_glass(1000, 2 if quick else 10)
+    figures["paper_e_full_s"] = ({"skipped": "--quick"} if quick
+                                 else paper_e_full_s(workers))
+    figures["load_avg_end"] = os.getloadavg()
+    figures["cpu_count"] = os.cpu_count()
+    figures["summary"] = summary(figures)
+    return figures
+
+
+def summary(figures: dict) -> dict[str, dict]:
+    """Each goal's measured value and whether it is met (None: skipped)."""
+    def get(path: list) -> float | None:
+        node: Any = figures
+        for key in path:
+            if isinstance(node, dict) and key in node:
+                node = node[key]
+            elif isinstance(node, list) and isinstance(key, int) and key < len(node):
+                node = node[key]
+            else:
+                return None
+        return float(node) if isinstance(node, int | float) else None
+
+    values = {
+        "esn_run_vs_reservoirpy_N200": get(["esn_run_vs_reservoirpy", 0, "ratio"]),
+        "esn_run_vs_reservoirpy_N1000": get(["esn_run_vs_reservoirpy", 1, "ratio"]),
+        "control_step_over_physics": get(["control_step_over_physics", "ratio"]),
+        "lockstep_speedup": get(["lockstep_speedup", "ratio"]),
+        "fast_vs_naive": get(["fast_vs_naive", "ratio"]),
+        "paper_e_full_s": get(["paper_e_full_s", "wall_s"]),
+        "mackey_glass_log10_nrmse84": get(["mackey_glass", "ours_log10_nrmse84"]),
+    }
+    out = {}
+    for key, value in values.items():
+        op, goal = GOALS[key]
+        met = None if value is None else (value >= goal if op == ">=" else value <= goal)
+        out[key] = {"value": value, "goal": f"{op} {goal:g}", "met": met}
+    return out
+
+
+def table(figures: dict) -> str:
+    """The summary as a plain-text table, with the machine load."""
+    lines = [f"{'figure':<30} {'measured':>10} {'goal':>8}  met",
+             "-" * 56]
+    for key, row in figures["summary"].items():
+        value = "skipped" if row["value"] is None else f"{row['value']:.3g}"
+        met = {True: "yes", False: "NO", None: "-"}[row["met"]]
+        lines.append(f"{key:<30} {value:>10} {row['goal']:>8}  {met}")
+    start, end = figures["load_avg_start"], figures["load_avg_end"]
+    lines.append(f"load average (1 min) {start[0]:.2f} -> {end[0]:.2f} on "
+                 f"{figures['cpu_count']} CPUs: ratios are timed interleaved, "
+                 "absolute times shift with load")
+    return "\n".join(lines)
