@@ -129,7 +129,20 @@ def run_one(cfg: Config, row: Row, seed: int) -> dict[str, Any]:
     the failure rate), each architecture's wall time in s, and failure reasons.
     """
     configs = train_configs(cfg, row)
-    tt, fel = train(configs["tt"], seed), train(configs["fel"], seed)
+    return _metrics(train(configs["tt"], seed), train(configs["fel"], seed))
+
+
+def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list[dict[str, Any]]:
+    """:func:`run_one` for several seeds in lockstep (the engine's fast path,
+    :func:`skinny_mj.training.train_batch`): seed by seed the same numbers."""
+    from skinny_mj.training import train_batch
+
+    configs = train_configs(cfg, row)
+    tts, fels = train_batch(configs["tt"], seeds), train_batch(configs["fel"], seeds)
+    return [_metrics(tt, fel) for tt, fel in zip(tts, fels, strict=True)]
+
+
+def _metrics(tt, fel) -> dict[str, Any]:
     return {
         "tt_position_train": None if tt.failed else tt.metrics["train"]["position_nrmse"],
         "tt_motor_train": None if tt.failed else tt.metrics["train"]["motor_nrmse"],
@@ -179,7 +192,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
         name = f"{NAME}-{movement_slug(movement)}"
     return Experiment(
         name=name, rows=rows(only), run_one=functools.partial(run_one, cfg), config=cfg,
-        runs=cfg.runs,
+        runs=cfg.runs, run_batch=functools.partial(run_batch, cfg),
         table_columns={**COLUMNS, "fel_motor_test": "FEL motor test (extra)",
                        "tt_failed": "TT failed", "fel_failed": "FEL failed"},
     )

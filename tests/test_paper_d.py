@@ -117,3 +117,13 @@ def test_run_one_is_reproducible_from_its_seed():
     keys = [*paper_d.COLUMNS]
     assert [a[k] for k in keys] == [b[k] for k in keys]
     assert not np.allclose([a[k] for k in keys], [c[k] for k in keys])
+
+
+def test_lockstep_batch_equals_one_run_at_a_time():
+    cfg = paper_d.quick_config()
+    row = paper_d.rows(("2",))[0]
+    single = [paper_d.run_one(cfg, row, seed) for seed in (11, 12)]
+    batch = paper_d.run_batch(cfg, row, [11, 12])
+    for one, many in zip(single, batch, strict=True):
+        assert {k: v for k, v in one.items() if not k.endswith("wall_s")} == \
+            {k: v for k, v in many.items() if not k.endswith("wall_s")}
