@@ -220,19 +220,11 @@ def _average_run(out_dir: Path, row_id: str) -> dict | None:
 
 def _record(path: Path, outcome: TrainOutcome, row: Row) -> None:
     """The TT test of one run as an ``.rrd`` (rerun) recording."""
-    from skinny_mj import body
-    from skinny_mj.recording import write_recording
+    from skinny_mj.training import record_test
 
-    test, tcfg, ro = outcome.test, outcome.config, outcome.test.rollout
-    write_recording(
-        path, dt=test.trajectory.dt, dof=tcfg.dof, dof_names=list(body.dof_names(tcfg.dof)),
-        signal_names=list(body.signal_names(tcfg.dof, tcfg.signals)),
-        desired_angles=test.trajectory.angles, actual_angles=ro.angles[0],
-        commands=ro.commands[0], desired_signals=test.desired,
-        actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0],
-        title=f"paper D exp {row.row_id}, true-target test, average run (seed {outcome.seed})",
-        metadata={"row": row.row_id, "params": dict(row.params), "seed": outcome.seed,
-                  "test": outcome.metrics["test"], "movement": tcfg.trajectory})
+    record_test(path, outcome,
+                f"paper D exp {row.row_id}, true-target test, average run (seed {outcome.seed})",
+                {"row": row.row_id, "params": dict(row.params)})
 
 
 def figure_4(out_dir: Path, cfg: Config, row_ids: tuple[str, ...] = FIGURE_4_ROWS,

@@ -241,24 +241,10 @@ def median_recordings(out_dir: Path, cfg: Config, table_rows: Sequence[Row]) -> 
 
 def _record_run(path: Path, cfg: Config, row: Row, seed: int, metrics: dict) -> bool:
     """Re-train one run, write its test as an .rrd; True when it reproduces ``metrics``."""
-    from skinny_mj import body
-    from skinny_mj.recording import write_recording
-    from skinny_mj.training import train
+    from skinny_mj.training import record_test, train
 
     outcome = train(train_config(cfg, row), seed)
-    test, tcfg = outcome.test, outcome.config
-    ro = test.rollout
-    curve = outcome.metrics["train"].get("position_nrmse") or []
-    curves = {"train_position_nrmse": np.array([np.nan if v is None else v for v in curve])}
-    write_recording(
-            path, dt=test.trajectory.dt, dof=tcfg.dof, dof_names=list(body.dof_names(tcfg.dof)),
-            signal_names=list(body.signal_names(tcfg.dof, tcfg.signals)),
-            desired_angles=test.trajectory.angles, actual_angles=ro.angles[0],
-            commands=ro.commands[0], desired_signals=test.desired,
-            actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0],
-            title=f"paper E exp {row.row_id}, median run (seed {seed})",
-            metadata={"row": row.row_id, "params": dict(row.params), "seed": seed,
-                      "test": outcome.metrics["test"], "movement": cfg.trajectory},
-            curves=curves if curve else None)
+    record_test(path, outcome, f"paper E exp {row.row_id}, median run (seed {seed})",
+                {"row": row.row_id, "params": dict(row.params)})
     return (outcome.metrics["test"]["position_nrmse"] == metrics.get("position_nrmse")
             and outcome.metrics["test"]["motor_nrmse"] == metrics.get("motor_nrmse"))

@@ -124,26 +124,18 @@ def _write_run(out: Path, outcome, title: str) -> None:
     """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png; for a
     failed (diverged) run only metrics.json, which says why."""
     from skinny_mj.plots import learning_curve_png
+    from skinny_mj.training import record_test
 
     if outcome.failed:
         atomic_write_json(out / "metrics.json", outcome.metrics)
         return
-    test = outcome.test
     cfg = outcome.config
-    curves = {}
     train_curve = outcome.metrics["train"].get("position_nrmse")
-    if train_curve:
+    if isinstance(train_curve, list) and train_curve:  # FEL: one value per epoch
         curve = np.array([np.nan if v is None else v for v in train_curve], dtype=float)
-        curves["train_position_nrmse"] = curve
         learning_curve_png(out / "learning_curve.png", {"position NRMSE (evaluation cycle)": curve},
                            "position NRMSE", title=title, log_y=True)
-    ro = test.rollout
-    _recording(out / "run.rrd", dof=cfg.dof, signals=cfg.signals,
-               desired_angles=test.trajectory.angles, actual_angles=ro.angles[0],
-               commands=ro.commands[0], desired_signals=test.desired,
-               actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0],
-               title=title, metadata={"test": outcome.metrics["test"], "seed": outcome.seed},
-               curves=curves or None)
+    record_test(out / "run.rrd", outcome, title)
     outcome.esn.save(out / "model.npz", metadata={
         "dof": cfg.dof, "signals": cfg.signals, "sensor_noise": cfg.sensor_noise,
         "max_speed_rad_s": [float(v) for v in outcome.max_speed_rad_s],

@@ -12,12 +12,13 @@ ctrl, ``mj_step2``, ``mj_step1``) and run r's sensor noise from its own
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, Protocol, runtime_checkable
+from typing import Any
 
 import dm_env
 import mujoco
 import numpy as np
 
+from controllers.plant import Plant as _Plant
 from skinny_mj import body
 from skinny_mj.model import load_model
 from skinny_mj.physics import Layout, servo_ctrl
@@ -26,36 +27,8 @@ from skinny_mj.task import Setup, prepare, widen_ctrlrange
 _NOISE_BLOCK = 128  # sensor-noise vectors drawn per run at once
 
 
-@runtime_checkable
-class Plant(Protocol):
-    """R independent plants stepping in lockstep (normalized signals, commands in [-1, 1])."""
-
-    n_runs: int
-    n_dof: int
-    n_signals: int
-    dt: float
-    max_speed_rad_s: np.ndarray  # (n_dof,) rad/s
-
-    def reset(self) -> np.ndarray:
-        """Sensed signals (R, n_signals) at t = 0 in the movement's first pose."""
-        ...
-
-    def step(self, command: np.ndarray) -> np.ndarray:
-        """Apply commands (R, n_dof) in [-1, 1] for one control step; sensed (R, n_signals)."""
-        ...
-
-    def true_signals(self) -> np.ndarray:
-        """Noise-free signals (R, n_signals)."""
-        ...
-
-    def joint_angles(self) -> np.ndarray:
-        """(R, n_dof) joint angles, rad."""
-        ...
-
-    def command_jacobian(self) -> np.ndarray:
-        """(R, n_signals, n_dof) d signal / d command over one control step at the
-        current pose = signal_jacobian(q) * max_speed_rad_s * dt."""
-        ...
+# The protocol is defined once, next to the pure-NumPy controllers that use it.
+Plant = _Plant
 
 
 class EnvPlant:

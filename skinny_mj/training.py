@@ -119,17 +119,24 @@ def load_trajectory(cfg: TrainConfig):
     return load_movement(cfg.trajectory, cfg.dof, asf=cfg.asf, speed=cfg.speed)
 
 
-def make_plant(cfg_dof: int, signals: str, trajectory, seed: int, sensor_noise: float,
-               max_speed_rad_s: np.ndarray, kind: str = "batch"):
-    """A one-run plant imitating ``trajectory`` (BatchPlant or the dm_control path)."""
+def make_plant(dof: int, signals: str, trajectory, seed: int | Sequence[int],
+               sensor_noise: float, max_speed_rad_s: np.ndarray, kind: str = "batch"):
+    """A plant imitating ``trajectory``: one run per seed (an int is one run).
+
+    ``kind`` "batch": one :class:`skinny_mj.plant.BatchPlant` stepping every run in
+    lockstep; "env": the dm_control environment (one run only).
+    """
     from skinny_mj.plant import BatchPlant, EnvPlant
     from skinny_mj.task import load
 
+    seeds = [int(seed)] if np.isscalar(seed) else [int(s) for s in seed]
     if kind == "env":
-        env = load(cfg_dof, signals, trajectory, sensor_noise=sensor_noise, seed=seed,
+        if len(seeds) != 1:
+            raise ValueError("the dm_control path steps one run per environment")
+        env = load(dof, signals, trajectory, sensor_noise=sensor_noise, seed=seeds[0],
                    max_speed_rad_s=max_speed_rad_s)
         return EnvPlant(env)
-    return BatchPlant(cfg_dof, signals, trajectory, n_runs=1, seeds=[seed],
+    return BatchPlant(dof, signals, trajectory, n_runs=len(seeds), seeds=seeds,
                       sensor_noise=sensor_noise, max_speed_rad_s=max_speed_rad_s)
 
 
@@ -158,23 +165,36 @@ class TestOutcome:
     true_commands: np.ndarray = field(repr=False)
 
 
-def test_network(esn: ESN, trajectory, signals: str, seed: int, sensor_noise: float,
-                 max_speed_rad_s: np.ndarray, plant_kind: str = "batch") -> TestOutcome:
-    """Reset, one cycle with the feedback controller off, no learning, no noise."""
+def test_networks(esn: ESN, trajectory, signals: str, plant_seeds: Sequence[int],
+                  sensor_noise: float, max_speed_rad_s: np.ndarray,
+                  plant_kind: str = "batch") -> list[TestOutcome]:
+    """Test R networks in lockstep (one plant run each, sensor noise from
+    ``plant_seeds``): reset, one cycle with the feedback controller off, no learning,
+    no reservoir noise."""
     from skinny_mj.ideal import true_commands
 
-    plant = make_plant(trajectory.dof, signals, trajectory, seed, sensor_noise,
+    plant = make_plant(trajectory.dof, signals, trajectory, plant_seeds, sensor_noise,
                        max_speed_rad_s, plant_kind)
     desired = trajectory.position_signals(signals)
     commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
     ev = fel.evaluate(esn, plant, desired, true_commands=commands)
-    failed = bool(ev.failed[0])
-    return TestOutcome(
-        position_nrmse=None if failed else float(ev.position_nrmse[0]),
-        motor_nrmse=None if failed else float(ev.motor_nrmse[0]),
-        failed=failed, fail_reason=ev.fail_reason[0], rollout=ev.rollout,
-        trajectory=trajectory, desired=desired, true_commands=commands,
-    )
+    out = []
+    for r in range(esn.n_runs):
+        failed = bool(ev.failed[r])
+        out.append(TestOutcome(
+            position_nrmse=None if failed else float(ev.position_nrmse[r]),
+            motor_nrmse=None if failed else float(ev.motor_nrmse[r]),
+            failed=failed, fail_reason=ev.fail_reason[r], rollout=rollout_run(ev.rollout, r),
+            trajectory=trajectory, desired=desired, true_commands=commands,
+        ))
+    return out
+
+
+def test_network(esn: ESN, trajectory, signals: str, seed: int, sensor_noise: float,
+                 max_speed_rad_s: np.ndarray, plant_kind: str = "batch") -> TestOutcome:
+    """:func:`test_networks` for one network and one plant seed."""
+    return test_networks(esn, trajectory, signals, [seed], sensor_noise, max_speed_rad_s,
+                         plant_kind)[0]
 
 
 @dataclass
@@ -199,72 +219,7 @@ def train(cfg: TrainConfig, seed: int = 0,
 
     ``progress(done, total)`` is called after every cycle (for a progress bar).
     """
-    from skinny_mj.ideal import true_commands
-
-    start = time.perf_counter()
-    trajectory, report = load_trajectory(cfg)
-    training = trajectory.repeat(cfg.reps) if cfg.reps > 1 else trajectory
-    # Full scale: twice the fastest speed of each DOF in ONE repetition of the movement
-    # (or of another movement, so that networks trained on different movements share
-    # one command scale, as in paper C).
-    max_speed = full_scale_speeds(cfg, trajectory)
-    esn_rng, plant_seed = run_streams(seed)
-    n_signals = trajectory.position_signals(cfg.signals).shape[1]
-    esn = ESN(esn_config(cfg, n_signals), rngs=[esn_rng])
-    desired = training.position_signals(cfg.signals)
-    commands = true_commands(training.angles, max_speed, training.dt)
-    metrics: dict[str, Any] = {"train": {}}
-
-    if cfg.method == "true-target":
-        tt = TrueTargetConfig(method="original" if cfg.beta >= 1 else "new", beta=cfg.beta,
-                              cycles=cfg.tt_cycles, noise=cfg.noise_level > 0)
-        result = train_true_target(esn, desired, commands, tt,
-                                   one_step=one_step_positions(training, cfg.signals, max_speed))
-        metrics["train"] = {"motor_nrmse": float(result.motor_nrmse[0]),
-                            "position_nrmse": float(result.position_nrmse[0])}
-        _report(progress, 1, 1)
-    else:
-        fcfg = fel.FELConfig(method=cfg.method, beta=cfg.beta,
-                             learning_cycles=cfg.learning_cycles, epochs=cfg.epochs)
-        per_epoch = fcfg.learning_cycles + 2
-        total = cfg.epochs * per_epoch
-        plant = make_plant(cfg.dof, cfg.signals, training, plant_seed, cfg.sensor_noise,
-                           max_speed, cfg.plant)
-
-        def tick(epoch: int, cycle: int) -> None:
-            _report(progress, epoch * per_epoch + cycle + 1, total)
-
-        result = fel.train(esn, plant, desired, fcfg, true_commands=commands, progress=tick)
-        curve = result.to_dict()
-        metrics["train"] = {
-            "gains": curve["gains"],
-            "position_nrmse": curve["position_nrmse"][0],
-            "motor_nrmse": curve["motor_nrmse"][0],
-        }
-        if result.failed[0]:
-            metrics.update(failed=True, fail_reason=result.fail_reason[0],
-                           fail_epoch=result.fail_epoch[0])
-
-    test = test_network(esn, trajectory, cfg.signals, plant_seed, cfg.sensor_noise,
-                        max_speed, cfg.plant)
-    if not metrics.get("failed") and test.failed:
-        metrics.update(failed=True, fail_reason=f"test: {test.fail_reason}")
-    metrics.setdefault("failed", False)
-    if metrics["failed"]:  # a diverged network has no test result, only its reason
-        metrics["test"] = {"position_nrmse": None, "motor_nrmse": None}
-    else:
-        metrics["test"] = {"position_nrmse": test.position_nrmse,
-                           "motor_nrmse": test.motor_nrmse}
-    metrics.update(
-        config={**asdict(cfg), "learning_cycles": cfg.learning_cycles,
-                "noise_level": cfg.noise_level},
-        seed=seed,
-        steps_per_cycle=len(desired),
-        max_speed_rad_s=[float(v) for v in max_speed],
-        clipped_samples=int(report.clipped_samples),
-        wall_s=time.perf_counter() - start,
-    )
-    return TrainOutcome(cfg, seed, metrics, esn, test, max_speed)
+    return _train_runs(cfg, [seed], progress)[0]
 
 
 def train_batch(cfg: TrainConfig, seeds: Sequence[int],
@@ -278,18 +233,24 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
     ``metrics["lockstep_runs"]`` = R). With ``cfg.plant == "env"`` (dm_control, one run
     per environment) the runs are trained one after another.
     """
-    from skinny_mj.ideal import true_commands
-    from skinny_mj.plant import BatchPlant
-
     seeds = [int(s) for s in seeds]
-    if not seeds:
-        return []
     if cfg.plant == "env":
         return [train(cfg, s, progress) for s in seeds]
+    return _train_runs(cfg, seeds, progress) if seeds else []
+
+
+def _train_runs(cfg: TrainConfig, seeds: list[int],
+                progress: Callable[[int, int], None] | None) -> list[TrainOutcome]:
+    """The one training path behind :func:`train` and :func:`train_batch`."""
+    from skinny_mj.ideal import true_commands
+
     start = time.perf_counter()
     n_runs = len(seeds)
     trajectory, report = load_trajectory(cfg)
     training = trajectory.repeat(cfg.reps) if cfg.reps > 1 else trajectory
+    # Full scale: twice the fastest speed of each DOF in ONE repetition of the movement
+    # (or of another movement, so that networks trained on different movements share
+    # one command scale, as in paper C).
     max_speed = full_scale_speeds(cfg, trajectory)
     streams = [run_streams(s) for s in seeds]
     plant_seeds = [p for _, p in streams]
@@ -297,15 +258,14 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
     esn = ESN(esn_config(cfg, n_signals), n_runs=n_runs, rngs=[g for g, _ in streams])
     desired = training.position_signals(cfg.signals)
     commands = true_commands(training.angles, max_speed, training.dt)
-    train_metrics: list[dict[str, Any]] = [{} for _ in seeds]
-    failures: list[dict[str, Any]] = [{} for _ in seeds]
+    runs: list[dict[str, Any]] = [{} for _ in seeds]  # per run: "train" (+ failure)
     if cfg.method == "true-target":
         tt = TrueTargetConfig(method="original" if cfg.beta >= 1 else "new", beta=cfg.beta,
                               cycles=cfg.tt_cycles, noise=cfg.noise_level > 0)
         result = train_true_target(esn, desired, commands, tt,
                                    one_step=one_step_positions(training, cfg.signals, max_speed))
         for r in range(n_runs):
-            train_metrics[r] = {"motor_nrmse": float(result.motor_nrmse[r]),
+            runs[r]["train"] = {"motor_nrmse": float(result.motor_nrmse[r]),
                                 "position_nrmse": float(result.position_nrmse[r])}
         _report(progress, 1, 1)
     else:
@@ -313,8 +273,8 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
                              learning_cycles=cfg.learning_cycles, epochs=cfg.epochs)
         per_epoch = fcfg.learning_cycles + 2
         total = cfg.epochs * per_epoch
-        plant = BatchPlant(cfg.dof, cfg.signals, training, n_runs=n_runs, seeds=plant_seeds,
-                           sensor_noise=cfg.sensor_noise, max_speed_rad_s=max_speed)
+        plant = make_plant(cfg.dof, cfg.signals, training, plant_seeds, cfg.sensor_noise,
+                           max_speed, cfg.plant)
 
         def tick(epoch: int, cycle: int) -> None:
             _report(progress, epoch * per_epoch + cycle + 1, total)
@@ -322,23 +282,25 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
         result = fel.train(esn, plant, desired, fcfg, true_commands=commands, progress=tick)
         curve = result.to_dict()
         for r in range(n_runs):
-            train_metrics[r] = {"gains": curve["gains"],
+            runs[r]["train"] = {"gains": curve["gains"],
                                 "position_nrmse": curve["position_nrmse"][r],
                                 "motor_nrmse": curve["motor_nrmse"][r]}
             if result.failed[r]:
-                failures[r] = {"failed": True, "fail_reason": result.fail_reason[r],
-                               "fail_epoch": result.fail_epoch[r]}
-    tests = _test_batch(esn, trajectory, cfg.signals, plant_seeds, cfg.sensor_noise, max_speed)
+                runs[r].update(failed=True, fail_reason=result.fail_reason[r],
+                               fail_epoch=result.fail_epoch[r])
+    tests = test_networks(esn, trajectory, cfg.signals, plant_seeds, cfg.sensor_noise,
+                          max_speed, cfg.plant)
     wall_share = (time.perf_counter() - start) / n_runs
     outcomes = []
-    for r, seed in enumerate(seeds):
-        metrics: dict[str, Any] = {"train": train_metrics[r], **failures[r]}
-        test = tests[r]
+    for r, (seed, metrics, test) in enumerate(zip(seeds, runs, tests, strict=True)):
         if not metrics.get("failed") and test.failed:
             metrics.update(failed=True, fail_reason=f"test: {test.fail_reason}")
         metrics.setdefault("failed", False)
-        metrics["test"] = {"position_nrmse": test.position_nrmse,
-                           "motor_nrmse": test.motor_nrmse}
+        if metrics["failed"]:  # a diverged network has no test result, only its reason
+            metrics["test"] = {"position_nrmse": None, "motor_nrmse": None}
+        else:
+            metrics["test"] = {"position_nrmse": test.position_nrmse,
+                               "motor_nrmse": test.motor_nrmse}
         metrics.update(
             config={**asdict(cfg), "learning_cycles": cfg.learning_cycles,
                     "noise_level": cfg.noise_level},
@@ -351,32 +313,34 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
     return outcomes
 
 
-def _test_batch(esn: ESN, trajectory, signals: str, plant_seeds: list[int],
-                sensor_noise: float, max_speed_rad_s: np.ndarray) -> list[TestOutcome]:
-    """:func:`test_network` for R networks in lockstep (one BatchPlant, R seeds)."""
-    from skinny_mj.ideal import true_commands
-    from skinny_mj.plant import BatchPlant
+def record_test(path, outcome: TrainOutcome, title: str, metadata: dict | None = None):
+    """Write the closed-loop test of a trained run as one rerun ``.rrd``: desired vs
+    actual angles and signals, commands, the arms in 3D, and the training curve."""
+    from skinny_mj import body
+    from skinny_mj.recording import write_recording
 
-    plant = BatchPlant(trajectory.dof, signals, trajectory, n_runs=esn.n_runs,
-                       seeds=plant_seeds, sensor_noise=sensor_noise,
-                       max_speed_rad_s=max_speed_rad_s)
-    desired = trajectory.position_signals(signals)
-    commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
-    ev = fel.evaluate(esn, plant, desired, true_commands=commands)
-    out = []
-    for r in range(esn.n_runs):
-        failed = bool(ev.failed[r])
-        out.append(TestOutcome(
-            position_nrmse=None if failed else float(ev.position_nrmse[r]),
-            motor_nrmse=None if failed else float(ev.motor_nrmse[r]),
-            failed=failed, fail_reason=ev.fail_reason[r], rollout=rollout_run(ev.rollout, r),
-            trajectory=trajectory, desired=desired, true_commands=commands,
-        ))
-    return out
+    test, cfg, ro = outcome.test, outcome.config, outcome.test.rollout
+    curve = outcome.metrics["train"].get("position_nrmse")
+    curves = None
+    if isinstance(curve, list) and curve:
+        curves = {"train_position_nrmse": np.array([np.nan if v is None else v for v in curve],
+                                                   dtype=float)}
+    meta = {"seed": outcome.seed, "test": outcome.metrics["test"], "movement": cfg.trajectory,
+            **(metadata or {})}
+    return write_recording(
+        path, dt=test.trajectory.dt, dof=cfg.dof, dof_names=list(body.dof_names(cfg.dof)),
+        signal_names=list(body.signal_names(cfg.dof, cfg.signals)),
+        desired_angles=test.trajectory.angles, actual_angles=ro.angles[0],
+        commands=ro.commands[0], desired_signals=test.desired,
+        actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0], title=title,
+        metadata=meta, curves=curves,
+    )
 
 
 def esn_run(esn: ESN, r: int) -> ESN:
     """Run ``r`` of a lockstep ESN as a one-run ESN (weights, state, noise stream)."""
+    if esn.n_runs == 1:
+        return esn
     one = ESN.__new__(ESN)
     one.cfg, one.n_runs, one.dtype, one.rngs = esn.cfg, 1, esn.dtype, [esn.rngs[r]]
     one._set_weights(esn.W[r:r + 1], esn.W_in[r:r + 1], esn.W_back[r:r + 1],
@@ -391,6 +355,8 @@ def esn_run(esn: ESN, r: int) -> ESN:
 
 def rollout_run(ro: fel.Rollout, r: int) -> fel.Rollout:
     """Run ``r`` of a lockstep :class:`controllers.fel.Rollout` (arrays keep R = 1)."""
+    if ro.commands.shape[0] == 1:
+        return ro
     return fel.Rollout(**{
         f.name: None if getattr(ro, f.name) is None else getattr(ro, f.name)[r:r + 1]
         for f in fields(ro)

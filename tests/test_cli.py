@@ -152,3 +152,15 @@ def test_render_writes_a_picture(tmp_path):
 
     image = matplotlib.image.imread(out)
     assert image.shape[:2] == (120, 160) and image.std() > 0.01
+
+
+def test_train_true_target_architecture_3d(tmp_path):
+    out = tmp_path / "tt"
+    assert main(["train", "--dof", "8", "--method", "true-target", "--beta", "1",
+                 "--out", str(out)]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    # Teacher-forced training fits its targets far better than the closed loop tests.
+    assert metrics["train"]["motor_nrmse"] < metrics["test"]["motor_nrmse"]
+    assert metrics["config"]["method"] == "true-target"
+    assert (out / "run.rrd").is_file() and (out / "model.npz").is_file()
+    assert not (out / "learning_curve.png").exists()  # no epochs, no curve
