@@ -57,16 +57,20 @@ def learning_curve_png(path: str | Path, curves: Mapping[str, np.ndarray], ylabe
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for name, values in curves.items():
         mean, sd = _mean_sd(values)
-        x = np.arange(1, len(mean) + 1)
-        (line,) = ax.plot(x, mean, marker="o", markersize=3, label=name)
-        if sd is not None:
-            ax.fill_between(x, mean - sd, mean + sd, color=line.get_color(), alpha=0.2)
+        _mean_band(ax, np.arange(1, len(mean) + 1), mean, sd, name)
     if log_y:
         ax.set_yscale("log")
     ax.set(xlabel=xlabel, ylabel=ylabel, title=title)
     ax.grid(alpha=0.3)
     ax.legend()
     return _save(fig, path)
+
+
+def _mean_band(ax, x: np.ndarray, mean: np.ndarray, sd: np.ndarray | None, name: str) -> None:
+    """A mean line with markers and, over several runs, a ± sd band in its colour."""
+    (line,) = ax.plot(x, mean, marker="o", markersize=3, label=name)
+    if sd is not None:
+        ax.fill_between(x, mean - sd, mean + sd, color=line.get_color(), alpha=0.2)
 
 
 def boxplot_png(path: str | Path, groups: Mapping[str, Sequence[float]], ylabel: str,
@@ -105,10 +109,7 @@ def line_sweep_png(path: str | Path, x: Sequence[float], ys: Mapping[str, np.nda
         if values.shape[-1] != len(x):
             raise SkinnyInputError(
                 f"series {name!r} has {values.shape[-1]} points, x has {len(x)}")
-        mean, sd = _mean_sd(values)
-        (line,) = ax.plot(x, mean, marker="o", markersize=3, label=name)
-        if sd is not None:
-            ax.fill_between(x, mean - sd, mean + sd, color=line.get_color(), alpha=0.2)
+        _mean_band(ax, x, *_mean_sd(values), name)
     if log_x:
         ax.set_xscale("log")
     ax.set(xlabel=xlabel, ylabel=ylabel, title=title)
