@@ -134,7 +134,8 @@ def _write_run(out: Path, outcome, title: str) -> None:
     if isinstance(train_curve, list) and train_curve:  # FEL: one value per epoch
         curve = np.array([np.nan if v is None else v for v in train_curve], dtype=float)
         learning_curve_png(out / "learning_curve.png", {"position NRMSE (evaluation cycle)": curve},
-                           "position NRMSE", title=title, log_y=True)
+                           "position NRMSE", title=title, log_y=True,
+                           xlabel="epoch (feedback gain K falls linearly from 1 to 0 in the last)")
     record_test(out / "run.rrd", outcome, title)
     outcome.esn.save(out / "model.npz", metadata={
         "dof": cfg.dof, "signals": cfg.signals, "sensor_noise": cfg.sensor_noise,
