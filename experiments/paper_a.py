@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from skinny_mj.delays import ARCHITECTURES, DelayConfig, run_delay
-from skinny_mj.experiment import Experiment, Row
+from skinny_mj.experiment import Experiment, Row, RunFailed
 
 NAME = "paper-a"
 DELAYS = tuple(range(11))
@@ -67,10 +67,6 @@ def rows(delays: tuple[int, ...] = DELAYS, only: tuple[str, ...] | None = None
                 paper["pretrain_prediction_nrmse"] = PAPER_TEXT[f"pretrain_prediction_delay_{d}"]
             out.append(Row(rid, {"architecture": arch, "delay": d}, paper))
     return tuple(out)
-
-
-class RunFailed(RuntimeError):
-    """The run's ESN diverged; the engine records it as failed with this reason."""
 
 
 METRICS = ("performance_nrmse", "performance_mae", "correction_ratio", "feedback_share",

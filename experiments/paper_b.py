@@ -82,13 +82,14 @@ def run_one(cfg: Config, row: Row, seed: int) -> dict:
     from controllers.fel import FELConfig
     from skinny_mj import bimanual as bm
     from skinny_mj.body import position_signals
+    from skinny_mj.ideal import max_speeds
     from skinny_mj.training import run_streams
 
     start = time.perf_counter()
     pattern, mv = bm.PATTERNS[row.row_id], movement(cfg)
     esn_rng, plant_seed = run_streams(seed)
     angles = bm.pattern_angles(pattern, mv)
-    max_speed = bm.body_max_speeds(angles, mv.dt)  # 2x the trained movement's fastest
+    max_speed = max_speeds(angles, mv.dt)  # 2x the trained movement's fastest
     esn = ESN(ESNConfig(4, 2, cfg.reservoir, cfg.spectral_radius, noise_level=cfg.noise),
               rngs=[esn_rng])
     plant = bm.BimanualPlant(angles, mv, max_speed, seeds=[plant_seed],

@@ -57,7 +57,7 @@ from controllers import fel
 from controllers.esn import ESN
 from controllers.metrics import motor_nrmse, nrmse, position_nrmse
 from skinny_mj import body
-from skinny_mj.experiment import Experiment, Row
+from skinny_mj.experiment import Experiment, Row, RunFailed
 
 NAME = "paper-c"
 #: Row/column id -> movement name (paper C §3.4; speeds: §4.1).
@@ -97,10 +97,6 @@ class Config:
         default_factory=lambda: str(REAL_MOVEMENT) if REAL_MOVEMENT.is_file() else None)
     asf: str | None = None
     runs: int = 10
-
-
-class RunFailed(RuntimeError):
-    """The network diverged during training; the engine records the run as failed."""
 
 
 def train_config(cfg: Config, movement: str):

@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import Experiment, Row
+from skinny_mj.experiment import Experiment, Row, RunFailed
 from skinny_mj.training import TrainConfig, train
 
 NAME = "paper-e"
@@ -108,10 +108,6 @@ class Config:
         names = {f.name for f in dataclasses.fields(cls)}
         return cls(**{k: tuple(v) if isinstance(v, list) else v
                       for k, v in d.items() if k in names})
-
-
-class RunFailed(RuntimeError):
-    """The run's ESN diverged; the engine records it as failed with this reason."""
 
 
 def train_config(cfg: Config, row: Row) -> TrainConfig:

@@ -35,7 +35,7 @@ from controllers.esn import ESN
 from controllers.feedback import FeedbackController
 from controllers.fel import FELConfig, Rollout
 from controllers.metrics import motor_nrmse, position_nrmse
-from skinny_mj.ideal import ideal_command, max_speeds, true_commands
+from skinny_mj.ideal import ideal_command, true_commands
 from skinny_mj.plant import BatchPlant
 from skinny_mj.trajectories import Trajectory
 
@@ -196,11 +196,6 @@ class BimanualPlant:
 
     def command_jacobian(self) -> np.ndarray:
         return self.body.command_jacobian()[:, :, self.lag]
-
-
-def body_max_speeds(angles: np.ndarray, dt: float, speed_factor: float = 2.0) -> np.ndarray:
-    """Full scale (4,) rad/s: ``speed_factor`` x the training movement's fastest speed."""
-    return max_speeds(angles, dt, speed_factor)
 
 
 def rollout(esn: ESN, plant: BimanualPlant, desired: np.ndarray, gain: float, *,

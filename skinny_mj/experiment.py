@@ -31,11 +31,16 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
 from skinny_mj.sweep.stats import aggregate, markdown_table, to_jsonable
 
-__all__ = ["Row", "Experiment", "RunSpec", "run_seed", "run_sweep", "aggregate",
+__all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "run_sweep", "aggregate",
            "markdown_table", "execute_run", "execute_batch", "default_out_dir"]
 
 _SAFE_NAME = re.compile(r"^[A-Za-z0-9_.][A-Za-z0-9_.+=-]*$")
 _THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+class RunFailed(RuntimeError):
+    """Raised (or returned by ``run_batch``) for a run whose network diverged: the engine
+    records the run as failed with this reason instead of its metrics."""
 
 
 @dataclass(frozen=True)

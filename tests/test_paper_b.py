@@ -12,13 +12,14 @@ from controllers.fel import FELConfig
 from controllers.plant import Plant
 from skinny_mj import bimanual as bm
 from skinny_mj.body import position_signals
+from skinny_mj.ideal import max_speeds
 
 MV = bm.Movement()
 
 
 def _plant(pattern: str = "phase0", speed: float = 1.0, noise: float = 0.0, runs: int = 1):
     q = bm.pattern_angles(bm.PATTERNS[pattern], MV, speed)
-    ms = bm.body_max_speeds(bm.pattern_angles(bm.PATTERNS[pattern], MV), MV.dt)
+    ms = max_speeds(bm.pattern_angles(bm.PATTERNS[pattern], MV), MV.dt)
     return q, bm.BimanualPlant(q, MV, ms, n_runs=runs, seeds=list(range(runs)),
                                sensor_noise=noise)
 
