@@ -29,10 +29,10 @@ import scipy.sparse.linalg
 
 from controllers._io import atomic_path
 
-try:  # SciPy's CSR matrix-vector kernel (what csr_array @ vector calls)
-    from scipy.sparse._sparsetools import csr_matvec as _csr_matvec
+try:  # SciPy's CSC matrix-vector kernel (what csc_array @ vector calls)
+    from scipy.sparse._sparsetools import csc_matvec as _csc_matvec
 except ImportError:  # pragma: no cover - other SciPy layouts
-    _csr_matvec = None
+    _csc_matvec = None
 
 _NOISE_KINDS = ("uniform", "gaussian")
 _ACTIVATIONS = ("tanh", "identity")
@@ -214,21 +214,48 @@ class ESN:
         self.W_back, self.W_out = w_back.astype(dt), w_out.astype(dt)
         self._sparse = None
         if self.cfg.density < _SPARSE_BELOW:
-            self._sparse = scipy.sparse.block_diag(
-                [scipy.sparse.csr_array(m) for m in self.W], format="csr"
+            # CSC, not CSR: CSR's inner loop ends after a random number of terms (a
+            # row's nonzeros), a mispredicted branch per row; CSC's scattered adds run
+            # ~2x faster. Column by column, each output still sums its terms from the
+            # first column to the last, as CSR did: the same numbers, bit for bit.
+            a = self._sparse = scipy.sparse.block_diag(
+                [scipy.sparse.csr_array(m) for m in self.W], format="csc"
             ).astype(dt)
+            self._kernel_args = (a.shape[0], a.shape[1], a.indptr, a.indices, a.data)
 
     def _noise(self) -> np.ndarray:
+        """Reservoir noise nu(t) of all runs, (R, N): a view into ``_noise_buf``."""
         if self._noise_pos >= _NOISE_BLOCK:
-            n, level = self.cfg.n_reservoir, self.cfg.noise_level
-            if self.cfg.noise_kind == "uniform":
-                blocks = [(g.random((_NOISE_BLOCK, n)) - 0.5) * level for g in self.rngs]
-            else:
-                blocks = [g.standard_normal((_NOISE_BLOCK, n)) * level for g in self.rngs]
-            self._noise_buf = np.stack(blocks, axis=1).astype(self.dtype)  # (B, R, N)
-            self._noise_pos = 0
+            self._draw_noise_block()
         self._noise_pos += 1
         return self._noise_buf[self._noise_pos - 1]
+
+    def _draw_noise_block(self) -> None:
+        """Refill ``_noise_buf`` (B, R, N) with the next B steps of every run's stream:
+        per run, B x N numbers drawn (into a scratch block, or in place when the run's
+        slice is contiguous) and scaled in place, the numbers of ``g.random((B, N))``.
+        float32 noise is float64 noise rounded (a float32 draw is another stream)."""
+        r, n, level = self.n_runs, self.cfg.n_reservoir, self.cfg.noise_level
+        buf = getattr(self, "_noise_buf", None)
+        if buf is None or buf.shape != (_NOISE_BLOCK, r, n) or buf.dtype != self.dtype:
+            buf = self._noise_buf = np.empty((_NOISE_BLOCK, r, n), self.dtype)
+        scratch = None
+        for run, g in enumerate(self.rngs):
+            block = buf[:, run]  # (B, N), contiguous only when R = 1
+            out = block
+            if not (block.flags.c_contiguous and block.dtype == np.float64):
+                if scratch is None:
+                    scratch = np.empty((_NOISE_BLOCK, n))
+                out = scratch
+            if self.cfg.noise_kind == "uniform":  # U[-level/2, level/2)
+                g.random(out=out)
+                out -= 0.5
+            else:
+                g.standard_normal(out=out)
+            out *= level
+            if out is not block:
+                block[...] = out
+        self._noise_pos = 0
 
     # -- verbs ---------------------------------------------------------------------
     def reset(self) -> None:
@@ -256,17 +283,23 @@ class ESN:
         -------
         y : (R, n_out) output.
         """
-        cfg, n_res = self.cfg, self.cfg.n_reservoir
+        cfg, n_runs, n_res = self.cfg, self.n_runs, self.cfg.n_reservoir
         # The extended state [x; u; bias] is filled in place; u1 = [u; bias] is its tail.
-        ext = np.empty((self.n_runs, cfg.n_extended), self.dtype)
-        ext[:, n_res:-1] = np.reshape(u, (self.n_runs, cfg.n_inputs))
+        ext = np.empty((n_runs, cfg.n_extended), self.dtype)
+        ext[:, n_res:-1] = np.reshape(u, (n_runs, cfg.n_inputs))
         ext[:, -1] = cfg.bias
-        u1 = ext[:, n_res:]
-        if self._sparse is not None:
-            pre = self._sparse_matvec(self.x)
-        else:
+        u1 = ext[:, n_res:, None]
+        a = self._sparse
+        if a is None:
             pre = np.matmul(self.W, self.x[..., None])[..., 0]
-        pre += np.matmul(self.W_in, u1[..., None])[..., 0]
+        else:  # W x summed from zero, then + W_in u1: bit for bit what CSR gave
+            pre = np.zeros((n_runs, n_res), self.dtype)
+            x = np.ascontiguousarray(self.x, self.dtype)
+            if _csc_matvec is None:
+                pre += (a @ x.reshape(-1)).reshape(n_runs, n_res)
+            else:
+                _csc_matvec(*self._kernel_args, x, pre)
+        pre += np.matmul(self.W_in, u1)[..., 0]
         if cfg.output_feedback:
             y_prev = self.y if feedback is None else np.asarray(feedback, self.dtype)
             pre += np.matmul(self.W_back, y_prev[..., None])[..., 0]
@@ -280,20 +313,6 @@ class ESN:
         self.extended = ext
         self.y = self._activate(np.matmul(self.W_out, ext[..., None])[..., 0])
         return self.y
-
-    def _sparse_matvec(self, x: np.ndarray) -> np.ndarray:
-        """Block-diagonal W times the stacked states, (R, N) -> (R, N).
-
-        Calls SciPy's CSR kernel directly (what ``csr_array @ vector`` runs, without
-        its Python dispatch); the sums are the same, term by term."""
-        a = self._sparse
-        out = np.zeros(x.size, np.result_type(a.dtype, x.dtype))
-        if _csr_matvec is None:
-            out += a @ x.reshape(-1)
-        else:
-            _csr_matvec(a.shape[0], a.shape[1], a.indptr, a.indices, a.data,
-                        np.ascontiguousarray(x).reshape(-1), out)
-        return out.reshape(x.shape)
 
     def run(
         self,
@@ -326,33 +345,50 @@ class ESN:
     def _run_driven(self, inputs: np.ndarray, noise: bool, washout: int
                     ) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`run` without output feedback: the input drive W_in [u; 1] of every
-        step in one product, then a loop of only the sparse reservoir update (+ noise),
-        then the readout of all steps in one product. Equal to stepping up to float
-        rounding (~1e-15: the sums are grouped differently)."""
+        step in one product, then a loop of only the sparse reservoir update (+ leak,
+        + noise), then the readout of all steps in one product. Equal to stepping up to
+        float rounding (~1e-15: the sums are grouped differently).
+
+        The loop allocates nothing: each step's row of ``rows`` (T, R*N) holds the
+        drive, the kernel adds W x to it, tanh overwrites it in place, and it is the
+        next step's x. With one run, the rows are the reservoir part of the returned
+        states themselves (contiguous within a row); with R runs, one copy at the end.
+        """
         cfg, n_res = self.cfg, self.cfg.n_reservoir
-        n_runs, n_steps = self.n_runs, inputs.shape[1]
+        n_runs, n_steps, width = self.n_runs, inputs.shape[1], self.n_runs * n_res
         xs = np.empty((n_runs, n_steps, cfg.n_extended), self.dtype)
         xs[:, :, n_res:-1] = inputs
         xs[:, :, -1] = cfg.bias
-        drive = np.matmul(xs[:, :, n_res:], np.swapaxes(self.W_in, 1, 2))  # (R, T, N)
-        drive = np.ascontiguousarray(drive.transpose(1, 0, 2)).reshape(n_steps, -1)
-        a = self._sparse
-        x = np.ascontiguousarray(self.x).reshape(-1).copy()
-        pre = np.empty_like(x)
+        if n_runs == 1:
+            rows = xs[0, :, :n_res]  # (T, N), each row contiguous
+        else:
+            rows = np.empty((n_steps, width), self.dtype)
+        by_run = rows.reshape(n_steps, n_runs, n_res)  # a view in both cases
+        np.matmul(xs[:, :, n_res:], np.swapaxes(self.W_in, 1, 2),
+                  out=by_run.transpose(1, 0, 2))  # drive (R, T, N)
+        a, kernel_args = self._sparse, self._kernel_args
+        leak = cfg.leak_rate
+        if leak != 1.0:
+            kept = np.empty(width, self.dtype)
         add_noise = noise and cfg.noise_level > 0
+        x = np.ascontiguousarray(self.x, self.dtype).reshape(-1)
         for t in range(n_steps):
-            pre[:] = drive[t]
-            if _csr_matvec is None:
-                pre += a @ x
+            row = rows[t]
+            if _csc_matvec is None:
+                row += a @ x
             else:
-                _csr_matvec(a.shape[0], a.shape[1], a.indptr, a.indices, a.data, x, pre)
-            if cfg.leak_rate != 1.0:
-                x = (1.0 - cfg.leak_rate) * x + cfg.leak_rate * np.tanh(pre)
-            else:
-                np.tanh(pre, out=x)
+                _csc_matvec(*kernel_args, x, row)
+            np.tanh(row, out=row)
+            if leak != 1.0:  # (1 - a) x + a tanh(.), as in step
+                np.multiply(x, 1.0 - leak, out=kept)
+                row *= leak
+                row += kept
             if add_noise:
-                x += self._noise().reshape(-1)
-            xs[:, t, :n_res] = x.reshape(n_runs, n_res)
+                row_by_run = by_run[t]
+                row_by_run += self._noise()
+            x = row
+        if n_runs > 1:
+            xs[:, :, :n_res] = by_run.transpose(1, 0, 2)
         self.x = x.reshape(n_runs, n_res).copy()
         self.extended = xs[:, -1].copy()
         ys = self.readout(xs)

@@ -1,4 +1,7 @@
-"""ESN contracts: spectral radius, echo states, readouts, lockstep runs, persistence."""
+"""ESN contracts: spectral radius, echo states, readouts, lockstep runs, noise streams,
+persistence."""
+
+import copy
 
 import numpy as np
 import pytest
@@ -82,6 +85,72 @@ def test_lockstep_runs_equal_single_runs(connectivity):
         np.testing.assert_allclose(ys[0], yb[r], rtol=0, atol=1e-12)
         np.testing.assert_allclose(ys2[0], yb2[r], rtol=0, atol=1e-12)
     assert not np.allclose(yb2[0], yb2[1])  # runs really differ
+
+
+def test_lockstep_steps_equal_single_steps_bitwise():
+    # the control loop's path: step() with a sparse reservoir, noise across a block edge
+    cfg = ESNConfig(3, 2, n_reservoir=80, noise_level=0.2)
+    n_runs = 3
+    u = _inputs(n_runs=n_runs, n_steps=300)
+    batch = ESN(cfg, n_runs=n_runs, seed=13)
+    yb = np.stack([batch.step(u[:, t]) for t in range(u.shape[1])], axis=1)
+    for r, gen in enumerate(run_generators(13, n_runs)):
+        single = ESN(cfg, n_runs=1, rngs=[gen])
+        ys = np.stack([single.step(u[r : r + 1, t]) for t in range(u.shape[1])], axis=1)
+        np.testing.assert_array_equal(ys[0], yb[r])
+        np.testing.assert_array_equal(single.x[0], batch.x[r])
+
+
+@pytest.mark.parametrize("leak_rate, n_runs, dtype", [(1.0, 1, "float64"), (0.6, 3, "float64"),
+                                                      (0.6, 1, "float32")])
+def test_run_equals_stepping(leak_rate, n_runs, dtype):
+    cfg = ESNConfig(3, 2, n_reservoir=60, noise_level=0.1, leak_rate=leak_rate, dtype=dtype)
+    u = _inputs(n_runs=n_runs, n_steps=300)
+    ran, stepped = ESN(cfg, n_runs=n_runs, seed=14), ESN(cfg, n_runs=n_runs, seed=14)
+    ran.W_out[:] = stepped.W_out[:] = np.random.default_rng(2).normal(0, 0.1, ran.W_out.shape)
+    y_run, x_run = ran.run(u)
+    y_step = np.stack([stepped.step(u[:, t]) for t in range(u.shape[1])], axis=1)
+    atol = 1e-12 if dtype == "float64" else 1e-5
+    np.testing.assert_allclose(y_run, y_step, rtol=0, atol=atol)
+    np.testing.assert_allclose(x_run[:, -1], stepped.extended, rtol=0, atol=atol)
+    np.testing.assert_allclose(ran.x, stepped.x, rtol=0, atol=atol)
+
+
+@pytest.mark.parametrize("kind, dtype", [("uniform", "float64"), ("gaussian", "float64"),
+                                         ("uniform", "float32")])
+def test_noise_is_each_runs_own_stream_in_blocks(kind, dtype):
+    # W = 0 and W_in = 0: the state is the noise alone, nu(t) = x(t)
+    cfg = ESNConfig(1, 1, n_reservoir=30, spectral_radius=0.0, input_scaling=0.0,
+                    noise_level=0.2, noise_kind=kind, dtype=dtype)
+    gens = run_generators(15, 2)
+    esn = ESN(cfg, n_runs=2, rngs=gens)
+    twins = [copy.deepcopy(g) for g in gens]  # the streams right after the weights
+    _, x = esn.run(np.zeros((2, 200, 1)))
+    stepped = np.empty((2, 100, 30), dtype)
+    for t in range(100):
+        esn.step(np.zeros((2, 1)))
+        stepped[:, t] = esn.x
+    for r, g in enumerate(twins):
+        draw = g.random if kind == "uniform" else g.standard_normal
+        blocks = [draw((256, 30)) for _ in range(2)]  # B = 256 steps a block, per run
+        if kind == "uniform":
+            blocks = [b - 0.5 for b in blocks]
+        expected = (np.concatenate(blocks) * 0.2).astype(dtype)
+        np.testing.assert_array_equal(x[r, :, :30], expected[:200])
+        np.testing.assert_array_equal(stepped[r], expected[200:300])
+
+
+def test_one_run_split_from_a_lockstep_esn_continues_its_noise():
+    from skinny_mj.training import esn_run  # reads _noise_buf as (B, R, N)
+
+    cfg = ESNConfig(3, 2, n_reservoir=40, noise_level=0.2)
+    u = _inputs(n_runs=3, n_steps=400)
+    batch = ESN(cfg, n_runs=3, seed=16)
+    batch.run(u[:, :100])
+    one = esn_run(batch, 1)
+    y_one, _ = one.run(u[1:2, 100:])
+    y_batch, _ = batch.run(u[:, 100:])
+    np.testing.assert_array_equal(y_one[0], y_batch[1])
 
 
 def test_gaussian_and_uniform_noise_have_the_documented_spread():
