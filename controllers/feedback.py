@@ -15,6 +15,7 @@ gimbal alignment), where it keeps u_error bounded instead of exploding.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,8 +50,15 @@ def jacobian_error(
     jac = np.asarray(command_jacobian, float)
     err = (np.asarray(desired) - sensed)[..., None]
     jt = np.swapaxes(jac, -1, -2)
-    gram = jt @ jac + damping**2 * np.eye(jac.shape[-1])
+    gram = jt @ jac + _damping_matrix(jac.shape[-1], damping)
     return np.linalg.solve(gram, jt @ err)[..., 0]
+
+
+@functools.lru_cache(maxsize=16)
+def _damping_matrix(n: int, damping: float) -> np.ndarray:
+    out = damping**2 * np.eye(n)
+    out.flags.writeable = False
+    return out
 
 
 @dataclass(frozen=True)
@@ -76,7 +84,6 @@ class FeedbackController:
 
     def u_error(self, desired: np.ndarray, sensed: np.ndarray, plant) -> np.ndarray:
         """u_error (R, n_dof) for desired (n_sig,) or (R, n_sig) and sensed (R, n_sig)."""
-        desired = np.broadcast_to(desired, np.shape(sensed))
         if self.mode == "joint":
             return joint_space_error(
                 desired, sensed, np.asarray(self.signal_per_rad), plant.max_speed_rad_s, plant.dt

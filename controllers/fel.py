@@ -169,19 +169,25 @@ def rollout(
     angles[:, 0] = plant.joint_angles()
     if forward is not None:
         predictions[:, 0] = sensed[:, 0]
+    n_des, n_sig = desired.shape[1], plant.n_signals
+    u_in = np.empty((n_runs, n_des + n_sig * (1 if forward is None else 2)))
     for t in range(n_steps - 1):
         s_in = sensed[:, max(t - delay_steps, 0)]
-        parts = [np.broadcast_to(desired[t + 1], s_in.shape), s_in]
+        u_in[:, :n_des] = desired[t + 1]  # the ESN's input [d(t+1); s(t); p(t)]
+        u_in[:, n_des:n_des + n_sig] = s_in
         if forward is not None:
-            parts.append(predictions[:, t])
-        y_esn[:, t] = esn.step(np.concatenate(parts, axis=1), noise=noise)
+            u_in[:, n_des + n_sig:] = predictions[:, t]
+        y_esn[:, t] = esn.step(u_in, noise=noise)
         states[:, t] = esn.extended
         u_error[:, t] = feedback.u_error(desired[t], sensed[:, t], plant)
-        commands[:, t] = np.clip(y_esn[:, t] + gain * u_error[:, t], -1.0, 1.0)
+        command = commands[:, t]  # clip(y_esn + K u_error) into its row
+        np.multiply(gain, u_error[:, t], out=command)
+        command += y_esn[:, t]
+        np.clip(command, -1.0, 1.0, out=command)
         if forward is not None:
-            predictions[:, t + 1] = forward.step(s_in, commands[:, t], noise=noise)
+            predictions[:, t + 1] = forward.step(s_in, command, noise=noise)
             fm_states[:, t] = forward.esn.extended
-        sensed[:, t + 1] = plant.step(commands[:, t])
+        sensed[:, t + 1] = plant.step(command)
         true[:, t + 1] = plant.true_signals()
         angles[:, t + 1] = plant.joint_angles()
     u_error[:, -1] = feedback.u_error(desired[-1], sensed[:, -1], plant)

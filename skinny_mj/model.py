@@ -59,13 +59,14 @@ def xml_path(dof: int, scene: bool = True) -> Path:
     return path
 
 
-def load_spec(dof: int, actuation: str = "velocity") -> mujoco.MjSpec:
-    """The scene as an editable :class:`mujoco.MjSpec`; ``actuation="torque"`` swaps every
+def load_spec(dof: int, actuation: str = "velocity", scene: bool = True) -> mujoco.MjSpec:
+    """The scene (``scene=False``: the robot alone) as an editable
+    :class:`mujoco.MjSpec`; ``actuation="torque"`` swaps every
     velocity actuator for a motor of the same name and joint, gear = peak torque (N m),
     ctrlrange [-1, 1], timestep :data:`TORQUE_TIMESTEP_S`; the joints keep their
     limits (soft MuJoCo constraints)."""
     _check(dof, actuation)
-    spec = mujoco.MjSpec.from_file(str(xml_path(dof)))
+    spec = mujoco.MjSpec.from_file(str(xml_path(dof, scene)))
     if actuation == "torque":
         spec.option.timestep = TORQUE_TIMESTEP_S
         for name in body.dof_names(dof):
@@ -83,3 +84,32 @@ def load_model(dof: int, actuation: str = "velocity") -> mujoco.MjModel:
     if actuation == "velocity":
         return mujoco.MjModel.from_xml_path(str(xml_path(dof)))
     return load_spec(dof, actuation).compile()
+
+
+BATCH_PREFIX = "r{}/"  # names of copy r in :func:`load_batch_model`
+
+
+def load_batch_model(dof: int, copies: int, actuation: str = "velocity") -> mujoco.MjModel:
+    """``copies`` independent Skinnies (no scene) in one model, for stepping many runs
+    with one ``mj_step``.
+
+    Copy r's elements are named ``r{r}/<name>`` and laid out as contiguous blocks in
+    copy order (bodies after the world body, joints, dofs, qpos, sites, actuators), so
+    ``data.qpos.reshape(copies, -1)`` etc. are per-copy views. Skinny's geoms never
+    collide and the copies share nothing, so each copy computes bit for bit what a
+    one-robot model computes (``tests/test_plant.py`` checks it).
+    """
+    _check(dof, actuation)
+    if copies < 1:
+        raise SkinnyInputError(f"copies must be >= 1, got {copies}")
+    parent = mujoco.MjSpec()
+    one = load_spec(dof, actuation, scene=False)
+    for name in dir(one.option):  # the robot's physics options, field by field
+        if not name.startswith("_"):
+            setattr(parent.option, name, getattr(one.option, name))
+    parent.compiler.degree = one.compiler.degree
+    parent.compiler.autolimits = one.compiler.autolimits
+    for r in range(copies):
+        parent.attach(load_spec(dof, actuation, scene=False), prefix=BATCH_PREFIX.format(r),
+                      frame=parent.worldbody.add_frame())
+    return parent.compile()

@@ -46,10 +46,72 @@ def servo_ctrl(
     -------
     (..., n_dof) joint velocity command, rad/s.
     """
-    vel = np.clip(command, -1.0, 1.0) * max_speed_rad_s
-    lo = (range_rad[:, 0] + margin_rad - q) / dt
-    hi = (range_rad[:, 1] - margin_rad - q) / dt
-    return np.minimum(np.maximum(vel, lo), hi)
+    vel = np.maximum(np.asarray(command, float), -1.0)  # clip to [-1, 1], in place
+    np.minimum(vel, 1.0, out=vel)
+    vel *= max_speed_rad_s
+    lo = range_rad[:, 0] + margin_rad - q
+    lo /= dt
+    hi = range_rad[:, 1] - margin_rad - q
+    hi /= dt
+    np.maximum(vel, lo, out=vel)
+    return np.minimum(vel, hi, out=vel)
+
+
+def segment_jacobian(
+    axes: np.ndarray, points: np.ndarray, turns: np.ndarray, lengths: np.ndarray,
+    comps: list[int],
+) -> np.ndarray:
+    """d(Cartesian signal)/d(joint angle), per rad, for R runs at once.
+
+    A signal is a component of a segment's unit direction v / L, v = p_b - p_a (shoulder
+    to elbow, elbow to wrist). A hinge upstream of p_a turns v about its axis:
+    d v / d q = axis x v; a hinge between p_a and p_b turns p_b about an axis through
+    p_b itself: 0. So this is ``mj_jacSite(b) - mj_jacSite(a)`` (over L) up to rounding
+    (~1e-16), at a fraction of its cost. :class:`Layout` (the dm_control path) and
+    :class:`skinny_mj.plant.BatchPlant` both call it, so both get the same bits.
+
+    Parameters
+    ----------
+    axes : (R, n_dof, 3) world joint axes (``cdof``'s angular part), in DOF order.
+    points : (R, 2 arms, 3, 3) shoulder, elbow, wrist positions, m.
+    turns : (4 segments, n_dof) 1.0 where the DOF turns the segment, else 0.0.
+    lengths : (4,) segment lengths, m (arm-major, upper arm then forearm).
+    comps : components of each segment in the signals ([0, 2]: x, z in 2D).
+
+    Returns
+    -------
+    (R, 4 * len(comps), n_dof), rows in :func:`body.signal_names` order.
+    """
+    n, n_dof = axes.shape[0], axes.shape[1]
+    # (component, segment, dof, R): on tiny arrays NumPy pays per call and per innermost
+    # run, so R goes innermost and each cross-product component is one expression
+    a = axes.transpose(2, 1, 0)  # (3, n_dof, R)
+    pts = points.transpose(3, 1, 2, 0)  # (3, arm, point, R)
+    v = (pts[:, :, 1:] - pts[:, :, :-1]).reshape(3, 4, 1, n)  # (3, segment, 1, R)
+    cross = np.stack([a[(k + 1) % 3] * v[(k + 2) % 3] - a[(k + 2) % 3] * v[(k + 1) % 3]
+                      for k in comps])  # mju_cross order; (comp, segment, dof, R)
+    out = np.empty((n, 4, len(comps), n_dof))
+    np.multiply(cross.transpose(3, 1, 0, 2), turns[:, None], out=out)
+    out /= lengths[:, None, None]
+    return out.reshape(n, 4 * len(comps), n_dof)
+
+
+def _segment_turns(model: mujoco.MjModel, site_ids: np.ndarray,
+                   dof_adr: np.ndarray) -> np.ndarray:
+    """(4 segments, n_dof) 1.0 where a DOF is on the kinematic chain of the segment's
+    first site (the chain ``mj_jac`` walks), else 0.0."""
+    starts = site_ids[:, :2].reshape(-1)  # shoulder, elbow of each arm
+    turns = np.zeros((starts.size, model.nv))
+    for k, site in enumerate(starts):
+        b = int(model.site_bodyid[site])
+        while b and not model.body_dofnum[b]:
+            b = int(model.body_parentid[b])
+        if b:
+            i = int(model.body_dofadr[b] + model.body_dofnum[b] - 1)
+            while i >= 0:
+                turns[k, i] = 1.0
+                i = int(model.dof_parentid[i])
+    return turns[:, dof_adr]
 
 
 class Layout:
@@ -75,6 +137,8 @@ class Layout:
         self.range_rad = model.jnt_range[jnt].copy()
         self._lengths = np.array([body.UPPER_ARM_LENGTH_M, body.FOREARM_LENGTH_M])
         self._comps = [0, 2] if self.dof == 4 else [0, 1, 2]
+        self.segment_turns = _segment_turns(model, self.site_ids, self.dof_adr)
+        self.segment_lengths = np.tile(self._lengths, 2)
         self._jacp = np.zeros((3, model.nv))
 
     def joint_angles(self, data: mujoco.MjData) -> np.ndarray:
@@ -115,12 +179,10 @@ class Layout:
             return np.diag(2.0 / (hi - lo))
         if signals != "cartesian":
             raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
-        blocks = []
-        for arm in range(2):
-            jac = [self.site_jacobian(model, data, s)[:, self.dof_adr] for s in self.site_ids[arm]]
-            for seg in range(2):
-                blocks.append((jac[seg + 1] - jac[seg])[self._comps] / self._lengths[seg])
-        return np.concatenate(blocks, axis=0)
+        axes = data.cdof[self.dof_adr, :3][None]
+        points = data.site_xpos[self.site_ids][None]
+        return segment_jacobian(axes, points, self.segment_turns, self.segment_lengths,
+                                self._comps)[0]
 
 
 class SkinnyPhysics(dm_mujoco.Physics):
@@ -175,5 +237,6 @@ class SkinnyPhysics(dm_mujoco.Physics):
         return self.layout.site_jacobian(self.model.ptr, self.data.ptr, self.model.site(name).id)
 
     def signal_jacobian(self, signals: str) -> np.ndarray:
-        """(n_signals, n_dof) d(normalized signal)/d(joint angle) from ``mj_jacSite``."""
+        """(n_signals, n_dof) d(normalized signal)/d(joint angle), per rad (see
+        :func:`segment_jacobian`)."""
         return self.layout.signal_jacobian(self.model.ptr, self.data.ptr, signals)

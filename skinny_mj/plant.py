@@ -2,7 +2,7 @@
 
 :class:`Plant` is R independent copies of Skinny stepping in lockstep. :class:`EnvPlant`
 wraps a dm_control environment (R = 1, the user-facing path); :class:`BatchPlant`
-steps R ``MjData`` of one ``MjModel`` directly, with the same operations as
+steps R copies of the robot in one ``MjModel`` directly, with the same operations as
 dm_control (reset: ``mj_resetData``, pose, ``mj_forward`` without actuation; step:
 ctrl, ``mj_step2``, ``mj_step1``) and run r's sensor noise from its own
 ``np.random.default_rng(seeds[r])`` in the task's draw order (see
@@ -20,8 +20,8 @@ import numpy as np
 
 from controllers.plant import Plant as _Plant
 from skinny_mj import body
-from skinny_mj.model import load_model
-from skinny_mj.physics import Layout, servo_ctrl
+from skinny_mj.model import BATCH_PREFIX, load_batch_model, load_model
+from skinny_mj.physics import Layout, segment_jacobian, servo_ctrl
 from skinny_mj.task import Setup, prepare, widen_ctrlrange
 
 _NOISE_BLOCK = 128  # sensor-noise vectors drawn per run at once
@@ -75,13 +75,20 @@ class EnvPlant:
 
 
 class BatchPlant:
-    """R copies of Skinny as R ``MjData`` of one ``MjModel``, stepped without dm_control.
+    """R copies of Skinny as one MuJoCo model, stepped without dm_control.
 
-    The per-step work around the physics is vectorized over R and computes the same
-    numbers with the same floating-point operations as :class:`skinny_mj.physics.Layout`
-    (bit-identical): the servo ctrl, the position signals from ``site_xpos``, and the
-    site Jacobians from ``cdof`` / ``subtree_com`` exactly as MuJoCo's ``mj_jac`` forms
-    them. Sensor noise is drawn from each run's Generator in blocks of
+    The R robots are copies in one ``MjModel`` (:func:`skinny_mj.model.load_batch_model`):
+    one ``mj_step`` advances all of them in C, and every per-run quantity is a
+    (R, ...) view of the one ``MjData``. The copies share nothing, so run r's physics is
+    bit for bit that of ``EnvPlant(load(..., seed=seeds[r]))``, with the same operations
+    as dm_control (reset: ``mj_resetData``, pose, ``mj_forward`` without actuation;
+    step: ctrl, ``mj_step2``, ``mj_step1``). The work around the physics is vectorized
+    over R: the servo ctrl and the position signals with the same floating-point
+    operations as :class:`skinny_mj.physics.Layout` (bitwise); the command Jacobian
+    from the joint axes and segment vectors, equal to Layout's ``mj_jacSite``
+    differences to ~1e-16 (not bitwise: a whole training run agrees with the
+    dm_control path to ~1e-12). Sensor noise is drawn from each run's Generator
+    (``np.random.default_rng(seeds[r])``, the task's draw order) in blocks of
     ``_NOISE_BLOCK`` vectors, which yields the same sequence as one draw per step.
 
     Parameters
@@ -109,10 +116,12 @@ class BatchPlant:
         seeds = list(range(n_runs)) if seeds is None else list(seeds)
         if n_runs < 1 or len(seeds) != n_runs:
             raise ValueError(f"need n_runs >= 1 and one seed per run, got {n_runs}, {seeds}")
-        self.model = load_model(dof, actuation)
-        self.layout = Layout(self.model)
-        widen_ctrlrange(self.model, self.layout.actuator_ids, self.setup)
-        self.data = [mujoco.MjData(self.model) for _ in range(n_runs)]
+        one = load_model(dof, actuation)  # names and indices of one robot
+        self.layout = Layout(one)
+        self.model = load_batch_model(dof, n_runs, actuation)
+        for r in range(n_runs):
+            widen_ctrlrange(self.model, r * one.nu + self.layout.actuator_ids, self.setup)
+        self.data = mujoco.MjData(self.model)
         self.rngs = [np.random.default_rng(s) for s in seeds]
         self.n_runs = n_runs
         self.n_dof = dof
@@ -121,52 +130,36 @@ class BatchPlant:
         self.max_speed_rad_s = self.setup.max_speed_rad_s
         self.signals = signals
         self.n_substeps = int(round(self.dt / self.model.opt.timestep))
-        self._init_fast_path()
+        self._init_views(one)
 
-    # -- vectorized views ----------------------------------------------------------
-    def _init_fast_path(self) -> None:
-        m, lay = self.model, self.layout
-        # Views into each MjData stay valid for the data's lifetime (no reallocation).
-        self._views = {name: [getattr(d, name) for d in self.data]
-                       for name in ("qpos", "ctrl", "site_xpos", "cdof", "subtree_com")}
-        # (1, ...) views, so one np.concatenate gathers R runs without np.stack's per-run
-        # expand_dims
-        self._rows = {name: [v[None] for v in views] for name, views in self._views.items()}
-        self._sites = lay.site_ids.reshape(-1)  # (6,) arm-major, shoulder/elbow/wrist
-        site_body = m.site_bodyid[self._sites]
-        self._site_root = m.body_rootid[site_body]
-        # dofs on each site's kinematic chain (mj_jac walks the same chain)
-        mask = np.zeros((self._sites.size, m.nv), bool)
-        for k, body_id in enumerate(site_body):
-            b = int(body_id)
-            while b and not m.body_dofnum[b]:
-                b = int(m.body_parentid[b])
-            if b:
-                i = int(m.body_dofadr[b] + m.body_dofnum[b] - 1)
-                while i >= 0:
-                    mask[k, i] = True
-                    i = int(m.dof_parentid[i])
-        self._chain = mask[:, None, :]  # (6, 1, nv)
+    # -- per-run views -------------------------------------------------------------
+    def _init_views(self, one: mujoco.MjModel) -> None:
+        m, d, lay, r = self.model, self.data, self.layout, self.n_runs
+        _check_blocks(one, m, r)
+        # (R, ...) views of the one MjData (its buffers never move)
+        self._qpos = d.qpos.reshape(r, one.nq)
+        self._qvel = d.qvel.reshape(r, one.nv)
+        self._ctrl = d.ctrl.reshape(r, one.nu)
+        self._site_xpos = d.site_xpos.reshape(r, one.nsite, 3)
+        self._cdof = d.cdof.reshape(r, one.nv, 6)
+        sites = lay.site_ids.reshape(-1)  # (6,) arm-major, shoulder/elbow/wrist
         self._comps = np.array(lay._comps)
+        self._comp_sel = _as_slice(self._comps)  # views, not gathers, where possible
+        self._site_sel = _as_slice(sites)
+        self._qpos_sel = _as_slice(lay.qpos_adr)
+        self._dof_sel = _as_slice(lay.dof_adr)
+        self._act_sel = _as_slice(lay.actuator_ids)
         self._lengths = lay._lengths
-        self._scale = self.max_speed_rad_s * self.dt
         self._noise_buf = np.zeros((0, self.n_runs, self.n_signals))
         self._noise_pos = 0
-        self._cache: dict[str, np.ndarray] = {}
+        self._signals: np.ndarray | None = None
 
-    def _stacked(self, name: str) -> np.ndarray:
-        arr = self._cache.get(name)
-        if arr is None:
-            arr = np.concatenate(self._rows[name])
-            self._cache[name] = arr
-        return arr
-
-    def _forward_without_actuation(self, data: mujoco.MjData) -> None:
+    def _forward_without_actuation(self) -> None:
         # as dm_control's Physics.reset / after_reset
         flags = self.model.opt.disableflags
         self.model.opt.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
         try:
-            mujoco.mj_forward(self.model, data)
+            mujoco.mj_forward(self.model, self.data)
         finally:
             self.model.opt.disableflags = flags
 
@@ -180,18 +173,25 @@ class BatchPlant:
         return self._noise_buf[self._noise_pos - 1]
 
     def _sensed(self) -> np.ndarray:
-        return self.true_signals() + self._draw_noise() * self.setup.sensor_noise
+        out = self._draw_noise() * self.setup.sensor_noise
+        out += self._true()  # true + noise, as the task adds them
+        return out
 
     # -- Plant protocol --------------------------------------------------------------
     def reset(self) -> np.ndarray:
-        for data in self.data:
-            mujoco.mj_resetData(self.model, data)
-            self._forward_without_actuation(data)
-            self.layout.set_joint_angles(data, self.setup.start_rad)
-            data.ctrl[:] = 0.0
-            self._forward_without_actuation(data)
-        self._cache = {}
+        mujoco.mj_resetData(self.model, self.data)
+        self._forward_without_actuation()
+        self.set_joint_angles(np.broadcast_to(self.setup.start_rad, (self.n_runs, self.n_dof)))
         return self._sensed()
+
+    def set_joint_angles(self, q: np.ndarray) -> None:
+        """Pose every run at (R, n_dof) angles (rad), at rest, with zero ctrl, and
+        recompute its kinematics (as a reset does)."""
+        self._qpos[:, self.layout.qpos_adr] = q
+        self._qvel[:, self.layout.dof_adr] = 0.0
+        self.data.ctrl[:] = 0.0
+        self._forward_without_actuation()
+        self._signals = None
 
     def step(self, command: np.ndarray) -> np.ndarray:
         command = np.asarray(command, dtype=float).reshape(self.n_runs, self.n_dof)
@@ -200,50 +200,72 @@ class BatchPlant:
         else:
             ctrl = servo_ctrl(command, self.joint_angles(), self.max_speed_rad_s,
                               self.layout.range_rad, self.dt)
-        ids, model, extra = self.layout.actuator_ids, self.model, self.n_substeps - 1
-        step1, step2 = mujoco.mj_step1, mujoco.mj_step2
-        for r, (data, ctrl_view) in enumerate(zip(self.data, self._views["ctrl"],
-                                                  strict=True)):
-            ctrl_view[ids] = ctrl[r]
-            # dm_control's legacy step: finish the step, keep kinematics in sync with qpos
-            step2(model, data)
-            if extra:
-                mujoco.mj_step(model, data, extra)
-            step1(model, data)
-        self._cache = {}
+        self._ctrl[:, self._act_sel] = ctrl
+        # dm_control's legacy step: finish the step, keep kinematics in sync with qpos
+        mujoco.mj_step2(self.model, self.data)
+        if self.n_substeps > 1:
+            mujoco.mj_step(self.model, self.data, self.n_substeps - 1)
+        mujoco.mj_step1(self.model, self.data)
+        self._signals = None
         return self._sensed()
 
     def true_signals(self) -> np.ndarray:
-        out = self._cache.get("signals")
-        if out is None:
+        return self._true().copy()
+
+    def _true(self) -> np.ndarray:
+        if self._signals is None:
+            n = self.n_runs
             if self.signals == "joint":
-                out = body.normalize_angles(self.joint_angles(), self.n_dof)
+                self._signals = body.normalize_angles(self.joint_angles(), self.n_dof)
             else:
-                pts = self._stacked("site_xpos")[:, self.layout.site_ids]  # (R, 2, 3, 3)
-                seg = (pts[:, :, 1:] - pts[:, :, :-1]) / self._lengths[:, None]
-                out = seg[..., self._comps].reshape(self.n_runs, -1)
-            self._cache["signals"] = out
-        return out.copy()
+                pts = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
+                seg = np.empty((n, 2, 2, len(self._comps)))
+                np.divide((pts[:, :, 1:] - pts[:, :, :-1])[..., self._comp_sel],
+                          self._lengths[:, None], out=seg)
+                self._signals = seg.reshape(n, -1)
+        return self._signals
 
     def joint_angles(self) -> np.ndarray:
-        return self._stacked("qpos")[:, self.layout.qpos_adr]
+        return self._qpos[:, self._qpos_sel].copy()
 
     def command_jacobian(self) -> np.ndarray:
         n = self.n_runs
         if self.signals == "joint":
             lo, hi = self.layout.range_rad.T
-            jac = np.diag(2.0 / (hi - lo)) * self._scale
+            jac = np.diag(2.0 / (hi - lo)) * (self.max_speed_rad_s * self.dt)
             return np.broadcast_to(jac, (n, *jac.shape)).copy()
-        cdof = self._stacked("cdof")  # (R, nv, 6)
-        offset = (self._stacked("site_xpos")[:, self._sites]
-                  - self._stacked("subtree_com")[:, self._site_root])  # (R, 6, 3)
-        a = np.swapaxes(cdof[..., :3], 1, 2)[:, None]  # (R, 1, 3, nv) angular part
-        o = offset[..., None]  # (R, 6, 3, 1)
-        cross = np.stack([a[:, :, 1] * o[:, :, 2] - a[:, :, 2] * o[:, :, 1],
-                          a[:, :, 2] * o[:, :, 0] - a[:, :, 0] * o[:, :, 2],
-                          a[:, :, 0] * o[:, :, 1] - a[:, :, 1] * o[:, :, 0]], axis=2)
-        jac = np.where(self._chain, np.swapaxes(cdof[..., 3:], 1, 2)[:, None] + cross, 0.0)
-        jac = jac[..., self.layout.dof_adr].reshape(n, 2, 3, 3, self.n_dof)
-        seg = (jac[:, :, 1:] - jac[:, :, :-1])[:, :, :, self._comps]
-        seg = seg / self._lengths[None, None, :, None, None]
-        return seg.reshape(n, self.n_signals, self.n_dof) * self._scale
+        axes = self._cdof[:, self._dof_sel, :3]
+        points = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
+        jac = segment_jacobian(axes, points, self.layout.segment_turns,
+                               self.layout.segment_lengths, self.layout._comps)
+        jac *= self.max_speed_rad_s * self.dt  # as EnvPlant.command_jacobian
+        return jac
+
+
+def _as_slice(index: np.ndarray) -> slice | np.ndarray:
+    """An index array as the equal slice when it is an evenly spaced ascending run."""
+    index = np.asarray(index).reshape(-1)
+    if index.size > 1:
+        step = int(index[1] - index[0])
+        if step > 0 and np.array_equal(index, index[0] + step * np.arange(index.size)):
+            return slice(int(index[0]), int(index[-1]) + 1, step)
+    return index
+
+
+def _check_blocks(one: mujoco.MjModel, batch: mujoco.MjModel, copies: int) -> None:
+    """The batch model holds ``copies`` robots as contiguous, identically ordered blocks
+    (what the (R, ...) views assume); raises if MuJoCo ever lays them out otherwise."""
+    sizes = {"nq": one.nq, "nv": one.nv, "nu": one.nu, "nsite": one.nsite,
+             "nbody": one.nbody - 1}
+    for key, n in sizes.items():
+        got = getattr(batch, key) - (1 if key == "nbody" else 0)
+        if got != copies * n:
+            raise RuntimeError(f"batch model: {key} = {got}, expected {copies} x {n}")
+    for kind, count in ((mujoco.mjtObj.mjOBJ_JOINT, one.njnt),
+                        (mujoco.mjtObj.mjOBJ_SITE, one.nsite),
+                        (mujoco.mjtObj.mjOBJ_ACTUATOR, one.nu)):
+        for r in (0, copies - 1):
+            for i in range(count):
+                name = BATCH_PREFIX.format(r) + mujoco.mj_id2name(one, kind, i)
+                if mujoco.mj_name2id(batch, kind, name) != r * count + i:
+                    raise RuntimeError(f"batch model: {name} is not where the views expect")

@@ -86,6 +86,26 @@ def test_forward_kinematics_and_jacobians_equal_body(dof):
                                        body.signal_jacobian(q, dof, signals), atol=1e-12)
 
 
+@pytest.mark.parametrize("dof", [4, 8])
+def test_segment_jacobian_equals_mujoco_site_jacobians(dof):
+    """The analytic signal Jacobian (axis x segment) is MuJoCo's mj_jacSite(b) -
+    mj_jacSite(a) over the segment length, per signal component."""
+    physics = SkinnyPhysics.load(dof)
+    lay = physics.layout
+    rng = np.random.default_rng(10 + dof)
+    ranges = body.joint_ranges(dof)
+    for _ in range(20):
+        physics.set_joint_angles(rng.uniform(ranges[:, 0], ranges[:, 1]))
+        rows = []
+        for arm in range(2):
+            jac = [lay.site_jacobian(physics.model.ptr, physics.data.ptr, s)[:, lay.dof_adr]
+                   for s in lay.site_ids[arm]]
+            for seg, length in enumerate(lay._lengths):
+                rows.append((jac[seg + 1] - jac[seg])[lay._comps] / length)
+        np.testing.assert_allclose(physics.signal_jacobian("cartesian"),
+                                   np.concatenate(rows), rtol=0, atol=1e-12)
+
+
 def test_site_jacobian_is_finite_difference_of_site_position():
     physics = SkinnyPhysics.load(8)
     q = np.array([1.0, 0.3, -0.4, 1.1, 0.5, -0.2, 0.6, 0.7])

@@ -147,8 +147,7 @@ def test_servo_moves_command_times_full_scale_step(dof):
     worst = 0.0
     for c_prev, c in [(0.0, 1.0), (0.0, -0.3), (0.5, 0.5), (-1.0, 1.0), (1.0, -1.0), (0.2, -0.7)]:
         plant.reset()
-        plant.layout.set_joint_angles(plant.data[0], mid - 2.5 * c_prev * step_rad)
-        plant._forward_without_actuation(plant.data[0])
+        plant.set_joint_angles((mid - 2.5 * c_prev * step_rad)[None])
         for _ in range(2):
             plant.step(np.full((1, dof), c_prev))
         q = plant.joint_angles()[0]
@@ -172,7 +171,7 @@ def test_random_commands_never_pass_the_range(dof):
         q = plant.joint_angles()[0]
         worst = max(worst, np.max(lo - q), np.max(q - hi))
     assert worst < 1e-3
-    assert all(w.number == 0 for w in plant.data[0].warning)
+    assert all(w.number == 0 for w in plant.data.warning)
 
 
 def test_default_trajectory_is_ymca():
