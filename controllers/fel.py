@@ -154,44 +154,45 @@ def rollout(
     desired = np.asarray(desired, float)
     n_steps, n_runs = desired.shape[0], esn.n_runs
     gain = np.broadcast_to(np.asarray(gain, float), (n_runs,))[:, None]
-    sensed = np.empty((n_runs, n_steps, plant.n_signals))
-    true = np.empty_like(sensed)
-    angles = np.empty((n_runs, n_steps, plant.n_dof))
-    u_error = np.empty((n_runs, n_steps, plant.n_dof))
-    commands = np.empty((n_runs, n_steps - 1, plant.n_dof))
+    # Time-major buffers (T, R, ...): each step writes contiguous rows, not R rows a
+    # whole movement apart (scattered first touches of fresh pages cost more than the
+    # writes). The Rollout holds their (R, T, ...) views.
+    n_des, n_sig, n_dof = desired.shape[1], plant.n_signals, plant.n_dof
+    sensed, true = np.empty((n_steps, n_runs, n_sig)), np.empty((n_steps, n_runs, n_sig))
+    angles, u_error = np.empty((n_steps, n_runs, n_dof)), np.empty((n_steps, n_runs, n_dof))
+    commands = np.empty((n_steps - 1, n_runs, n_dof))
     y_esn = np.empty_like(commands)
-    states = np.empty((n_runs, n_steps - 1, esn.cfg.n_extended))
+    states = np.empty((n_steps - 1, n_runs, esn.cfg.n_extended), esn.dtype)
     fm_states = None if forward is None else np.empty(
-        (n_runs, n_steps - 1, forward.esn.cfg.n_extended))
+        (n_steps - 1, n_runs, forward.esn.cfg.n_extended))
     predictions = None if forward is None else np.empty_like(sensed)
-    sensed[:, 0] = plant.reset()
-    true[:, 0] = plant.true_signals()
-    angles[:, 0] = plant.joint_angles()
+    sensed[0] = plant.reset()
+    true[0] = plant.true_signals()
+    angles[0] = plant.joint_angles()
     if forward is not None:
-        predictions[:, 0] = sensed[:, 0]
-    n_des, n_sig = desired.shape[1], plant.n_signals
+        predictions[0] = sensed[0]
     u_in = np.empty((n_runs, n_des + n_sig * (1 if forward is None else 2)))
     for t in range(n_steps - 1):
-        s_in = sensed[:, max(t - delay_steps, 0)]
+        s_in = sensed[max(t - delay_steps, 0)]
         u_in[:, :n_des] = desired[t + 1]  # the ESN's input [d(t+1); s(t); p(t)]
         u_in[:, n_des:n_des + n_sig] = s_in
         if forward is not None:
-            u_in[:, n_des + n_sig:] = predictions[:, t]
-        y_esn[:, t] = esn.step(u_in, noise=noise)
-        states[:, t] = esn.extended
-        u_error[:, t] = feedback.u_error(desired[t], sensed[:, t], plant)
-        command = commands[:, t]  # clip(y_esn + K u_error) into its row
-        np.multiply(gain, u_error[:, t], out=command)
-        command += y_esn[:, t]
+            u_in[:, n_des + n_sig:] = predictions[t]
+        y_esn[t] = esn.step(u_in, noise=noise, out_extended=states[t])
+        u_error[t] = feedback.u_error(desired[t], sensed[t], plant)
+        command = commands[t]  # clip(y_esn + K u_error), in place
+        np.multiply(gain, u_error[t], out=command)
+        command += y_esn[t]
         np.clip(command, -1.0, 1.0, out=command)
         if forward is not None:
-            predictions[:, t + 1] = forward.step(s_in, command, noise=noise)
-            fm_states[:, t] = forward.esn.extended
-        sensed[:, t + 1] = plant.step(command)
-        true[:, t + 1] = plant.true_signals()
-        angles[:, t + 1] = plant.joint_angles()
-    u_error[:, -1] = feedback.u_error(desired[-1], sensed[:, -1], plant)
-    return Rollout(commands, y_esn, u_error, sensed, true, angles, states, fm_states, predictions)
+            predictions[t + 1] = forward.step(s_in, command, noise=noise)
+            fm_states[t] = forward.esn.extended
+        sensed[t + 1] = plant.step(command)
+        true[t + 1] = plant.true_signals()
+        angles[t + 1] = plant.joint_angles()
+    u_error[-1] = feedback.u_error(desired[-1], sensed[-1], plant)
+    return Rollout(*(None if a is None else np.swapaxes(a, 0, 1) for a in (
+        commands, y_esn, u_error, sensed, true, angles, states, fm_states, predictions)))
 
 
 @dataclass

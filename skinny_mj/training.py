@@ -222,6 +222,15 @@ def train(cfg: TrainConfig, seed: int = 0,
     return _train_runs(cfg, [seed], progress)[0]
 
 
+def relative_cost(cfg: TrainConfig) -> float:
+    """A training's size, for scheduling sweeps (longest first): its cycles through the
+    movement (FEL: epochs x (learning cycles + washout + evaluation); true target: its
+    cycles; x reps; + the test), x N / 200 for reservoirs above 200 units."""
+    cycles = cfg.tt_cycles if cfg.method == "true-target" \
+        else cfg.epochs * (cfg.learning_cycles + 2)
+    return (cycles * cfg.reps + 1) * max(1.0, cfg.reservoir / 200)
+
+
 def train_batch(cfg: TrainConfig, seeds: Sequence[int],
                 progress: Callable[[int, int], None] | None = None) -> list[TrainOutcome]:
     """Train R = len(seeds) runs of ``cfg`` in lockstep; run r equals ``train(cfg, seeds[r])``.

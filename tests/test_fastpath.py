@@ -173,6 +173,31 @@ def test_engine_batch_resume_and_raising_batch_falls_back(tmp_path):
     assert _run_files(out) == first
 
 
+def test_default_batch_size_gives_every_worker_the_same_number_of_jobs():
+    from skinny_mj.experiment import default_batch_size
+
+    assert default_batch_size(n_rows=6, runs=20, workers=2) == 20  # whole rows
+    assert default_batch_size(n_rows=5, runs=50, workers=2) == 25  # 10 jobs
+    assert default_batch_size(n_rows=1, runs=20, workers=2) == 10
+    assert default_batch_size(n_rows=3, runs=4, workers=8) == 1  # runs bound the cut
+    assert default_batch_size(n_rows=2, runs=7, workers=1) == 7
+
+
+def test_costliest_batches_start_first_and_files_do_not_change(tmp_path):
+    started = []
+
+    def recording(row, seeds):
+        started.append(row.row_id)
+        return _toy_batch(row, seeds)
+
+    plain = run_sweep(_toy(_toy_batch), tmp_path / "plain", workers=1, progress=False)
+    exp = dataclasses.replace(_toy(recording), cost=lambda row: 1.0 + row.params["shift"])
+    costed = run_sweep(exp, tmp_path / "costed", workers=1, progress=False, batch_size=7)
+    assert started == ["b", "a"]  # row b costs 2, row a 1
+    assert _run_files(tmp_path / "plain") == _run_files(tmp_path / "costed")
+    assert [r["row"] for r in plain["rows"]] == [r["row"] for r in costed["rows"]]
+
+
 def test_execute_batch_refuses_mixed_rows():
     from skinny_mj.experiment import RunSpec
 
