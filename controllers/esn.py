@@ -493,26 +493,32 @@ def read_metadata(path: str | Path) -> dict:
 
 
 PINV_RCOND = 1e-15  # singular values below this x the largest count as zero (NumPy's)
+# Below this estimated (1-norm) condition number of R_M no singular value is anywhere
+# near the cutoff (kappa_2 <= D kappa_1, and the estimate is good to a small factor),
+# so M^+ S is the plain least-squares solution.
+PINV_DIRECT_COND = 1e10
 
 
 def pinv_solve(m: np.ndarray, s: np.ndarray) -> np.ndarray:
     """M^+ S for stacked (R, T, D) M and (R, T, n) S, without forming M^+ or M's U.
 
     Per run, one Householder QR (LAPACK ``dgeqrf``) of [M | S] in a reused workspace
-    gives R_M and Q^T S, then the SVD of the small (D, D) R_M:
-    M^+ S = V diag(1/s) U^T (Q^T S), with singular values under :data:`PINV_RCOND` x
-    the largest dropped, as ``np.linalg.pinv`` does. The same minimum-norm
-    least-squares solution (equal to ~1e-14 on the thesis's reservoir states,
-    condition ~5e3) at about half the cost of ``pinv(M) @ S`` when T >> D, and with
-    one (T, D + n) buffer instead of several (R, T, D) copies (fresh pages of a few
-    hundred MB cost as much system time as the solve).
+    gives R_M and Q^T S. When R_M is safely full-rank (LAPACK's estimate of its
+    condition number under :data:`PINV_DIRECT_COND`, far from where
+    ``np.linalg.pinv`` drops a singular value, at :data:`PINV_RCOND` x the largest),
+    M^+ S is the least-squares solution R_M^-1 Q^T S, one triangular solve. Otherwise
+    the SVD of the small (D, D) R_M: M^+ S = V diag(1/s) U^T (Q^T S), singular values
+    under the cutoff dropped, as ``np.linalg.pinv`` does. Equal to ``pinv(M) @ S`` to
+    ~1e-13 on the thesis's reservoir states (condition ~5e3), at a fraction of its cost,
+    and with one (T, D + n) buffer instead of several (R, T, D) copies (fresh pages of a
+    few hundred MB cost as much system time as the solve).
     """
     n_runs, n_steps, d = m.shape
     if n_steps < d:  # wide M: QR gives no square R_M; the plain way
         return np.linalg.pinv(m, rcond=PINV_RCOND) @ s
     work = np.empty((n_steps, d + s.shape[-1]), order="F")
     lapack = scipy.linalg.lapack
-    lwork, info = lapack.dgeqrf_lwork(*work.shape)  # the blocked algorithm's workspace
+    lwork, _ = lapack.dgeqrf_lwork(*work.shape)  # the blocked algorithm's workspace
     out = np.empty((n_runs, d, s.shape[-1]))
     for r in range(n_runs):
         work[:, :d] = m[r]
@@ -520,10 +526,15 @@ def pinv_solve(m: np.ndarray, s: np.ndarray) -> np.ndarray:
         qr, _, _, info = lapack.dgeqrf(work, lwork=int(lwork), overwrite_a=True)
         if info != 0:  # pragma: no cover - LAPACK argument error
             raise np.linalg.LinAlgError(f"dgeqrf failed (info {info})")
-        u, sv, vt = np.linalg.svd(np.triu(qr[:d, :d]))
+        r_m, qt_s = qr[:d, :d], qr[:d, d:]  # R_M is the upper triangle
+        rcond, _ = lapack.dtrcon(r_m, norm="1")
+        if rcond * PINV_DIRECT_COND > 1.0:
+            out[r] = lapack.dtrtrs(r_m, qt_s)[0]
+            continue
+        u, sv, vt = np.linalg.svd(np.triu(r_m))
         large = sv > PINV_RCOND * sv.max()
         inv = np.divide(1.0, sv, out=np.zeros_like(sv), where=large)
-        out[r] = vt.T @ (inv[:, None] * (u.T @ qr[:d, d:]))
+        out[r] = vt.T @ (inv[:, None] * (u.T @ qt_s))
     return out
 
 

@@ -237,3 +237,27 @@ def test_pinv_solve_is_numpys_pinv_including_rank_deficient(shape):
     m[..., 5] = 0.0
     s = rng.normal(size=(*shape[:2], 3))
     np.testing.assert_allclose(pinv_solve(m, s), np.linalg.pinv(m) @ s, rtol=0, atol=1e-10)
+
+
+def test_pinv_solve_takes_both_branches_and_both_equal_pinv():
+    """Well-conditioned M: the triangular solve; rank-deficient M (a duplicated
+    column): the SVD with NumPy's cutoff. Both give pinv(M) @ S."""
+    from controllers import esn as esn_module
+
+    rng = np.random.default_rng(7)
+    m = rng.normal(size=(2, 200, 30))
+    m[1, :, 4] = m[1, :, 2]
+    s = rng.normal(size=(2, 200, 2))
+    calls = []
+    svd = np.linalg.svd
+
+    def counting_svd(*args, **kwargs):
+        calls.append(1)
+        return svd(*args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(esn_module.np.linalg, "svd", counting_svd)
+        got = esn_module.pinv_solve(m, s)
+    assert len(calls) == 1  # only the nearly rank-deficient run needed the SVD
+    np.testing.assert_allclose(got[0], np.linalg.pinv(m[0]) @ s[0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got[1], np.linalg.pinv(m[1]) @ s[1], rtol=0, atol=1e-12)
