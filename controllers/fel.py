@@ -139,6 +139,7 @@ def rollout(
     feedback: FeedbackController | None = None,
     delay_steps: int = 0,
     forward=None,
+    buffers: dict | None = None,
 ) -> Rollout:
     """Run one cycle: plant reset to the first pose, ESN state carried on.
 
@@ -149,8 +150,21 @@ def rollout(
     noise : reservoir noise on (washout/learning) or off (evaluation/test).
     forward : optional :class:`controllers.forward_model.ForwardModel`, whose
         prediction p(t) is appended to the inverse model's input.
+    buffers : optional dict the rollout keeps its arrays in and reuses on the next call
+        with the same dict (fresh pages of a few MB per rollout cost about as much as
+        the control step); the returned Rollout's arrays are then views that the next
+        such call overwrites. :func:`train` passes one per training.
     """
     feedback = feedback or FeedbackController()
+
+    def array(name: str, shape: tuple[int, ...], dtype=np.float64) -> np.ndarray:
+        if buffers is None:
+            return np.empty(shape, dtype)
+        out = buffers.get(name)
+        if out is None or out.shape != shape or out.dtype != dtype:
+            out = buffers[name] = np.empty(shape, dtype)
+        return out
+
     desired = np.asarray(desired, float)
     n_steps, n_runs = desired.shape[0], esn.n_runs
     gain = np.broadcast_to(np.asarray(gain, float), (n_runs,))[:, None]
@@ -158,14 +172,16 @@ def rollout(
     # whole movement apart (scattered first touches of fresh pages cost more than the
     # writes). The Rollout holds their (R, T, ...) views.
     n_des, n_sig, n_dof = desired.shape[1], plant.n_signals, plant.n_dof
-    sensed, true = np.empty((n_steps, n_runs, n_sig)), np.empty((n_steps, n_runs, n_sig))
-    angles, u_error = np.empty((n_steps, n_runs, n_dof)), np.empty((n_steps, n_runs, n_dof))
-    commands = np.empty((n_steps - 1, n_runs, n_dof))
-    y_esn = np.empty_like(commands)
-    states = np.empty((n_steps - 1, n_runs, esn.cfg.n_extended), esn.dtype)
-    fm_states = None if forward is None else np.empty(
-        (n_steps - 1, n_runs, forward.esn.cfg.n_extended))
-    predictions = None if forward is None else np.empty_like(sensed)
+    sensed = array("sensed", (n_steps, n_runs, n_sig))
+    true = array("true", (n_steps, n_runs, n_sig))
+    angles = array("angles", (n_steps, n_runs, n_dof))
+    u_error = array("u_error", (n_steps, n_runs, n_dof))
+    commands = array("commands", (n_steps - 1, n_runs, n_dof))
+    y_esn = array("y_esn", (n_steps - 1, n_runs, n_dof))
+    states = array("states", (n_steps - 1, n_runs, esn.cfg.n_extended), esn.dtype)
+    fm_states = None if forward is None else array(
+        "fm_states", (n_steps - 1, n_runs, forward.esn.cfg.n_extended))
+    predictions = None if forward is None else array("predictions", (n_steps, n_runs, n_sig))
     sensed[0] = plant.reset()
     true[0] = plant.true_signals()
     angles[0] = plant.joint_angles()
@@ -183,7 +199,8 @@ def rollout(
         command = commands[t]  # clip(y_esn + K u_error), in place
         np.multiply(gain, u_error[t], out=command)
         command += y_esn[t]
-        np.clip(command, -1.0, 1.0, out=command)
+        np.maximum(command, -1.0, out=command)  # np.clip, without its Python wrapper
+        np.minimum(command, 1.0, out=command)
         if forward is not None:
             predictions[t + 1] = forward.step(s_in, command, noise=noise)
             fm_states[t] = forward.esn.extended
@@ -271,7 +288,10 @@ def train(
         fail_reason=[None] * n_runs, fail_epoch=[None] * n_runs,
     )
     beta = cfg.effective_beta
-    kw = {"feedback": feedback, "delay_steps": cfg.delay_steps, "forward": forward}
+    # one set of rollout arrays for the whole training: each rollout is used (fit,
+    # metrics) before the next overwrites it, and the last one is the last evaluation
+    kw = {"feedback": feedback, "delay_steps": cfg.delay_steps, "forward": forward,
+          "buffers": {}}
     for epoch, gain in enumerate(gains):
         esn.reset()
         if forward is not None:

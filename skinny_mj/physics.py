@@ -58,24 +58,25 @@ def servo_ctrl(
 
 
 def segment_jacobian(
-    axes: np.ndarray, points: np.ndarray, turns: np.ndarray, lengths: np.ndarray,
-    comps: list[int],
+    axes: np.ndarray, points: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
+    lengths: np.ndarray, comps: list[int],
 ) -> np.ndarray:
     """d(Cartesian signal)/d(joint angle), per rad, for R runs at once.
 
-    A signal is a component of a segment's unit direction v / L, v = p_b - p_a (shoulder
-    to elbow, elbow to wrist). A hinge upstream of p_a turns v about its axis:
-    d v / d q = axis x v; a hinge between p_a and p_b turns p_b about an axis through
-    p_b itself: 0. So this is ``mj_jacSite(b) - mj_jacSite(a)`` (over L) up to rounding
-    (~1e-16), at a fraction of its cost. :class:`Layout` (the dm_control path) and
-    :class:`skinny_mj.plant.BatchPlant` both call it, so both get the same bits.
+    A segment's signals are the components of its unit direction e = v / L,
+    v = p_b - p_a (shoulder to elbow, elbow to wrist). A hinge upstream of p_a turns v
+    about its axis: d e / d q = axis x e; a hinge between p_a and p_b turns p_b about
+    an axis through p_b itself: 0. So this is ``mj_jacSite(b) - mj_jacSite(a)`` over L
+    up to rounding (~1e-16), at a fraction of its cost. :class:`Layout` (the dm_control
+    path) and :class:`skinny_mj.plant.BatchPlant` both call it: both get the same bits.
 
     Parameters
     ----------
     axes : (R, n_dof, 3) world joint axes (``cdof``'s angular part), in DOF order.
     points : (R, 2 arms, 3, 3) shoulder, elbow, wrist positions, m.
-    turns : (4 segments, n_dof) 1.0 where the DOF turns the segment, else 0.0.
-    lengths : (4,) segment lengths, m (arm-major, upper arm then forearm).
+    pairs : (segment indices, DOF indices) of the (segment, DOF) pairs where the DOF
+        turns the segment (segments arm-major: upper arm, forearm).
+    lengths : (4,) segment lengths, m.
     comps : components of each segment in the signals ([0, 2]: x, z in 2D).
 
     Returns
@@ -83,16 +84,15 @@ def segment_jacobian(
     (R, 4 * len(comps), n_dof), rows in :func:`body.signal_names` order.
     """
     n, n_dof = axes.shape[0], axes.shape[1]
-    # (component, segment, dof, R): on tiny arrays NumPy pays per call and per innermost
-    # run, so R goes innermost and each cross-product component is one expression
-    a = axes.transpose(2, 1, 0)  # (3, n_dof, R)
-    pts = points.transpose(3, 1, 2, 0)  # (3, arm, point, R)
-    v = (pts[:, :, 1:] - pts[:, :, :-1]).reshape(3, 4, 1, n)  # (3, segment, 1, R)
-    cross = np.stack([a[(k + 1) % 3] * v[(k + 2) % 3] - a[(k + 2) % 3] * v[(k + 1) % 3]
-                      for k in comps])  # mju_cross order; (comp, segment, dof, R)
-    out = np.empty((n, 4, len(comps), n_dof))
-    np.multiply(cross.transpose(3, 1, 0, 2), turns[:, None], out=out)
-    out /= lengths[:, None, None]
+    seg, dof = pairs
+    # Only the turning pairs, (R, P, 3), each product over all R x P at once: on tiny
+    # arrays NumPy pays per call and per innermost run, so nothing is broadcast.
+    a = axes[:, dof]
+    e = ((points[:, :, 1:] - points[:, :, :-1]).reshape(n, 4, 3) / lengths[:, None])[:, seg]
+    cross = np.stack([a[..., (k + 1) % 3] * e[..., (k + 2) % 3]  # mju_cross: a_i e_j - a_j e_i
+                      - a[..., (k + 2) % 3] * e[..., (k + 1) % 3] for k in comps], axis=-1)
+    out = np.zeros((n, 4, len(comps), n_dof))
+    out[:, seg, :, dof] = cross.transpose(1, 0, 2)  # (P, R, comp): the indexed dims first
     return out.reshape(n, 4 * len(comps), n_dof)
 
 
@@ -138,6 +138,7 @@ class Layout:
         self._lengths = np.array([body.UPPER_ARM_LENGTH_M, body.FOREARM_LENGTH_M])
         self._comps = [0, 2] if self.dof == 4 else [0, 1, 2]
         self.segment_turns = _segment_turns(model, self.site_ids, self.dof_adr)
+        self.segment_pairs = np.nonzero(self.segment_turns)  # (segment, DOF) that turn
         self.segment_lengths = np.tile(self._lengths, 2)
         self._jacp = np.zeros((3, model.nv))
 
@@ -181,7 +182,7 @@ class Layout:
             raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
         axes = data.cdof[self.dof_adr, :3][None]
         points = data.site_xpos[self.site_ids][None]
-        return segment_jacobian(axes, points, self.segment_turns, self.segment_lengths,
+        return segment_jacobian(axes, points, self.segment_pairs, self.segment_lengths,
                                 self._comps)[0]
 
 

@@ -236,7 +236,7 @@ class BatchPlant:
             return np.broadcast_to(jac, (n, *jac.shape)).copy()
         axes = self._cdof[:, self._dof_sel, :3]
         points = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
-        jac = segment_jacobian(axes, points, self.layout.segment_turns,
+        jac = segment_jacobian(axes, points, self.layout.segment_pairs,
                                self.layout.segment_lengths, self.layout._comps)
         jac *= self.max_speed_rad_s * self.dt  # as EnvPlant.command_jacobian
         return jac
