@@ -261,3 +261,18 @@ def test_pinv_solve_takes_both_branches_and_both_equal_pinv():
     assert len(calls) == 1  # only the nearly rank-deficient run needed the SVD
     np.testing.assert_allclose(got[0], np.linalg.pinv(m[0]) @ s[0], rtol=0, atol=1e-12)
     np.testing.assert_allclose(got[1], np.linalg.pinv(m[1]) @ s[1], rtol=0, atol=1e-12)
+
+
+def test_step_writes_the_extended_state_where_asked_and_checks_the_array():
+    cfg = ESNConfig(3, 2, n_reservoir=30)
+    a, b = ESN(cfg, n_runs=2, seed=4), ESN(cfg, n_runs=2, seed=4)
+    u = np.random.default_rng(0).uniform(-1, 1, (5, 2, 3))
+    record = np.zeros((5, 2, cfg.n_extended))
+    for t in range(5):
+        np.testing.assert_array_equal(a.step(u[t]), b.step(u[t], out_extended=record[t]))
+        np.testing.assert_array_equal(a.extended, record[t])
+    assert np.shares_memory(b.extended, record[4])
+    for bad in (np.zeros((2, cfg.n_extended), np.float32), np.zeros((2, cfg.n_extended + 1)),
+                np.zeros((cfg.n_extended, 2)).T):
+        with pytest.raises(ValueError):
+            b.step(u[0], out_extended=bad)

@@ -236,3 +236,27 @@ def test_bench_paper_e_figure_runs_through_the_engine(tmp_path):
     records = [json.loads(p.read_text()) for p in (tmp_path / "runs").glob("*.json")]
     assert all(r["status"] == "ok" for r in records)
     assert fig["peak_rss_self_mib"] > 0
+
+
+def test_bench_control_step_figure_runs_and_reports_both_floors():
+    fig = bench.control_step_over_physics(n_steps=12, repeats=1)
+    assert fig["R"] == bench.N_RUNS and fig["substeps"] == 1
+    for key in ("control_step_us", "physics_step_us", "batch_physics_step_us"):
+        assert np.isfinite(fig[key]) and fig[key] > 0
+    assert fig["ratio"] == pytest.approx(fig["control_step_us"] / fig["physics_step_us"])
+    assert fig["ratio_vs_batch_physics"] == pytest.approx(
+        fig["control_step_us"] / fig["batch_physics_step_us"])
+
+
+def test_rollout_buffers_are_reused_and_change_nothing():
+    _, _, desired, esn, plant = bench._lockstep_parts(3, 40)
+    _, _, _, esn_b, plant_b = bench._lockstep_parts(3, 40)  # the same, seed by seed
+    buffers: dict = {}
+    for _ in range(2):
+        plain = fel.rollout(esn, plant, desired, 0.5)
+        reused = fel.rollout(esn_b, plant_b, desired, 0.5, buffers=buffers)
+        for name in ("commands", "y_esn", "u_error", "sensed", "true_signals", "angles",
+                     "states"):
+            np.testing.assert_array_equal(getattr(plain, name), getattr(reused, name))
+    assert np.shares_memory(reused.states, buffers["states"])
+    assert reused.states.shape == (3, len(desired) - 1, esn.cfg.n_extended)
