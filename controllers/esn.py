@@ -18,7 +18,7 @@ std ``level``, and ``f_out`` = tanh (targets fitted through atanh) or identity.
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -418,6 +418,7 @@ class ESN:
         targets: np.ndarray,
         washout: int = 0,
         runs: np.ndarray | None = None,
+        factors: PinvFactors | None = None,
     ) -> None:
         """Fit W_out per run: (W_out)^T = M^+ S (pinv) or ridge via Cholesky.
 
@@ -427,6 +428,8 @@ class ESN:
         targets : (R, T, n_out) desired outputs (through atanh for a tanh readout).
         washout : leading steps to drop.
         runs : (R,) bool, which runs to refit (others keep their readout).
+        factors : optional :class:`PinvFactors` of these same states (after the
+            washout), reused across fits (pinv readout only).
         """
         m = np.asarray(states, np.float64)[:, washout:]
         s = np.asarray(targets, np.float64)[:, washout:]
@@ -437,7 +440,12 @@ class ESN:
         idx = np.flatnonzero(selected)
         if idx.size == 0:
             return
-        if self.cfg.readout == "pinv":  # (r, D, n_out); m[idx] would copy all the states
+        if factors is not None:
+            if self.cfg.readout != "pinv" or factors.shape != m.shape:
+                raise ValueError("factors must be PinvFactors of the same states, for a "
+                                 "pinv readout")
+            w_t = factors.solve(s[idx], idx)
+        elif self.cfg.readout == "pinv":  # (r, D, n_out); m[idx] would copy all the states
             w_t = pinv_solve(m if idx.size == self.n_runs else m[idx], s[idx])
         else:
             w_t = np.stack([ridge_solve(m[i], s[i], self.cfg.ridge_lambda) for i in idx])
@@ -503,39 +511,89 @@ def pinv_solve(m: np.ndarray, s: np.ndarray) -> np.ndarray:
     """M^+ S for stacked (R, T, D) M and (R, T, n) S, without forming M^+ or M's U.
 
     Per run, one Householder QR (LAPACK ``dgeqrf``) of [M | S] in a reused workspace
-    gives R_M and Q^T S. When R_M is safely full-rank (LAPACK's estimate of its
-    condition number under :data:`PINV_DIRECT_COND`, far from where
-    ``np.linalg.pinv`` drops a singular value, at :data:`PINV_RCOND` x the largest),
-    M^+ S is the least-squares solution R_M^-1 Q^T S, one triangular solve. Otherwise
-    the SVD of the small (D, D) R_M: M^+ S = V diag(1/s) U^T (Q^T S), singular values
-    under the cutoff dropped, as ``np.linalg.pinv`` does. Equal to ``pinv(M) @ S`` to
-    ~1e-13 on the thesis's reservoir states (condition ~5e3), at a fraction of its cost,
-    and with one (T, D + n) buffer instead of several (R, T, D) copies (fresh pages of a
-    few hundred MB cost as much system time as the solve).
+    gives R_M and Q^T S; then :func:`_small_solver`. Equal to ``pinv(M) @ S`` to ~1e-13 on
+    the thesis's reservoir states (condition ~5e3), at a fraction of its cost, and with
+    one (T, D + n) buffer instead of several (R, T, D) copies (fresh pages of a few
+    hundred MB cost as much system time as the solve). For many fits on the same M see
+    :class:`PinvFactors`.
     """
     n_runs, n_steps, d = m.shape
     if n_steps < d:  # wide M: QR gives no square R_M; the plain way
         return np.linalg.pinv(m, rcond=PINV_RCOND) @ s
     work = np.empty((n_steps, d + s.shape[-1]), order="F")
-    lapack = scipy.linalg.lapack
-    lwork, _ = lapack.dgeqrf_lwork(*work.shape)  # the blocked algorithm's workspace
     out = np.empty((n_runs, d, s.shape[-1]))
     for r in range(n_runs):
         work[:, :d] = m[r]
         work[:, d:] = s[r]
-        qr, _, _, info = lapack.dgeqrf(work, lwork=int(lwork), overwrite_a=True)
-        if info != 0:  # pragma: no cover - LAPACK argument error
-            raise np.linalg.LinAlgError(f"dgeqrf failed (info {info})")
-        r_m, qt_s = qr[:d, :d], qr[:d, d:]  # R_M is the upper triangle
-        rcond, _ = lapack.dtrcon(r_m, norm="1")
-        if rcond * PINV_DIRECT_COND > 1.0:
-            out[r] = lapack.dtrtrs(r_m, qt_s)[0]
-            continue
-        u, sv, vt = np.linalg.svd(np.triu(r_m))
-        large = sv > PINV_RCOND * sv.max()
-        inv = np.divide(1.0, sv, out=np.zeros_like(sv), where=large)
-        out[r] = vt.T @ (inv[:, None] * (u.T @ qt_s))
+        qr = _householder_qr(work)
+        out[r] = _small_solver(qr[:d, :d])(qr[:d, d:])  # R_M, Q^T S
     return out
+
+
+class PinvFactors:
+    """The pinv readout's factorization of stacked states M (R, T, D), for many fits on
+    the same states with different targets (paper E's Fig. 3 cycles, true-target
+    training without noise: the teacher-forced states repeat bit for bit). One QR and
+    small solver per run up front; each :meth:`solve` is then Q^T S (LAPACK ``dormqr``)
+    and the small solve, a few percent of a fresh :func:`pinv_solve`."""
+
+    def __init__(self, m: np.ndarray):
+        m = np.asarray(m, np.float64)
+        self.shape = m.shape
+        n_runs, n_steps, d = m.shape
+        self._pinv = np.linalg.pinv(m, rcond=PINV_RCOND) if n_steps < d else None
+        self._qr: list[tuple[np.ndarray, np.ndarray]] = []
+        self._small: list[Callable[[np.ndarray], np.ndarray]] = []
+        if self._pinv is None:
+            for r in range(n_runs):
+                qr, tau = _householder_qr(np.array(m[r], order="F"), with_tau=True)
+                self._qr.append((qr, tau))
+                self._small.append(_small_solver(np.array(qr[:d, :d], order="F")))
+
+    def solve(self, s: np.ndarray, runs: np.ndarray | None = None) -> np.ndarray:
+        """M^+ S for targets (r, T, n) of the runs ``runs`` (indices; default all)."""
+        runs = np.arange(self.shape[0]) if runs is None else np.asarray(runs)
+        if self._pinv is not None:
+            return self._pinv[runs] @ s
+        d, lapack = self.shape[2], scipy.linalg.lapack
+        out = np.empty((runs.size, d, s.shape[-1]))
+        for k, r in enumerate(runs):
+            qr, tau = self._qr[r]
+            c = np.array(s[k], order="F")
+            qt_s, _, info = lapack.dormqr("L", "T", qr, tau, c, max(1, 64 * c.shape[1]),
+                                          overwrite_c=True)
+            if info != 0:  # pragma: no cover - LAPACK argument error
+                raise np.linalg.LinAlgError(f"dormqr failed (info {info})")
+            out[k] = self._small[r](qt_s[:d])
+        return out
+
+
+def _householder_qr(a: np.ndarray, with_tau: bool = False):
+    """LAPACK ``dgeqrf`` of a Fortran-ordered ``a`` in place (R in its upper triangle,
+    the reflectors below), with the blocked algorithm's workspace."""
+    lapack = scipy.linalg.lapack
+    lwork, _ = lapack.dgeqrf_lwork(*a.shape)
+    qr, tau, _, info = lapack.dgeqrf(a, lwork=int(lwork), overwrite_a=True)
+    if info != 0:  # pragma: no cover - LAPACK argument error
+        raise np.linalg.LinAlgError(f"dgeqrf failed (info {info})")
+    return (qr, tau) if with_tau else qr
+
+
+def _small_solver(r_m: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """x = R_M^+ b for the (D, D) upper triangle ``r_m``. When R_M is safely full-rank
+    (LAPACK's estimate of its condition number under :data:`PINV_DIRECT_COND`, far from
+    where ``np.linalg.pinv`` drops a singular value, at :data:`PINV_RCOND` x the
+    largest), one triangular solve: the least-squares solution is M^+ S. Otherwise the
+    SVD of R_M: V diag(1/s) U^T b, singular values under the cutoff dropped, as
+    ``np.linalg.pinv`` does. The solver reads ``r_m`` when called."""
+    lapack = scipy.linalg.lapack
+    rcond, _ = lapack.dtrcon(r_m, norm="1")
+    if rcond * PINV_DIRECT_COND > 1.0:
+        return lambda b: lapack.dtrtrs(r_m, b)[0]
+    u, sv, vt = np.linalg.svd(np.triu(r_m))
+    large = sv > PINV_RCOND * sv.max()
+    inv = np.divide(1.0, sv, out=np.zeros_like(sv), where=large)
+    return lambda b: vt.T @ (inv[:, None] * (u.T @ b))
 
 
 def ridge_solve(m: np.ndarray, s: np.ndarray, ridge_lambda: float) -> np.ndarray:

@@ -276,3 +276,26 @@ def test_step_writes_the_extended_state_where_asked_and_checks_the_array():
                 np.zeros((cfg.n_extended, 2)).T):
         with pytest.raises(ValueError):
             b.step(u[0], out_extended=bad)
+
+
+def test_pinv_factors_reused_equal_fresh_fits():
+    """PinvFactors of fixed states solves any targets like a fresh pinv, for all runs
+    or a subset, and fit(factors=...) refuses factors of other states."""
+    from controllers.esn import PinvFactors
+
+    esn = ESN(ESNConfig(3, 2, n_reservoir=40), n_runs=3, seed=5)
+    _, x = esn.run(np.random.default_rng(1).uniform(-1, 1, (3, 120, 3)), noise=False)
+    factors = PinvFactors(x)
+    rng = np.random.default_rng(2)
+    for _ in range(3):
+        s = rng.normal(size=(3, 120, 2))
+        np.testing.assert_allclose(factors.solve(s), np.linalg.pinv(x) @ s, rtol=0, atol=1e-10)
+        np.testing.assert_allclose(factors.solve(s[[0, 2]], np.array([0, 2])),
+                                   np.linalg.pinv(x[[0, 2]]) @ s[[0, 2]], rtol=0, atol=1e-10)
+    targets = np.tanh(rng.normal(size=(3, 120, 2)))
+    fresh = ESN(esn.cfg, n_runs=3, seed=5)
+    fresh.fit(x, targets)
+    esn.fit(x, targets, factors=factors)
+    np.testing.assert_allclose(esn.W_out, fresh.W_out, rtol=0, atol=1e-10)
+    with pytest.raises(ValueError):
+        esn.fit(x[:, 10:], targets[:, 10:], factors=factors)
