@@ -131,13 +131,15 @@ def _load(cfg: Config, movement):
     return load_movement(movement, cfg.dof, asf=asf)[0]
 
 
-def evaluate_two_cycles(esn: ESN, trajectory, signals: str, plant_seed: int, sensor_noise: float,
-                    max_speed_rad_s: np.ndarray) -> tuple[fel.Rollout | None, np.ndarray]:
-    """Paper C §3.6: reset, an initialization cycle and an evaluation cycle, K = 0.
+def evaluate_two_cycles(esn: ESN, trajectory, signals: str, plant_seed: int | list[int],
+                        sensor_noise: float, max_speed_rad_s: np.ndarray
+                        ) -> tuple[fel.Rollout | None, np.ndarray]:
+    """Paper C §3.6: reset, an initialization cycle and an evaluation cycle, K = 0, for
+    the ESN's R runs (one plant seed per run).
 
-    Returns the evaluation rollout (None if the network diverged) and the true
-    commands (T-1, n_dof) in [-1, 1] (clipped where the movement is faster than full
-    scale).
+    Returns the evaluation rollout (None if every network diverged; see
+    :func:`_healthy` for which did) and the true commands (T-1, n_dof) in [-1, 1]
+    (clipped where the movement is faster than full scale).
     """
     from skinny_mj.ideal import true_commands
     from skinny_mj.training import make_plant
@@ -149,8 +151,13 @@ def evaluate_two_cycles(esn: ESN, trajectory, signals: str, plant_seed: int, sen
     esn.reset()
     fel.rollout(esn, plant, desired, 0.0, noise=False)
     ro = fel.rollout(esn, plant, desired, 0.0, noise=False)
-    ok = esn.diverged()[0] is None and np.all(np.isfinite(ro.commands))
-    return (ro if ok else None), commands
+    return (ro if _healthy(esn, ro).any() else None), commands
+
+
+def _healthy(esn: ESN, ro: fel.Rollout) -> np.ndarray:
+    """(R,) runs whose network did not diverge and whose commands are finite."""
+    return np.array([reason is None for reason in esn.diverged()]) \
+        & np.all(np.isfinite(ro.commands), axis=(1, 2))
 
 
 def _elbows(dof: int) -> list[int]:
@@ -189,6 +196,17 @@ def elbow_range(angles: np.ndarray, dof: int) -> float:
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
     """Train on the row's movement (paper C §3.5), then test on every column (§3.6)."""
+    (out,) = run_batch(cfg, row, [seed])
+    if isinstance(out, Exception):
+        raise out
+    return out
+
+
+def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
+    """:func:`run_one` for several seeds of one row in lockstep (the engine's fast path):
+    seed k's metrics dict, or its :class:`RunFailed`, bit for bit what it gets alone
+    (the lockstep ESN and plant compute every run's numbers as a single run would);
+    the wall times are the batch's, shared out per run."""
     from skinny_mj.ideal import true_commands
     from skinny_mj.training import esn_config, full_scale_speeds, make_plant, run_streams
 
@@ -196,47 +214,62 @@ def run_one(cfg: Config, row: Row, seed: int) -> dict:
     tcfg = train_config(cfg, row.params["train"])
     trajectory = _load(cfg, tcfg.trajectory)
     max_speed = full_scale_speeds(tcfg, trajectory)
-    esn_rng, plant_seed = run_streams(seed)
-    n_signals = body.n_signals(cfg.dof, cfg.signals)
-    esn = ESN(esn_config(tcfg, n_signals), rngs=[esn_rng])
+    streams = [run_streams(seed) for seed in seeds]
+    plant_seeds = [plant_seed for _, plant_seed in streams]
+    esn = ESN(esn_config(tcfg, body.n_signals(cfg.dof, cfg.signals)), n_runs=len(seeds),
+              rngs=[rng for rng, _ in streams])
     desired = trajectory.position_signals(cfg.signals)
-    plant = make_plant(cfg.dof, cfg.signals, trajectory, plant_seed, cfg.sensor_noise, max_speed)
+    plant = make_plant(cfg.dof, cfg.signals, trajectory, plant_seeds, cfg.sensor_noise,
+                       max_speed)
     result = fel.train(esn, plant, desired, fel_config(cfg),
                        true_commands=true_commands(trajectory.angles, max_speed, trajectory.dt))
-    if result.failed[0]:
-        raise RunFailed(f"epoch {result.fail_epoch[0]}: {result.fail_reason[0]}")
-    out: dict = {
-        "train_position_nrmse": float(result.position_nrmse[0, -1]),
-        "train_motor_nrmse": float(result.motor_nrmse[0, -1]),
-        "train_curve_position_nrmse": result.position_nrmse[0],
+    outs: list = [{
+        "train_position_nrmse": float(result.position_nrmse[r, -1]),
+        "train_motor_nrmse": float(result.motor_nrmse[r, -1]),
+        "train_curve_position_nrmse": result.position_nrmse[r],
         "train_elbow_range_rad": elbow_range(trajectory.angles, cfg.dof),
-        "train_wall_s": time.perf_counter() - start,
+        "train_wall_s": (time.perf_counter() - start) / len(seeds),
         "n_test_failed": 0,
-    }
+    } for r in range(len(seeds))]
     for col, movement in columns(cfg).items():
         test = _load(cfg, movement)
-        ro, commands = evaluate_two_cycles(esn, test, cfg.signals, plant_seed, cfg.sensor_noise,
-                                       max_speed)
+        ro, commands = evaluate_two_cycles(esn, test, cfg.signals, plant_seeds,
+                                           cfg.sensor_noise, max_speed)
+        healthy = np.zeros(len(seeds), bool) if ro is None else _healthy(esn, ro)
         raw = np.diff(test.angles, axis=0) / (max_speed * test.dt)  # unclipped commands
-        out[f"{col}__true_command_saturated"] = float(np.mean(np.abs(raw) > 1.0 + 1e-9))
-        if ro is None:
-            out["n_test_failed"] += 1
-            continue
-        angles = ro.angles[0]
-        desired_rng = elbow_range(test.angles, cfg.dof)
-        wanted = test.position_signals(cfg.signals)
-        out[f"{col}__position_nrmse"] = float(position_nrmse(ro.true_signals, wanted)[0])
-        out[f"{col}__motor_nrmse"] = float(motor_nrmse(ro.commands, commands)[0])
-        out[f"{col}__elbow_range_rad"] = elbow_range(angles, cfg.dof)
-        out[f"{col}__elbow_rom_ratio"] = (elbow_range(angles, cfg.dof) / desired_rng
-                                          if desired_rng > 1e-6 else None)
-        if col == "ymca":
-            out.update({f"ymca__{k}": v for k, v in arm_metrics(angles, test.angles,
-                                                                 cfg.dof).items()})
-        if col in KEEP_ANGLES:
-            out[f"angles__{col}"] = np.round(angles, 5)
-    out["wall_s"] = time.perf_counter() - start
-    out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+        for r, out in enumerate(outs):
+            out[f"{col}__true_command_saturated"] = float(np.mean(np.abs(raw) > 1.0 + 1e-9))
+            if not healthy[r]:
+                out["n_test_failed"] += 1
+                continue
+            out.update(_test_metrics(cfg, col, test, ro, r, commands))
+    wall = (time.perf_counter() - start) / len(seeds)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    for r, out in enumerate(outs):
+        out.update(wall_s=wall, peak_rss_mb=peak)
+        if result.failed[r]:
+            outs[r] = RunFailed(f"epoch {result.fail_epoch[r]}: {result.fail_reason[r]}")
+    return outs
+
+
+def _test_metrics(cfg: Config, col: str, test, ro: fel.Rollout, r: int,
+                  commands: np.ndarray) -> dict:
+    """Run r's metrics on test column ``col``."""
+    angles = ro.angles[r]
+    desired_rng = elbow_range(test.angles, cfg.dof)
+    wanted = test.position_signals(cfg.signals)
+    out = {
+        f"{col}__position_nrmse": float(position_nrmse(ro.true_signals[r:r + 1], wanted)[0]),
+        f"{col}__motor_nrmse": float(motor_nrmse(ro.commands[r:r + 1], commands)[0]),
+        f"{col}__elbow_range_rad": elbow_range(angles, cfg.dof),
+        f"{col}__elbow_rom_ratio": (elbow_range(angles, cfg.dof) / desired_rng
+                                    if desired_rng > 1e-6 else None),
+    }
+    if col == "ymca":
+        out.update({f"ymca__{k}": v for k, v in arm_metrics(angles, test.angles,
+                                                             cfg.dof).items()})
+    if col in KEEP_ANGLES:
+        out[f"angles__{col}"] = np.round(angles, 5)
     return out
 
 
@@ -270,7 +303,8 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
                f"{REAL_ID}__position_nrmse": "test real pos", "wall_s": "wall s",
                "peak_rss_mb": "peak RSS MB"}
     return Experiment(name=NAME, rows=rows(only, train), run_one=functools.partial(run_one, cfg),
-                      config=cfg, runs=cfg.runs, table_columns=table)
+                      config=cfg, runs=cfg.runs, table_columns=table,
+                      run_batch=functools.partial(run_batch, cfg))
 
 
 

@@ -114,3 +114,20 @@ def test_quick_sweep_end_to_end(tmp_path):
     for mm in mirror:
         assert mm["ymca__err_vs_avg"] < mm["ymca__err_vs_own"]
         assert mm["ymca__asym_produced"] < 0.5 * mm["ymca__asym_desired"]
+
+
+def test_lockstep_batch_equals_runs_one_at_a_time():
+    """The engine's fast path: seeds in lockstep give each seed's run_one metrics, bit
+    for bit (wall times and memory aside)."""
+    exp = paper_c.build(quick=True, only=("ymca",))
+    cfg, row = exp.config, exp.rows[0]
+    cfg = type(cfg)(**{**cfg.__dict__, "epochs": 2, "tests": ("ymca", "y")})
+    seeds = [3, 8]
+    batch = paper_c.run_batch(cfg, row, seeds)
+    for seed, got in zip(seeds, batch, strict=True):
+        want = paper_c.run_one(cfg, row, seed)
+        assert set(got) == set(want)
+        for key, value in want.items():
+            if key not in ("wall_s", "train_wall_s", "peak_rss_mb"):
+                np.testing.assert_array_equal(np.asarray(got[key]), np.asarray(value),
+                                              err_msg=key)
