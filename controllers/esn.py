@@ -518,8 +518,8 @@ def pinv_solve(m: np.ndarray, s: np.ndarray) -> np.ndarray:
     :class:`PinvFactors`.
     """
     n_runs, n_steps, d = m.shape
-    if n_steps < d:  # wide M: QR gives no square R_M; the plain way
-        return np.linalg.pinv(m, rcond=PINV_RCOND) @ s
+    if n_steps < d:
+        return _pinv_solve_wide(m, s)
     work = np.empty((n_steps, d + s.shape[-1]), order="F")
     out = np.empty((n_runs, d, s.shape[-1]))
     for r in range(n_runs):
@@ -527,6 +527,28 @@ def pinv_solve(m: np.ndarray, s: np.ndarray) -> np.ndarray:
         work[:, d:] = s[r]
         qr = _householder_qr(work)
         out[r] = _small_solver(qr[:d, :d])(qr[:d, d:])  # R_M, Q^T S
+    return out
+
+
+def _pinv_solve_wide(m: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """:func:`pinv_solve` for wide M (T < D: fewer samples than features, the
+    interpolating regime of paper C). QR of M^T = Q R gives M = R^T Q^T, so
+    M^+ S = Q (R^T)^+ S: a (T, T) solve and Q applied to it (LAPACK ``dormqr``), instead
+    of the SVD of the whole (T, D) M."""
+    n_runs, n_steps, d = m.shape
+    n_out = s.shape[-1]
+    work = np.empty((d, n_steps), order="F")
+    out = np.empty((n_runs, d, n_out))
+    lapack = scipy.linalg.lapack
+    for r in range(n_runs):
+        work[:] = m[r].T
+        qr, tau = _householder_qr(work, with_tau=True)
+        c = np.zeros((d, n_out), order="F")
+        c[:n_steps] = _small_solver(qr[:n_steps, :n_steps], transpose=True)(s[r])
+        out[r], _, info = lapack.dormqr("L", "N", qr, tau, c, max(1, 64 * n_out),
+                                        overwrite_c=True)
+        if info != 0:  # pragma: no cover - LAPACK argument error
+            raise np.linalg.LinAlgError(f"dormqr failed (info {info})")
     return out
 
 
@@ -579,20 +601,24 @@ def _householder_qr(a: np.ndarray, with_tau: bool = False):
     return (qr, tau) if with_tau else qr
 
 
-def _small_solver(r_m: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-    """x = R_M^+ b for the (D, D) upper triangle ``r_m``. When R_M is safely full-rank
-    (LAPACK's estimate of its condition number under :data:`PINV_DIRECT_COND`, far from
-    where ``np.linalg.pinv`` drops a singular value, at :data:`PINV_RCOND` x the
-    largest), one triangular solve: the least-squares solution is M^+ S. Otherwise the
-    SVD of R_M: V diag(1/s) U^T b, singular values under the cutoff dropped, as
-    ``np.linalg.pinv`` does. The solver reads ``r_m`` when called."""
+def _small_solver(r_m: np.ndarray, transpose: bool = False
+                  ) -> Callable[[np.ndarray], np.ndarray]:
+    """x = A^+ b for A the (D, D) upper triangle ``r_m`` (``transpose``: its transpose).
+    When A is safely full-rank (LAPACK's estimate of its condition number under
+    :data:`PINV_DIRECT_COND`, far from where ``np.linalg.pinv`` drops a singular value,
+    at :data:`PINV_RCOND` x the largest), one triangular solve: the least-squares
+    solution is then the pseudo-inverse's. Otherwise the SVD of R: singular values under
+    the cutoff dropped, as ``np.linalg.pinv`` does. The solver reads ``r_m`` when
+    called."""
     lapack = scipy.linalg.lapack
     rcond, _ = lapack.dtrcon(r_m, norm="1")
     if rcond * PINV_DIRECT_COND > 1.0:
-        return lambda b: lapack.dtrtrs(r_m, b)[0]
-    u, sv, vt = np.linalg.svd(np.triu(r_m))
+        return lambda b: lapack.dtrtrs(r_m, b, trans=int(transpose))[0]
+    u, sv, vt = np.linalg.svd(np.triu(r_m))  # R = U S V^T, R^T = V S U^T
     large = sv > PINV_RCOND * sv.max()
     inv = np.divide(1.0, sv, out=np.zeros_like(sv), where=large)
+    if transpose:
+        return lambda b: u @ (inv[:, None] * (vt @ b))
     return lambda b: vt.T @ (inv[:, None] * (u.T @ b))
 
 

@@ -304,7 +304,14 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
                "peak_rss_mb": "peak RSS MB"}
     return Experiment(name=NAME, rows=rows(only, train), run_one=functools.partial(run_one, cfg),
                       config=cfg, runs=cfg.runs, table_columns=table,
-                      run_batch=functools.partial(run_batch, cfg))
+                      run_batch=functools.partial(run_batch, cfg),
+                      cost=functools.partial(cost, cfg))
+
+
+def cost(cfg: Config, row: Row) -> float:
+    """One run's relative cost, its training movement's length (the engine starts the
+    costliest rows first; YMCA at half speed is twice YMCA)."""
+    return float(len(_load(cfg, row.params["train"])))
 
 
 

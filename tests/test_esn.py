@@ -224,17 +224,22 @@ def test_spectral_radius_helper_large_matrix_uses_arpack():
     assert spectral_radius(w) == pytest.approx(0.7, rel=1e-8)
 
 
-@pytest.mark.parametrize("shape", [(2, 300, 25), (1, 40, 40), (2, 12, 30)])
-def test_pinv_solve_is_numpys_pinv_including_rank_deficient(shape):
-    """The QR + small-SVD readout solve gives pinv(M) @ S: tall, square and wide M,
-    and a rank-deficient M (a duplicated and an all-zero column) whose null space the
-    minimum-norm solution must leave out."""
+@pytest.mark.parametrize("shape", [(2, 300, 25), (1, 40, 40), (2, 12, 30), (2, 30, 80)])
+@pytest.mark.parametrize("deficient", ["columns", "rows"])
+def test_pinv_solve_is_numpys_pinv_including_rank_deficient(shape, deficient):
+    """The QR readout solve gives pinv(M) @ S: tall, square and wide M, rank-deficient
+    by a duplicated and an all-zero column, or (the wide case's own) a duplicated and
+    an all-zero row, whose null space the minimum-norm solution must leave out."""
     from controllers.esn import pinv_solve
 
     rng = np.random.default_rng(sum(shape))
     m = rng.normal(size=shape)
-    m[..., 3] = m[..., 1]
-    m[..., 5] = 0.0
+    if deficient == "columns":
+        m[..., 3] = m[..., 1]
+        m[..., 5] = 0.0
+    else:
+        m[:, 3] = m[:, 1]
+        m[:, 5] = 0.0
     s = rng.normal(size=(*shape[:2], 3))
     np.testing.assert_allclose(pinv_solve(m, s), np.linalg.pinv(m) @ s, rtol=0, atol=1e-10)
 
