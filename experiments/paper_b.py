@@ -231,9 +231,9 @@ def claims(out_dir: Path) -> list[str]:
 
 def _fig3(path: Path, row: str, traces: dict) -> None:
     from skinny_mj.io import atomic_path
-    from skinny_mj.plots import _pyplot
+    from skinny_mj.plots import pyplot
 
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(len(SPEEDS), 1, figsize=(7.0, 2.2 * len(SPEEDS)))
     for ax, s in zip(axes, SPEEDS, strict=True):
         tr = traces[_tag(s)]

@@ -353,9 +353,9 @@ def arm_figure_png(path: Path, cases: list[tuple[str, np.ndarray, np.ndarray | N
 
     cases : (title, desired (T, n_dof) rad, produced (T, n_dof) rad or None).
     """
-    from skinny_mj.plots import _pyplot, _save
+    from skinny_mj.plots import pyplot, save_figure
 
-    plt = _pyplot()
+    plt = pyplot()
     names = body.dof_names(dof)
     fig, axes = plt.subplots(len(cases), 2, figsize=(7.5, 3.0 * len(cases)), squeeze=False)
     for i, (title, desired, produced) in enumerate(cases):
@@ -371,7 +371,7 @@ def arm_figure_png(path: Path, cases: list[tuple[str, np.ndarray, np.ndarray | N
                    ylabel="elbow φ (deg)", title=f"{title}: {side} arm")
             ax.grid(alpha=0.3)
             ax.legend(fontsize=7)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _first_angles(runs: list[dict], row: str, col: str) -> np.ndarray | None:

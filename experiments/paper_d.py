@@ -235,7 +235,7 @@ def figure_4(out_dir: Path, cfg: Config, row_ids: tuple[str, ...] = FIGURE_4_ROW
     elbow, wrist (x, y, z each). ``reproduced`` collects, per re-trained run, whether
     it reproduced the run file's TT test position NRMSE exactly."""
     from skinny_mj import body
-    from skinny_mj.plots import _pyplot, _save
+    from skinny_mj.plots import pyplot, save_figure
 
     reproduced = [] if reproduced is None else reproduced
     picked = []
@@ -251,7 +251,7 @@ def figure_4(out_dir: Path, cfg: Config, row_ids: tuple[str, ...] = FIGURE_4_ROW
     if not picked:
         return None
     names = body.signal_names(cfg.dof, cfg.signals)
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(len(picked), 2, figsize=(11, 2.6 * len(picked)), squeeze=False,
                              sharex=True)
     for (row_id, outcome), ax_row in zip(picked, axes, strict=True):
@@ -271,7 +271,7 @@ def figure_4(out_dir: Path, cfg: Config, row_ids: tuple[str, ...] = FIGURE_4_ROW
     axes[0, 1].legend(fontsize=7, ncol=3, loc="lower right")
     for ax in axes[-1]:
         ax.set_xlabel("time (s)")
-    return _save(fig, out_dir / "fig4_right_arm_tt.png")
+    return save_figure(fig, out_dir / "fig4_right_arm_tt.png")
 
 
 CLAIMS = [

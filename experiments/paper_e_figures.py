@@ -68,12 +68,12 @@ def write_table(results: dict, out_dir: Path, cfg: Config) -> Path:
 def fig3(out_dir: Path, cfg: Config) -> Path | None:
     """Fig. 3: NRMSE(y_used, y_true) per cycle, mean ± sd over runs, per β (log y);
     dashed lines: the cycles the paper used (Table 1 x 10 epochs)."""
-    from skinny_mj.plots import _pyplot, _save
+    from skinny_mj.plots import pyplot, save_figure
 
     runs = _ok_runs(out_dir, "fig3")
     if not runs:
         return None
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for beta in sorted({float(r["params"]["beta"]) for r in runs}, reverse=True):
         curves = np.array([r["metrics"]["convergence_curve"] for r in runs
@@ -94,7 +94,7 @@ def fig3(out_dir: Path, cfg: Config) -> Path | None:
            title="Paper E, Figure 3 (dashed: cycles the paper used)")
     ax.grid(alpha=0.3)
     ax.legend()
-    return _save(fig, out_dir / "fig3.png")
+    return save_figure(fig, out_dir / "fig3.png")
 
 
 def fig3_summary(out_dir: Path, cfg: Config) -> str:

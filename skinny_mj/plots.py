@@ -17,7 +17,9 @@ from skinny_mj.io import atomic_path
 DPI = 120
 
 
-def _pyplot():
+def pyplot():
+    """matplotlib.pyplot on the non-interactive Agg backend (headless), imported on
+    first use so that importing this module stays cheap."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -26,8 +28,9 @@ def _pyplot():
     return plt
 
 
-def _save(fig, path: str | Path) -> Path:
-    plt = _pyplot()
+def save_figure(fig, path: str | Path) -> Path:
+    """Write ``fig`` as a PNG atomically (temp file + rename), close it, return the path."""
+    plt = pyplot()
     path = Path(path)
     try:
         fig.tight_layout()
@@ -53,7 +56,7 @@ def learning_curve_png(path: str | Path, curves: Mapping[str, np.ndarray], ylabe
     """Learning curves: name -> (E,) values or (R, E) runs (drawn as mean ± sd band)."""
     if not curves:
         raise SkinnyInputError("learning_curve_png needs at least one curve")
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for name, values in curves.items():
         mean, sd = _mean_sd(values)
@@ -63,7 +66,7 @@ def learning_curve_png(path: str | Path, curves: Mapping[str, np.ndarray], ylabe
     ax.set(xlabel=xlabel, ylabel=ylabel, title=title)
     ax.grid(alpha=0.3)
     ax.legend()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _mean_band(ax, x: np.ndarray, mean: np.ndarray, sd: np.ndarray | None, name: str) -> None:
@@ -78,7 +81,7 @@ def boxplot_png(path: str | Path, groups: Mapping[str, Sequence[float]], ylabel:
     """One box per group of run values; ``reference`` (the paper's means) as markers."""
     if not groups:
         raise SkinnyInputError("boxplot_png needs at least one group")
-    plt = _pyplot()
+    plt = pyplot()
     names = list(groups)
     data = [np.asarray(groups[n], dtype=float) for n in names]
     data = [d[np.isfinite(d)] for d in data]
@@ -93,7 +96,7 @@ def boxplot_png(path: str | Path, groups: Mapping[str, Sequence[float]], ylabel:
         ax.legend()
     ax.set(ylabel=ylabel, title=title)
     ax.grid(axis="y", alpha=0.3)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def line_sweep_png(path: str | Path, x: Sequence[float], ys: Mapping[str, np.ndarray],
@@ -102,7 +105,7 @@ def line_sweep_png(path: str | Path, x: Sequence[float], ys: Mapping[str, np.nda
     if not ys:
         raise SkinnyInputError("line_sweep_png needs at least one series")
     x = np.asarray(x, dtype=float)
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for name, values in ys.items():
         values = np.atleast_2d(np.asarray(values, dtype=float))
@@ -115,7 +118,7 @@ def line_sweep_png(path: str | Path, x: Sequence[float], ys: Mapping[str, np.nda
     ax.set(xlabel=xlabel, ylabel=ylabel, title=title)
     ax.grid(alpha=0.3)
     ax.legend()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def heatmap_png(path: str | Path, matrix: np.ndarray, row_labels: Sequence[str],
@@ -125,7 +128,7 @@ def heatmap_png(path: str | Path, matrix: np.ndarray, row_labels: Sequence[str],
     if matrix.shape != (len(row_labels), len(col_labels)):
         raise SkinnyInputError(f"matrix shape {matrix.shape} does not match "
                                f"{len(row_labels)} row and {len(col_labels)} column labels")
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(1.0 + 0.9 * len(col_labels), 1.0 + 0.5 * len(row_labels)))
     image = ax.imshow(matrix, cmap="viridis", aspect="auto")
     fig.colorbar(image, ax=ax)
@@ -137,4 +140,4 @@ def heatmap_png(path: str | Path, matrix: np.ndarray, row_labels: Sequence[str],
             ax.text(j, i, fmt.format(v), ha="center", va="center", fontsize=7,
                     color="white" if v < mid else "black")
     ax.set_title(title)
-    return _save(fig, path)
+    return save_figure(fig, path)
