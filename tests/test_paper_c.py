@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from experiments import paper_c
+from experiments import paper_c, paper_c_report
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.experiment import run_sweep
 from skinny_mj.ideal import max_speeds
@@ -104,7 +104,7 @@ def test_quick_sweep_end_to_end(tmp_path):
     for name in ("matrix_position_nrmse.png", "matrix.md", "train_curves.png", "fig3_ymca.png",
                  "fig4_ypure_ym.png", "fig6_mirror_left_ymca.png"):
         assert (tmp_path / name).is_file(), name
-    train, tests, m = paper_c.matrix(paper_c._runs(tmp_path))
+    train, tests, m = paper_c_report.matrix(paper_c_report._runs(tmp_path))
     assert train == list(paper_c.QUICK_TRAIN) and tests == cols and np.isfinite(m).all()
     assert "Y pure -> YM" in text and "mirror-left -> YMCA" in text
     assert "[n/a] trained on YMCA, tested on ymca-0.5x" in text  # not in the quick sweep
