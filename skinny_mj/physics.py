@@ -57,6 +57,15 @@ def servo_ctrl(
     return np.minimum(vel, hi, out=vel)
 
 
+def segment_signals(points: np.ndarray, lengths: np.ndarray, comps) -> np.ndarray:
+    """(R, 4 * n_comps) Cartesian signals: the ``comps`` components of each segment's unit
+    direction (shoulder to elbow, elbow to wrist, arm-major), from ``points`` (R, 2 arms,
+    3, 3). :class:`Layout` and :class:`skinny_mj.plant.BatchPlant` both call it."""
+    n = points.shape[0]
+    seg = (points[:, :, 1:] - points[:, :, :-1])[..., comps]  # (R, arm, segment, comp)
+    return (seg / lengths.reshape(2, 1)).reshape(n, -1)
+
+
 def segment_jacobian(
     axes: np.ndarray, points: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
     lengths: np.ndarray, comps: list[int],
@@ -96,12 +105,12 @@ def segment_jacobian(
     return out.reshape(n, 4 * len(comps), n_dof)
 
 
-def _segment_turns(model: mujoco.MjModel, site_ids: np.ndarray,
-                   dof_adr: np.ndarray) -> np.ndarray:
-    """(4 segments, n_dof) 1.0 where a DOF is on the kinematic chain of the segment's
-    first site (the chain ``mj_jac`` walks), else 0.0."""
+def _segment_pairs(model: mujoco.MjModel, site_ids: np.ndarray,
+                   dof_adr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(segment indices, DOF indices) of the pairs where a DOF is on the kinematic chain
+    of the segment's first site (the chain ``mj_jac`` walks): the DOFs that turn it."""
     starts = site_ids[:, :2].reshape(-1)  # shoulder, elbow of each arm
-    turns = np.zeros((starts.size, model.nv))
+    turns = np.zeros((starts.size, model.nv), bool)
     for k, site in enumerate(starts):
         b = int(model.site_bodyid[site])
         while b and not model.body_dofnum[b]:
@@ -109,9 +118,9 @@ def _segment_turns(model: mujoco.MjModel, site_ids: np.ndarray,
         if b:
             i = int(model.body_dofadr[b] + model.body_dofnum[b] - 1)
             while i >= 0:
-                turns[k, i] = 1.0
+                turns[k, i] = True
                 i = int(model.dof_parentid[i])
-    return turns[:, dof_adr]
+    return np.nonzero(turns[:, dof_adr])
 
 
 class Layout:
@@ -137,8 +146,7 @@ class Layout:
         self.range_rad = model.jnt_range[jnt].copy()
         self._lengths = np.array([body.UPPER_ARM_LENGTH_M, body.FOREARM_LENGTH_M])
         self._comps = [0, 2] if self.dof == 4 else [0, 1, 2]
-        self.segment_turns = _segment_turns(model, self.site_ids, self.dof_adr)
-        self.segment_pairs = np.nonzero(self.segment_turns)  # (segment, DOF) that turn
+        self.segment_pairs = _segment_pairs(model, self.site_ids, self.dof_adr)
         self.segment_lengths = np.tile(self._lengths, 2)
         self._jacp = np.zeros((3, model.nv))
 
@@ -162,8 +170,8 @@ class Layout:
             return body.normalize_angles(self.joint_angles(data), self.dof)
         if signals != "cartesian":
             raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
-        seg = self.segment_vectors(data) / self._lengths[:, None]
-        return seg[..., self._comps].reshape(-1)
+        return segment_signals(data.site_xpos[self.site_ids][None], self._lengths,
+                               self._comps)[0]
 
     def site_jacobian(self, model: mujoco.MjModel, data: mujoco.MjData, site_id: int):
         """(3, nv) translational Jacobian of a site, m/rad (``mj_jacSite``)."""

@@ -21,7 +21,7 @@ import numpy as np
 from controllers.plant import Plant as _Plant
 from skinny_mj import body
 from skinny_mj.model import BATCH_PREFIX, load_batch_model, load_model
-from skinny_mj.physics import Layout, segment_jacobian, servo_ctrl
+from skinny_mj.physics import Layout, segment_jacobian, segment_signals, servo_ctrl
 from skinny_mj.task import Setup, prepare, widen_ctrlrange
 
 _NOISE_BLOCK = 128  # sensor-noise vectors drawn per run at once
@@ -83,11 +83,11 @@ class BatchPlant:
     bit for bit that of ``EnvPlant(load(..., seed=seeds[r]))``, with the same operations
     as dm_control (reset: ``mj_resetData``, pose, ``mj_forward`` without actuation;
     step: ctrl, ``mj_step2``, ``mj_step1``). The work around the physics is vectorized
-    over R: the servo ctrl and the position signals with the same floating-point
-    operations as :class:`skinny_mj.physics.Layout` (bitwise); the command Jacobian
-    from the joint axes and segment vectors, equal to Layout's ``mj_jacSite``
-    differences to ~1e-16 (not bitwise: a whole training run agrees with the
-    dm_control path to ~1e-12). Sensor noise is drawn from each run's Generator
+    over R with the functions :class:`skinny_mj.physics.Layout` uses for one run (so
+    bitwise): the servo ctrl, the position signals
+    (:func:`skinny_mj.physics.segment_signals`) and the command Jacobian
+    (:func:`skinny_mj.physics.segment_jacobian`, equal to ``mj_jacSite`` differences to
+    ~1e-16). Sensor noise is drawn from each run's Generator
     (``np.random.default_rng(seeds[r])``, the task's draw order) in blocks of
     ``_NOISE_BLOCK`` vectors, which yields the same sequence as one draw per step.
 
@@ -143,13 +143,11 @@ class BatchPlant:
         self._site_xpos = d.site_xpos.reshape(r, one.nsite, 3)
         self._cdof = d.cdof.reshape(r, one.nv, 6)
         sites = lay.site_ids.reshape(-1)  # (6,) arm-major, shoulder/elbow/wrist
-        self._comps = np.array(lay._comps)
-        self._comp_sel = _as_slice(self._comps)  # views, not gathers, where possible
+        self._comp_sel = _as_slice(np.array(lay._comps))  # views, not gathers, if possible
         self._site_sel = _as_slice(sites)
         self._qpos_sel = _as_slice(lay.qpos_adr)
         self._dof_sel = _as_slice(lay.dof_adr)
         self._act_sel = _as_slice(lay.actuator_ids)
-        self._lengths = lay._lengths
         self._noise_buf = np.zeros((0, self.n_runs, self.n_signals))
         self._noise_pos = 0
         self._signals: np.ndarray | None = None
@@ -219,10 +217,7 @@ class BatchPlant:
                 self._signals = body.normalize_angles(self.joint_angles(), self.n_dof)
             else:
                 pts = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
-                seg = np.empty((n, 2, 2, len(self._comps)))
-                np.divide((pts[:, :, 1:] - pts[:, :, :-1])[..., self._comp_sel],
-                          self._lengths[:, None], out=seg)
-                self._signals = seg.reshape(n, -1)
+                self._signals = segment_signals(pts, self.layout._lengths, self._comp_sel)
         return self._signals
 
     def joint_angles(self) -> np.ndarray:
