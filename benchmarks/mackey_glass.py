@@ -75,7 +75,7 @@ def main(argv: list[str] | None = None) -> None:
                    help="compare with reservoirpy on the same series (skinny_mj.bench)")
     args = p.parse_args(argv)
     if args.reservoirpy:
-        from skinny_mj.bench import mackey_glass as compare
+        from skinny_mj.bench_mackey_glass import mackey_glass as compare
 
         print(compare(args.reservoir, args.trials, args.washout, args.train, args.seed))
         return

@@ -17,150 +17,30 @@ std ``level``, and ``f_out`` = tanh (targets fitted through atanh) or identity.
 
 from __future__ import annotations
 
+import copy
 import json
-from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from collections.abc import Sequence
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse
-import scipy.sparse.linalg
 
 from controllers._io import atomic_path
+from controllers.readout import PinvFactors, solve_readout
+from controllers.reservoir import ESNConfig, draw_weights, run_generators, spectral_radius
+
+# The hyper-parameters and the weight draw live in controllers.reservoir, the readout
+# solvers in controllers.readout; these names stay importable from here.
+__all__ = ["ESN", "ESNConfig", "read_metadata", "run_generators", "spectral_radius"]
 
 try:  # SciPy's CSC matrix-vector kernel (what csc_array @ vector calls)
     from scipy.sparse._sparsetools import csc_matvec as _csc_matvec
 except ImportError:  # pragma: no cover - other SciPy layouts
     _csc_matvec = None
 
-_NOISE_KINDS = ("uniform", "gaussian")
-_ACTIVATIONS = ("tanh", "identity")
-_READOUTS = ("pinv", "ridge")
-_DTYPES = ("float64", "float32")
 _NOISE_BLOCK = 256  # noise is drawn per run in blocks of this many steps
 _SPARSE_BELOW = 0.25  # use a block-diagonal sparse matrix below this connectivity
-_EXACT_EIG_MAX_N = 500  # exact eigenvalues up to this size, ARPACK above
-
-
-@dataclass(frozen=True)
-class ESNConfig:
-    """Hyper-parameters of an echo state network (defaults: Jaeger's toolbox, SPEC §5).
-
-    Attributes
-    ----------
-    n_inputs, n_outputs : sizes of u and y.
-    n_reservoir : N, number of tanh units.
-    spectral_radius : largest |eigenvalue| of W after rescaling (>= 0).
-    connectivity : fraction of nonzero reservoir weights; None means min(1, 10/N).
-    input_scaling : W_in ~ U[-s, s] (dense; the bias input column included).
-    bias : value of the constant bias input.
-    leak_rate : a in (0, 1]; 1 is the standard (non-leaky) ESN.
-    noise_level : nu >= 0, reservoir state noise added after tanh.
-    noise_kind : "uniform" (U[-nu/2, nu/2]) or "gaussian" (std nu).
-    output_feedback : add W_back y(t-1) ~ U[-s, s] with s = feedback_scaling.
-    readout_activation : "tanh" (targets through atanh, clipped to +-target_clip)
-        or "identity".
-    readout : "pinv" (Moore-Penrose, the thesis) or "ridge" (ridge_lambda).
-    dtype : "float64" or "float32".
-    """
-
-    n_inputs: int
-    n_outputs: int
-    n_reservoir: int = 200
-    spectral_radius: float = 0.5
-    connectivity: float | None = None
-    input_scaling: float = 1.0
-    bias: float = 1.0
-    leak_rate: float = 1.0
-    noise_level: float = 0.0
-    noise_kind: str = "uniform"
-    output_feedback: bool = False
-    feedback_scaling: float = 1.0
-    readout_activation: str = "tanh"
-    readout: str = "pinv"
-    ridge_lambda: float = 1e-6
-    target_clip: float = 0.99
-    dtype: str = "float64"
-
-    def __post_init__(self) -> None:
-        checks = [
-            (self.n_inputs >= 1, f"n_inputs must be >= 1, got {self.n_inputs}"),
-            (self.n_outputs >= 1, f"n_outputs must be >= 1, got {self.n_outputs}"),
-            (self.n_reservoir >= 1, f"reservoir size N must be >= 1, got {self.n_reservoir}"),
-            (
-                np.isfinite(self.spectral_radius) and self.spectral_radius >= 0,
-                f"spectral radius must be >= 0, got {self.spectral_radius}",
-            ),
-            (
-                self.connectivity is None or 0 < self.connectivity <= 1,
-                f"connectivity must be in (0, 1], got {self.connectivity}",
-            ),
-            (self.input_scaling >= 0, f"input scaling must be >= 0, got {self.input_scaling}"),
-            (0 < self.leak_rate <= 1, f"leak rate must be in (0, 1], got {self.leak_rate}"),
-            (
-                np.isfinite(self.noise_level) and self.noise_level >= 0,
-                f"noise level must be >= 0, got {self.noise_level}",
-            ),
-            (self.noise_kind in _NOISE_KINDS, f"noise kind must be one of {_NOISE_KINDS}, "
-             f"got {self.noise_kind!r}"),
-            (self.readout_activation in _ACTIVATIONS, f"readout activation must be one of "
-             f"{_ACTIVATIONS}, got {self.readout_activation!r}"),
-            (self.readout in _READOUTS, f"readout must be one of {_READOUTS}, "
-             f"got {self.readout!r}"),
-            (self.ridge_lambda >= 0, f"ridge lambda must be >= 0, got {self.ridge_lambda}"),
-            (0 < self.target_clip < 1, f"target clip must be in (0, 1), got {self.target_clip}"),
-            (self.dtype in _DTYPES, f"dtype must be one of {_DTYPES}, got {self.dtype!r}"),
-        ]
-        for ok, message in checks:
-            if not ok:
-                raise ValueError(message)
-
-    @property
-    def density(self) -> float:
-        """Fraction of nonzero reservoir weights actually used."""
-        if self.connectivity is not None:
-            return float(self.connectivity)
-        return min(1.0, 10.0 / self.n_reservoir)
-
-    @property
-    def n_extended(self) -> int:
-        """Length D of the extended state [x; u; 1] the readout sees."""
-        return self.n_reservoir + self.n_inputs + 1
-
-
-def run_generators(seed: int | None, n_runs: int) -> list[np.random.Generator]:
-    """One independent Generator per run, spawned from ``seed``."""
-    return [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(n_runs)]
-
-
-def spectral_radius(w: np.ndarray) -> float:
-    """Largest absolute eigenvalue of a square matrix ``w`` (N, N)."""
-    n = w.shape[0]
-    if n <= _EXACT_EIG_MAX_N:
-        return float(np.max(np.abs(np.linalg.eigvals(w))))
-    try:
-        vals = scipy.sparse.linalg.eigs(
-            scipy.sparse.csr_array(w), k=6, which="LM", v0=np.ones(n), ncv=min(n - 1, 60),
-            return_eigenvectors=False,
-        )  # several eigenvalues and a wide Krylov space: k=1 can stop on a runner-up
-        return float(np.max(np.abs(vals)))
-    except scipy.sparse.linalg.ArpackNoConvergence:
-        return float(np.max(np.abs(np.linalg.eigvals(w))))
-
-
-def _draw_weights(cfg: ESNConfig, rng: np.random.Generator) -> dict[str, np.ndarray]:
-    n = cfg.n_reservoir
-    mask = rng.random((n, n)) < cfg.density
-    w = np.where(mask, rng.uniform(-0.5, 0.5, (n, n)), 0.0)
-    radius = spectral_radius(w)
-    if radius > 0:
-        w *= cfg.spectral_radius / radius
-    w_in = cfg.input_scaling * rng.uniform(-1.0, 1.0, (n, cfg.n_inputs + 1))
-    w_back = cfg.feedback_scaling * rng.uniform(-1.0, 1.0, (n, cfg.n_outputs))
-    if not cfg.output_feedback:
-        w_back[:] = 0.0
-    return {"W": w, "W_in": w_in, "W_back": w_back}
 
 
 class ESN:
@@ -198,7 +78,7 @@ class ESN:
         self.n_runs = n_runs
         self.rngs = list(rngs)
         self.dtype = np.dtype(cfg.dtype)
-        drawn = [_draw_weights(cfg, g) for g in self.rngs]
+        drawn = [draw_weights(cfg, g) for g in self.rngs]
         self._set_weights(
             np.stack([d["W"] for d in drawn]),
             np.stack([d["W_in"] for d in drawn]),
@@ -431,24 +311,12 @@ class ESN:
         factors : optional :class:`PinvFactors` of these same states (after the
             washout), reused across fits (pinv readout only).
         """
-        m = np.asarray(states, np.float64)[:, washout:]
-        s = np.asarray(targets, np.float64)[:, washout:]
-        if self.cfg.readout_activation == "tanh":
-            clip = self.cfg.target_clip
-            s = np.arctanh(np.clip(s, -clip, clip))
         selected = np.ones(self.n_runs, bool) if runs is None else np.asarray(runs, bool)
         idx = np.flatnonzero(selected)
         if idx.size == 0:
             return
-        if factors is not None:
-            if self.cfg.readout != "pinv" or factors.shape != m.shape:
-                raise ValueError("factors must be PinvFactors of the same states, for a "
-                                 "pinv readout")
-            w_t = factors.solve(s[idx], idx)
-        elif self.cfg.readout == "pinv":  # (r, D, n_out); m[idx] would copy all the states
-            w_t = pinv_solve(m if idx.size == self.n_runs else m[idx], s[idx])
-        else:
-            w_t = np.stack([ridge_solve(m[i], s[i], self.cfg.ridge_lambda) for i in idx])
+        w_t = solve_readout(self.cfg, np.asarray(states, np.float64)[:, washout:],
+                            np.asarray(targets, np.float64)[:, washout:], idx, factors)
         self.W_out[idx] = np.swapaxes(w_t, 1, 2).astype(self.dtype)
 
     # -- health and persistence ----------------------------------------------------
@@ -468,6 +336,39 @@ class ESN:
         """(R,) bool: NaN/inf in state or readout, or saturation (mean |x| > 0.999)."""
         return np.array([reason is not None for reason in self.diverged()])
 
+    # -- selection and persistence -------------------------------------------------
+    @property
+    def sparse_reservoir(self) -> scipy.sparse.csc_array | None:
+        """Every run's W as one block-diagonal CSC matrix (R N, R N), the one ``step``
+        multiplies by; None when W is dense (connectivity >= 0.25)."""
+        return self._sparse
+
+    def select(self, runs: Sequence[int]) -> ESN:
+        """A new ESN of the runs ``runs`` (indices, in that order), holding copies of
+        their weights, state (x, y, extended), generators and buffered noise: stepping it
+        gives, bit for bit, what those runs give inside this batch (left unchanged)."""
+        idx = np.asarray(runs, dtype=np.intp).reshape(-1)
+        if idx.size == 0 or np.any((idx < 0) | (idx >= self.n_runs)):
+            raise ValueError(f"runs must be indices in [0, {self.n_runs}), got {list(runs)}")
+        out = self._assemble(self.cfg, [copy.deepcopy(self.rngs[i]) for i in idx], self.W[idx],
+                             self.W_in[idx], self.W_back[idx], self.W_out[idx])
+        out.x, out.y, out.extended = self.x[idx], self.y[idx], self.extended[idx]  # copies
+        out._noise_pos = self._noise_pos
+        if hasattr(self, "_noise_buf"):
+            out._noise_buf = self._noise_buf[:, idx]  # (B, r, N), a C-contiguous copy
+        return out
+
+    @classmethod
+    def _assemble(cls, cfg: ESNConfig, rngs: list[np.random.Generator], w: np.ndarray,
+                  w_in: np.ndarray, w_back: np.ndarray, w_out: np.ndarray) -> ESN:
+        """An ESN of these weights (R leading) and generators, in its reset state."""
+        esn = cls.__new__(cls)
+        esn.cfg, esn.n_runs, esn.dtype = cfg, len(rngs), np.dtype(cfg.dtype)
+        esn.rngs = rngs
+        esn._set_weights(w, w_in, w_back, w_out)
+        esn.reset()
+        return esn
+
     def save(self, path: str | Path, metadata: dict | None = None) -> None:
         """Write weights + config JSON (+ a JSON ``metadata`` dict, e.g. the plant the
         network was trained on) to an .npz (no pickle), atomically."""
@@ -484,12 +385,8 @@ class ESN:
         with np.load(Path(path), allow_pickle=False) as data:
             cfg = ESNConfig(**json.loads(str(data["config"])))
             arrays = {k: data[k] for k in ("W", "W_in", "W_back", "W_out", "x", "y")}
-        n_runs = arrays["W"].shape[0]
-        esn = cls.__new__(cls)
-        esn.cfg, esn.n_runs, esn.dtype = cfg, n_runs, np.dtype(cfg.dtype)
-        esn.rngs = run_generators(seed, n_runs)
-        esn._set_weights(arrays["W"], arrays["W_in"], arrays["W_back"], arrays["W_out"])
-        esn.reset()
+        esn = cls._assemble(cfg, run_generators(seed, arrays["W"].shape[0]), arrays["W"],
+                            arrays["W_in"], arrays["W_back"], arrays["W_out"])
         esn.x, esn.y = arrays["x"].astype(esn.dtype), arrays["y"].astype(esn.dtype)
         return esn
 
@@ -498,138 +395,3 @@ def read_metadata(path: str | Path) -> dict:
     """The ``metadata`` dict saved with a network by :meth:`ESN.save` ({} if none)."""
     with np.load(Path(path), allow_pickle=False) as data:
         return json.loads(str(data["metadata"])) if "metadata" in data.files else {}
-
-
-PINV_RCOND = 1e-15  # singular values below this x the largest count as zero (NumPy's)
-# Below this estimated (1-norm) condition number of R_M no singular value is anywhere
-# near the cutoff (kappa_2 <= D kappa_1, and the estimate is good to a small factor),
-# so M^+ S is the plain least-squares solution.
-PINV_DIRECT_COND = 1e10
-
-
-def pinv_solve(m: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """M^+ S for stacked (R, T, D) M and (R, T, n) S, without forming M^+ or M's U.
-
-    Per run, one Householder QR (LAPACK ``dgeqrf``) of [M | S] in a reused workspace
-    gives R_M and Q^T S; then :func:`_small_solver`. Equal to ``pinv(M) @ S`` to ~1e-13 on
-    the thesis's reservoir states (condition ~5e3), at a fraction of its cost, and with
-    one (T, D + n) buffer instead of several (R, T, D) copies (fresh pages of a few
-    hundred MB cost as much system time as the solve). For many fits on the same M see
-    :class:`PinvFactors`.
-    """
-    n_runs, n_steps, d = m.shape
-    if n_steps < d:
-        return _pinv_solve_wide(m, s)
-    work = np.empty((n_steps, d + s.shape[-1]), order="F")
-    out = np.empty((n_runs, d, s.shape[-1]))
-    for r in range(n_runs):
-        work[:, :d] = m[r]
-        work[:, d:] = s[r]
-        qr = _householder_qr(work)
-        out[r] = _small_solver(qr[:d, :d])(qr[:d, d:])  # R_M, Q^T S
-    return out
-
-
-def _pinv_solve_wide(m: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """:func:`pinv_solve` for wide M (T < D: fewer samples than features, the
-    interpolating regime of paper C). QR of M^T = Q R gives M = R^T Q^T, so
-    M^+ S = Q (R^T)^+ S: a (T, T) solve and Q applied to it (LAPACK ``dormqr``), instead
-    of the SVD of the whole (T, D) M."""
-    n_runs, n_steps, d = m.shape
-    n_out = s.shape[-1]
-    work = np.empty((d, n_steps), order="F")
-    out = np.empty((n_runs, d, n_out))
-    lapack = scipy.linalg.lapack
-    for r in range(n_runs):
-        work[:] = m[r].T
-        qr, tau = _householder_qr(work, with_tau=True)
-        c = np.zeros((d, n_out), order="F")
-        c[:n_steps] = _small_solver(qr[:n_steps, :n_steps], transpose=True)(s[r])
-        out[r], _, info = lapack.dormqr("L", "N", qr, tau, c, max(1, 64 * n_out),
-                                        overwrite_c=True)
-        if info != 0:  # pragma: no cover - LAPACK argument error
-            raise np.linalg.LinAlgError(f"dormqr failed (info {info})")
-    return out
-
-
-class PinvFactors:
-    """The pinv readout's factorization of stacked states M (R, T, D), for many fits on
-    the same states with different targets (paper E's Fig. 3 cycles, true-target
-    training without noise: the teacher-forced states repeat bit for bit). One QR and
-    small solver per run up front; each :meth:`solve` is then Q^T S (LAPACK ``dormqr``)
-    and the small solve, a few percent of a fresh :func:`pinv_solve`."""
-
-    def __init__(self, m: np.ndarray):
-        m = np.asarray(m, np.float64)
-        self.shape = m.shape
-        n_runs, n_steps, d = m.shape
-        self._pinv = np.linalg.pinv(m, rcond=PINV_RCOND) if n_steps < d else None
-        self._qr: list[tuple[np.ndarray, np.ndarray]] = []
-        self._small: list[Callable[[np.ndarray], np.ndarray]] = []
-        if self._pinv is None:
-            for r in range(n_runs):
-                qr, tau = _householder_qr(np.array(m[r], order="F"), with_tau=True)
-                self._qr.append((qr, tau))
-                self._small.append(_small_solver(np.array(qr[:d, :d], order="F")))
-
-    def solve(self, s: np.ndarray, runs: np.ndarray | None = None) -> np.ndarray:
-        """M^+ S for targets (r, T, n) of the runs ``runs`` (indices; default all)."""
-        runs = np.arange(self.shape[0]) if runs is None else np.asarray(runs)
-        if self._pinv is not None:
-            return self._pinv[runs] @ s
-        d, lapack = self.shape[2], scipy.linalg.lapack
-        out = np.empty((runs.size, d, s.shape[-1]))
-        for k, r in enumerate(runs):
-            qr, tau = self._qr[r]
-            c = np.array(s[k], order="F")
-            qt_s, _, info = lapack.dormqr("L", "T", qr, tau, c, max(1, 64 * c.shape[1]),
-                                          overwrite_c=True)
-            if info != 0:  # pragma: no cover - LAPACK argument error
-                raise np.linalg.LinAlgError(f"dormqr failed (info {info})")
-            out[k] = self._small[r](qt_s[:d])
-        return out
-
-
-def _householder_qr(a: np.ndarray, with_tau: bool = False):
-    """LAPACK ``dgeqrf`` of a Fortran-ordered ``a`` in place (R in its upper triangle,
-    the reflectors below), with the blocked algorithm's workspace."""
-    lapack = scipy.linalg.lapack
-    lwork, _ = lapack.dgeqrf_lwork(*a.shape)
-    qr, tau, _, info = lapack.dgeqrf(a, lwork=int(lwork), overwrite_a=True)
-    if info != 0:  # pragma: no cover - LAPACK argument error
-        raise np.linalg.LinAlgError(f"dgeqrf failed (info {info})")
-    return (qr, tau) if with_tau else qr
-
-
-def _small_solver(r_m: np.ndarray, transpose: bool = False
-                  ) -> Callable[[np.ndarray], np.ndarray]:
-    """x = A^+ b for A the (D, D) upper triangle ``r_m`` (``transpose``: its transpose).
-    When A is safely full-rank (LAPACK's estimate of its condition number under
-    :data:`PINV_DIRECT_COND`, far from where ``np.linalg.pinv`` drops a singular value,
-    at :data:`PINV_RCOND` x the largest), one triangular solve: the least-squares
-    solution is then the pseudo-inverse's. Otherwise the SVD of R: singular values under
-    the cutoff dropped, as ``np.linalg.pinv`` does. The solver reads ``r_m`` when
-    called."""
-    lapack = scipy.linalg.lapack
-    rcond, _ = lapack.dtrcon(r_m, norm="1")
-    if rcond * PINV_DIRECT_COND > 1.0:
-        return lambda b: lapack.dtrtrs(r_m, b, trans=int(transpose))[0]
-    u, sv, vt = np.linalg.svd(np.triu(r_m))  # R = U S V^T, R^T = V S U^T
-    large = sv > PINV_RCOND * sv.max()
-    inv = np.divide(1.0, sv, out=np.zeros_like(sv), where=large)
-    if transpose:
-        return lambda b: u @ (inv[:, None] * (vt @ b))
-    return lambda b: vt.T @ (inv[:, None] * (u.T @ b))
-
-
-def ridge_solve(m: np.ndarray, s: np.ndarray, ridge_lambda: float) -> np.ndarray:
-    """Solve (M^T M + lambda I) W = M^T S by Cholesky; M (T, D), S (T, n) -> W (D, n)."""
-    gram = m.T @ m + ridge_lambda * np.eye(m.shape[1])
-    try:
-        return scipy.linalg.cho_solve(scipy.linalg.cho_factor(gram), m.T @ s)
-    except np.linalg.LinAlgError:
-        # lambda too small for a rank-deficient M (e.g. a constant-zero input): solve the
-        # same problem as least squares on [M; sqrt(lambda) I], which needs no PD Gram.
-        aug_m = np.vstack([m, np.sqrt(ridge_lambda) * np.eye(m.shape[1])])
-        aug_s = np.vstack([s, np.zeros((m.shape[1], s.shape[1]))])
-        return np.linalg.lstsq(aug_m, aug_s, rcond=None)[0]

@@ -12,13 +12,18 @@ prediction p(t)); u_error(t) from (d(t), s(t)); command = clip(y_ESN + K u_error
 step the plant. After the cycle: y_est(t) = command(t) + u_error(t+1), and the readout
 is fitted to y_used = beta y_est + (1 - beta) y_ESN (beta = 1: the original method).
 ``s_in`` is the sensed signal delayed by ``delay_steps`` (paper A); the feedback
-controller always sees the undelayed s(t).
+controller always sees the undelayed s(t). With ``inputs="sensed"`` (paper B) the
+desired position is left out of the ESN's input: [s_in(t)] (+ p(t)).
+
+One health check (:func:`health`) decides for training and testing alike whether a
+run diverged; a diverged run is silenced (state and readout zero) and excluded from
+every later fit, so it cannot poison its lockstep batch.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -34,6 +39,9 @@ from controllers.plant import Plant
 
 _METHODS = ("original", "new")
 _SCHEDULES = ("linear", "multiplicative", "fixed")
+#: What the inverse model sees besides the forward model's prediction: the desired next
+#: position and the sensed one (papers A, C, D, E), or the sensed one only (paper B).
+INPUTS = ("desired+sensed", "sensed")
 
 
 @dataclass(frozen=True)
@@ -48,6 +56,7 @@ class FELConfig:
     gain_factor: float = 0.9  # multiplicative schedule
     gain_value: float = 0.65  # fixed schedule
     delay_steps: int = 0
+    inputs: str = "desired+sensed"
 
     def __post_init__(self) -> None:
         if self.method not in _METHODS:
@@ -61,6 +70,8 @@ class FELConfig:
                              f"{self.gain_schedule!r}")
         if self.delay_steps < 0:
             raise ValueError(f"delay must be >= 0 steps, got {self.delay_steps}")
+        if self.inputs not in INPUTS:
+            raise ValueError(f"inputs must be one of {INPUTS}, got {self.inputs!r}")
         self.gains()  # validates epochs and the schedule's parameters
 
     @property
@@ -77,23 +88,15 @@ class FELConfig:
         return fixed_gain(self.epochs, self.gain_value)
 
 
-@dataclass(frozen=True)
-class PaperERow:
-    """One row of paper E's Table 1 with SPEC §5's defaults."""
+def run_mean(a: np.ndarray) -> np.ndarray:
+    """Mean over every axis but the first, (R,), summed in the same order for every R.
 
-    fel: FELConfig
-    repetitions: int
-    noise_level: float
-
-
-PAPER_E: dict[int, PaperERow] = {
-    1: PaperERow(FELConfig("original", 1.0, 1), 1, 0.03),
-    2: PaperERow(FELConfig("original", 1.0, 1), 5, 0.03),
-    3: PaperERow(FELConfig("original", 1.0, 1), 10, 0.03),
-    4: PaperERow(FELConfig("new", 0.3, 2), 1, 0.2),
-    5: PaperERow(FELConfig("new", 0.1, 3), 1, 0.2),
-    6: PaperERow(FELConfig("new", 0.05, 6), 1, 0.2),
-}
+    A rollout's arrays are (R, T, ...) views of time-major buffers; reducing such a view
+    over several axes sums in another order than a single run's contiguous array, so a
+    lockstep run would differ from its single run in the last bits. Made contiguous
+    first (a no-op when R = 1), each run's sum is the single run's."""
+    a = np.ascontiguousarray(a)
+    return a.mean(axis=tuple(range(1, a.ndim)))
 
 
 @dataclass
@@ -101,8 +104,9 @@ class Rollout:
     """One cycle of R runs. T = len(desired).
 
     commands (R, T-1, n_dof) as sent; y_esn (R, T-1, n_dof) ESN outputs;
-    u_error (R, T, n_dof); sensed, true_signals (R, T, n_sig); angles (R, T, n_dof)
-    the plant's joint angles, rad; states (R, T-1, D) the inverse model's extended
+    u_error (R, T, n_dof); sensed, true_signals (R, T, n_sig); angles (R, T, n_joints)
+    the plant's joint angles, rad (n_joints = n_dof unless part of the body is forced,
+    as paper B's leading arm); states (R, T-1, D) the inverse model's extended
     states; fm_states (R, T-1, D_fm) or None;
     predictions (R, T, n_sig) the forward model's p(t) or None.
     """
@@ -117,6 +121,13 @@ class Rollout:
     fm_states: np.ndarray | None = None
     predictions: np.ndarray | None = None
 
+    def select(self, r: int) -> Rollout:
+        """Run ``r`` of a lockstep rollout (arrays keep R = 1; views, not copies)."""
+        if self.commands.shape[0] == 1:
+            return self
+        return Rollout(**{f.name: None if getattr(self, f.name) is None
+                          else getattr(self, f.name)[r:r + 1] for f in fields(self)})
+
     @property
     def y_est(self) -> np.ndarray:
         """Estimated target y_est(t) = command(t) + u_error(t+1), (R, T-1, n_dof)."""
@@ -125,8 +136,8 @@ class Rollout:
     @property
     def correction_ratio(self) -> np.ndarray:
         """Online correction ratio per run (R,): mean |command - y_ESN| / mean |command|."""
-        num = np.abs(self.commands - self.y_esn).mean(axis=(1, 2))
-        return num / np.maximum(np.abs(self.commands).mean(axis=(1, 2)), 1e-12)
+        num = run_mean(np.abs(self.commands - self.y_esn))
+        return num / np.maximum(run_mean(np.abs(self.commands)), 1e-12)
 
 
 def rollout(
@@ -140,6 +151,7 @@ def rollout(
     delay_steps: int = 0,
     forward=None,
     buffers: dict | None = None,
+    inputs: str = "desired+sensed",
 ) -> Rollout:
     """Run one cycle: plant reset to the first pose, ESN state carried on.
 
@@ -150,6 +162,8 @@ def rollout(
     noise : reservoir noise on (washout/learning) or off (evaluation/test).
     forward : optional :class:`controllers.forward_model.ForwardModel`, whose
         prediction p(t) is appended to the inverse model's input.
+    inputs : "desired+sensed" (ESN input [d(t+1); s_in(t)]) or "sensed" ([s_in(t)]);
+        the forward model's p(t) is appended in both cases.
     buffers : optional dict the rollout keeps its arrays in and reuses on the next call
         with the same dict (fresh pages of a few MB per rollout cost about as much as
         the control step); the returned Rollout's arrays are then views that the next
@@ -171,10 +185,17 @@ def rollout(
     # Time-major buffers (T, R, ...): each step writes contiguous rows, not R rows a
     # whole movement apart (scattered first touches of fresh pages cost more than the
     # writes). The Rollout holds their (R, T, ...) views.
-    n_des, n_sig, n_dof = desired.shape[1], plant.n_signals, plant.n_dof
+    if inputs not in INPUTS:
+        raise ValueError(f"inputs must be one of {INPUTS}, got {inputs!r}")
+    if plant.n_runs != n_runs:
+        raise ValueError(f"{n_runs} networks for {plant.n_runs} plant runs")
+    n_sig, n_dof = plant.n_signals, plant.n_dof
+    n_des = desired.shape[1] if inputs == "desired+sensed" else 0
     sensed = array("sensed", (n_steps, n_runs, n_sig))
     true = array("true", (n_steps, n_runs, n_sig))
-    angles = array("angles", (n_steps, n_runs, n_dof))
+    first = plant.reset()
+    angles0 = plant.joint_angles()  # the whole body's: more than n_dof when part is forced
+    angles = array("angles", (n_steps, n_runs, angles0.shape[1]))
     u_error = array("u_error", (n_steps, n_runs, n_dof))
     commands = array("commands", (n_steps - 1, n_runs, n_dof))
     y_esn = array("y_esn", (n_steps - 1, n_runs, n_dof))
@@ -182,15 +203,16 @@ def rollout(
     fm_states = None if forward is None else array(
         "fm_states", (n_steps - 1, n_runs, forward.esn.cfg.n_extended))
     predictions = None if forward is None else array("predictions", (n_steps, n_runs, n_sig))
-    sensed[0] = plant.reset()
+    sensed[0] = first
     true[0] = plant.true_signals()
-    angles[0] = plant.joint_angles()
+    angles[0] = angles0
     if forward is not None:
         predictions[0] = sensed[0]
     u_in = np.empty((n_runs, n_des + n_sig * (1 if forward is None else 2)))
     for t in range(n_steps - 1):
         s_in = sensed[max(t - delay_steps, 0)]
-        u_in[:, :n_des] = desired[t + 1]  # the ESN's input [d(t+1); s(t); p(t)]
+        if n_des:
+            u_in[:, :n_des] = desired[t + 1]  # the ESN's input [d(t+1); s(t); p(t)]
         u_in[:, n_des:n_des + n_sig] = s_in
         if forward is not None:
             u_in[:, n_des + n_sig:] = predictions[t]
@@ -242,16 +264,21 @@ class TrainResult:
         }
 
 
-def _mark_failures(esn: ESN, ro: Rollout, result: TrainResult, epoch: int) -> None:
+def health(esn: ESN, ro: Rollout) -> list[str | None]:
+    """Per run: None if the run is healthy after the cycle ``ro``, else why it diverged
+    (the ESN's own check: non-finite or saturated reservoir or readout; or non-finite
+    ESN outputs or commands). The one check every training and test uses."""
     reasons = esn.diverged()
     for r in range(esn.n_runs):
-        if result.failed[r]:
-            continue
-        reason = reasons[r]
-        if reason is None and not (np.all(np.isfinite(ro.commands[r]))
-                                   and np.all(np.isfinite(ro.y_esn[r]))):
-            reason = "non-finite ESN output or command"
-        if reason is not None:
+        if reasons[r] is None and not (np.all(np.isfinite(ro.commands[r]))
+                                       and np.all(np.isfinite(ro.y_esn[r]))):
+            reasons[r] = "non-finite ESN output or command"
+    return reasons
+
+
+def _mark_failures(esn: ESN, ro: Rollout, result: TrainResult, epoch: int) -> None:
+    for r, reason in enumerate(health(esn, ro)):
+        if reason is not None and not result.failed[r]:
             result.failed[r], result.fail_reason[r], result.fail_epoch[r] = True, reason, epoch
     # Silence failed runs so they cannot poison the batch (they stay excluded from fits).
     esn.x[result.failed] = 0.0
@@ -267,6 +294,7 @@ def train(
     progress: Callable[[int, int], None] | None = None,
     feedback: FeedbackController | None = None,
     forward=None,
+    scored: np.ndarray | None = None,
 ) -> TrainResult:
     """Train the inverse model ``esn`` (R runs) by FEL on ``plant``.
 
@@ -278,6 +306,8 @@ def train(
         (cycle 0 = washout, 1..C learning, C+1 evaluation).
     forward : optional forward model; trained on every learning cycle unless
         its ``mode`` is "serial".
+    scored : indices of the signals the position curve scores (default all; paper B
+        scores the lagging arm's only).
     """
     gains = cfg.gains()
     n_runs, n_epochs = esn.n_runs, cfg.epochs
@@ -291,7 +321,7 @@ def train(
     # one set of rollout arrays for the whole training: each rollout is used (fit,
     # metrics) before the next overwrites it, and the last one is the last evaluation
     kw = {"feedback": feedback, "delay_steps": cfg.delay_steps, "forward": forward,
-          "buffers": {}}
+          "buffers": {}, "inputs": cfg.inputs}
     for epoch, gain in enumerate(gains):
         esn.reset()
         if forward is not None:
@@ -310,7 +340,7 @@ def train(
         ro = rollout(esn, plant, desired, gain, noise=False, **kw)
         _mark_failures(esn, ro, result, epoch)
         alive = ~result.failed
-        result.position_nrmse[alive, epoch] = position_nrmse(ro.true_signals, desired)[alive]
+        result.position_nrmse[alive, epoch] = _scored_nrmse(ro, desired, scored)[alive]
         if true_commands is not None:
             result.motor_nrmse[alive, epoch] = motor_nrmse(ro.commands, true_commands)[alive]
         result.last_rollout = ro
@@ -336,20 +366,36 @@ def evaluate(
     true_commands: np.ndarray | None = None,
     delay_steps: int = 0,
     forward=None,
+    *,
+    inputs: str = "desired+sensed",
+    washout_cycles: int = 0,
+    scored: np.ndarray | None = None,
 ) -> EvalResult:
-    """Reset, one cycle with K = 0, no noise, no learning."""
+    """Test: reset, ``washout_cycles`` cycles without scoring (papers B, C: one
+    "initialization cycle"), then one scored cycle; K = 0, no noise, no learning."""
+    if washout_cycles < 0:
+        raise ValueError(f"washout cycles must be >= 0, got {washout_cycles}")
     esn.reset()
     if forward is not None:
         forward.esn.reset()
-    ro = rollout(esn, plant, desired, 0.0, noise=False, delay_steps=delay_steps, forward=forward)
-    reasons = esn.diverged()
+    kw = {"noise": False, "delay_steps": delay_steps, "forward": forward, "inputs": inputs}
+    for _ in range(washout_cycles):
+        rollout(esn, plant, desired, 0.0, **kw)
+    ro = rollout(esn, plant, desired, 0.0, **kw)
+    reasons = health(esn, ro)
     failed = np.array([r is not None for r in reasons])
-    pos = np.where(failed, np.nan, position_nrmse(ro.true_signals, desired))
+    pos = np.where(failed, np.nan, _scored_nrmse(ro, desired, scored))
     mot = np.full(esn.n_runs, np.nan)
     if true_commands is not None:
         mot = np.where(failed, np.nan, motor_nrmse(ro.commands, true_commands))
     return EvalResult(pos, mot, failed, reasons, ro)
 
+
+def _scored_nrmse(ro: Rollout, desired: np.ndarray, scored: np.ndarray | None) -> np.ndarray:
+    """Position NRMSE (R,) of the noise-free signals, over the ``scored`` ones (or all)."""
+    if scored is None:
+        return position_nrmse(ro.true_signals, desired)
+    return position_nrmse(ro.true_signals[:, :, scored], desired[:, scored])
 
 
 def _tick(progress: Callable[[int, int], None] | None, epoch: int, cycle: int) -> None:

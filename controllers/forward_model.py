@@ -53,16 +53,43 @@ class ForwardModel:
         true_commands: np.ndarray,
         delay_steps: int = 0,
         noise: bool = True,
+        sensor_noise: float = 0.0,
     ) -> np.ndarray:
-        """Pre-train on the desired movement (T, n_sig) with its true commands
-        (T-1, n_dof): reset, one washout pass, one pass whose states are fitted to
-        d(t+1). Returns the prediction NRMSE (R,) of the fitted readout on that pass."""
-        inputs = self.sequence_inputs(desired, true_commands, delay_steps)
-        batch = np.broadcast_to(inputs, (self.esn.n_runs, *inputs.shape))
+        """Pre-train on the desired movement (paper A §3.4): "the forward model was
+        trained to predict the next state in the sequence of desired states given the
+        correct motor command and the delayed and noisy sensory signal".
+
+        Inputs [d(t - delay) + e(t); c*(t)], e ~ N(0, sensor_noise²) drawn per run
+        from the run's own Generator (``esn.rngs[r]``, before any reservoir noise of
+        this pass); reset, one washout pass, one pass whose states are fitted to d(t+1).
+
+        Parameters
+        ----------
+        desired : (T, n_sig) desired positions, normalized.
+        true_commands : (T-1, n_dof) analytic commands in [-1, 1].
+        delay_steps : steps by which the sensed input lags.
+        noise : reservoir noise on during both passes.
+        sensor_noise : std of the Gaussian noise on the sensed input (normalized units).
+
+        Returns
+        -------
+        (R,) prediction NRMSE of the fitted readout on the fitting pass against d(t+1)
+        ("the prediction error in the last run of pre-training").
+        """
+        desired = np.asarray(desired, float)
+        n_runs = self.esn.n_runs
+        if sensor_noise > 0:
+            noisy = [desired + sensor_noise * g.standard_normal(desired.shape)
+                     for g in self.esn.rngs]
+            batch = np.stack([self.sequence_inputs(p, true_commands, delay_steps)
+                              for p in noisy])
+        else:
+            inputs = self.sequence_inputs(desired, true_commands, delay_steps)
+            batch = np.broadcast_to(inputs, (n_runs, *inputs.shape))
         self.esn.reset()
         self.esn.run(batch, noise=noise)
         _, states = self.esn.run(batch, noise=noise)
-        targets = np.broadcast_to(desired[1:], (self.esn.n_runs, *desired[1:].shape))
+        targets = np.broadcast_to(desired[1:], (n_runs, *desired[1:].shape))
         self.esn.fit(states, targets)
         return nrmse(self.esn.readout(states), desired[1:])
 

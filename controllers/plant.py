@@ -36,7 +36,8 @@ class Plant(Protocol):
         ...
 
     def joint_angles(self) -> np.ndarray:
-        """Joint angles (R, n_dof) rad."""
+        """Joint angles (R, n_joints) rad: n_joints = n_dof, or more when part of the
+        body is forced rather than commanded (paper B's leading arm)."""
         ...
 
     def command_jacobian(self) -> np.ndarray:

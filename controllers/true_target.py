@@ -16,8 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controllers.esn import ESN, PinvFactors
+from controllers.esn import ESN
 from controllers.metrics import nrmse
+from controllers.readout import PinvFactors
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,8 @@ import copy
 import numpy as np
 import pytest
 
-from controllers.esn import ESN, ESNConfig, ridge_solve, run_generators, spectral_radius
+from controllers.esn import ESN, ESNConfig, run_generators, spectral_radius
+from controllers.readout import ridge_solve
 
 
 def _inputs(n_runs=1, n_steps=60, n_in=3, seed=0):
@@ -153,6 +154,40 @@ def test_one_run_split_from_a_lockstep_esn_continues_its_noise():
     np.testing.assert_array_equal(y_one[0], y_batch[1])
 
 
+@pytest.mark.parametrize("n_reservoir, dtype, feedback", [
+    (80, "float64", False),  # sparse W (density 1/8), the driven run path
+    (20, "float32", True),   # dense W, output feedback
+])
+def test_select_continues_the_chosen_runs_bit_for_bit(n_reservoir, dtype, feedback):
+    """select() copies runs out of a batch (weights, state, generators, buffered noise):
+    the copies continue exactly as those runs do inside the batch, across a noise-block
+    boundary, and the batch is left as it was (it continues after the copies)."""
+    cfg = ESNConfig(3, 2, n_reservoir=n_reservoir, noise_level=0.2, dtype=dtype,
+                    output_feedback=feedback, readout_activation="identity")
+    u = _inputs(n_runs=3, n_steps=400)
+    batch = ESN(cfg, n_runs=3, seed=21)
+    _, x = batch.run(u[:, :100], noise=True)
+    batch.fit(x, np.sin(x[..., :2]))  # a nonzero readout, so y is checked too
+    for t in range(100, 110):
+        batch.step(u[:, t])
+    chosen = {(2,): batch.select([2]), (0, 2): batch.select([0, 2])}
+    continued = {}
+    for runs, part in chosen.items():
+        assert part.n_runs == len(runs)
+        np.testing.assert_array_equal(part.W_out, batch.W_out[list(runs)])
+        ys = [part.step(u[list(runs), t]) for t in range(110, 150)]
+        y_run, x_run = part.run(u[list(runs), 150:], noise=True)
+        continued[runs] = (np.stack(ys, 1), y_run, x_run, part.x, part.y)
+    ys = [batch.step(u[:, t]).copy() for t in range(110, 150)]
+    y_run, x_run = batch.run(u[:, 150:], noise=True)
+    reference = (np.stack(ys, 1), y_run, x_run, batch.x, batch.y)
+    for runs, got in continued.items():
+        for a, b in zip(got, reference, strict=True):
+            np.testing.assert_array_equal(a, b[list(runs)])
+    with pytest.raises(ValueError):
+        batch.select([3])
+
+
 def test_gaussian_and_uniform_noise_have_the_documented_spread():
     for kind, std in [("uniform", 0.2 / np.sqrt(12)), ("gaussian", 0.2)]:
         cfg = ESNConfig(1, 1, n_reservoir=200, spectral_radius=0.0, noise_level=0.2,
@@ -230,7 +265,7 @@ def test_pinv_solve_is_numpys_pinv_including_rank_deficient(shape, deficient):
     """The QR readout solve gives pinv(M) @ S: tall, square and wide M, rank-deficient
     by a duplicated and an all-zero column, or (the wide case's own) a duplicated and
     an all-zero row, whose null space the minimum-norm solution must leave out."""
-    from controllers.esn import pinv_solve
+    from controllers.readout import pinv_solve
 
     rng = np.random.default_rng(sum(shape))
     m = rng.normal(size=shape)
@@ -247,7 +282,7 @@ def test_pinv_solve_is_numpys_pinv_including_rank_deficient(shape, deficient):
 def test_pinv_solve_takes_both_branches_and_both_equal_pinv():
     """Well-conditioned M: the triangular solve; rank-deficient M (a duplicated
     column): the SVD with NumPy's cutoff. Both give pinv(M) @ S."""
-    from controllers import esn as esn_module
+    from controllers import readout as readout_module
 
     rng = np.random.default_rng(7)
     m = rng.normal(size=(2, 200, 30))
@@ -261,8 +296,8 @@ def test_pinv_solve_takes_both_branches_and_both_equal_pinv():
         return svd(*args, **kwargs)
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(esn_module.np.linalg, "svd", counting_svd)
-        got = esn_module.pinv_solve(m, s)
+        mp.setattr(readout_module.np.linalg, "svd", counting_svd)
+        got = readout_module.pinv_solve(m, s)
     assert len(calls) == 1  # only the nearly rank-deficient run needed the SVD
     np.testing.assert_allclose(got[0], np.linalg.pinv(m[0]) @ s[0], rtol=0, atol=1e-12)
     np.testing.assert_allclose(got[1], np.linalg.pinv(m[1]) @ s[1], rtol=0, atol=1e-12)
@@ -286,7 +321,7 @@ def test_step_writes_the_extended_state_where_asked_and_checks_the_array():
 def test_pinv_factors_reused_equal_fresh_fits():
     """PinvFactors of fixed states solves any targets like a fresh pinv, for all runs
     or a subset, and fit(factors=...) refuses factors of other states."""
-    from controllers.esn import PinvFactors
+    from controllers.readout import PinvFactors
 
     esn = ESN(ESNConfig(3, 2, n_reservoir=40), n_runs=3, seed=5)
     _, x = esn.run(np.random.default_rng(1).uniform(-1, 1, (3, 120, 3)), noise=False)

@@ -5,7 +5,7 @@ import pytest
 
 from controllers.esn import ESN, ESNConfig, run_generators
 from controllers.feedback import FeedbackController
-from controllers.fel import PAPER_E, FELConfig, evaluate, rollout, train
+from controllers.fel import FELConfig, evaluate, health, rollout, train
 from controllers.metrics import nrmse, position_nrmse
 from controllers.plant import ToyPlant, toy_movement
 
@@ -101,9 +101,9 @@ def test_delay_line_feeds_the_model_old_positions_only():
     np.testing.assert_allclose(sensed_part[1], ro.sensed[0, 0])
 
 
-def test_paper_e_presets_and_config_validation():
-    assert PAPER_E[1].fel.effective_beta == 1.0 and PAPER_E[2].repetitions == 5
-    assert [PAPER_E[i].fel.learning_cycles for i in (4, 5, 6)] == [2, 3, 6]
+def test_config_validation():
+    with pytest.raises(ValueError, match="inputs"):
+        FELConfig(inputs="desired")
     assert FELConfig("original", beta=0.1).effective_beta == 1.0
     with pytest.raises(ValueError, match="beta"):
         FELConfig("new", beta=0.0)
@@ -116,3 +116,34 @@ def test_nrmse_definition():
     actual = np.stack([np.full(10, 0.2), np.full(10, -0.4)], axis=1)
     assert nrmse(actual, target) == pytest.approx((0.1 + 0.2) / 2)
     assert nrmse(np.stack([actual, target]), target).tolist() == pytest.approx([0.15, 0.0])
+
+
+def test_sensed_only_inputs_leave_the_desired_position_out():
+    plant, desired, _, cfg = _setup(n_runs=1, noise=0.0)
+    n_sig = desired.shape[1]
+    small = ESNConfig(n_inputs=n_sig, n_outputs=cfg.n_outputs, n_reservoir=cfg.n_reservoir)
+    ro = rollout(ESN(small, seed=3), plant, desired, 1.0, inputs="sensed")
+    inputs_part = ro.states[0, :, small.n_reservoir:small.n_reservoir + n_sig]
+    np.testing.assert_array_equal(inputs_part, ro.sensed[0, :-1])
+
+
+def test_health_names_non_finite_commands():
+    plant, desired, _, cfg = _setup(n_runs=2, noise=0.0)
+    with pytest.raises(ValueError, match="2 plant runs"):
+        rollout(ESN(cfg, seed=1), plant, desired, 1.0)
+    esn = ESN(cfg, n_runs=2, seed=1)
+    ro = rollout(esn, plant, desired, 1.0)
+    assert health(esn, ro) == [None, None]
+    ro.commands[1, 3, 0] = np.nan
+    reasons = health(esn, ro)
+    assert reasons[0] is None and "non-finite" in reasons[1]
+
+
+def test_evaluate_washout_cycles_run_before_the_scored_one():
+    plant, desired, _, cfg = _setup(n_runs=1, noise=0.0)
+    esn = ESN(cfg, seed=2)
+    one = evaluate(esn, plant, desired, washout_cycles=1)
+    esn.reset()
+    rollout(esn, plant, desired, 0.0, noise=False)
+    second = rollout(esn, plant, desired, 0.0, noise=False)
+    np.testing.assert_array_equal(one.rollout.commands, second.commands)
