@@ -1,10 +1,80 @@
 """The experiment engine shared by every paper: a sweep of (row, seed) runs.
 
-A paper module describes an :class:`Experiment` (its rows with the paper's values and a
-``run_one(row, seed) -> dict`` of metrics); :func:`run_sweep` runs it in parallel
-(joblib/loky on this machine, or a Dask cluster), writing one JSON file per finished run
-to ``out/runs/<row>-<seed>.json``. :func:`aggregate` rebuilds ``results.json`` from those
-files only, and :func:`markdown_table` sets our numbers beside the paper's.
+A paper module describes an :class:`Experiment`; :func:`run_sweep` runs it in parallel
+(joblib/loky here, or a Dask cluster), writing one JSON file per finished run to
+``out/runs/<row>-<seed>.json``; :func:`aggregate` rebuilds ``results.json`` from those
+files only and :func:`markdown_table` sets our numbers beside the paper's.
+
+The contract
+------------
+**A paper module** (``experiments/paper_*.py``) exposes ``NAME``, ``report(results,
+out_dir) -> str`` (figures + claims, run after the sweep on whatever is on disk) and::
+
+    build(*, quick=False, movement=None, asf=None, dof=None, signals=None) -> Experiment
+
+each None meaning the paper's default. ``skinny experiment`` passes exactly these
+(``--quick --movement --asf --dof --signals``). ``build`` puts every one of them that
+changes the runs into ``Experiment.config`` (so ``config.json`` records it and
+``--resume`` refuses a different one), and never into the name: the name is ``NAME``
+whatever the movement, so the default output folder stays ``results/<NAME>/<time>``.
+
+**An Experiment holds ALL its rows**, always; ``build`` never filters them. Selection
+is the engine's: ``run_sweep(..., rows=["5", "fig4"])`` takes row ids and group names
+(``Experiment.groups``: group name -> row ids, e.g. ``{"table": ("1", ..., "6")}``).
+A run's seed is ``run_seed(base_seed, row_index, run_index)`` with ``row_index`` the
+row's place in the full ``Experiment.rows``, so ``--rows`` reproduces the full sweep's
+files bit for bit. An unknown entry raises :class:`SkinnyInputError` naming the known
+ids and groups.
+
+**A run** is ``run_one(row, seed) -> Mapping`` of metrics (numbers are aggregated; other
+JSON-able values are kept in the run file only). It is shipped to worker processes with
+cloudpickle: bind the config with ``functools.partial``. Its outcome is one of:
+
+- it returns the metrics: status ``"ok"``;
+- it raises :class:`RunFailed` (the network diverged): status ``"failed"``. A diverged
+  run is data: it counts in ``failed / n`` and is left out of the means;
+- anything else raised (or a return value that is not a mapping of JSON-able values)
+  is a bug, not data: status ``"error"`` with the full traceback; the sweep finishes
+  the other runs, ``--resume`` runs it again, and ``skinny experiment`` exits 1.
+
+``run_batch(row, seeds) -> list`` (optional, the lockstep fast path) returns per seed
+the metrics mapping or a :class:`RunFailed` instance (any other exception instance
+there is that seed's error). If ``run_batch`` itself raises (or returns the wrong
+number of results), the engine runs that batch's seeds one by one with ``run_one`` and
+each of those records carries ``"fallback": "<ExcType>: <message> (batch of N seeds)"``
+and ``"fallback_traceback"``. Batched or not, the run files are the same.
+
+**A run file** ``runs/<row>-<seed>.json`` (:func:`skinny_mj.sweep.stats.load_run`
+validates it; a damaged file is an error naming it, hidden ``.*.tmp`` leftovers of
+atomic writes are ignored)::
+
+    {"experiment", "row", "row_index", "run_index", "seed", "params", "paper",
+     "status": "ok" | "failed" | "error",
+     "metrics": {...} ({} unless ok), "nonfinite_metrics": [names stored as null] (ok),
+     "fail_reason": str | None (failed), "error": "ExcType: message" | None (error),
+     "traceback": str (error only), "fallback", "fallback_traceback" (fell back only),
+     "wall_s", "finished_at"}
+
+**config.json** records ``experiment``, ``config``, every row (``rows``: row, params,
+paper[, runs]), ``groups``, ``runs``, ``base_seed``, ``selection`` (``{"requested":
+[entries] | None, "rows": [ids run]}``), ``options`` (the CLI's quick, movement, asf,
+dof, signals), ``started_at``, versions, and ``resumes`` (one ``{"at", "runs",
+"selection", "options"}`` per ``--resume``). ``--resume`` needs the same experiment,
+config, rows and base_seed; the selection and ``--runs`` may differ. It reruns
+errored runs and runs missing ones, never an ok or failed one.
+
+**results.json** (:func:`aggregate`, from the run files on disk only)::
+
+    {"experiment", "n_runs", "n_ok", "n_failed", "n_error",
+     "rows": [{"row", "row_index", "params", "paper", "n", "n_ok", "n_failed",
+               "n_error", "n_fallback", "failures": [{"seed", "fail_reason"}],
+               "errors": [{"seed", "error"}], "seeds",
+               "metrics": {name: {mean, variance, sd, median, min, max, n}},
+               "wall_s": {"mean", "total"}}]}
+
+with ``n = n_ok + n_failed`` (the runs that are data) and metric statistics over the ok
+runs only. ``table.md`` shows ``failed / n`` per row (``1 / 20 (+1 error)``) and says
+under the table that the means exclude failed runs.
 
 Output layout::
 
@@ -15,12 +85,12 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as _dt
+import functools
+import json
 import os
 import re
 import sys
-import time
-import traceback
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,18 +99,14 @@ import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
-from skinny_mj.sweep.stats import aggregate, markdown_table, to_jsonable
+from skinny_mj.sweep import RunFailed, execute_batch, execute_run, iter_dask, iter_joblib
+from skinny_mj.sweep.stats import aggregate, load_run, markdown_table, to_jsonable
 
-__all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "run_sweep", "aggregate",
-           "markdown_table", "execute_run", "execute_batch", "default_out_dir"]
+__all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "select_rows",
+           "run_sweep", "aggregate", "markdown_table", "execute_run", "execute_batch",
+           "default_out_dir"]
 
 _SAFE_NAME = re.compile(r"^[A-Za-z0-9_.][A-Za-z0-9_.+=-]*$")
-_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-
-
-class RunFailed(RuntimeError):
-    """Raised (or returned by ``run_batch``) for a run whose network diverged: the engine
-    records the run as failed with this reason instead of its metrics."""
 
 
 @dataclass(frozen=True)
@@ -65,14 +131,11 @@ class Row:
 
 @dataclass(frozen=True)
 class Experiment:
-    """A sweep description.
+    """A sweep description: ALL the paper's rows (see the module docstring's contract).
 
-    ``run_one(row, seed) -> dict`` returns a run's metrics (numbers; other JSON-able
-    values are kept in the run file but not aggregated). It is shipped to worker
-    processes with cloudpickle, so bind the config with ``functools.partial``.
-    ``config`` is a frozen dataclass (or a mapping) recorded in ``config.json``.
-    With ``run_batch``, the engine hands each worker a chunk of one row's seeds to run
-    in lockstep; the run files are the same as with ``run_one``.
+    ``config`` is a frozen dataclass (or a mapping) recorded in ``config.json``;
+    ``groups`` names sets of rows for ``run_sweep(rows=...)`` (group name -> row ids;
+    a group's name may not be a row id).
     """
 
     name: str
@@ -81,15 +144,16 @@ class Experiment:
     config: Any = None
     runs: int = 10
     base_seed: int = 0
-    table_columns: tuple[str, ...] | None = None
+    table_columns: tuple[str, ...] | Mapping[str, str] | None = None
     #: optional ``run_batch(row, seeds) -> list`` running one row's seeds in lockstep
-    #: (the fast path); element k is seed k's metrics dict, or an Exception for a run
-    #: that failed. Must give the same metrics as ``run_one`` seed by seed.
+    #: (the fast path); element k is seed k's metrics dict, or a RunFailed for a run
+    #: that diverged. Must give the same metrics as ``run_one`` seed by seed.
     run_batch: Callable[[Row, list[int]], list[Any]] | None = None
     #: optional ``cost(row) -> float``: one run's relative cost (e.g. its control steps).
     #: Only the schedule uses it: the costliest jobs start first (longest processing
     #: time first), so a long row does not start last and keep the other workers idle.
     cost: Callable[[Row], float] | None = None
+    groups: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not _SAFE_NAME.match(self.name):
@@ -97,11 +161,22 @@ class Experiment:
         ids = [r.row_id for r in self.rows]
         if not ids or len(set(ids)) != len(ids):
             raise SkinnyInputError(f"experiment {self.name!r} needs unique row ids, got {ids}")
+        groups = {str(g): (m,) if isinstance(m, str) else tuple(m)
+                  for g, m in self.groups.items()}
+        for group, members in groups.items():
+            unknown = [m for m in members if m not in ids]
+            if group in ids or not members or unknown:
+                raise SkinnyInputError(
+                    f"experiment {self.name!r}: group {group!r} must name existing rows "
+                    f"and not be a row id itself (members {list(members)}, rows {ids})")
+        object.__setattr__(self, "rows", tuple(self.rows))
+        object.__setattr__(self, "groups", groups)
 
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One (row, run) pair with its derived seed."""
+    """One (row, run) pair with its derived seed; ``row_index`` is the row's place in
+    the experiment's full ``rows``."""
 
     row: Row
     row_index: int
@@ -119,6 +194,29 @@ def run_seed(base_seed: int, row_index: int, run_index: int) -> int:
     return int(seq.generate_state(1, dtype=np.uint32)[0])
 
 
+def _entries(rows: Sequence[str] | str) -> list[str]:
+    parts = rows.split(",") if isinstance(rows, str) else rows
+    return [e.strip() for e in parts if e.strip()]
+
+
+def select_rows(experiment: Experiment, rows: Sequence[str] | str | None = None
+                ) -> tuple[Row, ...]:
+    """The rows named by ``rows`` (row ids and group names; a string is split at commas),
+    in experiment order; None selects every row."""
+    if rows is None:
+        return experiment.rows
+    entries = _entries(rows)
+    ids = [r.row_id for r in experiment.rows]
+    unknown = [e for e in entries if e not in ids and e not in experiment.groups]
+    if unknown or not entries:
+        what = f"no row or group {', '.join(map(repr, unknown))}" if unknown else "no rows"
+        raise SkinnyInputError(
+            f"experiment {experiment.name!r} has {what}; groups: "
+            f"{', '.join(experiment.groups) or '(none)'}; row ids: {', '.join(ids)}")
+    chosen = {m for e in entries for m in experiment.groups.get(e, (e,))}
+    return tuple(r for r in experiment.rows if r.row_id in chosen)
+
+
 def _config_dict(experiment: Experiment, runs: int) -> dict[str, Any]:
     cfg = experiment.config
     if dataclasses.is_dataclass(cfg) and not isinstance(cfg, type):
@@ -128,77 +226,10 @@ def _config_dict(experiment: Experiment, runs: int) -> dict[str, Any]:
         "config": cfg,
         "rows": [{"row": r.row_id, "params": dict(r.params), "paper": dict(r.paper),
                   **({} if r.runs is None else {"runs": r.runs})} for r in experiment.rows],
+        "groups": {g: list(m) for g, m in experiment.groups.items()},
         "runs": runs,
         "base_seed": experiment.base_seed,
     })
-
-
-def _record(spec: RunSpec, experiment_name: str) -> dict[str, Any]:
-    return {
-        "experiment": experiment_name, "row": spec.row.row_id, "row_index": spec.row_index,
-        "run_index": spec.run_index, "seed": spec.seed, "params": dict(spec.row.params),
-        "paper": dict(spec.row.paper),
-    }
-
-
-def _finish(record: dict[str, Any], out: Any, tb: str | None = None) -> dict[str, Any]:
-    """Fill a record from a run's output: a metrics mapping, or an exception."""
-    if not isinstance(out, Mapping | BaseException):
-        out = TypeError(f"run_one must return a dict, got {type(out).__name__}")
-    if isinstance(out, BaseException):
-        tb = tb or "".join(traceback.format_exception(out)[-6:])
-        record.update(status="failed", error=f"{type(out).__name__}: {out}",
-                      traceback=tb, metrics={})
-    else:
-        metrics = to_jsonable(dict(out))
-        bad = sorted(k for k, v in out.items() if isinstance(v, float | np.floating)
-                     and not np.isfinite(v))
-        record.update(status="ok", error=None, metrics=metrics, nonfinite_metrics=bad)
-    return record
-
-
-def _stamp(record: dict[str, Any], wall_s: float) -> dict[str, Any]:
-    record["wall_s"] = wall_s
-    record["finished_at"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-    return record
-
-
-def execute_run(run_one: Callable[[Row, int], Mapping[str, Any]], spec: RunSpec,
-                experiment_name: str) -> dict[str, Any]:
-    """Run one (row, seed) and return its JSON-able record; an exception becomes a
-    ``"failed"`` record with the error, never a lost run."""
-    start = time.perf_counter()
-    record = _record(spec, experiment_name)
-    try:
-        out: Any = run_one(spec.row, spec.seed)
-    except Exception as exc:  # a run's failure is data, not a crash
-        out = exc
-    _finish(record, out)
-    return _stamp(record, time.perf_counter() - start)
-
-
-def execute_batch(run_batch: Callable[[Row, list[int]], list[Any]],
-                  run_one: Callable[[Row, int], Mapping[str, Any]], specs: list[RunSpec],
-                  experiment_name: str) -> list[dict[str, Any]]:
-    """Run several seeds of ONE row in lockstep and return one record per seed.
-
-    ``wall_s`` of each record is the batch's wall time divided by its size. If the
-    batch itself raises, its seeds are run one by one with ``run_one`` instead, so a
-    single bad seed cannot lose the others.
-    """
-    rows = {spec.row.row_id for spec in specs}
-    if len(rows) != 1:
-        raise ValueError(f"a batch holds one row, got {sorted(rows)}")
-    start = time.perf_counter()
-    try:
-        outs = list(run_batch(specs[0].row, [spec.seed for spec in specs]))
-        if len(outs) != len(specs):
-            raise ValueError(f"run_batch returned {len(outs)} results for {len(specs)} seeds")
-    except Exception:
-        return [execute_run(run_one, spec, experiment_name) for spec in specs]
-    share = (time.perf_counter() - start) / len(specs)
-    return [_stamp(_finish(_record(spec, experiment_name), out), share)
-            for spec, out in zip(specs, outs, strict=True)]
 
 
 def default_batch_size(n_rows: int, runs: int, workers: int) -> int:
@@ -226,85 +257,70 @@ def default_out_dir(experiment_name: str, root: str | Path = "results") -> Path:
     return Path(root) / experiment_name / stamp
 
 
-def _iter_joblib(fn, specs: list, workers: int) -> Iterator[Any]:
-    from joblib import Parallel, delayed, parallel_config
-
-    # One BLAS/OpenMP thread per worker: with several processes, more threads
-    # oversubscribe the cores and slow every step down 5-25x.
-    with parallel_config(backend="loky", inner_max_num_threads=1):
-        parallel = Parallel(n_jobs=workers, return_as="generator_unordered")
-        yield from parallel(delayed(fn)(spec) for spec in specs)
+def _key(job: RunSpec | list[RunSpec]) -> str:
+    return job.filename if isinstance(job, RunSpec) else "+".join(s.filename for s in job)
 
 
-def _iter_dask(fn, specs: list, workers: int, scheduler: str) -> Iterator[Any]:
-    try:
-        from dask.distributed import Client, LocalCluster, as_completed
-    except ImportError as exc:
-        raise SkinnyInputError(
-            "--scheduler needs Dask distributed: pip install 'skinny-mj[dask]'") from exc
-    cluster = None
-    if scheduler == "local":
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               host="127.0.0.1", dashboard_address=None,
-                               env={k: "1" for k in _THREAD_ENV})
-        client = Client(cluster)
-    elif scheduler.startswith(("tcp://", "tls://", "ws://", "wss://")):
-        client = Client(scheduler)
-    else:
-        raise SkinnyInputError(f"scheduler must be 'local' or an address like "
-                               f"tcp://host:8786, got {scheduler!r}")
-    try:
-        futures = [client.submit(fn, spec, pure=False, key=f"run-{_key(spec)}")
-                   for spec in specs]
-        for future in as_completed(futures):
-            yield future.result()
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-
-
-def _key(spec: RunSpec | list[RunSpec]) -> str:
-    return spec.filename if isinstance(spec, RunSpec) else "+".join(s.filename for s in spec)
-
-
-def _run_specs(experiment: Experiment, runs: int) -> list[RunSpec]:
+def _run_specs(experiment: Experiment, runs: int, selected: Sequence[Row]) -> list[RunSpec]:
+    chosen = {r.row_id for r in selected}
     return [RunSpec(row, i, k, run_seed(experiment.base_seed, i, k))
             for k in range(runs) for i, row in enumerate(experiment.rows)
-            if row.runs is None or k < row.runs]
+            if row.row_id in chosen and (row.runs is None or k < row.runs)]
 
 
-def _prepare_out_dir(experiment: Experiment, out_dir: Path, runs: int, resume: bool) -> None:
+def _prepare_out_dir(experiment: Experiment, out_dir: Path, runs: int, resume: bool,
+                     invocation: dict[str, Any]) -> None:
     config = _config_dict(experiment, runs)
     config_path = out_dir / "config.json"
+    now = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
     if resume and config_path.is_file():
-        import json
-
-        old = json.loads(config_path.read_text())
-        same = {k: old.get(k) for k in ("experiment", "config", "rows", "base_seed")}
+        try:
+            old = json.loads(config_path.read_text())
+            same = {k: old.get(k) for k in ("experiment", "config", "rows", "base_seed")}
+        except (ValueError, AttributeError) as exc:
+            raise SkinnyInputError(f"not a sweep's config.json ({exc})",
+                                   path=config_path) from exc
         if same != {k: config[k] for k in same}:
             raise SkinnyInputError("holds a different sweep (experiment, config, rows or "
                                    "seed differ); use a new --out", path=config_path)
+        old["resumes"] = [*old.get("resumes", []), {"at": now, **invocation}]
+        atomic_write_json(config_path, to_jsonable(old))
         return
-    config["started_at"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-    config["python"] = sys.version.split()[0]
-    config["numpy"] = np.__version__
-    atomic_write_json(config_path, config)
+    config.update(invocation, started_at=now, python=sys.version.split()[0],
+                  numpy=np.__version__, resumes=[])
+    atomic_write_json(config_path, to_jsonable(config))
+
+
+def _report(bar: Any, records: list[dict[str, Any]]) -> None:
+    """One line per batch that fell back, per errored run and per failed run."""
+    if records and records[0].get("fallback"):
+        bar.write(f"row {records[0]['row']}: run_batch raised {records[0]['fallback']}; "
+                  "ran its seeds one by one", file=sys.stderr)
+    for rec in records:
+        name = f"{rec['row']}-{rec['seed']}.json"
+        if rec["status"] == "error":
+            bar.write(f"run {name} errored (a bug, not data): {rec['error']}",
+                      file=sys.stderr)
+        elif rec["status"] == "failed":
+            bar.write(f"run {name} failed (diverged): {rec['fail_reason']}", file=sys.stderr)
 
 
 def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
-              runs: int | None = None, workers: int | None = None, resume: bool = False,
-              scheduler: str | None = None, progress: bool = True,
-              batch_size: int | None = None) -> dict[str, Any]:
-    """Run every (row, seed) of ``experiment`` and write its results.
+              rows: Sequence[str] | str | None = None, runs: int | None = None,
+              workers: int | None = None, resume: bool = False, scheduler: str | None = None,
+              progress: bool = True, batch_size: int | None = None,
+              options: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Run the (row, seed) runs of ``experiment`` and write its results.
 
     Parameters
     ----------
-    experiment : the sweep.
+    experiment : the sweep (all its rows).
     out_dir : output folder; default ``results/<name>/<timestamp>``.
+    rows : row ids and group names to run (default: all); seeds do not depend on it.
     runs : runs per row (default ``experiment.runs``).
     workers : parallel processes (default: all cores); 1 runs in this process.
-    resume : skip runs whose file already exists in ``out_dir/runs``.
+    resume : skip runs whose ok or failed file is already in ``out_dir/runs``
+        (errored runs run again).
     scheduler : None (joblib), ``"local"`` (a Dask LocalCluster on 127.0.0.1) or a
         Dask scheduler address ``tcp://host:port``. Same run files either way.
     progress : tqdm bar over runs (with ETA) on stderr.
@@ -312,16 +328,16 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
         in lockstep; default :func:`default_batch_size` (whole rows when the rows
         share out evenly over the workers). 0 disables the fast path (every run
         through ``run_one``).
+    options : recorded in ``config.json`` (the CLI's quick, movement, asf, dof, signals).
 
     Returns
     -------
-    The results dict also written to ``out_dir/results.json`` (see :func:`aggregate`);
-    ``table.md`` is written beside it.
+    The results dict also written to ``out_dir/results.json`` (see :func:`aggregate`;
+    ``n_error`` counts errored runs on disk); ``table.md`` is written beside it.
     """
-    import functools
-
     from tqdm import tqdm
 
+    selected = select_rows(experiment, rows)
     runs = experiment.runs if runs is None else int(runs)
     if runs < 1:
         raise SkinnyInputError(f"runs must be >= 1, got {runs}")
@@ -337,16 +353,20 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     out_dir = Path(out_dir)
     runs_dir = out_dir / "runs"
     runs_dir.mkdir(parents=True, exist_ok=True)
-    _prepare_out_dir(experiment, out_dir, runs, resume)
+    invocation = {"runs": runs, "options": dict(options or {}), "selection": {
+        "requested": None if rows is None else _entries(rows),
+        "rows": [r.row_id for r in selected]}}
+    _prepare_out_dir(experiment, out_dir, runs, resume, invocation)
 
-    specs = _run_specs(experiment, runs)
-    if resume:
-        specs = [s for s in specs if not (runs_dir / s.filename).is_file()]
+    specs = _run_specs(experiment, runs, selected)
+    if resume:  # an errored run (a bug) runs again; ok and failed runs are data
+        specs = [s for s in specs if not (runs_dir / s.filename).is_file()
+                 or load_run(runs_dir / s.filename)["status"] == "error"]
     jobs: list = specs
     fn: Callable[[Any], Any] = functools.partial(
         execute_run, experiment.run_one, experiment_name=experiment.name)
     if experiment.run_batch is not None and batch_size != 0 and specs:
-        size = batch_size or default_batch_size(len(experiment.rows), runs, workers)
+        size = batch_size or default_batch_size(len(selected), runs, workers)
         jobs = _batches(specs, size)
         fn = functools.partial(execute_batch, experiment.run_batch, experiment.run_one,
                                experiment_name=experiment.name)
@@ -358,21 +378,21 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     if not jobs:
         results_iter = ()
     elif scheduler is not None:
-        results_iter = _iter_dask(fn, jobs, workers, scheduler)
+        results_iter = iter_dask(fn, jobs, workers, scheduler, [_key(j) for j in jobs])
     elif workers == 1:
         results_iter = (fn(job) for job in jobs)
     else:
-        results_iter = _iter_joblib(fn, jobs, min(workers, len(jobs)))
+        results_iter = iter_joblib(fn, jobs, min(workers, len(jobs)))
     with tqdm(total=len(specs), desc=experiment.name, unit="run", file=sys.stderr,
               disable=not progress, dynamic_ncols=True) as bar:
         for result in results_iter:
-            for record in result if isinstance(result, list) else [result]:
+            records = result if isinstance(result, list) else [result]
+            for record in records:
                 # The parent writes every file, so remote Dask workers need no shared disk.
-                name = f"{record['row']}-{record['seed']}.json"
-                atomic_write_json(runs_dir / name, record)
+                atomic_write_json(runs_dir / f"{record['row']}-{record['seed']}.json",
+                                  record)
                 bar.update(1)
-                if record["status"] != "ok":
-                    bar.write(f"run {name} failed: {record['error']}", file=sys.stderr)
+            _report(bar, records)
 
     results = aggregate(out_dir)
     atomic_write_text(out_dir / "table.md",

@@ -10,7 +10,15 @@ import numpy as np
 import pytest
 
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import Experiment, Row, aggregate, markdown_table, run_seed, run_sweep
+from skinny_mj.experiment import (
+    Experiment,
+    Row,
+    RunFailed,
+    aggregate,
+    markdown_table,
+    run_seed,
+    run_sweep,
+)
 from skinny_mj.sweep.stats import load_runs, summarize
 
 
@@ -21,7 +29,7 @@ def make_run_one(marker_dir: Path | None = None):
         if marker_dir is not None:
             (marker_dir / f"{row.row_id}-{seed}-{uuid.uuid4().hex}").touch()
         if row.params.get("fail"):
-            raise RuntimeError("diverged on purpose")
+            raise RunFailed("diverged on purpose")
         rng = np.random.default_rng(seed)
         x = rng.normal(row.params["mu"], 1.0, size=200)
         out = {"error": float(abs(x.mean())), "spread": float(x.std()),
@@ -73,17 +81,20 @@ def test_sweep_writes_layout_and_results_equal_aggregate_of_run_files(tmp_path):
     config = json.loads((tmp_path / "config.json").read_text())
     assert config["experiment"] == "fake" and config["runs"] == 3
     table = (tmp_path / "table.md").read_text()
-    assert "| exp1 | 3 / 0 |" in table and "| 0.4000 (0.0024) |" in table
+    assert "| exp1 | 0 / 3 |" in table and "| 0.4000 (0.0024) |" in table
+    assert "Means (variance) over the runs that did not fail" in table
 
 
-def test_a_failing_run_is_recorded_not_lost(tmp_path):
+def test_a_diverged_run_is_recorded_as_failed_data(tmp_path):
     results = run_sweep(make_experiment(fail=True), tmp_path, workers=1, progress=False)
     bad = next(r for r in results["rows"] if r["row"] == "bad")
     assert bad["n_failed"] == 3 and bad["n_ok"] == 0 and bad["metrics"] == {}
-    assert "diverged on purpose" in bad["failures"][0]["error"]
+    assert bad["n"] == 3 and bad["n_error"] == 0 and results["n_error"] == 0
+    assert bad["failures"][0]["fail_reason"] == "diverged on purpose"
     records = [r for r in load_runs(tmp_path) if r["row"] == "bad"]
-    assert all(r["status"] == "failed" and "RuntimeError" in r["error"] for r in records)
-    assert "| bad | 0 / 3 |" in (tmp_path / "table.md").read_text()
+    assert all(r["status"] == "failed" and r["fail_reason"] == "diverged on purpose"
+               and r["error"] is None and "traceback" not in r for r in records)
+    assert "| bad | 3 / 3 |" in (tmp_path / "table.md").read_text()
 
 
 def test_nonfinite_metric_is_stored_as_null(tmp_path):
@@ -158,5 +169,5 @@ def test_summarize_and_markdown_table():
         {"row": "r1", "n_ok": 3, "n_failed": 0, "paper": {"m": 0.5},
          "metrics": {"m": st}}]}
     table = markdown_table(results, {"m": "position NRMSE"})
-    assert "position NRMSE (paper)" in table
-    assert "| r1 | 3 / 0 | 2.0000 (1.0000) | 0.5000 |" in table
+    assert "position NRMSE (ours: mean (var))" in table and "position NRMSE (paper)" in table
+    assert "| r1 | 0 / 3 | 2.0000 (1.0000) | 0.5000 |" in table

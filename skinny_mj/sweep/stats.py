@@ -1,7 +1,8 @@
-"""From run files to results: per-row statistics and the markdown table.
+"""From run files to results: validated run records, per-row statistics, the table.
 
 :func:`aggregate` reads ``out/runs/*.json`` only (each run file carries its row, params
-and the paper's values), so results can always be rebuilt from what finished.
+and the paper's values), so results can always be rebuilt from what finished. The run
+record schema is documented in :mod:`skinny_mj.experiment`.
 """
 
 from __future__ import annotations
@@ -18,6 +19,16 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
 
 _STATS = ("mean", "variance", "sd", "median", "min", "max", "n")
+
+#: A run's status: ``ok`` (metrics), ``failed`` (diverged: data, ``fail_reason``) or
+#: ``error`` (any other exception: a bug, not data; ``error`` and ``traceback``).
+STATUSES = ("ok", "failed", "error")
+#: Keys every run file holds (:func:`load_run` refuses a file without them).
+REQUIRED_KEYS = ("experiment", "row", "row_index", "run_index", "seed", "status", "metrics")
+#: The line under every table: what the means are over.
+MEANS_NOTE = ("Means (variance) over the runs that did not fail "
+              "(failed = diverged, excluded).")
+ERRORS_NOTE = "Errored runs (+N error: bugs, not data) are excluded too: see runs/*.json."
 
 
 def to_jsonable(obj: Any) -> Any:
@@ -52,48 +63,100 @@ def summarize(values: Sequence[float]) -> dict[str, float | int | None]:
             "n": int(a.size)}
 
 
+def load_run(path: str | Path) -> dict[str, Any]:
+    """One run record, validated: a clear :class:`SkinnyInputError` naming the file if
+    it is not JSON, lacks a required key (:data:`REQUIRED_KEYS`), has an unknown
+    ``status`` or is not named ``<row>-<seed>.json``. Run files are written atomically,
+    so a bad one was damaged (disk fault) or edited, and is never skipped silently."""
+    path = Path(path)
+    try:
+        rec = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise SkinnyInputError(f"not a readable JSON run file ({exc}); run files are "
+                               "written atomically, so this one was damaged or edited: "
+                               "delete it and --resume to run it again", path=path) from exc
+    if not isinstance(rec, dict):
+        raise SkinnyInputError(f"not a run file: holds a JSON {type(rec).__name__}, "
+                               "not an object", path=path)
+    missing = [k for k in REQUIRED_KEYS if k not in rec]
+    if missing:
+        raise SkinnyInputError(f"not a run file: lacks {', '.join(missing)}", path=path)
+    if rec["status"] not in STATUSES:
+        raise SkinnyInputError(f"run status {rec['status']!r} is none of "
+                               f"{', '.join(STATUSES)}", path=path)
+    ints = [k for k in ("row_index", "run_index", "seed")
+            if not isinstance(rec[k], int) or isinstance(rec[k], bool)]
+    if ints or not isinstance(rec["row"], str) or not isinstance(rec["metrics"], dict):
+        raise SkinnyInputError("not a run file: row must be a string, metrics an object, "
+                               "row_index, run_index and seed integers", path=path)
+    if path.name != f"{rec['row']}-{rec['seed']}.json":
+        raise SkinnyInputError(f"holds row {rec['row']!r} seed {rec['seed']}, so it should "
+                               f"be named {rec['row']}-{rec['seed']}.json", path=path)
+    return rec
+
+
 def load_runs(out_dir: str | Path) -> list[dict[str, Any]]:
-    """All run records under ``out_dir/runs``, ordered by (row index, run index)."""
+    """Every run record under ``out_dir/runs``, validated (:func:`load_run`), ordered by
+    (row index, run index). Hidden files (the ``.<name>.*.tmp`` left by an interrupted
+    atomic write) are ignored; any other file that is not a valid run file is an error."""
     runs_dir = Path(out_dir) / "runs"
     if not runs_dir.is_dir():
         raise SkinnyInputError("no runs/ folder: not a sweep output", path=out_dir)
     records = []
-    for path in sorted(runs_dir.glob("*.json")):
-        try:
-            rec = json.loads(path.read_text())
-            key = (int(rec["row_index"]), int(rec["run_index"]), str(rec["row"]))
-        except (ValueError, KeyError, TypeError) as exc:
-            raise SkinnyInputError(f"not a run file ({exc})", path=path) from exc
-        records.append((key, rec))
+    for path in sorted(runs_dir.iterdir()):
+        if path.name.startswith("."):
+            continue
+        if path.suffix != ".json" or not path.is_file():
+            raise SkinnyInputError("not a run file (run files are <row>-<seed>.json)",
+                                   path=path)
+        rec = load_run(path)
+        records.append(((rec["row_index"], rec["run_index"], rec["row"]), rec))
     records.sort(key=lambda kv: kv[0])
     return [rec for _, rec in records]
 
 
 def aggregate(out_dir: str | Path, *, write: bool = True) -> dict[str, Any]:
-    """Per-row statistics of every numeric metric, from the run files only.
+    """Per-row counts and statistics of every numeric metric, from the run files only.
 
-    Returns ``{"experiment", "n_runs", "rows": [{"row", "params", "paper", "n_ok",
-    "n_failed", "failures", "seeds", "metrics": {name: {mean, variance, sd, median,
-    min, max, n}}, "wall_s": {"mean", "total"}}]}`` and writes it to
-    ``out_dir/results.json`` unless ``write`` is False. Failed runs count in
-    ``n_failed`` and give no metric values.
+    Returns (and writes to ``out_dir/results.json`` unless ``write`` is False)::
+
+        {"experiment", "n_runs", "n_ok", "n_failed", "n_error",
+         "rows": [{"row", "row_index", "params", "paper",
+                   "n", "n_ok", "n_failed", "n_error", "n_fallback",
+                   "failures": [{"seed", "fail_reason"}], "errors": [{"seed", "error"}],
+                   "seeds", "metrics": {name: {mean, variance, sd, median, min, max, n}},
+                   "wall_s": {"mean", "total"}}]}
+
+    ``n = n_ok + n_failed``: the runs that are data (a failed run diverged); errored runs
+    (bugs) are counted apart in ``n_error``; ``n_runs`` counts every run file. Metric
+    statistics are over the ok runs only (``metrics[name]["n"]``: those with a finite
+    value). Rows appear in experiment order, only those with run files on disk.
     """
     records = load_runs(out_dir)
     rows: dict[str, dict[str, Any]] = {}
     values: dict[str, dict[str, list[float]]] = {}
     for rec in records:
         row = rows.setdefault(rec["row"], {
-            "row": rec["row"], "params": rec.get("params", {}), "paper": rec.get("paper", {}),
-            "n_ok": 0, "n_failed": 0, "failures": [], "seeds": [], "wall": []})
+            "row": rec["row"], "row_index": rec["row_index"], "params": rec.get("params", {}),
+            "paper": rec.get("paper", {}), "n": 0, "n_ok": 0, "n_failed": 0, "n_error": 0,
+            "n_fallback": 0, "failures": [], "errors": [], "seeds": [], "wall": []})
         row["seeds"].append(rec["seed"])
-        row["wall"].append(float(rec.get("wall_s", 0.0)))
-        if rec.get("status") != "ok":
+        row["wall"].append(float(rec.get("wall_s") or 0.0))
+        row["n_fallback"] += bool(rec.get("fallback"))
+        if rec["status"] == "error":
+            row["n_error"] += 1
+            row["errors"].append({"seed": rec["seed"], "error": rec.get("error")})
+            continue
+        row["n"] += 1
+        if rec["status"] == "failed":
             row["n_failed"] += 1
-            row["failures"].append({"seed": rec["seed"], "error": rec.get("error")})
+            # records older than the "error" status kept the reason in "error"
+            reason = rec.get("fail_reason") or rec.get("error")
+            row["failures"].append({"seed": rec["seed"], "fail_reason": reason})
             continue
         row["n_ok"] += 1
         per_metric = values.setdefault(rec["row"], {})
-        for name, v in rec.get("metrics", {}).items():
+        for name, v in rec["metrics"].items():
             if _is_number(v) or v is None:
                 per_metric.setdefault(name, []).append(v)
     out_rows = []
@@ -103,7 +166,9 @@ def aggregate(out_dir: str | Path, *, write: bool = True) -> dict[str, Any]:
         row["wall_s"] = {"mean": float(np.mean(wall)), "total": float(np.sum(wall))}
         out_rows.append(row)
     experiment = records[0]["experiment"] if records else Path(out_dir).name
-    results = {"experiment": experiment, "n_runs": len(records), "rows": out_rows}
+    results = {"experiment": experiment, "n_runs": len(records),
+               **{k: sum(r[k] for r in out_rows) for k in ("n_ok", "n_failed", "n_error")},
+               "rows": out_rows}
     if write:
         atomic_write_json(Path(out_dir) / "results.json", results)
     return results
@@ -115,9 +180,21 @@ def _fmt(v: float | None) -> str:
     return f"{v:.4f}" if 1e-3 <= abs(v) < 1e4 or v == 0 else f"{v:.2e}"
 
 
+def failed_cell(row: Mapping[str, Any]) -> str:
+    """``failed / n`` of one results row, errored runs beside: ``1 / 20 (+1 error)``."""
+    n_failed = int(row.get("n_failed", 0))
+    n = int(row.get("n", int(row.get("n_ok", 0)) + n_failed))
+    n_error = int(row.get("n_error", 0))
+    cell = f"{n_failed} / {n}"
+    if n_error:
+        cell += f" (+{n_error} error{'s' if n_error > 1 else ''})"
+    return cell
+
+
 def markdown_table(results: Mapping[str, Any],
                    columns: Sequence[str] | Mapping[str, str] | None = None) -> str:
-    """Our mean (variance) beside the paper's value for each metric column.
+    """Our mean (variance) beside the paper's value for each metric column, a
+    ``failed / n`` column, and a line under the table saying what the means exclude.
 
     ``columns``: metric names, or ``{metric: header}``; default every metric seen.
     A paper value ``<metric>_var`` is shown as the paper's variance.
@@ -129,13 +206,13 @@ def markdown_table(results: Mapping[str, Any],
             seen.update(dict.fromkeys(row["metrics"]))
         columns = list(seen)
     headers = dict(columns) if isinstance(columns, Mapping) else {c: c for c in columns}
-    head = ["row", "ok / failed"]
+    head = ["row", "failed / n"]
     for label in headers.values():
         head += [f"{label} (ours: mean (var))", f"{label} (paper)"]
     lines = [f"### {results.get('experiment', '')}", "",
              "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for row in rows:
-        cells = [row["row"], f"{row['n_ok']} / {row['n_failed']}"]
+        cells = [row["row"], failed_cell(row)]
         for metric in headers:
             st = row["metrics"].get(metric)
             ours = "—" if not st or st["mean"] is None else \
@@ -146,4 +223,7 @@ def markdown_table(results: Mapping[str, Any],
                 ref += f" ({_fmt(paper[f'{metric}_var'])})"
             cells += [ours, ref]
         lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", MEANS_NOTE]
+    if any(int(row.get("n_error", 0)) for row in rows):
+        lines.append(ERRORS_NOTE)
     return "\n".join(lines)
