@@ -144,10 +144,10 @@ class Layout:
             [[model.site(f"{s}_{p}").id for p in _POINTS] for s in body.SIDES]
         )
         self.range_rad = model.jnt_range[jnt].copy()
-        self._lengths = np.array([body.UPPER_ARM_LENGTH_M, body.FOREARM_LENGTH_M])
-        self._comps = [0, 2] if self.dof == 4 else [0, 1, 2]
+        self.arm_lengths = np.array([body.UPPER_ARM_LENGTH_M, body.FOREARM_LENGTH_M])
+        self.components = [0, 2] if self.dof == 4 else [0, 1, 2]
         self.segment_pairs = _segment_pairs(model, self.site_ids, self.dof_adr)
-        self.segment_lengths = np.tile(self._lengths, 2)
+        self.segment_lengths = np.tile(self.arm_lengths, 2)
         self._jacp = np.zeros((3, model.nv))
 
     def joint_angles(self, data: mujoco.MjData) -> np.ndarray:
@@ -166,12 +166,10 @@ class Layout:
 
     def position_signals(self, data: mujoco.MjData, signals: str) -> np.ndarray:
         """(n_signals,) normalized noise-free signals (see :func:`body.signal_names`)."""
-        if signals == "joint":
+        if body.check_signals(signals) == "joint":
             return body.normalize_angles(self.joint_angles(data), self.dof)
-        if signals != "cartesian":
-            raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
-        return segment_signals(data.site_xpos[self.site_ids][None], self._lengths,
-                               self._comps)[0]
+        return segment_signals(data.site_xpos[self.site_ids][None], self.arm_lengths,
+                               self.components)[0]
 
     def site_jacobian(self, model: mujoco.MjModel, data: mujoco.MjData, site_id: int):
         """(3, nv) translational Jacobian of a site, m/rad (``mj_jacSite``)."""
@@ -183,15 +181,13 @@ class Layout:
         self, model: mujoco.MjModel, data: mujoco.MjData, signals: str
     ) -> np.ndarray:
         """(n_signals, n_dof) d(normalized signal)/d(joint angle), per rad."""
-        if signals == "joint":
+        if body.check_signals(signals) == "joint":
             lo, hi = self.range_rad.T
             return np.diag(2.0 / (hi - lo))
-        if signals != "cartesian":
-            raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
         axes = data.cdof[self.dof_adr, :3][None]
         points = data.site_xpos[self.site_ids][None]
         return segment_jacobian(axes, points, self.segment_pairs, self.segment_lengths,
-                                self._comps)[0]
+                                self.components)[0]
 
 
 class SkinnyPhysics(dm_mujoco.Physics):

@@ -82,9 +82,9 @@ class BatchPlant:
     (R, ...) view of the one ``MjData``. The copies share nothing, so run r's physics is
     bit for bit that of ``EnvPlant(load(..., seed=seeds[r]))``, with the same operations
     as dm_control (reset: ``mj_resetData``, pose, ``mj_forward`` without actuation;
-    step: ctrl, ``mj_step2``, ``mj_step1``). The work around the physics is vectorized
-    over R with the functions :class:`skinny_mj.physics.Layout` uses for one run (so
-    bitwise): the servo ctrl, the position signals
+    step: ctrl, ``mj_step2`` (RK4: ``mj_step``), ``mj_step1``). The work around the
+    physics is vectorized over R with the functions :class:`skinny_mj.physics.Layout`
+    uses for one run (so bitwise): the servo ctrl, the position signals
     (:func:`skinny_mj.physics.segment_signals`) and the command Jacobian
     (:func:`skinny_mj.physics.segment_jacobian`, equal to ``mj_jacSite`` differences to
     ~1e-16). Sensor noise is drawn from each run's Generator
@@ -130,6 +130,7 @@ class BatchPlant:
         self.max_speed_rad_s = self.setup.max_speed_rad_s
         self.signals = signals
         self.n_substeps = int(round(self.dt / self.model.opt.timestep))
+        self._rk4 = self.model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4
         self._init_views(one)
 
     # -- per-run views -------------------------------------------------------------
@@ -143,7 +144,7 @@ class BatchPlant:
         self._site_xpos = d.site_xpos.reshape(r, one.nsite, 3)
         self._cdof = d.cdof.reshape(r, one.nv, 6)
         sites = lay.site_ids.reshape(-1)  # (6,) arm-major, shoulder/elbow/wrist
-        self._comp_sel = _as_slice(np.array(lay._comps))  # views, not gathers, if possible
+        self._comp_sel = _as_slice(np.array(lay.components))  # views, not gathers, if possible
         self._site_sel = _as_slice(sites)
         self._qpos_sel = _as_slice(lay.qpos_adr)
         self._dof_sel = _as_slice(lay.dof_adr)
@@ -200,9 +201,13 @@ class BatchPlant:
                               self.layout.range_rad, self.dt)
         self._ctrl[:, self._act_sel] = ctrl
         # dm_control's legacy step: finish the step, keep kinematics in sync with qpos
-        mujoco.mj_step2(self.model, self.data)
-        if self.n_substeps > 1:
-            mujoco.mj_step(self.model, self.data, self.n_substeps - 1)
+        # (mj_step2 integrates with Euler, so RK4, the torque twin's, steps whole)
+        if self._rk4:
+            mujoco.mj_step(self.model, self.data, self.n_substeps)
+        else:
+            mujoco.mj_step2(self.model, self.data)
+            if self.n_substeps > 1:
+                mujoco.mj_step(self.model, self.data, self.n_substeps - 1)
         mujoco.mj_step1(self.model, self.data)
         self._signals = None
         return self._sensed()
@@ -217,7 +222,7 @@ class BatchPlant:
                 self._signals = body.normalize_angles(self.joint_angles(), self.n_dof)
             else:
                 pts = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
-                self._signals = segment_signals(pts, self.layout._lengths, self._comp_sel)
+                self._signals = segment_signals(pts, self.layout.arm_lengths, self._comp_sel)
         return self._signals
 
     def joint_angles(self) -> np.ndarray:
@@ -232,7 +237,7 @@ class BatchPlant:
         axes = self._cdof[:, self._dof_sel, :3]
         points = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
         jac = segment_jacobian(axes, points, self.layout.segment_pairs,
-                               self.layout.segment_lengths, self.layout._comps)
+                               self.layout.segment_lengths, self.layout.components)
         jac *= self.max_speed_rad_s * self.dt  # as EnvPlant.command_jacobian
         return jac
 

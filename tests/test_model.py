@@ -100,8 +100,8 @@ def test_segment_jacobian_equals_mujoco_site_jacobians(dof):
         for arm in range(2):
             jac = [lay.site_jacobian(physics.model.ptr, physics.data.ptr, s)[:, lay.dof_adr]
                    for s in lay.site_ids[arm]]
-            for seg, length in enumerate(lay._lengths):
-                rows.append((jac[seg + 1] - jac[seg])[lay._comps] / length)
+            for seg, length in enumerate(lay.arm_lengths):
+                rows.append((jac[seg + 1] - jac[seg])[lay.components] / length)
         np.testing.assert_allclose(physics.signal_jacobian("cartesian"),
                                    np.concatenate(rows), rtol=0, atol=1e-12)
 
@@ -121,7 +121,7 @@ def test_site_jacobian_is_finite_difference_of_site_position():
     np.testing.assert_allclose(jac, num, atol=1e-8)
 
 
-def test_torque_twin_swaps_only_the_actuators():
+def test_torque_twin_swaps_the_actuators_and_frees_the_arm():
     vel, tor = load_model(8, "velocity"), load_model(8, "torque")
     assert [tor.actuator(i).name for i in range(tor.nu)] == list(body.dof_names(8))
     assert np.all(tor.actuator_biastype == mujoco.mjtBias.mjBIAS_NONE)
@@ -129,7 +129,11 @@ def test_torque_twin_swaps_only_the_actuators():
     gears = [TORQUE_GEAR_NM[n.split("_", 1)[1]] for n in body.dof_names(8)]
     np.testing.assert_array_equal(tor.actuator_gear[:, 0], gears)
     np.testing.assert_array_equal(tor.actuator_ctrlrange, np.tile([-1.0, 1.0], (8, 1)))
-    np.testing.assert_array_equal(tor.body_mass, vel.body_mass)
+    arm = [i for i in range(tor.nbody) if tor.body(i).name.endswith("arm")
+           or tor.body(i).name.endswith("hand")]
+    fixed = [i for i in range(tor.nbody) if i not in arm]
+    np.testing.assert_array_equal(tor.body_mass[fixed], vel.body_mass[fixed])
+    assert np.all(tor.body_gravcomp[arm] == 0) and np.all(vel.body_gravcomp[arm] == 1)
     np.testing.assert_array_equal(tor.jnt_range, vel.jnt_range)
 
 

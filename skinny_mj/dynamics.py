@@ -1,0 +1,132 @@
+"""Torques of the torque twin: gravity and bias forces of a pose, inverse dynamics of a
+joint trajectory, and the torques that replay a movement step by step.
+
+The plant side of torque control (the controllers in ``controllers/torque_feedback.py``
+are pure NumPy and take these as arrays). Every function works on one robot's compiled
+model (:func:`skinny_mj.model.load_model` ``(dof, "torque")``) and returns per-DOF
+arrays in :func:`skinny_mj.body.dof_names` order, in N m, or normalized by the motors'
+peak torques (:func:`torque_limits_nm`; normalized torque = ctrl).
+
+Conventions (MuJoCo's): ``M(q) qdd + c(q, qd) = tau + tau_passive``, with
+``c = qfrc_bias`` (gravity, Coriolis and centrifugal forces) and the joints' viscous
+damping ``tau_passive = -b qd``. The inverse dynamics are continuous-time (the twin
+integrates with RK4, which has no discrete inverse); joint limits are left out of them
+(an arm pressing on a limit is not a torque the motors must make).
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from skinny_mj import body
+from skinny_mj.physics import Layout
+
+
+class Dynamics:
+    """Rigid-body queries on one robot model, with a scratch ``MjData`` of their own
+    (the caller's simulation state is never touched).
+
+    Parameters
+    ----------
+    model : a compiled one-robot Skinny model, usually the torque twin.
+    """
+
+    def __init__(self, model: mujoco.MjModel):
+        self.model = model
+        self.layout = Layout(model)
+        self.data = mujoco.MjData(model)
+        self.n_dof = self.layout.dof
+
+    # -- limits -------------------------------------------------------------------------
+    def torque_limits_nm(self) -> np.ndarray:
+        """(n_dof,) peak torque of each DOF's motor, N m (its gear; ctrl is in [-1, 1])."""
+        return self.model.actuator_gear[self.layout.actuator_ids, 0].copy()
+
+    def normalize(self, torque_nm: np.ndarray) -> np.ndarray:
+        """Torques (..., n_dof) N m -> normalized torque commands (torque / limit)."""
+        return np.asarray(torque_nm, float) / self.torque_limits_nm()
+
+    # -- forward quantities of a state ------------------------------------------------
+    def _set(self, q, qd=None) -> None:
+        d = self.data
+        d.qpos[self.layout.qpos_adr] = q
+        d.qvel[self.layout.dof_adr] = 0.0 if qd is None else qd
+
+    def bias_torque_nm(self, q: np.ndarray, qd: np.ndarray | None = None) -> np.ndarray:
+        """Torques (..., n_dof) N m that cancel gravity and the velocity-product forces at
+        state (q, qd) (``qfrc_bias``): holding the arm still at q (qd = None) takes
+        exactly this; q, qd: (..., n_dof) rad, rad/s."""
+        q = np.asarray(q, float)
+        qd = None if qd is None else np.broadcast_to(np.asarray(qd, float), q.shape)
+        out = np.empty(q.shape)
+        for idx in np.ndindex(q.shape[:-1]):
+            self._set(q[idx], None if qd is None else qd[idx])
+            mujoco.mj_forward(self.model, self.data)
+            out[idx] = self.data.qfrc_bias[self.layout.dof_adr]
+        return out
+
+    def gravity_torque_nm(self, q: np.ndarray) -> np.ndarray:
+        """Torques (..., n_dof) N m that hold the arms still against gravity at q (rad)."""
+        return self.bias_torque_nm(q)
+
+    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        """Joint-space inertia M(q) (n_dof, n_dof), kg m^2, at one pose q (n_dof,) rad."""
+        self._set(np.asarray(q, float))
+        mujoco.mj_forward(self.model, self.data)
+        full = np.zeros((self.model.nv, self.model.nv))
+        mujoco.mj_fullM(self.model, self.data, full)
+        adr = self.layout.dof_adr
+        return full[np.ix_(adr, adr)]
+
+    def inertia_range(self, n_poses: int = 200, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """Smallest and largest diagonal of M (each (n_dof,), kg m^2) over ``n_poses``
+        random poses inside the joint ranges: what a joint's own inertia can be."""
+        rng = np.random.default_rng(seed)
+        lo, hi = body.joint_ranges(self.n_dof).T
+        diag = np.array([np.diag(self.mass_matrix(rng.uniform(lo, hi)))
+                         for _ in range(n_poses)])
+        return diag.min(axis=0), diag.max(axis=0)
+
+    # -- inverse dynamics ---------------------------------------------------------------
+    def inverse_dynamics_nm(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """Joint torques (..., n_dof) N m that give accelerations qdd at state (q, qd)
+        (``mj_inverse``: M qdd + c - tau_passive; joint limits off); all (..., n_dof) in
+        rad, rad/s, rad/s^2."""
+        q, qd, qdd = np.broadcast_arrays(*(np.asarray(a, float) for a in (q, qd, qdd)))
+        out = np.empty(q.shape)
+        m, d = self.model, self.data
+        flags = m.opt.disableflags
+        m.opt.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
+        try:
+            for idx in np.ndindex(q.shape[:-1]):
+                self._set(q[idx], qd[idx])
+                d.qacc[:] = 0.0
+                d.qacc[self.layout.dof_adr] = qdd[idx]
+                mujoco.mj_inverse(m, d)
+                out[idx] = d.qfrc_inverse[self.layout.dof_adr]
+        finally:
+            m.opt.disableflags = flags
+        return out
+
+    def trajectory_torques_nm(self, angles: np.ndarray, dt: float = 0.02,
+                              points: int = 4) -> np.ndarray:
+        """The torque to hold during each step of a movement, (T-1, n_dof) N m.
+
+        The angles (T, n_dof) rad, sampled every ``dt`` s, are interpolated by a cubic
+        spline that starts and ends at rest (as the plant starts after a reset); step
+        k's torque is the mean of the inverse dynamics over the step, at ``points``
+        Gauss-Legendre nodes: the zero-order-hold torque that gives the step the
+        spline's change of momentum to within O(dt^2). Held open loop through
+        ``mj_step``, they reproduce the movement closely for a short horizon
+        (``tests/test_dynamics.py`` states how closely); the true target of a torque
+        inverse model.
+        """
+        angles = np.asarray(angles, float)
+        t = dt * np.arange(len(angles))
+        spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
+        nodes, weights = np.polynomial.legendre.leggauss(points)
+        ts = t[:-1, None] + 0.5 * dt * (1.0 + nodes)  # (T-1, points)
+        tau = self.inverse_dynamics_nm(spline(ts), spline(ts, 1), spline(ts, 2))
+        return np.einsum("kpn,p->kn", tau, 0.5 * weights)
