@@ -5,11 +5,12 @@
 
 from __future__ import annotations
 
-import importlib
 from types import ModuleType
 
-from skinny_mj.errors import SkinnyInputError
+from skinny_mj import registry
 
+#: This package's experiments, name -> module: the entry points it declares in pyproject
+#: (group ``skinny_mj.experiments``), through which :mod:`skinny_mj.registry` finds them.
 REGISTRY = {
     "paper-a": "experiments.paper_a",
     "paper-b": "experiments.paper_b",
@@ -20,11 +21,10 @@ REGISTRY = {
 
 
 def get(name: str) -> ModuleType:
-    if name not in REGISTRY:
-        raise SkinnyInputError(f"unknown experiment {name!r}; known: {', '.join(REGISTRY)}")
-    return importlib.import_module(REGISTRY[name])
+    """The experiment registered as ``name`` (:func:`skinny_mj.registry.get`)."""
+    return registry.get(name)
 
 
 def describe(name: str) -> str:
-    doc = get(name).__doc__ or ""
-    return doc.strip().splitlines()[0] if doc.strip() else ""
+    """First docstring line of an experiment (:func:`skinny_mj.registry.describe`)."""
+    return registry.describe(name)

@@ -9,19 +9,24 @@ cycle, K = 0). Patterns: relative phase 0°, 90°, 180°; frequency ratio 1:2, 1
 3:5; amplitude ratio 2:1. The paper reports no numbers, only Figure 3 and the
 qualitative claims that :func:`report` checks here with our numbers.
 
-Not stated in paper B (our choices, in :class:`Config`): the number of epochs, runs,
-spectral radius, reservoir noise, the movement's period and amplitude.
+Not stated in paper B (our choices, in :data:`MODEL` and :class:`Config`): the number
+of epochs, runs, spectral radius, reservoir noise, the movement's period and amplitude.
+Each row is a config of the one training path on paper B's plant
+(:class:`skinny_mj.bimanual.BimanualPlant`, ``leading_arm="right"``).
 """
 
 from __future__ import annotations
 
 import functools
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from skinny_mj.experiment import Experiment, Row
+from skinny_mj.body import CONTROL_DT_S
+from skinny_mj.config import TrainConfig, relative_cost
+from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.trajectories.patterns import PATTERNS, PREFIX
 
 NAME = "paper-b"
 #: The leader's test speeds (paper B §3, Fig. 3); 1.0 = the trained speed.
@@ -41,112 +46,129 @@ PAPER_SAYS = {
 #: Thresholds on the relative shoulder error (RMS error / RMS of the desired swing; 0
 #: perfect, ~1 = standing still at the mean or half a period off) and on the timing.
 GOOD_REL, FAIL_REL, GOOD_LAG_DEG = 0.3, 0.6, 20.0
+#: Paper B §3 values, and our choices where it states none (marked): the lagging arm's
+#: ESN sees both arms' current state only (Fig. 2: 4 inputs, L = 100, 2 outputs), FEL
+#: new method β = 0.01 (eq. 6), 7 cycles per epoch (washout + 5 learning + evaluation),
+#: K 1 -> 0 linearly; tests: "one additional epoch with only two cycles, the
+#: initialization cycle and the evaluation cycle" (K = 0).
+MODEL = TrainConfig(
+    dof=4, signals="joint", leading_arm="right", inputs="sensed", reservoir=100,
+    method="new", beta=0.01, cycles=5, test_washout_cycles=1, sensor_noise=0.01,
+    epochs=50,  # not stated; 10 (papers D/E) leaves 1:2 unlearned at β = 0.01
+    spectral_radius=0.5,  # not stated; SPEC §5 default
+    noise=0.2,  # not stated; reservoir noise of the new method (papers D/E)
+)
 
 
 @dataclass(frozen=True)
 class Config:
-    """Paper B §3 values, and our choices where it states none (marked)."""
+    """The run (``model``; its movement is each row's pattern) and the runs per row
+    (not stated in the paper). The movement's period, amplitude and elbow angle are
+    :class:`skinny_mj.trajectories.patterns.Movement`'s (not stated either)."""
 
-    reservoir: int = 100  # Fig. 2: L = 100
-    beta: float = 0.01  # §3, eq. (6)
-    learning_cycles: int = 5  # §3: 7 cycles = washout + 5 learning + evaluation
-    epochs: int = 50  # not stated; 10 (papers D/E) leaves 1:2 unlearned at β = 0.01
-    spectral_radius: float = 0.5  # not stated; SPEC §5 default
-    noise: float = 0.2  # not stated; reservoir noise of the new method (papers D/E)
-    sensor_noise: float = 0.01  # SPEC §1
-    leading: str = "right"  # not stated
-    period_s: float = 2.0  # not stated: the leader's period at the trained speed
-    amplitude_deg: float = 40.0  # not stated: leader's shoulder 50°-130°
-    elbow_deg: float = 20.0  # "no movement in the elbow joint"; held at 20°
-    min_leader_periods: int = 3  # one cycle = 3 leader periods (2:3 -> 4)
-    runs: int = 10  # not stated
-
-
-def movement(cfg: Config):
-    from skinny_mj.bimanual import Movement
-
-    return Movement(leading=cfg.leading, period_s=cfg.period_s,
-                    min_leader_periods=cfg.min_leader_periods,
-                    amplitude_deg=cfg.amplitude_deg, elbow_deg=cfg.elbow_deg)
+    model: TrainConfig = MODEL
+    runs: int = 10
 
 
 def _tag(speed: float) -> str:
     return f"x{speed:g}"
 
 
-def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    """Train one lagging-arm ESN on ``row``'s pattern, test at every speed in SPEEDS."""
+def train_config(cfg: Config, row: Row) -> TrainConfig:
+    return replace(cfg.model, trajectory=PREFIX + row.row_id)
+
+
+def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
+    """Train lagging-arm ESNs on ``row``'s pattern for several seeds in lockstep, then
+    test each at every leader speed in SPEEDS (a fresh plant whose sensor noise comes
+    from the run's plant seed + 1)."""
     import time
 
-    from controllers.esn import ESN, ESNConfig
-    from controllers.fel import FELConfig
-    from skinny_mj import bimanual as bm
-    from skinny_mj.body import position_signals
-    from skinny_mj.ideal import max_speeds
-    from skinny_mj.training import run_streams
+    from skinny_mj.bimanual import arm_dofs, phase_lag_deg
+    from skinny_mj.training import build_run, evaluate, train_run
+    from skinny_mj.trajectories import get
+    from skinny_mj.trajectories.patterns import Movement
 
     start = time.perf_counter()
-    pattern, mv = bm.PATTERNS[row.row_id], movement(cfg)
-    esn_rng, plant_seed = run_streams(seed)
-    angles = bm.pattern_angles(pattern, mv)
-    max_speed = max_speeds(angles, mv.dt)  # 2x the trained movement's fastest
-    esn = ESN(ESNConfig(4, 2, cfg.reservoir, cfg.spectral_radius, noise_level=cfg.noise),
-              rngs=[esn_rng])
-    plant = bm.BimanualPlant(angles, mv, max_speed, seeds=[plant_seed],
-                             sensor_noise=cfg.sensor_noise)
-    fel_cfg = FELConfig("new", cfg.beta, cfg.learning_cycles, cfg.epochs)
-    tr = bm.train(esn, plant, position_signals(angles, 4, "joint"), fel_cfg)
-    if tr.failed[0]:
-        raise RuntimeError("the lagging arm's ESN diverged during training")
-    out: dict = {"train_position_nrmse": float(tr.position_nrmse[0, -1]),
-                 "train_curve_position_nrmse": [float(v) for v in tr.position_nrmse[0]],
-                 "max_speed_rad_s": [float(v) for v in max_speed], "traces": {}}
-    lead, lag = bm.ARM_DOFS[mv.leading][0], bm.ARM_DOFS[mv.lagging][0]
+    tcfg = train_config(cfg, row)
+    run = build_run(tcfg, seeds)
+    result = train_run(run).fel
+    lead_side = tcfg.leading_arm
+    lag_side = "left" if lead_side == "right" else "right"
+    lead, lag = arm_dofs(tcfg.dof, lead_side)[0], arm_dofs(tcfg.dof, lag_side)[0]
+    outs: list = [{"train_position_nrmse": float(result.position_nrmse[r, -1]),
+                   "train_curve_position_nrmse": [float(v) for v in result.position_nrmse[r]],
+                   "max_speed_rad_s": [float(v) for v in run.max_speed_rad_s], "traces": {}}
+                  for r in range(len(seeds))]
+    failed = {r: "the lagging arm's ESN diverged during training"
+              for r in range(len(seeds)) if result.failed[r]}
+    period_s, pattern = Movement().period_s, PATTERNS[row.row_id]
     for speed in SPEEDS:
-        q = bm.pattern_angles(pattern, mv, speed)
-        ev = bm.evaluate(esn, bm.BimanualPlant(q, mv, max_speed, seeds=[plant_seed + 1],
-                                               sensor_noise=cfg.sensor_noise),
-                         position_signals(q, 4, "joint"))
-        if ev.failed[0]:
-            raise RuntimeError(f"the lagging arm's ESN diverged in the test at {speed:g}x")
-        actual, desired = ev.rollout.angles[0, :, lag], q[:, lag]
-        period_steps = mv.period_s / (speed * mv.dt) / pattern.frequency_ratio
+        trajectory = get(f"{tcfg.trajectory}@{speed:g}" if speed != 1.0 else tcfg.trajectory,
+                         tcfg.dof)
+        tests = evaluate(run, trajectory, plant_seeds=[s + 1 for s in run.plant_seeds])
+        desired = trajectory.angles[:, lag]
+        period_steps = period_s / (speed * trajectory.dt) / pattern.frequency_ratio
         t = _tag(speed)
-        out[f"position_nrmse_{t}"] = float(ev.position_nrmse[0])
-        out[f"motor_nrmse_{t}"] = float(ev.motor_nrmse[0])
-        out[f"relative_error_{t}"] = float(np.sqrt(np.mean((actual - desired) ** 2))
-                                           / np.std(desired))
-        out[f"phase_lag_deg_{t}"] = bm.phase_lag_deg(actual, desired, period_steps)
-        out["traces"][t] = {k: np.round(np.degrees(v), 2).tolist() for k, v in
-                            (("leader", ev.rollout.angles[0, :, lead]),
-                             ("desired", desired), ("actual", actual))}
-    out["wall_s_run"] = time.perf_counter() - start
+        for r, (out, test) in enumerate(zip(outs, tests, strict=True)):
+            if test.failed:
+                failed.setdefault(r, f"the lagging arm's ESN diverged in the test at {speed:g}x")
+            if r in failed:
+                continue
+            actual = test.rollout.angles[0, :, lag]
+            out[f"position_nrmse_{t}"] = test.position_nrmse
+            out[f"motor_nrmse_{t}"] = test.motor_nrmse
+            out[f"relative_error_{t}"] = float(np.sqrt(np.mean((actual - desired) ** 2))
+                                               / np.std(desired))
+            out[f"phase_lag_deg_{t}"] = phase_lag_deg(actual, desired, period_steps)
+            out["traces"][t] = {k: np.round(np.degrees(v), 2).tolist() for k, v in
+                                (("leader", test.rollout.angles[0, :, lead]),
+                                 ("desired", desired), ("actual", actual))}
+    wall = (time.perf_counter() - start) / len(seeds)
+    for out in outs:
+        out["wall_s_run"] = wall
+    return [RunFailed(failed[r]) if r in failed else out for r, out in enumerate(outs)]
+
+
+def run_one(cfg: Config, row: Row, seed: int) -> dict:
+    """One run of ``row``: :func:`run_batch` of one seed."""
+    (out,) = run_batch(cfg, row, [seed])
+    if isinstance(out, Exception):
+        raise out
     return out
 
 
-def rows(only: tuple[str, ...] | None = None) -> tuple[Row, ...]:
-    from skinny_mj.bimanual import PATTERNS
+def rows() -> tuple[Row, ...]:
+    return tuple(Row(name, asdict(p)) for name, p in PATTERNS.items())
 
-    return tuple(Row(name, asdict(p)) for name, p in PATTERNS.items()
-                 if not only or name in only)
+
+def cost(cfg: Config, row: Row) -> float:
+    """One run's relative cost: its pattern's length (2:3 and 3:5 hold more periods)."""
+    from skinny_mj.trajectories import get
+
+    return relative_cost(train_config(cfg, row)) * len(get(PREFIX + row.row_id, cfg.model.dof))
 
 
 def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          only: tuple[str, ...] | None = None) -> Experiment:
-    """The sweep; ``quick`` = 1 run of 2 epochs per pattern (a smoke test).
-
-    ``movement``/``asf`` are not used: paper B's movement is the synthetic raise/lower.
-    """
+          dof: int | None = None, signals: str | None = None) -> Experiment:
+    """The sweep; ``quick`` = 1 run of 2 epochs per pattern (a smoke test). ``dof`` 8
+    runs the patterns on the 3D body (shoulder abduction swings; flexion, rotation and
+    elbow held: :mod:`skinny_mj.trajectories.patterns`), ``signals`` the position
+    signals. ``movement`` does not apply: each row's movement is its pattern."""
     if movement is not None or asf is not None:
         from skinny_mj.errors import SkinnyInputError
 
-        raise SkinnyInputError("paper-b uses its own raise/lower movement; "
-                               "--movement/--asf do not apply")
-    cfg = Config(epochs=2, runs=1) if quick else Config()
+        raise SkinnyInputError("paper-b's movements are its coordination patterns (one per "
+                               "row, e.g. bimanual-phase90); --movement/--asf do not apply")
+    changes = {k: v for k, v in (("dof", dof), ("signals", signals)) if v is not None}
+    model = replace(MODEL, **changes)
+    cfg = Config(model=replace(model, epochs=2), runs=1) if quick else Config(model=model)
     columns = [f"{m}_{_tag(s)}" for m in ("relative_error", "phase_lag_deg")
                for s in SPEEDS] + ["position_nrmse_x1", "motor_nrmse_x1"]
-    return Experiment(name=NAME, rows=rows(only), run_one=functools.partial(run_one, cfg),
-                      config=cfg, runs=cfg.runs, table_columns=tuple(columns))
+    return Experiment(name=NAME, rows=rows(), run_one=functools.partial(run_one, cfg),
+                      run_batch=functools.partial(run_batch, cfg),
+                      cost=functools.partial(cost, cfg), config=cfg, runs=cfg.runs,
+                      table_columns=tuple(columns))
 
 
 # -- report: figures and claims -------------------------------------------------------
@@ -237,7 +259,7 @@ def _fig3(path: Path, row: str, traces: dict) -> None:
     fig, axes = plt.subplots(len(SPEEDS), 1, figsize=(7.0, 2.2 * len(SPEEDS)))
     for ax, s in zip(axes, SPEEDS, strict=True):
         tr = traces[_tag(s)]
-        t = np.arange(len(tr["leader"])) * 0.02
+        t = np.arange(len(tr["leader"])) * CONTROL_DT_S
         ax.plot(t, tr["leader"], color="0.6", label="leading arm")
         ax.plot(t, tr["desired"], "--", color="tab:blue", label="lagging, desired")
         ax.plot(t, tr["actual"], color="tab:red", label="lagging, actual")

@@ -53,11 +53,10 @@ from pathlib import Path
 
 import numpy as np
 
-from controllers import fel
-from controllers.esn import ESN
-from controllers.metrics import motor_nrmse, nrmse, position_nrmse
+from controllers.metrics import nrmse
 from skinny_mj import body
 from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.trajectories import sample_clip
 
 NAME = "paper-c"
 #: Row/column id -> movement name (paper C §3.4; speeds: §4.1).
@@ -67,8 +66,8 @@ MOVEMENTS = {
     "ymca-0.5x": "ymca@0.5", "ymca-1.5x": "ymca@1.5",
 }
 REAL_ID = "real"
-_SHARED = Path(__file__).resolve().parents[2] / "shared"
-REAL_MOVEMENT = _SHARED / "mocap" / "cmu" / "md_02.amc"
+#: CMU trial 05_02 (modern dance), shipped with the package (skinny_mj/data/mocap/cmu).
+REAL_MOVEMENT = sample_clip("md_02")
 #: Test cases whose produced joint angles are kept in the run file (for the figures).
 KEEP_ANGLES = ("ymca", "ym")
 #: Claim thresholds (ours; the paper states none, only "without significantly more error").
@@ -93,27 +92,25 @@ class Config:
     gain_factor: float = 0.9  # K = 0.9^epoch (-10 % per epoch)
     max_speed_from: str = "ymca"
     tests: tuple[str, ...] = tuple(MOVEMENTS)
-    real_movement: str | None = field(
-        default_factory=lambda: str(REAL_MOVEMENT) if REAL_MOVEMENT.is_file() else None)
+    real_movement: str | None = field(default_factory=lambda: str(REAL_MOVEMENT))
     asf: str | None = None
     runs: int = 10
 
 
 def train_config(cfg: Config, movement: str):
-    from skinny_mj.training import TrainConfig
+    """Paper C §3.5: the original target (β = 1) fitted after each of 5 learning cycles
+    per epoch, K x 0.9 per epoch, one command scale (``max_speed_from``), and a test of
+    one initialization cycle + one evaluation cycle (§3.6)."""
+    from skinny_mj.config import TrainConfig
 
+    asf = cfg.asf if str(movement).lower().split("@")[0].endswith(".amc") else None
     return TrainConfig(
-        dof=cfg.dof, signals=cfg.signals, trajectory=movement, method="original", beta=1.0,
-        cycles=cfg.learning_cycles, epochs=cfg.epochs, reservoir=cfg.reservoir,
-        spectral_radius=cfg.spectral_radius, noise=cfg.noise, sensor_noise=cfg.sensor_noise,
-        max_speed_from=cfg.max_speed_from)
-
-
-def fel_config(cfg: Config) -> fel.FELConfig:
-    """Original target (β = 1), 5 learning cycles, K × 0.9 per epoch (paper C §3.5)."""
-    return fel.FELConfig(method="original", beta=1.0, learning_cycles=cfg.learning_cycles,
-                         epochs=cfg.epochs, gain_schedule="multiplicative",
-                         gain_factor=cfg.gain_factor)
+        dof=cfg.dof, signals=cfg.signals, trajectory=str(movement), asf=asf,
+        method="original", beta=1.0, cycles=cfg.learning_cycles, epochs=cfg.epochs,
+        gain_schedule="multiplicative", gain_factor=cfg.gain_factor,
+        reservoir=cfg.reservoir, spectral_radius=cfg.spectral_radius, noise=cfg.noise,
+        sensor_noise=cfg.sensor_noise, max_speed_from=cfg.max_speed_from,
+        test_washout_cycles=1)
 
 
 def columns(cfg: Config) -> dict[str, object]:
@@ -124,40 +121,12 @@ def columns(cfg: Config) -> dict[str, object]:
     return cols
 
 
-def _load(cfg: Config, movement):
+def load(cfg: Config, movement):
+    """A test or training movement of ``cfg`` (an .amc gets ``cfg.asf``)."""
     from skinny_mj.trajectories import load_movement
 
     asf = cfg.asf if str(movement).lower().endswith(".amc") else None
     return load_movement(movement, cfg.dof, asf=asf)[0]
-
-
-def evaluate_two_cycles(esn: ESN, trajectory, signals: str, plant_seed: int | list[int],
-                        sensor_noise: float, max_speed_rad_s: np.ndarray
-                        ) -> tuple[fel.Rollout | None, np.ndarray]:
-    """Paper C §3.6: reset, an initialization cycle and an evaluation cycle, K = 0, for
-    the ESN's R runs (one plant seed per run).
-
-    Returns the evaluation rollout (None if every network diverged; see
-    :func:`_healthy` for which did) and the true commands (T-1, n_dof) in [-1, 1]
-    (clipped where the movement is faster than full scale).
-    """
-    from skinny_mj.ideal import true_commands
-    from skinny_mj.training import make_plant
-
-    plant = make_plant(trajectory.dof, signals, trajectory, plant_seed, sensor_noise,
-                       max_speed_rad_s)
-    desired = trajectory.position_signals(signals)
-    commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
-    esn.reset()
-    fel.rollout(esn, plant, desired, 0.0, noise=False)
-    ro = fel.rollout(esn, plant, desired, 0.0, noise=False)
-    return (ro if _healthy(esn, ro).any() else None), commands
-
-
-def _healthy(esn: ESN, ro: fel.Rollout) -> np.ndarray:
-    """(R,) runs whose network did not diverge and whose commands are finite."""
-    return np.array([reason is None for reason in esn.diverged()]) \
-        & np.all(np.isfinite(ro.commands), axis=(1, 2))
 
 
 def _elbows(dof: int) -> list[int]:
@@ -204,45 +173,32 @@ def run_one(cfg: Config, row: Row, seed: int) -> dict:
 
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     """:func:`run_one` for several seeds of one row in lockstep (the engine's fast path):
-    seed k's metrics dict, or its :class:`RunFailed`, bit for bit what it gets alone
-    (the lockstep ESN and plant compute every run's numbers as a single run would);
+    seed k's metrics dict, or its :class:`RunFailed`, bit for bit what it gets alone;
     the wall times are the batch's, shared out per run."""
-    from skinny_mj.ideal import true_commands
-    from skinny_mj.training import esn_config, full_scale_speeds, make_plant, run_streams
+    from skinny_mj.training import build_run, evaluate, train_run
 
     start = time.perf_counter()
-    tcfg = train_config(cfg, row.params["train"])
-    trajectory = _load(cfg, tcfg.trajectory)
-    max_speed = full_scale_speeds(tcfg, trajectory)
-    streams = [run_streams(seed) for seed in seeds]
-    plant_seeds = [plant_seed for _, plant_seed in streams]
-    esn = ESN(esn_config(tcfg, body.n_signals(cfg.dof, cfg.signals)), n_runs=len(seeds),
-              rngs=[rng for rng, _ in streams])
-    desired = trajectory.position_signals(cfg.signals)
-    plant = make_plant(cfg.dof, cfg.signals, trajectory, plant_seeds, cfg.sensor_noise,
-                       max_speed)
-    result = fel.train(esn, plant, desired, fel_config(cfg),
-                       true_commands=true_commands(trajectory.angles, max_speed, trajectory.dt))
+    run = build_run(train_config(cfg, row.params["train"]), seeds)
+    result = train_run(run).fel
+    max_speed = run.max_speed_rad_s
     outs: list = [{
         "train_position_nrmse": float(result.position_nrmse[r, -1]),
         "train_motor_nrmse": float(result.motor_nrmse[r, -1]),
         "train_curve_position_nrmse": result.position_nrmse[r],
-        "train_elbow_range_rad": elbow_range(trajectory.angles, cfg.dof),
+        "train_elbow_range_rad": elbow_range(run.trajectory.angles, cfg.dof),
         "train_wall_s": (time.perf_counter() - start) / len(seeds),
         "n_test_failed": 0,
     } for r in range(len(seeds))]
     for col, movement in columns(cfg).items():
-        test = _load(cfg, movement)
-        ro, commands = evaluate_two_cycles(esn, test, cfg.signals, plant_seeds,
-                                           cfg.sensor_noise, max_speed)
-        healthy = np.zeros(len(seeds), bool) if ro is None else _healthy(esn, ro)
+        test = load(cfg, movement)
+        outcomes = evaluate(run, test)
         raw = np.diff(test.angles, axis=0) / (max_speed * test.dt)  # unclipped commands
-        for r, out in enumerate(outs):
+        for out, outcome in zip(outs, outcomes, strict=True):
             out[f"{col}__true_command_saturated"] = float(np.mean(np.abs(raw) > 1.0 + 1e-9))
-            if not healthy[r]:
+            if outcome.failed:
                 out["n_test_failed"] += 1
                 continue
-            out.update(_test_metrics(cfg, col, test, ro, r, commands))
+            out.update(_test_metrics(cfg, col, outcome))
     wall = (time.perf_counter() - start) / len(seeds)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     for r, out in enumerate(outs):
@@ -252,15 +208,13 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     return outs
 
 
-def _test_metrics(cfg: Config, col: str, test, ro: fel.Rollout, r: int,
-                  commands: np.ndarray) -> dict:
-    """Run r's metrics on test column ``col``."""
-    angles = ro.angles[r]
+def _test_metrics(cfg: Config, col: str, outcome) -> dict:
+    """One run's metrics on test column ``col`` (a :class:`skinny_mj.training.TestOutcome`)."""
+    test, angles = outcome.trajectory, outcome.rollout.angles[0]
     desired_rng = elbow_range(test.angles, cfg.dof)
-    wanted = test.position_signals(cfg.signals)
     out = {
-        f"{col}__position_nrmse": float(position_nrmse(ro.true_signals[r:r + 1], wanted)[0]),
-        f"{col}__motor_nrmse": float(motor_nrmse(ro.commands[r:r + 1], commands)[0]),
+        f"{col}__position_nrmse": outcome.position_nrmse,
+        f"{col}__motor_nrmse": outcome.motor_nrmse,
         f"{col}__elbow_range_rad": elbow_range(angles, cfg.dof),
         f"{col}__elbow_rom_ratio": (elbow_range(angles, cfg.dof) / desired_rng
                                     if desired_rng > 1e-6 else None),
@@ -273,10 +227,14 @@ def _test_metrics(cfg: Config, col: str, test, ro: fel.Rollout, r: int,
     return out
 
 
-def rows(only: tuple[str, ...] | None = None,
-         train: tuple[str, ...] = tuple(MOVEMENTS)) -> tuple[Row, ...]:
-    return tuple(Row(rid, {"train": MOVEMENTS[rid]}) for rid in train
-                 if not only or rid in only)
+def rows(train: tuple[str, ...] = tuple(MOVEMENTS), real: str | None = None
+         ) -> tuple[Row, ...]:
+    """One row per training movement; with ``real`` (``--movement``) also a row
+    training on it."""
+    out = [Row(rid, {"train": MOVEMENTS[rid]}) for rid in train]
+    if real is not None:
+        out.append(Row(REAL_ID, {"train": str(real)}))
+    return tuple(out)
 
 
 QUICK_TRAIN = ("ymca", "y-pure", "mirror-left")
@@ -284,25 +242,23 @@ QUICK_TESTS = ("ymca", "y", "ym", "mirror-left")
 
 
 def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          only: tuple[str, ...] | None = None) -> Experiment:
-    """The sweep. ``movement`` (+ ``asf``) replaces the real-movement column.
+          dof: int | None = None, signals: str | None = None) -> Experiment:
+    """The sweep. ``movement`` (+ ``asf``) is the experiment's real movement: a training
+    row ``real`` and the test column ``real`` (default: CMU md_02, tested only).
+    ``dof``/``signals``: another body (None: the paper's 2D joint angles).
     ``quick``: N = 100, 3 epochs, 2 runs, 3 training x 4 test movements (a smoke test)."""
-    from skinny_mj.errors import SkinnyInputError
-
-    cfg = Config()
+    changes: dict = {k: v for k, v in (("dof", dof), ("signals", signals)) if v is not None}
     if quick:
-        cfg = Config(reservoir=100, epochs=3, runs=2, tests=QUICK_TESTS)
+        changes.update(reservoir=100, epochs=3, runs=2, tests=QUICK_TESTS)
     if movement is not None:
-        cfg = Config(**{**cfg.__dict__, "real_movement": str(movement), "asf": asf})
+        changes.update(real_movement=str(movement), asf=None if asf is None else str(asf))
+    cfg = Config(**changes)
     train = QUICK_TRAIN if quick else tuple(MOVEMENTS)
-    unknown = set(only or ()) - set(MOVEMENTS)
-    if unknown:
-        raise SkinnyInputError(f"unknown paper-c rows {sorted(unknown)}; known: "
-                               f"{', '.join(MOVEMENTS)}")
     table = {"train_position_nrmse": "train pos", "ymca__position_nrmse": "test YMCA pos",
-               f"{REAL_ID}__position_nrmse": "test real pos", "wall_s": "wall s",
-               "peak_rss_mb": "peak RSS MB"}
-    return Experiment(name=NAME, rows=rows(only, train), run_one=functools.partial(run_one, cfg),
+             f"{REAL_ID}__position_nrmse": "test real pos", "wall_s": "wall s",
+             "peak_rss_mb": "peak RSS MB"}
+    return Experiment(name=NAME, rows=rows(train, movement),
+                      run_one=functools.partial(run_one, cfg),
                       config=cfg, runs=cfg.runs, table_columns=table,
                       run_batch=functools.partial(run_batch, cfg),
                       cost=functools.partial(cost, cfg))
@@ -311,7 +267,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
 def cost(cfg: Config, row: Row) -> float:
     """One run's relative cost, its training movement's length (the engine starts the
     costliest rows first; YMCA at half speed is twice YMCA)."""
-    return float(len(_load(cfg, row.params["train"])))
+    return float(len(load(cfg, row.params["train"])))
 
 
 def report(results: dict, out_dir: Path) -> str:

@@ -18,8 +18,8 @@ from experiments.paper_c import (
     STILL_ELBOW_RATIO,
     SYMMETRIC_FACTOR,
     Config,
-    _load,
     elbow_range,
+    load,
 )
 from skinny_mj import body
 
@@ -119,7 +119,7 @@ def claims(runs: list[dict], dof: int = 4) -> list[str]:
                      f"ratio {ratio:.3f} (YMCA-trained on YM: {ref:.3f})"))
     produced = _mean(runs, "y", "ymca__elbow_range_rad")
     trained = _mean(runs, "y", "train_elbow_range_rad")
-    wanted = elbow_range(_load(Config(real_movement=None), "ymca").angles, dof)
+    wanted = elbow_range(load(Config(real_movement=None), "ymca").angles, dof)
     out.append(_line(None if not np.isfinite(produced) else bool(produced > trained),
                      "Y -> YMCA: more elbow motion than trained on",
                      f"produced elbow range {np.degrees(produced):.1f}° vs "

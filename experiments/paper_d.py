@@ -160,11 +160,9 @@ def _metrics(tt, fel) -> dict[str, Any]:
     }
 
 
-def rows(only: tuple[str, ...] | None = None) -> tuple[Row, ...]:
+def rows() -> tuple[Row, ...]:
     out = []
     for row_id, (method, noise, reps) in EXPERIMENTS.items():
-        if only and row_id not in only:
-            continue
         paper: dict[str, float] = {}
         for metric, (mean, var) in zip(COLUMNS, PAPER_TABLE_1[row_id], strict=True):
             paper[metric], paper[f"{metric}_var"] = mean, var
@@ -178,20 +176,18 @@ def quick_config(cfg: Config | None = None) -> Config:
 
 
 def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          only: tuple[str, ...] | None = None) -> Experiment:
+          dof: int | None = None, signals: str | None = None) -> Experiment:
     """The sweep: one row per experiment, both architectures per run. ``movement``
     (a library name, a file, or an excerpt such as
-    ``/work/shared/mocap/cmu/md_02.amc@start=3,duration=6.26``) replaces YMCA in
-    training and testing; the experiment is then named ``paper-d-<movement>``."""
-    from experiments.paper_e import movement_slug
-
-    cfg = quick_config() if quick else Config()
-    name = NAME
-    if movement is not None and movement != cfg.trajectory:
-        cfg = dataclasses.replace(cfg, trajectory=str(movement), asf=asf)
-        name = f"{NAME}-{movement_slug(movement)}"
+    ``../shared/mocap/cmu/md_02.amc@start=3,duration=6.26``) replaces YMCA in training
+    and testing; ``dof``/``signals`` another body (None: the paper's 3D Cartesian)."""
+    changes = {k: v for k, v in (("trajectory", movement), ("dof", dof),
+                                 ("signals", signals)) if v is not None}
+    if movement is not None:
+        changes["asf"] = None if asf is None else str(asf)
+    cfg = dataclasses.replace(quick_config() if quick else Config(), **changes)
     return Experiment(
-        name=name, rows=rows(only), run_one=functools.partial(run_one, cfg), config=cfg,
+        name=NAME, rows=rows(), run_one=functools.partial(run_one, cfg), config=cfg,
         runs=cfg.runs, run_batch=functools.partial(run_batch, cfg),
         table_columns={**COLUMNS, "fel_motor_test": "FEL motor test (extra)",
                        "tt_failed": "TT failed", "fel_failed": "FEL failed"},
@@ -220,7 +216,7 @@ def _average_run(out_dir: Path, row_id: str) -> dict | None:
 
 def _record(path: Path, outcome: TrainOutcome, row: Row) -> None:
     """The TT test of one run as an ``.rrd`` (rerun) recording."""
-    from skinny_mj.training import record_test
+    from skinny_mj.recording import record_test
 
     record_test(path, outcome,
                 f"paper D exp {row.row_id}, true-target test, average run (seed {outcome.seed})",
@@ -239,7 +235,7 @@ def figure_4(out_dir: Path, cfg: Config, row_ids: tuple[str, ...] = FIGURE_4_ROW
 
     reproduced = [] if reproduced is None else reproduced
     picked = []
-    for row in rows(row_ids):
+    for row in (r for r in rows() if r.row_id in row_ids):
         run = _average_run(out_dir, row.row_id)
         if run is not None:
             outcome = train(train_configs(cfg, row)["tt"], int(run["seed"]))

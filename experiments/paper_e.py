@@ -17,8 +17,8 @@ Rows of one sweep, grouped by id (``--rows table,fig3,fig4,fig5``; or single ids
 Defaults per SPEC §4/§5 (N = 200, spectral radius 0.5, reservoir noise 0.03 original /
 0.2 new, sensor noise 0.01, 10 epochs, K 1 → 0). ``--movement`` trains and tests every
 row on another movement, e.g. an excerpt of motion capture:
-``--movement /work/shared/mocap/cmu/md_02.amc@start=3,duration=6.26``; the experiment
-is then named ``paper-e-<movement>`` (its own output folder and table heading).
+``--movement ../shared/mocap/cmu/md_02.amc@start=3,duration=6.26`` (recorded in
+config.json and the table heading); ``--dof 8`` runs it on the 3D body.
 
 The paper's numbers are shown beside ours, labelled; never in place of ours.
 """
@@ -28,15 +28,13 @@ from __future__ import annotations
 import dataclasses
 import functools
 import json
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from skinny_mj.errors import SkinnyInputError
+from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
-from skinny_mj.training import TrainConfig, relative_cost, train
 
 NAME = "paper-e"
 
@@ -123,41 +121,26 @@ def train_config(cfg: Config, row: Row) -> TrainConfig:
     )
 
 
-def run_fel(cfg: Config, row: Row, seed: int) -> dict:
-    """One training + test run; returns the test metrics."""
-    outcome = train(train_config(cfg, row), seed)
-    m = outcome.metrics
-    if m["failed"]:
-        raise RunFailed(m.get("fail_reason") or "diverged")
-    return {
-        "position_nrmse": m["test"]["position_nrmse"],
-        "motor_nrmse": m["test"]["motor_nrmse"],
-        "train_wall_s": m["wall_s"],
-        "train_curve_position_nrmse": m["train"]["position_nrmse"],
-    }
+def convergence_config(cfg: Config, row: Row) -> TrainConfig:
+    """Fig. 3's network: the Table's, without reservoir noise."""
+    return TrainConfig(dof=cfg.dof, signals=cfg.signals, trajectory=cfg.trajectory,
+                       asf=cfg.asf, method="new", beta=float(row.params["beta"]),
+                       reservoir=cfg.reservoir, spectral_radius=cfg.spectral_radius, noise=0.0)
 
 
-def run_convergence(cfg: Config, row: Row, seed: int) -> dict:
+def run_convergence(cfg: Config, row: Row, seeds: list[int]) -> list[dict]:
     """Fig. 3: NRMSE(y_used^i, y_true) over ``fig3_cycles`` cycles with perfect targets
-    and teacher forcing (true commands at full scale 2 x the fastest speed)."""
-    from controllers.esn import ESN
+    and teacher forcing (true commands at full scale 2 x the fastest speed), for
+    several seeds in lockstep."""
     from controllers.true_target import convergence_curve
-    from skinny_mj.ideal import true_commands
-    from skinny_mj.training import esn_config, full_scale_speeds, load_trajectory, run_streams
+    from skinny_mj.training import build_run
 
-    beta = float(row.params["beta"])
-    tcfg = TrainConfig(dof=cfg.dof, signals=cfg.signals, trajectory=cfg.trajectory,
-                       asf=cfg.asf, method="new", beta=beta, reservoir=cfg.reservoir,
-                       spectral_radius=cfg.spectral_radius, noise=0.0)
-    traj, _ = load_trajectory(tcfg)
-    desired = traj.position_signals(cfg.signals)
-    commands = true_commands(traj.angles, full_scale_speeds(tcfg, traj), traj.dt)
-    esn_rng, _ = run_streams(seed)
-    esn = ESN(esn_config(tcfg, desired.shape[1]), rngs=[esn_rng])
-    curve = convergence_curve(esn, desired, commands, beta, int(row.params["cycles"]))[0]
-    return {"cycles_to_converge": cycles_to_converge(curve, cfg.fig3_tolerance),
-            "initial_nrmse": float(curve[0]), "final_nrmse": float(curve[-1]),
-            "convergence_curve": curve}
+    run = build_run(convergence_config(cfg, row), seeds)
+    curves = convergence_curve(run.esn, run.desired, run.true_commands,
+                               float(row.params["beta"]), int(row.params["cycles"]))
+    return [{"cycles_to_converge": cycles_to_converge(curve, cfg.fig3_tolerance),
+             "initial_nrmse": float(curve[0]), "final_nrmse": float(curve[-1]),
+             "convergence_curve": curve} for curve in curves]
 
 
 def cycles_to_converge(curve: np.ndarray, tolerance: float) -> int:
@@ -169,10 +152,11 @@ def cycles_to_converge(curve: np.ndarray, tolerance: float) -> int:
 
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    """One run of any row (dispatch on the row's kind)."""
-    if row.params.get("kind") == "convergence":
-        return run_convergence(cfg, row, seed)
-    return run_fel(cfg, row, seed)
+    """One run of any row: :func:`run_batch` of one seed."""
+    (out,) = run_batch(cfg, row, [seed])
+    if isinstance(out, Exception):
+        raise out
+    return out
 
 
 def group_of(row_id: str) -> str:
@@ -210,44 +194,34 @@ def all_rows(cfg: Config) -> tuple[Row, ...]:
     return tuple(out)
 
 
-def rows(cfg: Config | None = None, only: tuple[str, ...] | None = None) -> tuple[Row, ...]:
-    """The rows, optionally only those named in ``only`` (ids or groups: ``table``,
-    ``fig3``, ``fig4``, ``fig5`` (= ``fig5a`` + ``fig5b``), ``fig5a``, ``fig5b``)."""
-    every = all_rows(Config() if cfg is None else cfg)
-    if not only:
-        return every
-
-    def chosen(row_id: str, entry: str) -> bool:
-        group = group_of(row_id)
-        return entry in (row_id, group, group.rstrip("ab"))
-
-    known = {r.row_id for r in every} | {group_of(r.row_id) for r in every} | {"fig5"}
-    unknown = [e for e in only if e not in known]
-    if unknown:
-        groups = sorted({group_of(r.row_id) for r in every} | {"fig5"})
-        raise SkinnyInputError(f"unknown row(s) {unknown}; groups: {', '.join(groups)}; "
-                               "or row ids such as 5, fig4-n200, fig5b-nu0.2")
-    return tuple(r for r in every if any(chosen(r.row_id, e) for e in only))
+def rows(cfg: Config | None = None) -> tuple[Row, ...]:
+    """Every row of the sweep (the engine selects with ``--rows``, see :func:`groups`)."""
+    return all_rows(Config() if cfg is None else cfg)
 
 
-def movement_slug(movement: str) -> str:
-    """A file-name word for a movement: ``md_02.amc@start=3,duration=6.26`` ->
-    ``md_02_start=3_duration=6.26``."""
-    base, at, spec = str(movement).rpartition("@")
-    stem = Path(base if at else movement).stem
-    return re.sub(r"[^A-Za-z0-9_.+=-]+", "_", stem + ("_" + spec if at else ""))
+def groups(every: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
+    """Row groups for ``--rows``: ``table``, ``fig3``, ``fig4``, ``fig5a``, ``fig5b`` and
+    ``fig5`` (= fig5a + fig5b)."""
+    out: dict[str, tuple[str, ...]] = {}
+    for row in every:
+        out[group_of(row.row_id)] = (*out.get(group_of(row.row_id), ()), row.row_id)
+    out["fig5"] = out.get("fig5a", ()) + out.get("fig5b", ())
+    return out
 
 
 def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          only: tuple[str, ...] | None = None) -> Experiment:
-    """The sweep; ``quick``: see :meth:`Config.quick`."""
-    cfg = Config.quick() if quick else Config()
-    name = NAME
-    if movement is not None and movement != cfg.trajectory:
-        cfg = dataclasses.replace(cfg, trajectory=str(movement), asf=asf)
-        name = f"{NAME}-{movement_slug(movement)}"
+          dof: int | None = None, signals: str | None = None) -> Experiment:
+    """The sweep; ``quick``: see :meth:`Config.quick`. ``movement`` (+ ``asf``), ``dof``,
+    ``signals``: train and test every row on another movement or body (None: the
+    paper's)."""
+    changes = {k: v for k, v in (("trajectory", movement), ("dof", dof),
+                                 ("signals", signals)) if v is not None}
+    if movement is not None:
+        changes["asf"] = None if asf is None else str(asf)
+    cfg = Config.quick(**changes) if quick else Config(**changes)
+    every = rows(cfg)
     return Experiment(
-        name=name, rows=rows(cfg, only), run_one=functools.partial(run_one, cfg),
+        name=NAME, rows=every, groups=groups(every), run_one=functools.partial(run_one, cfg),
         config=cfg, runs=cfg.runs, table_columns=tuple(TABLE_COLUMNS),
         run_batch=functools.partial(run_batch, cfg), cost=functools.partial(cost, cfg),
     )
@@ -280,19 +254,12 @@ def report(results: dict, out_dir: Path) -> str:
 
 
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
-    """:func:`run_one` for several seeds of one row in lockstep (the engine's fast path,
-    :func:`skinny_mj.training.train_batch`): the same metrics seed by seed, or the
-    exception of a failed run. Convergence rows (Fig. 3) run one seed at a time."""
+    """Several seeds of one row in lockstep (the engine's fast path): seed by seed the
+    numbers each gets alone, or the :class:`RunFailed` of a diverged run."""
     from skinny_mj.training import train_batch
 
     if row.params.get("kind") == "convergence":
-        out: list = []
-        for seed in seeds:
-            try:
-                out.append(run_convergence(cfg, row, seed))
-            except Exception as exc:  # a run's failure is data
-                out.append(exc)
-        return out
+        return run_convergence(cfg, row, seeds)
     return [RunFailed(m.get("fail_reason") or "diverged") if m["failed"] else {
         "position_nrmse": m["test"]["position_nrmse"],
         "motor_nrmse": m["test"]["motor_nrmse"],

@@ -33,7 +33,7 @@ def _ok_runs(out_dir: Path, group: str) -> list[dict]:
 
 
 def _n_failed(out_dir: Path, row_id: str) -> int:
-    return sum(1 for r in load_runs(out_dir) if r["row"] == row_id and r.get("status") != "ok")
+    return sum(1 for r in load_runs(out_dir) if r["row"] == row_id and r.get("status") == "failed")
 
 
 def _padded(columns: Sequence[list[float]]) -> np.ndarray:
@@ -241,7 +241,8 @@ def median_recordings(out_dir: Path, cfg: Config, table_rows: Sequence[Row]) -> 
 
 def _record_run(path: Path, cfg: Config, row: Row, seed: int, metrics: dict) -> bool:
     """Re-train one run, write its test as an .rrd; True when it reproduces ``metrics``."""
-    from skinny_mj.training import record_test, train
+    from skinny_mj.recording import record_test
+    from skinny_mj.training import train
 
     outcome = train(train_config(cfg, row), seed)
     record_test(path, outcome, f"paper E exp {row.row_id}, median run (seed {seed})",

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from skinny_mj.errors import SkinnyInputError
+
 SIDES = ("right", "left")
 SHOULDER_HEIGHT_M = 1.42
 SHOULDER_HALF_WIDTH_M = 0.19
@@ -57,12 +59,34 @@ _ELBOW_2D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, np.pi))
 _ELBOW_3D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, 5 * np.pi / 6))
 
 ARM_JOINTS = {4: (_ABDUCTION, _ELBOW_2D), 8: (_ABDUCTION, _FLEXION, _ROTATION, _ELBOW_3D)}
+SIGNALS = ("joint", "cartesian")
+ACTUATIONS = ("velocity", "torque")
+#: The control step, s (50 Hz: the thesis's 200 Hz capture, every 4th sample kept).
+CONTROL_DT_S = 0.02
 
 
-def _check_dof(dof: int) -> int:
-    if dof not in ARM_JOINTS:
-        raise ValueError(f"dof must be 4 (2D) or 8 (3D), got {dof!r}")
-    return dof
+def check_dof(dof: object) -> int:
+    """``dof`` if it is 4 (2D) or 8 (3D), else a :class:`SkinnyInputError` (a ValueError)."""
+    if isinstance(dof, bool) or dof not in ARM_JOINTS:
+        raise SkinnyInputError(f"dof must be 4 (2D) or 8 (3D), got {dof!r}")
+    return int(dof)  # type: ignore[call-overload]
+
+
+def check_signals(signals: object) -> str:
+    """``signals`` if it is "joint" or "cartesian", else a :class:`SkinnyInputError`."""
+    if signals not in SIGNALS:
+        raise SkinnyInputError(f"signals must be one of {SIGNALS}, got {signals!r}")
+    return str(signals)
+
+
+def check_actuation(actuation: object) -> str:
+    """``actuation`` if it is "velocity" or "torque", else a :class:`SkinnyInputError`."""
+    if actuation not in ACTUATIONS:
+        raise SkinnyInputError(f"actuation must be one of {ACTUATIONS}, got {actuation!r}")
+    return str(actuation)
+
+
+_check_dof = check_dof
 
 
 def joint_axis(spec: JointSpec, side: str) -> np.ndarray:
@@ -86,10 +110,8 @@ def signal_names(dof: int, signals: str) -> tuple[str, ...]:
     """Names of the position signals: joint angles, or Cartesian components of the
     elbow relative to the shoulder and the wrist relative to the elbow
     (x, z in 2D; x, y, z in 3D), right arm first."""
-    if signals == "joint":
+    if check_signals(signals) == "joint":
         return dof_names(dof)
-    if signals != "cartesian":
-        raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
     axes = "xz" if _check_dof(dof) == 4 else "xyz"
     return tuple(
         f"{side}_{point}_{a}" for side in SIDES for point in ("elbow", "wrist") for a in axes
@@ -189,11 +211,9 @@ def cartesian_signals(q: np.ndarray, dof: int) -> np.ndarray:
 
 def position_signals(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
     """Normalized position signals (..., n_signals) for joint angles q (..., n_dof) rad."""
-    if signals == "joint":
+    if check_signals(signals) == "joint":
         return normalize_angles(q, dof)
-    if signals == "cartesian":
-        return cartesian_signals(q, dof)
-    raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
+    return cartesian_signals(q, dof)
 
 
 def signal_jacobian(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
@@ -209,11 +229,9 @@ def signal_jacobian(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
         raise ValueError(f"expected {n_dof} joint angles for dof={dof}, got {q.shape[-1]}")
     lead = q.shape[:-1]
     q2 = q.reshape(-1, n_dof)
-    if signals == "joint":
+    if check_signals(signals) == "joint":
         lo, hi = joint_ranges(dof).T
         return np.broadcast_to(np.diag(2.0 / (hi - lo)), lead + (n_dof, n_dof)).copy()
-    if signals != "cartesian":
-        raise ValueError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
     comps = _cartesian_components(dof)
     nc = len(comps)
     n_arm = n_dof // 2

@@ -14,8 +14,6 @@ from pathlib import Path
 
 from skinny_mj.errors import SkinnyInputError
 
-DEFAULT_RESULTS = Path("results")
-
 
 def _positive_int(text: str) -> int:
     value = int(text)
@@ -52,12 +50,6 @@ def _add_plant_args(p: argparse.ArgumentParser) -> None:
         default="cartesian",
         help="position signals the controller sees (default: %(default)s)",
     )
-
-
-def _timestamped(kind: str) -> Path:
-    from datetime import datetime
-
-    return DEFAULT_RESULTS / kind / datetime.now().strftime("%Y%m%d-%H%M%S")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -117,12 +109,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--runs", type=_positive_int, help="runs per row (default: the paper's)")
     p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
     p.add_argument("--out", type=Path, help="output folder (default: results/<name>/<time>)")
-    p.add_argument("--resume", action="store_true", help="skip runs already in --out")
+    p.add_argument("--resume", action="store_true", help="continue the sweep in --out: skip "
+                   "its ok and failed runs, rerun errored ones (rows may differ)")
     p.add_argument("--quick", action="store_true", help="a smoke test: few runs, few epochs")
     p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
-    p.add_argument("--movement", help="train/test on another movement (name or file)")
+    p.add_argument("--movement", help="train/test every row on another movement (name or "
+                   "file; default: the paper's); recorded in config.json, the name stays")
     p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc --movement")
-    p.add_argument("--rows", help="comma-separated row ids to run (default: all)")
+    p.add_argument("--dof", type=int, choices=(4, 8), help="2D (4) or 3D (8) Skinny "
+                   "(default: the paper's)")
+    p.add_argument("--signals", choices=("joint", "cartesian"),
+                   help="the networks' position signals (default: the paper's)")
+    p.add_argument("--rows", help="comma-separated row ids and groups to run (default: all); "
+                   "seeds are the full sweep's")
 
     p = sub.add_parser("bench", help="measure the fast path: ratios vs reservoirpy, physics, "
                        "the naive loop (prints a table)")

@@ -17,10 +17,16 @@ import numpy as np
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
 
+DEFAULT_RESULTS = Path("results")
+
+
+def _timestamped(kind: str) -> Path:
+    from datetime import datetime
+
+    return DEFAULT_RESULTS / kind / datetime.now().strftime("%Y%m%d-%H%M%S")
+
 
 def _out_dir(args: argparse.Namespace, kind: str) -> Path:
-    from skinny_mj.cli import _timestamped
-
     return Path(args.out) if args.out is not None else _timestamped(kind)
 
 
@@ -37,7 +43,7 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
     from skinny_mj.recording import write_recording
 
     return write_recording(
-        path, dt=0.02, dof=dof, dof_names=list(body.dof_names(dof)),
+        path, dt=body.CONTROL_DT_S, dof=dof, dof_names=list(body.dof_names(dof)),
         signal_names=list(body.signal_names(dof, signals)), desired_angles=desired_angles,
         actual_angles=actual_angles, commands=commands, desired_signals=desired_signals,
         actual_signals=actual_signals, sensed_signals=sensed_signals, title=title,
@@ -124,7 +130,7 @@ def _write_run(out: Path, outcome, title: str) -> None:
     """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png; for a
     failed (diverged) run only metrics.json, which says why."""
     from skinny_mj.plots import learning_curve_png
-    from skinny_mj.training import record_test
+    from skinny_mj.recording import record_test
 
     if outcome.failed:
         atomic_write_json(out / "metrics.json", outcome.metrics)
@@ -176,7 +182,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from experiments.paper_e import PAPER_TABLE_2
+    from skinny_mj import registry
     from skinny_mj.training import TrainConfig
 
     cfg = TrainConfig()  # paper E, experiment 5
@@ -188,7 +194,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     outcome = _train_and_write(cfg, args.seed, out, "demo: paper E exp. 5")
     wall = time.perf_counter() - start
     m = outcome.metrics
-    paper = PAPER_TABLE_2["5"]
+    paper = registry.get("paper-e").PAPER_TABLE_2["5"]
     rows = [
         ("test position NRMSE", _fmt(m["test"]["position_nrmse"]), f"{paper[0]:.4f}"),
         ("test motor NRMSE", _fmt(m["test"]["motor_nrmse"]), f"{paper[2]:.4f}"),
@@ -209,7 +215,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def cmd_test(args: argparse.Namespace) -> int:
     from controllers.esn import ESN, read_metadata
-    from skinny_mj.training import run_streams, test_network
+    from skinny_mj.training import TrainConfig, evaluate, run_of, run_streams
 
     path = Path(args.model)
     if not path.is_file():
@@ -224,9 +230,15 @@ def cmd_test(args: argparse.Namespace) -> int:
         raise SkinnyInputError("model has no Skinny metadata (dof, signals, max speed)", path=path)
     dof, signals = int(meta["dof"]), str(meta["signals"])
     traj, report = _load_movement(args, dof)
-    _, plant_seed = run_streams(args.seed)
-    test = test_network(esn, traj, signals, plant_seed, args.sensor_noise,
-                        np.asarray(meta["max_speed_rad_s"], dtype=float))
+    saved = meta.get("config") if isinstance(meta.get("config"), dict) else {}
+    try:
+        cfg = TrainConfig.from_dict({**saved, "dof": dof, "signals": signals,
+                                     "sensor_noise": args.sensor_noise})
+    except TypeError as err:
+        raise SkinnyInputError(f"model metadata holds a bad config ({err})", path=path) from None
+    run = run_of(cfg, esn, np.asarray(meta["max_speed_rad_s"], dtype=float), traj,
+                 [run_streams(args.seed).plant_seed])
+    (test,) = evaluate(run)
     metrics: dict[str, Any] = {
         "model": str(path), "trained_on": meta.get("trained_on"),
         "trajectory": str(args.trajectory),
@@ -287,31 +299,38 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 # -- experiment -------------------------------------------------------------------------
 def cmd_experiment(args: argparse.Namespace) -> int:
-    import experiments
+    """Build the experiment with the CLI's options (each None = the paper's default), run
+    the selected rows, write table/claims/report; exit 1 if any run errored (a bug)."""
+    from skinny_mj import registry
     from skinny_mj.experiment import default_out_dir, run_sweep
+    from skinny_mj.io import atomic_write_text
 
     if args.name == "list":
-        for name in experiments.REGISTRY:
-            print(f"{name:10} {experiments.describe(name)}")
+        for name in registry.names():
+            print(f"{name:10} {registry.describe(name)}")
         return 0
-    module = experiments.get(args.name)
-    only = tuple(r.strip() for r in args.rows.split(",")) if args.rows else None
-    exp = module.build(quick=args.quick, movement=args.movement,
-                       asf=None if args.asf is None else str(args.asf), only=only)
+    module = registry.get(args.name)
+    rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
+    options = {"quick": bool(args.quick), "movement": args.movement,
+               "asf": None if args.asf is None else str(args.asf), "dof": args.dof,
+               "signals": args.signals}
+    exp = module.build(**options)
     out = Path(args.out) if args.out is not None else default_out_dir(exp.name)
     start = time.perf_counter()
-    results = run_sweep(exp, out, runs=args.runs, workers=args.workers, resume=args.resume,
-                        scheduler=args.scheduler, progress=True)
+    results = run_sweep(exp, out, rows=rows, runs=args.runs, workers=args.workers,
+                        resume=args.resume, scheduler=args.scheduler, progress=True,
+                        options=options)
     wall = time.perf_counter() - start
     claims = module.report(results, out)
     table = (out / "table.md").read_text()
     summary = f"{table}\n## Claims\n{claims}\n\nwall time {wall:.1f} s\n"
-    from skinny_mj.io import atomic_write_text
-
     atomic_write_text(out / "claims.md", f"## Claims\n{claims}\n")
     print(summary)
+    n_error = int(results.get("n_error", 0))
+    if n_error:
+        print(f"{n_error} run(s) errored (bugs, not data): see {out / 'runs'}/*.json")
     print(f"results: {out}")
-    return 0
+    return 1 if n_error else 0
 
 
 # -- bench ------------------------------------------------------------------------------

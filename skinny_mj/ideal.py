@@ -73,3 +73,20 @@ class IdealController:
         """Command (..., n_dof) at control step ``step`` from the current angles q, rad."""
         target = self.angles[min(step + 1, len(self.angles) - 1)]
         return ideal_command(target, q, self.max_speed_rad_s, self.dt)
+
+
+def one_step_positions(trajectory, signals: str, max_speed_rad_s: np.ndarray):
+    """The true-target architecture's training position error: each teacher-forced
+    command applied for one step from the desired pose q_d(t), through Skinny's
+    kinematics (the servo follows a command to < 1 %; joints clip at their ranges)."""
+    from skinny_mj import body
+
+    dof, dt = trajectory.dof, trajectory.dt
+    lo, hi = body.joint_ranges(dof).T
+    q_from = trajectory.angles[:-1]
+
+    def one_step(_positions: np.ndarray, commands: np.ndarray) -> np.ndarray:
+        q_next = np.clip(q_from + np.clip(commands, -1, 1) * max_speed_rad_s * dt, lo, hi)
+        return body.position_signals(q_next, dof, signals)
+
+    return one_step

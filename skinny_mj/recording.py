@@ -308,3 +308,26 @@ def read_recording_series(path: str | Path, entity: str, timeline: str | None = 
                                path=path)
     idx, val = np.concatenate(index), np.concatenate(values)
     return val[np.argsort(idx, kind="stable")]
+
+
+def record_test(path: str | Path, outcome: Any, title: str,
+                metadata: Mapping[str, Any] | None = None) -> Path:
+    """Write the closed-loop test of a trained run (a
+    :class:`skinny_mj.training.TrainOutcome`) as one ``.rrd``: desired vs actual angles
+    and signals, commands, the arms in 3D, and the training curve."""
+    test, cfg, ro = outcome.test, outcome.config, outcome.test.rollout
+    curve = outcome.metrics["train"].get("position_nrmse")
+    curves = None
+    if isinstance(curve, list) and curve:
+        curves = {"train_position_nrmse": np.array([np.nan if v is None else v for v in curve],
+                                                   dtype=float)}
+    meta = {"seed": outcome.seed, "test": outcome.metrics["test"], "movement": cfg.trajectory,
+            **(metadata or {})}
+    return write_recording(
+        path, dt=test.trajectory.dt, dof=cfg.dof, dof_names=list(body.dof_names(cfg.dof)),
+        signal_names=list(body.signal_names(cfg.dof, cfg.signals)),
+        desired_angles=test.trajectory.angles, actual_angles=ro.angles[0],
+        commands=ro.commands[0], desired_signals=test.desired,
+        actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0], title=title,
+        metadata=meta, curves=curves,
+    )

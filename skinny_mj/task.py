@@ -24,8 +24,8 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.ideal import max_speeds
 from skinny_mj.physics import LIMIT_MARGIN_RAD, SkinnyPhysics, servo_ctrl
 
-CONTROL_DT_S = 0.02
-SIGNALS = ("joint", "cartesian")
+CONTROL_DT_S = body.CONTROL_DT_S
+SIGNALS = body.SIGNALS
 
 
 @dataclass(frozen=True)
@@ -58,12 +58,9 @@ def prepare(
     speed_factor: float = 2.0,
 ) -> Setup:
     """Validate the arguments of :func:`load` and derive the per-DOF numbers."""
-    if dof not in (4, 8):
-        raise SkinnyInputError(f"dof must be 4 (2D) or 8 (3D), got {dof!r}")
-    if signals not in SIGNALS:
-        raise SkinnyInputError(f"signals must be one of {SIGNALS}, got {signals!r}")
-    if actuation not in ("velocity", "torque"):
-        raise SkinnyInputError(f"actuation must be 'velocity' or 'torque', got {actuation!r}")
+    body.check_dof(dof)
+    body.check_signals(signals)
+    body.check_actuation(actuation)
     if not (np.isfinite(sensor_noise) and sensor_noise >= 0):
         raise SkinnyInputError(f"sensor_noise must be finite and >= 0, got {sensor_noise!r}")
     if trajectory is None:

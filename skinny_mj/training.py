@@ -1,115 +1,66 @@
-"""One training run of an ESN inverse model on the MuJoCo plant, and its test.
+"""The one training path: build a run's parts from a :class:`TrainConfig`, train, test.
 
-This is the glue between the pure-NumPy learning in ``controllers/`` and the plant:
-it builds the movement, the plant (:class:`skinny_mj.plant.BatchPlant`, or the
-dm_control environment through :class:`skinny_mj.plant.EnvPlant`), the ESN, runs
-feedback-error learning (original or new β method) or the true-target architecture,
-and tests the trained network with the feedback controller off (K = 0).
+Every experiment and command goes through these functions:
 
-Seeds: a run's seed s spawns two streams, ``SeedSequence(s).spawn(2)``: the ESN's
-Generator (weights, then reservoir noise) and the plant's sensor-noise seed. So a run
-is reproduced from (config, seed) alone, whichever plant path runs it.
+- :func:`build_run` (``cfg``, R seeds) -> :class:`Run`: the movement, the full-scale
+  speeds, the seed streams, the ESN inverse model (R networks in lockstep), the
+  optional forward model, the desired signals and true commands, and the plant
+  (built when first used: one :class:`skinny_mj.plant.BatchPlant` for all R runs,
+  paper B's :class:`skinny_mj.bimanual.BimanualPlant`, or the dm_control env);
+- :func:`train_run`: forward-model pre-training (:meth:`ForwardModel.pretrain`), then
+  feedback-error learning (:func:`controllers.fel.train`, original or β) or the
+  true-target architecture (:func:`controllers.true_target.train_true_target`);
+- :func:`evaluate`: the test (:func:`controllers.fel.evaluate`, K = 0) on any movement;
+- :func:`train_batch` / :func:`train`: the three together with the standard metrics
+  (papers D, E and the ``skinny train`` command).
+
+Seeds: a run's seed s spawns three streams, ``SeedSequence(s).spawn(3)``: the inverse
+ESN's Generator (weights, then reservoir noise), the plant's sensor-noise seed, and the
+forward ESN's Generator (weights, pre-training sensor noise, reservoir noise). So a
+run is reproduced from (config, seed) alone, whichever plant path and batch runs it.
 """
 
 from __future__ import annotations
 
-import math
+import functools
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field, fields, replace
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from controllers import fel
 from controllers.esn import ESN, ESNConfig
+from controllers.forward_model import ForwardModel
 from controllers.true_target import TrueTargetConfig, train_true_target
+from skinny_mj import ideal
+from skinny_mj.config import (  # noqa: F401  (re-exported: the training API in one place)
+    DEFAULT_NOISE,
+    METHODS,
+    PAPER_CYCLES_FOR_BETA,
+    TrainConfig,
+    relative_cost,
+    with_overrides,
+)
 from skinny_mj.errors import SkinnyInputError
 
-METHODS = ("original", "new", "true-target")
-#: Learning cycles per epoch the paper derived from its Figure 3 (paper E, Table 1).
-PAPER_CYCLES_FOR_BETA = {0.3: 2, 0.1: 3, 0.05: 6}
-#: Reservoir noise the paper chose per method (paper E, Fig. 5).
-DEFAULT_NOISE = {"original": 0.03, "new": 0.2, "true-target": 0.2}
+
+class RunStreams(NamedTuple):
+    """The random streams of one run (see the module docstring)."""
+
+    esn: np.random.Generator
+    plant_seed: int
+    forward: np.random.Generator
 
 
-@dataclass(frozen=True)
-class TrainConfig:
-    """One training run. Defaults: paper E experiment 5 (2D, Cartesian, N = 200,
-    spectral radius 0.5, reservoir noise 0.2, β = 0.1 with 3 learning cycles per
-    epoch, 10 epochs, K 1 → 0, sensor noise 0.01)."""
-
-    dof: int = 4
-    signals: str = "cartesian"
-    trajectory: str = "ymca"
-    asf: str | None = None
-    speed: float = 1.0
-    reps: int = 1
-    method: str = "new"
-    beta: float = 0.1
-    cycles: int | None = None  # learning cycles per epoch (new method); None: from β
-    epochs: int = 10
-    reservoir: int = 200
-    spectral_radius: float = 0.5
-    noise: float | None = None  # reservoir noise ν; None: DEFAULT_NOISE[method]
-    readout: str = "pinv"
-    ridge: float = 1e-6
-    sensor_noise: float = 0.01
-    tt_cycles: int = 50  # true-target with β < 1: cycles (paper D: 50 rounds); β = 1: one fit
-    max_speed_from: str | None = None  # movement whose speeds set full scale (None: this one)
-    plant: str = "batch"  # "batch" (MjData stepped directly) or "env" (dm_control)
-
-    def __post_init__(self) -> None:
-        checks = [
-            (self.method in METHODS, f"method must be one of {METHODS}, got {self.method!r}"),
-            (0 < self.beta <= 1, f"--beta must be in (0, 1], got {self.beta}"),
-            (self.cycles is None or self.cycles >= 1, f"--cycles must be >= 1, got {self.cycles}"),
-            (self.epochs >= 1, f"--epochs must be >= 1, got {self.epochs}"),
-            (self.reservoir >= 1, f"--reservoir must be >= 1, got {self.reservoir}"),
-            (
-                math.isfinite(self.spectral_radius) and self.spectral_radius >= 0,
-                f"--spectral-radius must be >= 0, got {self.spectral_radius}",
-            ),
-            (
-                self.noise is None or (math.isfinite(self.noise) and self.noise >= 0),
-                f"--noise must be >= 0, got {self.noise}",
-            ),
-            (self.readout in ("pinv", "ridge"), f"--readout must be pinv or ridge, got "
-             f"{self.readout!r}"),
-            (self.ridge >= 0, f"--ridge must be >= 0, got {self.ridge}"),
-            (self.reps >= 1, f"--reps must be >= 1, got {self.reps}"),
-            (self.plant in ("batch", "env"), f"plant must be 'batch' or 'env', got {self.plant!r}"),
-        ]
-        for ok, message in checks:
-            if not ok:
-                raise SkinnyInputError(message)
-
-    @property
-    def noise_level(self) -> float:
-        return DEFAULT_NOISE[self.method] if self.noise is None else self.noise
-
-    @property
-    def learning_cycles(self) -> int:
-        """Learning cycles per epoch: 1 for the original method; for the new method the
-        paper's Table 1 where it has β, else enough cycles for (1 − β)^n to fall below
-        5 % over all epochs (which reproduces the table for β = 0.1 and 0.05)."""
-        if self.cycles is not None:
-            return self.cycles
-        if self.method != "new":
-            return 1
-        for beta, cycles in PAPER_CYCLES_FOR_BETA.items():
-            if abs(self.beta - beta) < 1e-12:
-                return cycles
-        if self.beta >= 1:
-            return 1
-        total = math.ceil(math.log(0.05) / math.log(1.0 - self.beta))
-        return max(1, math.ceil(total / self.epochs))
-
-
-def run_streams(seed: int) -> tuple[np.random.Generator, int]:
-    """The ESN's Generator and the plant's sensor-noise seed for run ``seed``."""
-    esn_ss, plant_ss = np.random.SeedSequence(seed).spawn(2)
-    return np.random.default_rng(esn_ss), int(plant_ss.generate_state(1, np.uint64)[0])
+def run_streams(seed: int) -> RunStreams:
+    """The inverse ESN's Generator, the plant's sensor-noise seed and the forward
+    ESN's Generator for run ``seed``."""
+    esn_ss, plant_ss, fm_ss = np.random.SeedSequence(int(seed)).spawn(3)
+    return RunStreams(np.random.default_rng(esn_ss),
+                      int(plant_ss.generate_state(1, np.uint64)[0]),
+                      np.random.default_rng(fm_ss))
 
 
 def load_trajectory(cfg: TrainConfig):
@@ -119,36 +70,199 @@ def load_trajectory(cfg: TrainConfig):
     return load_movement(cfg.trajectory, cfg.dof, asf=cfg.asf, speed=cfg.speed)
 
 
-def make_plant(dof: int, signals: str, trajectory, seed: int | Sequence[int],
-               sensor_noise: float, max_speed_rad_s: np.ndarray, kind: str = "batch"):
-    """A plant imitating ``trajectory``: one run per seed (an int is one run).
+def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
+    """(n_dof,) rad/s: 2 x the fastest speed per DOF of ``trajectory`` (one repetition)
+    or of the movement named by ``cfg.max_speed_from``, so that networks trained on
+    different movements share one command scale (paper C)."""
+    from skinny_mj.ideal import max_speeds
+    from skinny_mj.trajectories import load_movement
 
-    ``kind`` "batch": one :class:`skinny_mj.plant.BatchPlant` stepping every run in
-    lockstep; "env": the dm_control environment (one run only).
-    """
+    if cfg.max_speed_from is not None:
+        trajectory, _ = load_movement(cfg.max_speed_from, cfg.dof, asf=cfg.asf)
+    return max_speeds(trajectory.angles, trajectory.dt)
+
+
+def make_plant(cfg: TrainConfig, trajectory, plant_seeds: Sequence[int],
+               max_speed_rad_s: np.ndarray):
+    """The plant of ``cfg`` imitating ``trajectory``, one run per plant seed."""
     from skinny_mj.plant import BatchPlant, EnvPlant
-    from skinny_mj.task import load
 
-    seeds = [int(seed)] if np.isscalar(seed) else [int(s) for s in seed]
-    if kind == "env":
+    seeds = [int(s) for s in plant_seeds]
+    common = dict(n_runs=len(seeds), seeds=seeds, sensor_noise=cfg.sensor_noise,
+                  actuation=cfg.actuation, max_speed_rad_s=max_speed_rad_s)
+    if cfg.leading_arm is not None:
+        from skinny_mj.bimanual import BimanualPlant
+
+        return BimanualPlant(cfg.dof, cfg.signals, trajectory, cfg.leading_arm, **common)
+    if cfg.plant == "env":
+        from skinny_mj.task import load
+
         if len(seeds) != 1:
             raise ValueError("the dm_control path steps one run per environment")
-        env = load(dof, signals, trajectory, sensor_noise=sensor_noise, seed=seeds[0],
-                   max_speed_rad_s=max_speed_rad_s)
+        env = load(cfg.dof, cfg.signals, trajectory, actuation=cfg.actuation,
+                   sensor_noise=cfg.sensor_noise, seed=seeds[0], max_speed_rad_s=max_speed_rad_s)
         return EnvPlant(env)
-    return BatchPlant(dof, signals, trajectory, n_runs=len(seeds), seeds=seeds,
-                      sensor_noise=sensor_noise, max_speed_rad_s=max_speed_rad_s)
+    return BatchPlant(cfg.dof, cfg.signals, trajectory, **common)
 
 
-def esn_config(cfg: TrainConfig, n_signals: int) -> ESNConfig:
+def esn_config(cfg: TrainConfig, n_inputs: int, n_outputs: int,
+               n_reservoir: int | None = None) -> ESNConfig:
     try:
         return ESNConfig(
-            n_inputs=2 * n_signals, n_outputs=cfg.dof, n_reservoir=cfg.reservoir,
+            n_inputs=n_inputs, n_outputs=n_outputs,
+            n_reservoir=cfg.reservoir if n_reservoir is None else n_reservoir,
             spectral_radius=cfg.spectral_radius, noise_level=cfg.noise_level,
             readout=cfg.readout, ridge_lambda=cfg.ridge,
         )
     except ValueError as err:
         raise SkinnyInputError(str(err)) from None
+
+
+def controlled_dofs(cfg: TrainConfig) -> np.ndarray | None:
+    """Body DOFs the ESN drives: None for all, paper B's lagging arm's otherwise."""
+    if cfg.leading_arm is None:
+        return None
+    from skinny_mj.bimanual import arm_dofs
+
+    return arm_dofs(cfg.dof, "left" if cfg.leading_arm == "right" else "right")
+
+
+def true_commands_of(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) -> np.ndarray:
+    """(T-1, n_controlled) the analytic commands of ``trajectory`` for the ESN's DOFs."""
+    from skinny_mj.ideal import true_commands
+
+    commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
+    dofs = controlled_dofs(cfg)
+    return commands if dofs is None else commands[:, dofs]
+
+
+@dataclass
+class Run:
+    """The parts of R runs of one config, built by :func:`build_run`.
+
+    trajectory : one repetition (the test movement by default); training : the
+    repeated movement the training cycles run; desired (T, n_sig) / true_commands
+    (T-1, n_out) of ``training``; max_speed_rad_s (n_dof,) full scale; esn : R
+    inverse networks; forward : R forward networks or None; plant_seeds : (R,).
+    """
+
+    cfg: TrainConfig
+    seeds: list[int]
+    trajectory: Any
+    training: Any
+    report: Any
+    max_speed_rad_s: np.ndarray
+    esn: ESN
+    forward: ForwardModel | None
+    plant_seeds: list[int]
+    desired: np.ndarray
+    true_commands: np.ndarray
+
+    @functools.cached_property
+    def plant(self):
+        """The training plant (built on first use: Fig. 3-style runs never need it)."""
+        return make_plant(self.cfg, self.training, self.plant_seeds, self.max_speed_rad_s)
+
+    @property
+    def scored(self) -> np.ndarray | None:
+        """Signals the position metrics score: all (None), or paper B's lagging arm's."""
+        if self.cfg.leading_arm is None:
+            return None
+        from skinny_mj.bimanual import arm_signals
+
+        lagging = "left" if self.cfg.leading_arm == "right" else "right"
+        return arm_signals(self.cfg.dof, self.cfg.signals, lagging)
+
+    def fel_config(self) -> fel.FELConfig:
+        cfg = self.cfg
+        return fel.FELConfig(method=cfg.method, beta=cfg.beta,
+                             learning_cycles=cfg.learning_cycles, epochs=cfg.epochs,
+                             gain_schedule=cfg.gain_schedule, gain_factor=cfg.gain_factor,
+                             gain_value=cfg.gain_value, delay_steps=cfg.delay,
+                             inputs=cfg.inputs)
+
+
+def build_run(cfg: TrainConfig, seeds: Sequence[int]) -> Run:
+    """The parts of ``len(seeds)`` runs of ``cfg`` in lockstep (see :class:`Run`)."""
+    from skinny_mj import body
+
+    if cfg.actuation != "velocity" and cfg.method != "true-target":
+        raise SkinnyInputError("feedback-error learning on the torque body needs a feedback "
+                               "controller in torque units; train with actuation='velocity'")
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise ValueError("build_run needs at least one seed")
+    trajectory, report = load_trajectory(cfg)
+    training = trajectory.repeat(cfg.reps) if cfg.reps > 1 else trajectory
+    max_speed = full_scale_speeds(cfg, trajectory)
+    streams = [run_streams(s) for s in seeds]
+    n_sig = body.n_signals(cfg.dof, cfg.signals)
+    dofs = controlled_dofs(cfg)
+    n_out = cfg.dof if dofs is None else len(dofs)
+    n_in = (n_sig if cfg.inputs == "desired+sensed" else 0) + n_sig \
+        + (n_sig if cfg.forward is not None else 0)
+    esn = ESN(esn_config(cfg, n_in, n_out), n_runs=len(seeds), rngs=[s.esn for s in streams])
+    forward = None
+    if cfg.forward is not None:
+        fm_cfg = esn_config(cfg, n_sig + n_out, n_sig, cfg.forward_reservoir)
+        forward = ForwardModel(ESN(fm_cfg, n_runs=len(seeds), rngs=[s.forward for s in streams]),
+                               cfg.forward)
+    return Run(cfg=cfg, seeds=seeds, trajectory=trajectory, training=training, report=report,
+               max_speed_rad_s=max_speed, esn=esn, forward=forward,
+               plant_seeds=[s.plant_seed for s in streams],
+               desired=training.position_signals(cfg.signals),
+               true_commands=true_commands_of(cfg, training, max_speed))
+
+
+def run_of(cfg: TrainConfig, esn: ESN, max_speed_rad_s: np.ndarray, trajectory,
+           plant_seeds: Sequence[int]) -> Run:
+    """A :class:`Run` around networks trained elsewhere (e.g. a saved ``model.npz``),
+    to :func:`evaluate` them on ``trajectory`` with the full scale they were trained with."""
+    max_speed = np.asarray(max_speed_rad_s, float)
+    return Run(cfg=cfg, seeds=[0] * esn.n_runs, trajectory=trajectory, training=trajectory,
+               report=None, max_speed_rad_s=max_speed, esn=esn, forward=None,
+               plant_seeds=[int(s) for s in plant_seeds],
+               desired=trajectory.position_signals(cfg.signals),
+               true_commands=true_commands_of(cfg, trajectory, max_speed))
+
+
+@dataclass
+class Training:
+    """What :func:`train_run` measured. fel : the FEL curve and failures (None for the
+    true-target architecture); true_target : the TT fit's errors (None for FEL);
+    pretrain_prediction_nrmse : (R,) the forward model's pre-training error or None."""
+
+    fel: fel.TrainResult | None = None
+    true_target: Any = None
+    pretrain_prediction_nrmse: np.ndarray | None = None
+
+
+def train_run(run: Run, progress: Callable[[int, int], None] | None = None) -> Training:
+    """Train ``run``'s networks in place. ``progress(done, total)`` after every cycle."""
+    cfg, out = run.cfg, Training()
+    if run.forward is not None and cfg.forward in ("serial", "hybrid"):
+        out.pretrain_prediction_nrmse = run.forward.pretrain(
+            run.trajectory.position_signals(cfg.signals),
+            true_commands_of(cfg, run.trajectory, run.max_speed_rad_s),
+            cfg.delay, sensor_noise=cfg.sensor_noise)
+    if cfg.method == "true-target":
+        tt = TrueTargetConfig(method="original" if cfg.beta >= 1 else "new", beta=cfg.beta,
+                              cycles=cfg.tt_cycles, noise=cfg.noise_level > 0)
+        out.true_target = train_true_target(
+            run.esn, run.desired, run.true_commands, tt,
+            one_step=ideal.one_step_positions(run.training, cfg.signals, run.max_speed_rad_s))
+        _report(progress, 1, 1)
+        return out
+    fcfg = run.fel_config()
+    per_epoch = fcfg.learning_cycles + 2
+    total = cfg.epochs * per_epoch
+
+    def tick(epoch: int, cycle: int) -> None:
+        _report(progress, epoch * per_epoch + cycle + 1, total)
+
+    out.fel = fel.train(run.esn, run.plant, run.desired, fcfg, true_commands=run.true_commands,
+                        progress=tick, forward=run.forward, scored=run.scored)
+    return out
 
 
 @dataclass
@@ -165,36 +279,32 @@ class TestOutcome:
     true_commands: np.ndarray = field(repr=False)
 
 
-def test_networks(esn: ESN, trajectory, signals: str, plant_seeds: Sequence[int],
-                  sensor_noise: float, max_speed_rad_s: np.ndarray,
-                  plant_kind: str = "batch") -> list[TestOutcome]:
-    """Test R networks in lockstep (one plant run each, sensor noise from
-    ``plant_seeds``): reset, one cycle with the feedback controller off, no learning,
-    no reservoir noise."""
-    from skinny_mj.ideal import true_commands
+def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = None,
+             plant=None) -> list[TestOutcome]:
+    """Test the R trained networks of ``run`` (K = 0, no noise, no learning) on
+    ``trajectory`` (default: one repetition of the training movement), after
+    ``cfg.test_washout_cycles`` unscored cycles, with ``run``'s full-scale speeds.
 
-    plant = make_plant(trajectory.dof, signals, trajectory, plant_seeds, sensor_noise,
-                       max_speed_rad_s, plant_kind)
-    desired = trajectory.position_signals(signals)
-    commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
-    ev = fel.evaluate(esn, plant, desired, true_commands=commands)
-    out = []
-    for r in range(esn.n_runs):
-        failed = bool(ev.failed[r])
-        out.append(TestOutcome(
-            position_nrmse=None if failed else float(ev.position_nrmse[r]),
-            motor_nrmse=None if failed else float(ev.motor_nrmse[r]),
-            failed=failed, fail_reason=ev.fail_reason[r], rollout=rollout_run(ev.rollout, r),
-            trajectory=trajectory, desired=desired, true_commands=commands,
-        ))
-    return out
-
-
-def test_network(esn: ESN, trajectory, signals: str, seed: int, sensor_noise: float,
-                 max_speed_rad_s: np.ndarray, plant_kind: str = "batch") -> TestOutcome:
-    """:func:`test_networks` for one network and one plant seed."""
-    return test_networks(esn, trajectory, signals, [seed], sensor_noise, max_speed_rad_s,
-                         plant_kind)[0]
+    The plant is a fresh one whose sensor noise restarts from ``plant_seeds``
+    (default: the runs' own plant seeds), or ``plant`` as given (e.g. ``run.plant``,
+    whose noise stream then continues from training)."""
+    cfg = run.cfg
+    trajectory = run.trajectory if trajectory is None else trajectory
+    if plant is None:
+        seeds = run.plant_seeds if plant_seeds is None else plant_seeds
+        plant = make_plant(cfg, trajectory, seeds, run.max_speed_rad_s)
+    desired = trajectory.position_signals(cfg.signals)
+    commands = true_commands_of(cfg, trajectory, run.max_speed_rad_s)
+    ev = fel.evaluate(run.esn, plant, desired, commands, cfg.delay, run.forward,
+                      inputs=cfg.inputs, washout_cycles=cfg.test_washout_cycles,
+                      scored=run.scored)
+    return [TestOutcome(
+        position_nrmse=None if ev.failed[r] else float(ev.position_nrmse[r]),
+        motor_nrmse=None if ev.failed[r] else float(ev.motor_nrmse[r]),
+        failed=bool(ev.failed[r]), fail_reason=ev.fail_reason[r],
+        rollout=ev.rollout.select(r), trajectory=trajectory, desired=desired,
+        true_commands=commands,
+    ) for r in range(run.esn.n_runs)]
 
 
 @dataclass
@@ -219,192 +329,71 @@ def train(cfg: TrainConfig, seed: int = 0,
 
     ``progress(done, total)`` is called after every cycle (for a progress bar).
     """
-    return _train_runs(cfg, [seed], progress)[0]
-
-
-def relative_cost(cfg: TrainConfig) -> float:
-    """A training's size, for scheduling sweeps (longest first): its cycles through the
-    movement (FEL: epochs x (learning cycles + washout + evaluation); true target: its
-    cycles; x reps; + the test), x N / 200 for reservoirs above 200 units."""
-    cycles = cfg.tt_cycles if cfg.method == "true-target" \
-        else cfg.epochs * (cfg.learning_cycles + 2)
-    return (cycles * cfg.reps + 1) * max(1.0, cfg.reservoir / 200)
+    return train_batch(cfg, [seed], progress)[0]
 
 
 def train_batch(cfg: TrainConfig, seeds: Sequence[int],
                 progress: Callable[[int, int], None] | None = None) -> list[TrainOutcome]:
     """Train R = len(seeds) runs of ``cfg`` in lockstep; run r equals ``train(cfg, seeds[r])``.
 
-    One ESN with R networks (``rngs`` = each seed's :func:`run_streams` Generator) and
-    one :class:`skinny_mj.plant.BatchPlant` with R ``MjData`` (each seed's sensor-noise
-    seed) step together; every per-run number is the one the single run computes.
     ``metrics["wall_s"]`` is the batch's wall time divided by R (and
     ``metrics["lockstep_runs"]`` = R). With ``cfg.plant == "env"`` (dm_control, one run
     per environment) the runs are trained one after another.
     """
     seeds = [int(s) for s in seeds]
-    if cfg.plant == "env":
-        return [train(cfg, s, progress) for s in seeds]
-    return _train_runs(cfg, seeds, progress) if seeds else []
-
-
-def _train_runs(cfg: TrainConfig, seeds: list[int],
-                progress: Callable[[int, int], None] | None) -> list[TrainOutcome]:
-    """The one training path behind :func:`train` and :func:`train_batch`."""
-    from skinny_mj.ideal import true_commands
-
+    if cfg.plant == "env" and len(seeds) > 1:
+        return [o for s in seeds for o in train_batch(cfg, [s], progress)]
+    if not seeds:
+        return []
     start = time.perf_counter()
-    n_runs = len(seeds)
-    trajectory, report = load_trajectory(cfg)
-    training = trajectory.repeat(cfg.reps) if cfg.reps > 1 else trajectory
-    # Full scale: twice the fastest speed of each DOF in ONE repetition of the movement
-    # (or of another movement, so that networks trained on different movements share
-    # one command scale, as in paper C).
-    max_speed = full_scale_speeds(cfg, trajectory)
-    streams = [run_streams(s) for s in seeds]
-    plant_seeds = [p for _, p in streams]
-    n_signals = trajectory.position_signals(cfg.signals).shape[1]
-    esn = ESN(esn_config(cfg, n_signals), n_runs=n_runs, rngs=[g for g, _ in streams])
-    desired = training.position_signals(cfg.signals)
-    commands = true_commands(training.angles, max_speed, training.dt)
-    runs: list[dict[str, Any]] = [{} for _ in seeds]  # per run: "train" (+ failure)
-    if cfg.method == "true-target":
-        tt = TrueTargetConfig(method="original" if cfg.beta >= 1 else "new", beta=cfg.beta,
-                              cycles=cfg.tt_cycles, noise=cfg.noise_level > 0)
-        result = train_true_target(esn, desired, commands, tt,
-                                   one_step=one_step_positions(training, cfg.signals, max_speed))
-        for r in range(n_runs):
-            runs[r]["train"] = {"motor_nrmse": float(result.motor_nrmse[r]),
-                                "position_nrmse": float(result.position_nrmse[r])}
-        _report(progress, 1, 1)
+    run = build_run(cfg, seeds)
+    trained = train_run(run, progress)
+    tests = evaluate(run)
+    return [_outcome(run, trained, r, test, (time.perf_counter() - start) / len(seeds))
+            for r, test in enumerate(tests)]
+
+
+def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
+             wall_share: float) -> TrainOutcome:
+    """Run r's :class:`TrainOutcome` with the standard metrics."""
+    metrics: dict[str, Any] = {}
+    if trained.true_target is not None:
+        tt = trained.true_target
+        metrics["train"] = {"motor_nrmse": float(tt.motor_nrmse[r]),
+                            "position_nrmse": float(tt.position_nrmse[r])}
     else:
-        fcfg = fel.FELConfig(method=cfg.method, beta=cfg.beta,
-                             learning_cycles=cfg.learning_cycles, epochs=cfg.epochs)
-        per_epoch = fcfg.learning_cycles + 2
-        total = cfg.epochs * per_epoch
-        plant = make_plant(cfg.dof, cfg.signals, training, plant_seeds, cfg.sensor_noise,
-                           max_speed, cfg.plant)
-
-        def tick(epoch: int, cycle: int) -> None:
-            _report(progress, epoch * per_epoch + cycle + 1, total)
-
-        result = fel.train(esn, plant, desired, fcfg, true_commands=commands, progress=tick)
+        result = trained.fel
         curve = result.to_dict()
-        for r in range(n_runs):
-            runs[r]["train"] = {"gains": curve["gains"],
-                                "position_nrmse": curve["position_nrmse"][r],
-                                "motor_nrmse": curve["motor_nrmse"][r]}
-            if result.failed[r]:
-                runs[r].update(failed=True, fail_reason=result.fail_reason[r],
-                               fail_epoch=result.fail_epoch[r])
-    tests = test_networks(esn, trajectory, cfg.signals, plant_seeds, cfg.sensor_noise,
-                          max_speed, cfg.plant)
-    wall_share = (time.perf_counter() - start) / n_runs
-    outcomes = []
-    for r, (seed, metrics, test) in enumerate(zip(seeds, runs, tests, strict=True)):
-        if not metrics.get("failed") and test.failed:
-            metrics.update(failed=True, fail_reason=f"test: {test.fail_reason}")
-        metrics.setdefault("failed", False)
-        if metrics["failed"]:  # a diverged network has no test result, only its reason
-            metrics["test"] = {"position_nrmse": None, "motor_nrmse": None}
-        else:
-            metrics["test"] = {"position_nrmse": test.position_nrmse,
-                               "motor_nrmse": test.motor_nrmse}
-        metrics.update(
-            config={**asdict(cfg), "learning_cycles": cfg.learning_cycles,
-                    "noise_level": cfg.noise_level},
-            seed=seed, steps_per_cycle=len(desired),
-            max_speed_rad_s=[float(v) for v in max_speed],
-            clipped_samples=int(report.clipped_samples), wall_s=wall_share,
-            lockstep_runs=n_runs,
-        )
-        outcomes.append(TrainOutcome(cfg, seed, metrics, esn_run(esn, r), test, max_speed))
-    return outcomes
-
-
-def record_test(path, outcome: TrainOutcome, title: str, metadata: dict | None = None):
-    """Write the closed-loop test of a trained run as one rerun ``.rrd``: desired vs
-    actual angles and signals, commands, the arms in 3D, and the training curve."""
-    from skinny_mj import body
-    from skinny_mj.recording import write_recording
-
-    test, cfg, ro = outcome.test, outcome.config, outcome.test.rollout
-    curve = outcome.metrics["train"].get("position_nrmse")
-    curves = None
-    if isinstance(curve, list) and curve:
-        curves = {"train_position_nrmse": np.array([np.nan if v is None else v for v in curve],
-                                                   dtype=float)}
-    meta = {"seed": outcome.seed, "test": outcome.metrics["test"], "movement": cfg.trajectory,
-            **(metadata or {})}
-    return write_recording(
-        path, dt=test.trajectory.dt, dof=cfg.dof, dof_names=list(body.dof_names(cfg.dof)),
-        signal_names=list(body.signal_names(cfg.dof, cfg.signals)),
-        desired_angles=test.trajectory.angles, actual_angles=ro.angles[0],
-        commands=ro.commands[0], desired_signals=test.desired,
-        actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0], title=title,
-        metadata=meta, curves=curves,
+        metrics["train"] = {"gains": curve["gains"], "position_nrmse": curve["position_nrmse"][r],
+                            "motor_nrmse": curve["motor_nrmse"][r]}
+        if result.failed[r]:
+            metrics.update(failed=True, fail_reason=result.fail_reason[r],
+                           fail_epoch=result.fail_epoch[r])
+    if not metrics.get("failed") and test.failed:
+        metrics.update(failed=True, fail_reason=f"test: {test.fail_reason}")
+    metrics.setdefault("failed", False)
+    if metrics["failed"]:  # a diverged network has no test result, only its reason
+        metrics["test"] = {"position_nrmse": None, "motor_nrmse": None}
+    else:
+        metrics["test"] = {"position_nrmse": test.position_nrmse,
+                           "motor_nrmse": test.motor_nrmse}
+    if trained.pretrain_prediction_nrmse is not None:
+        metrics["pretrain_prediction_nrmse"] = float(trained.pretrain_prediction_nrmse[r])
+    metrics.update(
+        config=run.cfg.to_dict(), seed=run.seeds[r], steps_per_cycle=len(run.desired),
+        max_speed_rad_s=[float(v) for v in run.max_speed_rad_s],
+        clipped_samples=int(run.report.clipped_samples), wall_s=wall_share,
+        lockstep_runs=len(run.seeds),
     )
+    return TrainOutcome(run.cfg, run.seeds[r], metrics, esn_run(run.esn, r), test,
+                        run.max_speed_rad_s)
 
 
 def esn_run(esn: ESN, r: int) -> ESN:
     """Run ``r`` of a lockstep ESN as a one-run ESN (weights, state, noise stream)."""
-    if esn.n_runs == 1:
-        return esn
-    one = ESN.__new__(ESN)
-    one.cfg, one.n_runs, one.dtype, one.rngs = esn.cfg, 1, esn.dtype, [esn.rngs[r]]
-    one._set_weights(esn.W[r:r + 1], esn.W_in[r:r + 1], esn.W_back[r:r + 1],
-                     esn.W_out[r:r + 1])
-    one.x, one.y = esn.x[r:r + 1].copy(), esn.y[r:r + 1].copy()
-    one.extended = esn.extended[r:r + 1].copy()
-    one._noise_pos = esn._noise_pos
-    if hasattr(esn, "_noise_buf"):
-        one._noise_buf = esn._noise_buf[:, r:r + 1].copy()
-    return one
-
-
-def rollout_run(ro: fel.Rollout, r: int) -> fel.Rollout:
-    """Run ``r`` of a lockstep :class:`controllers.fel.Rollout` (arrays keep R = 1)."""
-    if ro.commands.shape[0] == 1:
-        return ro
-    return fel.Rollout(**{
-        f.name: None if getattr(ro, f.name) is None else getattr(ro, f.name)[r:r + 1]
-        for f in fields(ro)
-    })
-
-
-def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
-    """(n_dof,) rad/s: 2 x the fastest speed per DOF of ``trajectory`` (one repetition)
-    or of the movement named by ``cfg.max_speed_from``."""
-    from skinny_mj.ideal import max_speeds
-    from skinny_mj.trajectories import load_movement
-
-    if cfg.max_speed_from is not None:
-        trajectory, _ = load_movement(cfg.max_speed_from, cfg.dof, asf=cfg.asf)
-    return max_speeds(trajectory.angles, trajectory.dt)
-
-
-def one_step_positions(trajectory, signals: str, max_speed_rad_s: np.ndarray):
-    """The true-target architecture's training position error: each teacher-forced
-    command applied for one step from the desired pose q_d(t), through Skinny's
-    kinematics (the servo follows a command to < 1 %; joints clip at their ranges)."""
-    from skinny_mj import body
-
-    dof, dt = trajectory.dof, trajectory.dt
-    lo, hi = body.joint_ranges(dof).T
-    q_from = trajectory.angles[:-1]
-
-    def one_step(_positions: np.ndarray, commands: np.ndarray) -> np.ndarray:
-        q_next = np.clip(q_from + np.clip(commands, -1, 1) * max_speed_rad_s * dt, lo, hi)
-        return body.position_signals(q_next, dof, signals)
-
-    return one_step
+    return esn if esn.n_runs == 1 else esn.select([r])
 
 
 def _report(progress: Callable[[int, int], None] | None, done: int, total: int) -> None:
     if progress is not None:
         progress(done, total)
-
-
-def with_overrides(cfg: TrainConfig, **changes: Any) -> TrainConfig:
-    """``cfg`` with some fields replaced (validated again)."""
-    return replace(cfg, **{k: v for k, v in changes.items() if v is not None})

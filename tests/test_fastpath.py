@@ -19,7 +19,7 @@ from controllers import fel
 from controllers.esn import ESN
 from controllers.metrics import position_nrmse
 from skinny_mj import bench
-from skinny_mj.experiment import Experiment, Row, execute_batch, run_sweep
+from skinny_mj.experiment import Experiment, Row, RunFailed, execute_batch, run_sweep
 from skinny_mj.plant import BatchPlant, EnvPlant
 from skinny_mj.task import load
 from skinny_mj.training import TrainConfig, train, train_batch
@@ -112,7 +112,7 @@ def test_float32_state_loop_and_closed_loop_within_tolerance():
 # -- the engine ---------------------------------------------------------------------------
 def _toy_one(row: Row, seed: int) -> dict:
     if seed % 7 == 0:
-        raise RuntimeError("diverged")
+        raise RunFailed("diverged")
     rng = np.random.default_rng(seed)
     return {"value": float(rng.random() + row.params["shift"])}
 
@@ -122,7 +122,7 @@ def _toy_batch(row: Row, seeds: list[int]) -> list:
     for seed in seeds:
         try:
             out.append(_toy_one(row, seed))
-        except RuntimeError as exc:
+        except RunFailed as exc:
             out.append(exc)
     return out
 

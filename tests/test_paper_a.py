@@ -12,10 +12,13 @@ from controllers.fel import Rollout
 from controllers.forward_model import ForwardModel
 from controllers.metrics import nrmse
 from experiments import get, paper_a
-from skinny_mj.delays import DelayConfig, feedback_share, pretrain_forward, run_delay
-from skinny_mj.experiment import Experiment, run_sweep
+from skinny_mj.experiment import Experiment, Row, run_sweep
 
-TINY = replace(paper_a.quick_config().model, epochs=1, learning_cycles=1)
+TINY = paper_a.Config(model=replace(paper_a.quick_config().model, epochs=1, cycles=1))
+
+
+def _row(arch: str, delay: int) -> Row:
+    return Row(paper_a.row_id(arch, delay), {"architecture": arch, "delay": delay})
 
 
 def _movement(n: int = 120) -> tuple[np.ndarray, np.ndarray]:
@@ -29,12 +32,24 @@ def test_pretrained_forward_model_beats_the_delayed_no_change_guess():
     desired, commands = _movement()
     fm = ForwardModel(ESN(ESNConfig(8, 4, n_reservoir=60, spectral_radius=0.1,
                                     noise_level=0.2), seed=3), "serial")
-    rng = np.random.default_rng(0)
     for delay in (0, 3):
-        err = pretrain_forward(fm, desired, commands, delay, 0.01, rng)
+        err = fm.pretrain(desired, commands, delay, sensor_noise=0.01)
         stale = nrmse(desired[np.maximum(np.arange(len(commands)) - delay, 0)], desired[1:])
         assert err.shape == (1,)
         assert err[0] < 0.5 * stale
+
+
+def test_pretraining_noise_comes_from_each_runs_own_stream():
+    desired, commands = _movement()
+    cfg = ESNConfig(8, 4, n_reservoir=40, spectral_radius=0.1, noise_level=0.2)
+    both = ForwardModel(ESN(cfg, n_runs=2, seed=9), "serial")
+    err_both = both.pretrain(desired, commands, 2, sensor_noise=0.01)
+    alone = [ForwardModel(both.esn.select([r]), "serial") for r in range(2)]
+    # a fresh selection of an untrained batch = the same networks and streams, unused
+    fresh = ForwardModel(ESN(cfg, n_runs=2, seed=9), "serial")
+    alone = [ForwardModel(fresh.esn.select([r]), "serial") for r in range(2)]
+    for r, fm in enumerate(alone):
+        assert fm.pretrain(desired, commands, 2, sensor_noise=0.01)[0] == err_both[r]
 
 
 def test_feedback_share_is_a_fraction_and_correction_ratio_can_exceed_one():
@@ -43,30 +58,35 @@ def test_feedback_share_is_a_fraction_and_correction_ratio_can_exceed_one():
     ro = Rollout(commands, y_esn, np.zeros((1, 6, 4)), *(np.zeros((1, 6, 4)),) * 3,
                  states=np.zeros((1, 5, 3)))
     assert ro.correction_ratio[0] == pytest.approx(4.0)
-    assert feedback_share(ro)[0] == pytest.approx(0.4 / 0.9)
+    assert paper_a.feedback_share(ro)[0] == pytest.approx(0.4 / 0.9)
 
 
 def test_run_is_reproducible_and_reports_the_metrics():
-    a = run_delay(TINY, "serial", 2, seed=5)
-    b = run_delay(TINY, "serial", 2, seed=5)
+    a = paper_a.run_one(TINY, _row("serial", 2), seed=5)
+    b = paper_a.run_one(TINY, _row("serial", 2), seed=5)
     for key in ("performance_nrmse", "feedback_share", "prediction_nrmse",
                 "pretrain_prediction_nrmse", "test_position_nrmse"):
         assert a[key] == b[key], key
         assert np.isfinite(a[key])
     assert 0 <= a["feedback_share"] <= 1
-    assert "prediction_nrmse" not in run_delay(TINY, "inverse", 0, seed=5)
+    assert "prediction_nrmse" not in paper_a.run_one(TINY, _row("inverse", 0), seed=5)
+
+
+@pytest.mark.parametrize("arch", paper_a.ARCHITECTURES)
+def test_lockstep_batch_equals_each_seed_alone(arch):
+    row, seeds = _row(arch, 3), [11, 12, 13]
+    batch = paper_a.run_batch(TINY, row, seeds)
+    for seed, out in zip(seeds, batch, strict=True):
+        alone = paper_a.run_one(TINY, row, seed)
+        assert {k: v for k, v in out.items() if k != "wall_s"} == \
+            {k: v for k, v in alone.items() if k != "wall_s"}
 
 
 def test_delay_hurts_the_inverse_only_architecture():
-    cfg = paper_a.quick_config().model
-    d0 = run_delay(cfg, "inverse", 0, seed=1)["performance_nrmse"]
-    d4 = run_delay(cfg, "inverse", 4, seed=1)["performance_nrmse"]
+    cfg = paper_a.quick_config()
+    d0 = paper_a.run_one(cfg, _row("inverse", 0), seed=1)["performance_nrmse"]
+    d4 = paper_a.run_one(cfg, _row("inverse", 4), seed=1)["performance_nrmse"]
     assert d4 > 2 * d0
-
-
-def test_bad_architecture():
-    with pytest.raises(ValueError, match="architecture"):
-        run_delay(TINY, "sideways", 0, seed=0)
 
 
 def _fake(metrics_by_row: dict[str, list[dict]]):
@@ -100,9 +120,10 @@ def test_claims_hold_and_fail_on_synthetic_runs(tmp_path):
 
 def test_quick_sweep_end_to_end(tmp_path):
     module = get("paper-a")
-    exp = module.build(quick=True, only=("inverse-d0", "serial-d4"))
-    assert [r.row_id for r in exp.rows] == ["inverse-d0", "serial-d4"]
-    results = run_sweep(exp, tmp_path, workers=1, progress=False)
+    exp = module.build(quick=True)
+    results = run_sweep(exp, tmp_path, rows=["inverse-d0", "serial-d4"], workers=1,
+                        progress=False)
+    assert [r["row"] for r in results["rows"]] == ["inverse-d0", "serial-d4"]
     assert all(r["n_ok"] == 2 and r["n_failed"] == 0 for r in results["rows"])
     text = module.report(results, tmp_path)
     assert (tmp_path / "fig4_error.png").is_file()
@@ -112,10 +133,16 @@ def test_quick_sweep_end_to_end(tmp_path):
 
 def test_full_config_matches_the_paper():
     cfg = paper_a.Config()
-    assert (cfg.model.inverse_reservoir, cfg.model.forward_reservoir) == (1000, 100)
-    assert (cfg.model.spectral_radius, cfg.model.noise, cfg.model.gain) == (0.1, 0.2, 0.65)
+    assert (cfg.model.reservoir, cfg.model.forward_reservoir) == (1000, 100)
+    assert (cfg.model.spectral_radius, cfg.model.noise, cfg.model.gain_value) == (0.1, 0.2, 0.65)
+    assert (cfg.model.dof, cfg.model.signals, cfg.model.gain_schedule) == (4, "joint", "fixed")
     assert cfg.delays == tuple(range(11)) and cfg.runs == 10
     assert len(paper_a.rows()) == 44
-    assert isinstance(cfg.model, DelayConfig)
-    fcfg = cfg.model.fel_config(3)
-    assert fcfg.delay_steps == 3 and np.all(fcfg.gains() == 0.65)
+    tcfg = paper_a.train_config(cfg, _row("hybrid", 3))
+    assert (tcfg.delay, tcfg.forward) == (3, "hybrid")
+    assert paper_a.train_config(cfg, _row("inverse", 3)).forward is None
+
+
+def test_dof_8_builds_a_3d_sweep():
+    exp = paper_a.build(quick=True, dof=8, signals="cartesian")
+    assert (exp.config.model.dof, exp.config.model.signals) == (8, "cartesian")

@@ -7,21 +7,26 @@ import json
 import numpy as np
 import pytest
 
+from controllers import fel
 from controllers.esn import ESN, ESNConfig
-from controllers.fel import FELConfig
 from controllers.plant import Plant
+from experiments import paper_b
 from skinny_mj import bimanual as bm
 from skinny_mj.body import position_signals
+from skinny_mj.experiment import Row
 from skinny_mj.ideal import max_speeds
+from skinny_mj.trajectories import get
+from skinny_mj.trajectories import patterns as pt
 
-MV = bm.Movement()
+MV = pt.Movement()
 
 
-def _plant(pattern: str = "phase0", speed: float = 1.0, noise: float = 0.0, runs: int = 1):
-    q = bm.pattern_angles(bm.PATTERNS[pattern], MV, speed)
-    ms = max_speeds(bm.pattern_angles(bm.PATTERNS[pattern], MV), MV.dt)
-    return q, bm.BimanualPlant(q, MV, ms, n_runs=runs, seeds=list(range(runs)),
-                               sensor_noise=noise)
+def _plant(pattern: str = "phase0", speed: float = 1.0, noise: float = 0.0, runs: int = 1,
+           dof: int = 4, signals: str = "joint"):
+    traj = get(f"bimanual-{pattern}@{speed:g}", dof)
+    ms = max_speeds(get(f"bimanual-{pattern}", dof).angles, MV.dt)
+    return traj.angles, bm.BimanualPlant(dof, signals, traj, "right", ms, n_runs=runs,
+                                         seeds=list(range(runs)), sensor_noise=noise)
 
 
 def _cycles(x: np.ndarray) -> float:
@@ -29,10 +34,10 @@ def _cycles(x: np.ndarray) -> float:
     return float(np.argmax(np.abs(np.fft.rfft(x[:-1] - x[:-1].mean()))))
 
 
-@pytest.mark.parametrize("name", list(bm.PATTERNS))
+@pytest.mark.parametrize("name", list(pt.PATTERNS))
 def test_patterns_define_the_lagging_arm_relative_to_the_leader(name):
-    p = bm.PATTERNS[name]
-    q = bm.pattern_angles(p, MV)
+    p = pt.PATTERNS[name]
+    q = pt.pattern_angles(p, MV)
     lead, lag = q[:, 0], q[:, 2]  # right arm leads by default
     lo, hi = np.radians(0.0), np.radians(180.0)
     assert np.all((q > lo) & (q < hi))
@@ -40,7 +45,7 @@ def test_patterns_define_the_lagging_arm_relative_to_the_leader(name):
     assert _cycles(lag) / _cycles(lead) == pytest.approx(p.frequency_ratio)
     assert np.ptp(lag) / np.ptp(lead) == pytest.approx(p.amplitude_ratio, rel=1e-3)
     # The same pattern at another speed is the same function of the leader's phase.
-    q2 = bm.pattern_angles(p, MV, 0.5)
+    q2 = pt.pattern_angles(p, MV, 0.5)
     assert len(q2) - 1 == 2 * (len(q) - 1)
     np.testing.assert_allclose(q2[::2], q, atol=1e-12)
 
@@ -53,7 +58,7 @@ def test_relative_phase_is_measured_as_a_lag():
         lag = np.cos(2 * np.pi * t / period - np.radians(deg))
         measured = bm.phase_lag_deg(lag, lead, period)
         assert abs(measured) == pytest.approx(deg, abs=3.6)  # +-180 are the same
-    q = bm.pattern_angles(bm.PATTERNS["phase90"], MV)
+    q = pt.pattern_angles(pt.PATTERNS["phase90"], MV)
     assert bm.phase_lag_deg(q[:, 2], q[:, 0], MV.period_s / MV.dt) == pytest.approx(90, abs=4)
 
 
@@ -71,34 +76,55 @@ def test_plant_forces_the_leader_and_controls_only_the_lagging_arm():
     for t in range(10):
         plant.step(np.array([[0.5, 0.0], [0.0, 0.0]]))
         # the leading arm tracks its movement whatever the lagging arm's command
-        np.testing.assert_allclose(plant.all_joint_angles()[:, 0], q[t + 1, 0], atol=2e-3)
-    moved = plant.joint_angles()[:, 0] - q[0, 2]
+        np.testing.assert_allclose(plant.joint_angles()[:, 0], q[t + 1, 0], atol=2e-3)
+    moved = plant.joint_angles()[:, 2] - q[0, 2]
     expected = 0.5 * plant.max_speed_rad_s[0] * plant.dt * 10
     assert moved[0] == pytest.approx(expected, rel=0.05)
     assert abs(moved[1]) < 0.02
+
+
+def test_3d_plant_controls_the_lagging_arms_four_dofs():
+    q, plant = _plant("phase90", dof=8, signals="cartesian")
+    assert (plant.n_dof, plant.n_signals) == (4, 12) and isinstance(plant, Plant)
+    jac = plant.command_jacobian()
+    assert jac.shape == (1, 12, 4) and np.all(jac[:, :6] == 0)
+    for _ in range(5):
+        plant.step(np.zeros((1, 4)))
+    assert plant.joint_angles().shape == (1, 8)
 
 
 def test_esn_sees_only_the_current_state_of_both_arms():
     q, plant = _plant()
     esn = ESN(ESNConfig(4, 2, 20, 0.5), seed=0)
     desired = position_signals(q, 4, "joint")
-    ro = bm.rollout(esn, plant, desired, 1.0, noise=False)
+    ro = fel.rollout(esn, plant, desired, 1.0, noise=False, inputs="sensed")
     # input block of the extended state [x; u; 1] is the sensed state s(t)
     np.testing.assert_allclose(ro.states[0, :, 20:24], ro.sensed[0, :-1])
     assert ro.commands.shape == (1, len(q) - 1, 2)
 
 
 def test_feedback_tracks_and_fel_learns_in_phase():
-    q, plant = _plant("phase0", noise=0.01)
-    desired = position_signals(q, 4, "joint")
-    untrained = ESN(ESNConfig(4, 2, 100, 0.5, noise_level=0.2), seed=3)
-    before = bm.evaluate(untrained, plant, desired).position_nrmse[0]
-    esn = ESN(ESNConfig(4, 2, 100, 0.5, noise_level=0.2), seed=3)
-    tr = bm.train(esn, plant, desired, FELConfig("new", 0.01, 5, 4))
-    assert not tr.failed[0]
-    assert tr.position_nrmse[0, 0] < 0.02  # K = 1: the feedback controller tracks
-    after = bm.evaluate(esn, plant, desired)
-    assert after.position_nrmse[0] < 0.5 * before  # K = 0: the ESN moves the arm
+    from dataclasses import replace
+
+    from skinny_mj.training import build_run, evaluate, train_run
+
+    cfg = replace(paper_b.MODEL, trajectory="bimanual-phase0", epochs=4)
+    untrained = evaluate(build_run(cfg, [3]))[0].position_nrmse
+    run = build_run(cfg, [3])
+    result = train_run(run).fel
+    assert not result.failed[0]
+    assert result.position_nrmse[0, 0] < 0.02  # K = 1: the feedback controller tracks
+    assert evaluate(run)[0].position_nrmse < 0.5 * untrained  # K = 0: the ESN moves the arm
+
+
+def test_lockstep_batch_equals_each_seed_alone():
+    cfg = paper_b.Config(model=__import__("dataclasses").replace(paper_b.MODEL, epochs=2))
+    row = Row("freq1-2", {})
+    batch = paper_b.run_batch(cfg, row, [4, 5])
+    for seed, out in zip([4, 5], batch, strict=True):
+        alone = paper_b.run_one(cfg, row, seed)
+        assert {k: v for k, v in out.items() if k != "wall_s_run"} == \
+            {k: v for k, v in alone.items() if k != "wall_s_run"}
 
 
 @pytest.mark.parametrize("workers", [1])
@@ -108,7 +134,7 @@ def test_quick_sweep_end_to_end(tmp_path, workers):
 
     module = get("paper-b")
     exp = module.build(quick=True)
-    assert [r.row_id for r in exp.rows] == list(bm.PATTERNS)
+    assert [r.row_id for r in exp.rows] == list(pt.PATTERNS)
     results = run_sweep(exp, tmp_path, workers=workers, progress=False)
     assert all(r["n_ok"] == 1 for r in results["rows"])
     run = json.loads(next((tmp_path / "runs").glob("phase0-*.json")).read_text())

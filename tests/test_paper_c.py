@@ -20,7 +20,9 @@ def test_config_is_paper_c_section_3_5():
     assert (cfg.signals, cfg.reservoir, cfg.spectral_radius, cfg.noise) == ("joint", 1000, 0.1,
                                                                             0.2)
     assert (cfg.sensor_noise, cfg.epochs, cfg.learning_cycles) == (0.01, 150, 5)
-    fcfg = paper_c.fel_config(cfg)
+    from skinny_mj.training import build_run
+
+    fcfg = build_run(paper_c.train_config(cfg, "ymca"), [0]).fel_config()
     assert fcfg.effective_beta == 1.0  # u_target = u + u_error(t+1): the original target
     gains = fcfg.gains()
     assert gains.shape == (150,) and gains[0] == 1.0
@@ -28,6 +30,7 @@ def test_config_is_paper_c_section_3_5():
     assert gains[-1] < 1e-6  # "decreased to ~0"
     tcfg = paper_c.train_config(cfg, "y-pure")
     assert tcfg.method == "original" and tcfg.learning_cycles == 5 and tcfg.noise_level == 0.2
+    assert tcfg.test_washout_cycles == 1  # "the initialization cycle and the evaluation cycle"
 
 
 def test_every_network_shares_ymcas_command_scale():
@@ -62,28 +65,33 @@ def test_elbow_range_of_the_derived_movements():
 
 def test_untrained_network_leaves_the_arm_still_at_test():
     """K = 0 and a zero readout: the commands are zero, so the plant keeps its first pose."""
-    from controllers.esn import ESN
-    from skinny_mj.training import esn_config
+    from skinny_mj.training import build_run, evaluate
 
     cfg = paper_c.Config(reservoir=30)
-    esn = ESN(esn_config(paper_c.train_config(cfg, "ymca"), 4), seed=0)
+    run = build_run(paper_c.train_config(cfg, "ymca"), [0])
     traj = get("ym")
-    ro, commands = paper_c.evaluate_two_cycles(esn, traj, "joint", 0, 0.01,
-                                           max_speeds(get("ymca").angles, 0.02))
-    assert ro is not None and np.all(ro.commands == 0)
-    assert paper_c.elbow_range(ro.angles[0], 4) < 1e-3
-    assert commands.shape == (len(traj) - 1, 4) and np.abs(commands).max() <= 1
+    (test,) = evaluate(run, traj)
+    assert not test.failed and np.all(test.rollout.commands == 0)
+    assert paper_c.elbow_range(test.rollout.angles[0], 4) < 1e-3
+    assert test.true_commands.shape == (len(traj) - 1, 4)
+    assert np.abs(test.true_commands).max() <= 1
 
 
-def test_build_rows_and_unknown_rows():
+def test_build_rows_and_the_movement_option():
     full = paper_c.build()
     assert [r.row_id for r in full.rows] == list(paper_c.MOVEMENTS) and full.runs == 10
-    quick = paper_c.build(quick=True, only=("ymca",))
-    assert [r.row_id for r in quick.rows] == ["ymca"] and quick.config.reservoir == 100
+    assert paper_c.columns(full.config)[paper_c.REAL_ID].endswith("md_02.amc")  # shipped clip
+    quick = paper_c.build(quick=True)
+    assert [r.row_id for r in quick.rows] == list(paper_c.QUICK_TRAIN)
+    assert quick.config.reservoir == 100
     moved = paper_c.build(quick=True, movement="ymca@0.5")
     assert paper_c.columns(moved.config)[paper_c.REAL_ID] == "ymca@0.5"
-    with pytest.raises(SkinnyInputError, match="unknown paper-c rows"):
-        paper_c.build(only=("nope",))
+    assert moved.rows[-1].row_id == paper_c.REAL_ID  # --movement trains on it too
+    assert moved.rows[-1].params["train"] == "ymca@0.5"
+    with pytest.raises(SkinnyInputError, match="nope"):
+        run_sweep(full, None, rows=["nope"], progress=False)
+    eight = paper_c.build(quick=True, dof=8, signals="cartesian")
+    assert (eight.config.dof, eight.config.signals) == (8, "cartesian")
 
 
 def test_quick_sweep_end_to_end(tmp_path):
@@ -119,7 +127,7 @@ def test_quick_sweep_end_to_end(tmp_path):
 def test_lockstep_batch_equals_runs_one_at_a_time():
     """The engine's fast path: seeds in lockstep give each seed's run_one metrics, bit
     for bit (wall times and memory aside)."""
-    exp = paper_c.build(quick=True, only=("ymca",))
+    exp = paper_c.build(quick=True)
     cfg, row = exp.config, exp.rows[0]
     cfg = type(cfg)(**{**cfg.__dict__, "epochs": 2, "tests": ("ymca", "y")})
     seeds = [3, 8]

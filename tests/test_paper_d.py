@@ -40,14 +40,16 @@ def test_rows_follow_the_papers_design():
     }
     # 50 rounds for the new method in both architectures: 5 cycles x 10 gains, 50 TT rounds.
     assert cfg.fel_cycles * cfg.gains == cfg.tt_cycles == 50
-    assert [r.row_id for r in paper_d.rows(("2", "4"))] == ["2", "4"]
+    assert [r.row_id for r in paper_d.rows()] == ["1", "2", "3a", "3b", "4"]
 
 
 def test_build_options():
-    exp = paper_d.build(quick=True, movement="y", only=("1",))
+    exp = paper_d.build(quick=True, movement="y")
     assert exp.runs == 2 and exp.config.gains == 2 and exp.config.tt_cycles == 3
-    assert exp.config.trajectory == "y" and [r.row_id for r in exp.rows] == ["1"]
-    assert exp.name == "paper-d-y" and paper_d.build().name == "paper-d"
+    assert exp.config.trajectory == "y" and len(exp.rows) == 5
+    assert exp.name == paper_d.build().name == "paper-d"  # the movement is in the config
+    two_d = paper_d.build(dof=4, signals="joint")
+    assert (two_d.config.dof, two_d.config.signals) == (4, "joint")
     assert set(paper_d.COLUMNS) <= set(exp.table_columns)
 
 
@@ -111,7 +113,7 @@ def test_report_writes_figures_and_claims(quick_sweep):
 
 def test_run_one_is_reproducible_from_its_seed():
     cfg = paper_d.quick_config(paper_d.Config(reservoir=30))
-    row = paper_d.rows(("2",))[0]
+    row = next(r for r in paper_d.rows() if r.row_id == "2")
     a, b = paper_d.run_one(cfg, row, 7), paper_d.run_one(cfg, row, 7)
     c = paper_d.run_one(cfg, row, 8)
     keys = [*paper_d.COLUMNS]
@@ -121,7 +123,7 @@ def test_run_one_is_reproducible_from_its_seed():
 
 def test_lockstep_batch_equals_one_run_at_a_time():
     cfg = paper_d.quick_config()
-    row = paper_d.rows(("2",))[0]
+    row = next(r for r in paper_d.rows() if r.row_id == "2")
     single = [paper_d.run_one(cfg, row, seed) for seed in (11, 12)]
     batch = paper_d.run_batch(cfg, row, [11, 12])
     for one, many in zip(single, batch, strict=True):

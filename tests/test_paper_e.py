@@ -5,20 +5,18 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from experiments import paper_e
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import Experiment, Row, aggregate, run_sweep
+from skinny_mj.experiment import Experiment, Row, aggregate, run_sweep, select_rows
 from skinny_mj.sweep.stats import load_runs
-from skinny_mj.trajectories import load_movement, ymca
+from skinny_mj.trajectories import load_movement, sample_clip, ymca
 from skinny_mj.trajectories.library import split_excerpt
 
-CMU = Path(__file__).resolve().parents[2] / "shared" / "mocap" / "cmu"
-MD02 = CMU / "md_02.amc"
+MD02 = sample_clip("md_02")  # shipped with the package
 
 
 @pytest.fixture(scope="module")
@@ -44,6 +42,24 @@ def test_quick_sweep_is_complete(quick_sweep):
     assert by_id["5"]["metrics"]["position_nrmse"]["n"] == by_id["5"]["n_ok"]
     assert by_id["fig3-b0.1"]["paper"] == {"cycles_to_converge": 30}
     assert by_id["fig3-b1"]["metrics"]["cycles_to_converge"]["mean"] == 1
+
+
+def test_rows_5_reproduces_row_5_of_the_full_quick_sweep(quick_sweep, tmp_path):
+    """``skinny experiment paper-e --quick --rows 5``: the same seeds and, bit for bit,
+    the same run files as row 5 of the whole sweep (timing fields aside)."""
+    exp, out, _, _ = quick_sweep
+    run_sweep(exp, tmp_path, rows=["5"], workers=1, progress=False)
+    timing = ("wall_s", "finished_at")
+
+    def strip(path):
+        record = json.loads(path.read_text())
+        record["metrics"].pop("train_wall_s", None)
+        return {k: v for k, v in record.items() if k not in timing}
+
+    alone = sorted((tmp_path / "runs").glob("*.json"))
+    assert [p.name for p in alone] == sorted(p.name for p in (out / "runs").glob("5-*.json"))
+    for path in alone:
+        assert strip(path) == strip(out / "runs" / path.name)
 
 
 def test_results_equal_the_aggregate_of_the_run_files(quick_sweep):
@@ -88,14 +104,17 @@ def test_row_groups_and_run_counts():
     cfg = paper_e.Config()
     every = paper_e.rows(cfg)
     assert len(every) == 6 + 4 + 7 + 9 + 9
-    assert [r.row_id for r in paper_e.rows(cfg, ("table",))] == ["1", "2", "3", "4", "5", "6"]
-    fig5 = [r.row_id for r in paper_e.rows(cfg, ("fig5",))]
+    groups = paper_e.groups(every)
+    assert groups["table"] == ("1", "2", "3", "4", "5", "6")
+    fig5 = groups["fig5"]
     assert fig5[0] == "fig5a-nu0" and fig5[-1] == "fig5b-nu0.5" and len(fig5) == 18
-    assert [r.row_id for r in paper_e.rows(cfg, ("5", "fig4-n200"))] == ["5", "fig4-n200"]
+    exp = paper_e.build()
+    chosen = select_rows(exp, ["5", "fig4-n200"])
+    assert [r.row_id for r in chosen] == ["5", "fig4-n200"]
     assert {r.runs for r in every if r.row_id in paper_e.TABLE_1} == {None}  # 20 (Config.runs)
     assert {r.runs for r in every if r.row_id not in paper_e.TABLE_1} == {10}
-    with pytest.raises(SkinnyInputError, match="unknown row"):
-        paper_e.rows(cfg, ("fig9",))
+    with pytest.raises(SkinnyInputError, match="fig9"):
+        select_rows(exp, ["fig9"])
 
 
 def test_row_runs_cap_the_sweep(tmp_path):
@@ -153,10 +172,11 @@ def test_mocap_excerpt_reports_its_own_clipping():
 @pytest.mark.skipif(not MD02.is_file(), reason="shared CMU clip md_02 not present")
 def test_sweep_on_a_movement_excerpt(tmp_path):
     movement = f"{MD02}@start=3,duration=6.26"
-    exp = paper_e.build(quick=True, movement=movement, only=("5", "fig3-b0.3"))
-    assert exp.name == "paper-e-md_02_start=3_duration=6.26"
+    exp = paper_e.build(quick=True, movement=movement)
+    assert exp.name == "paper-e"  # the movement is recorded in config.json
     assert exp.config.trajectory == movement
-    results = run_sweep(exp, tmp_path, runs=1, workers=1, progress=False)
+    results = run_sweep(exp, tmp_path, rows=["5", "fig3-b0.3"], runs=1, workers=1,
+                        progress=False)
     text = paper_e.report(results, tmp_path)
     table = (tmp_path / "table.md").read_text()
     assert "md_02" in table.splitlines()[0] and "313 steps" in table

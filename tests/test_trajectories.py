@@ -18,6 +18,7 @@ from skinny_mj.trajectories import (
     names,
     ymca,
 )
+from skinny_mj.trajectories.patterns import PATTERNS
 
 DOFS = (4, 8)
 MARGIN_RAD = np.deg2rad(2.0)
@@ -177,8 +178,15 @@ def test_ymca_3d_uses_flexion_and_rotation():
 # -- derived movements -----------------------------------------------------------------
 
 
+def test_bimanual_patterns_are_regenerated_at_a_speed_not_resampled():
+    slow = get("bimanual-phase90@0.5", 8)
+    assert len(slow) - 1 == 2 * (len(get("bimanual-phase90", 8)) - 1)
+    np.testing.assert_allclose(slow.angles[::2], get("bimanual-phase90", 8).angles, atol=1e-12)
+
+
 def test_names_and_unknown_name():
-    assert set(names()) == {"ymca", "y", "y-pure", "ym", "mirror-right", "mirror-left"}
+    family = {"ymca", "y", "y-pure", "ym", "mirror-right", "mirror-left"}
+    assert set(names()) == family | {f"bimanual-{p}" for p in PATTERNS}
     with pytest.raises(SkinnyInputError, match="valid names: ymca"):
         get("macarena", 4)
     with pytest.raises(SkinnyInputError):

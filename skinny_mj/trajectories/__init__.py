@@ -9,12 +9,15 @@ onto Skinny's joints. Pure NumPy/SciPy: no mujoco, no dm_control.
 
 from skinny_mj.trajectories.library import get, load_movement, names
 from skinny_mj.trajectories.retarget import ArmClip, RetargetReport, retarget
+from skinny_mj.trajectories.samples import SAMPLE_ASF, SAMPLE_CLIPS, sample_clip
 from skinny_mj.trajectories.trajectory import Trajectory, excerpt
 from skinny_mj.trajectories.ymca import key_poses, letter_end_steps, ymca
 
 __all__ = [
     "ArmClip",
     "RetargetReport",
+    "SAMPLE_ASF",
+    "SAMPLE_CLIPS",
     "Trajectory",
     "excerpt",
     "get",
@@ -23,5 +26,6 @@ __all__ = [
     "load_movement",
     "names",
     "retarget",
+    "sample_clip",
     "ymca",
 ]

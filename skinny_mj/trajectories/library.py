@@ -15,6 +15,7 @@ import numpy as np
 
 from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.trajectories import patterns
 from skinny_mj.trajectories.retarget import RetargetReport, clip_report, range_excess
 from skinny_mj.trajectories.trajectory import Trajectory, excerpt
 from skinny_mj.trajectories.ymca import letter_end_steps, ymca
@@ -67,14 +68,12 @@ _MOVEMENTS: dict[str, Callable[[int], Trajectory]] = {
 
 
 def names() -> tuple[str, ...]:
-    """Names accepted by :func:`get` (each may carry a speed suffix such as ``@0.5``)."""
-    return tuple(_MOVEMENTS)
+    """Names accepted by :func:`get` (each may carry a speed suffix such as ``@0.5``):
+    the YMCA family, then paper B's bimanual patterns."""
+    return tuple(_MOVEMENTS) + patterns.names()
 
 
-def _check_dof(dof: int) -> int:
-    if dof not in body.ARM_JOINTS:
-        raise SkinnyInputError(f"dof must be 4 (2D) or 8 (3D), got {dof!r}")
-    return int(dof)
+_check_dof = body.check_dof
 
 
 def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajectory:
@@ -85,7 +84,7 @@ def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajec
     """
     _check_dof(dof)
     base, _, suffix = str(name).strip().lower().partition("@")
-    if base not in _MOVEMENTS:
+    if base not in names():
         raise SkinnyInputError(f"unknown movement {name!r}; valid names: {', '.join(names())}")
     if suffix:
         if speed != 1.0:
@@ -94,7 +93,10 @@ def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajec
             speed = float(suffix)
         except ValueError:
             raise SkinnyInputError(f"bad speed suffix in {name!r} (use e.g. 'ymca@0.5')") from None
-    traj = _MOVEMENTS[base](dof).resample(speed).repeat(reps)
+    if base in _MOVEMENTS:
+        traj = _MOVEMENTS[base](dof).resample(speed).repeat(reps)
+    else:  # a rhythmic pattern is a function of the leader's phase: made at that speed
+        traj = patterns.pattern_trajectory(base, dof, speed).repeat(reps)
     label = base + (f"@{speed:g}" if speed != 1.0 else "") + (f"x{reps}" if reps != 1 else "")
     return traj.with_name(label)
 
@@ -165,7 +167,7 @@ def load_movement(
     suffix = Path(text).suffix.lower()
     if suffix not in _FILE_SUFFIXES:
         base = text.strip().lower().partition("@")[0]
-        if base in _MOVEMENTS or not Path(text).exists():
+        if base in names() or not Path(text).exists():
             traj = get(text, dof, speed=speed, reps=reps)
             excess = range_excess(traj.angles, dof)
             return traj, clip_report(excess, dof, source=text, source_fps=1.0 / traj.dt)

@@ -297,8 +297,7 @@ def retarget(
 
     Returns the clipped trajectory at ``dt`` and a :class:`RetargetReport`.
     """
-    if dof not in body.ARM_JOINTS:
-        raise SkinnyInputError(f"dof must be 4 (2D) or 8 (3D), got {dof!r}")
+    body.check_dof(dof)
     if len(clip) < 2:
         raise SkinnyInputError(f"{clip.source}: need at least 2 frames, got {len(clip)}")
     pts = np.concatenate([clip.shoulder, clip.elbow, clip.wrist], axis=1)

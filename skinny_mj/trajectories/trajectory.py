@@ -25,7 +25,7 @@ from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path, atomic_write_text
 
-DEFAULT_DT_S = 0.02
+DEFAULT_DT_S = body.CONTROL_DT_S  # movements are sampled at the control rate
 MIN_SPEED, MAX_SPEED = 0.0, 10.0  # resample(speed) accepts MIN_SPEED < speed <= MAX_SPEED
 _FORMAT_VERSION = 1
 
@@ -97,8 +97,7 @@ class Trajectory:
     # -- signals ----------------------------------------------------------------------
     def position_signals(self, signals: str = "joint") -> np.ndarray:
         """Normalized position signals (T, n_signals), see ``body.position_signals``."""
-        if signals not in ("joint", "cartesian"):
-            raise SkinnyInputError(f"signals must be 'joint' or 'cartesian', got {signals!r}")
+        body.check_signals(signals)
         return body.position_signals(self.angles, self.dof, signals)
 
     def velocities(self) -> np.ndarray:

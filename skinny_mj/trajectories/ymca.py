@@ -73,11 +73,9 @@ def min_jerk(n: int) -> np.ndarray:
 
 def key_poses(dof: int) -> dict[str, np.ndarray]:
     """Key poses {name: (n_dof,) rad} for dof 4 or 8."""
-    table = {4: POSES_2D_DEG, 8: POSES_3D_DEG}.get(dof)
-    if table is None:
-        from skinny_mj.errors import SkinnyInputError
+    from skinny_mj.body import check_dof
 
-        raise SkinnyInputError(f"dof must be 4 (2D) or 8 (3D), got {dof!r}")
+    table = {4: POSES_2D_DEG, 8: POSES_3D_DEG}[check_dof(dof)]
     return {k: np.deg2rad(np.array(v, dtype=float)) for k, v in table.items()}
 
 

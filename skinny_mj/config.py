@@ -1,0 +1,193 @@
+"""The one run configuration every experiment and command configures.
+
+:class:`TrainConfig` says everything one training run of an ESN inverse model needs,
+grouped as the thesis's papers vary it:
+
+- plant: ``dof`` (4 = 2D, 8 = 3D), ``signals`` (joint angles or Cartesian segment
+  vectors), ``actuation`` (velocity servo or torque), ``sensor_noise``,
+  ``leading_arm`` (paper B: that arm is forced along the movement and the ESN drives
+  the other one), ``plant`` (the lockstep MuJoCo batch, or the dm_control env);
+- movement: ``trajectory`` (+ ``asf``), ``speed``, ``reps``, ``max_speed_from`` (the
+  movement whose speeds set full scale);
+- ESN: ``reservoir``, ``spectral_radius``, ``noise``, ``readout``, ``ridge``,
+  ``inputs`` (desired + sensed, or sensed only as in paper B);
+- architecture: ``delay`` (steps on the sensed input to the internal models, paper A),
+  ``forward`` (a forward model: parallel, serial or hybrid, paper A) and its size;
+- schedule: ``method`` (original, new β, true target), ``beta``, ``cycles``,
+  ``epochs``, the feedback gain schedule (linear 1 → 0, ×factor per epoch, fixed),
+  ``tt_cycles``, and ``test_washout_cycles`` (unscored cycles before the scored test).
+
+A paper's row is ``dataclasses.replace(base, ...)`` of this one dataclass; the
+defaults are paper E's experiment 5.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import asdict, dataclass, replace
+from typing import Any
+
+from skinny_mj.body import ACTUATIONS, SIGNALS, check_actuation, check_dof, check_signals
+from skinny_mj.errors import SkinnyInputError
+
+__all__ = ["TrainConfig", "relative_cost", "with_overrides", "check_dof", "check_signals",
+           "check_actuation", "METHODS", "SIGNALS", "ACTUATIONS", "DEFAULT_NOISE",
+           "PAPER_CYCLES_FOR_BETA"]
+
+METHODS = ("original", "new", "true-target")
+INPUTS = ("desired+sensed", "sensed")
+FORWARD_MODES = ("parallel", "serial", "hybrid")
+GAIN_SCHEDULES = ("linear", "multiplicative", "fixed")
+ARMS = ("right", "left")
+#: Learning cycles per epoch the paper derived from its Figure 3 (paper E, Table 1).
+PAPER_CYCLES_FOR_BETA = {0.3: 2, 0.1: 3, 0.05: 6}
+#: Reservoir noise the paper chose per method (paper E, Fig. 5).
+DEFAULT_NOISE = {"original": 0.03, "new": 0.2, "true-target": 0.2}
+
+
+def _finite_at_least(value: float, low: float) -> bool:
+    return isinstance(value, int | float) and math.isfinite(value) and value >= low
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """One training run. Defaults: paper E experiment 5 (2D, Cartesian, N = 200,
+    spectral radius 0.5, reservoir noise 0.2, β = 0.1 with 3 learning cycles per
+    epoch, 10 epochs, K 1 → 0 linearly, sensor noise 0.01)."""
+
+    # plant
+    dof: int = 4
+    signals: str = "cartesian"
+    actuation: str = "velocity"
+    sensor_noise: float = 0.01
+    leading_arm: str | None = None  # paper B: this arm is forced, the ESN drives the other
+    plant: str = "batch"  # "batch" (MjData stepped directly) or "env" (dm_control)
+    # movement
+    trajectory: str = "ymca"
+    asf: str | None = None
+    speed: float = 1.0
+    reps: int = 1
+    max_speed_from: str | None = None  # movement whose speeds set full scale (None: this one)
+    # ESN
+    reservoir: int = 200
+    spectral_radius: float = 0.5
+    noise: float | None = None  # reservoir noise ν; None: DEFAULT_NOISE[method]
+    readout: str = "pinv"
+    ridge: float = 1e-6
+    inputs: str = "desired+sensed"
+    # architecture (paper A)
+    delay: int = 0  # steps by which the internal models' sensed input lags
+    forward: str | None = None  # forward model: None, "parallel", "serial" or "hybrid"
+    forward_reservoir: int = 100
+    # schedule
+    method: str = "new"
+    beta: float = 0.1
+    cycles: int | None = None  # learning cycles per epoch (new method); None: from β
+    epochs: int = 10
+    gain_schedule: str = "linear"  # K per epoch: linear 1 -> 0, multiplicative, fixed
+    gain_factor: float = 0.9  # multiplicative: K = factor ** epoch (paper C)
+    gain_value: float = 0.65  # fixed: K (paper A)
+    tt_cycles: int = 50  # true-target with β < 1: cycles (paper D: 50 rounds); β = 1: one fit
+    test_washout_cycles: int = 0  # unscored K = 0 cycles before the scored test (papers B, C)
+
+    def __post_init__(self) -> None:
+        check_dof(self.dof)
+        check_signals(self.signals)
+        check_actuation(self.actuation)
+        checks = [
+            (self.method in METHODS, f"method must be one of {METHODS}, got {self.method!r}"),
+            (_finite_at_least(self.beta, 0) and 0 < self.beta <= 1,
+             f"--beta must be in (0, 1], got {self.beta}"),
+            (self.cycles is None or self.cycles >= 1, f"--cycles must be >= 1, got {self.cycles}"),
+            (self.epochs >= 1, f"--epochs must be >= 1, got {self.epochs}"),
+            (self.reservoir >= 1, f"--reservoir must be >= 1, got {self.reservoir}"),
+            (self.forward_reservoir >= 1,
+             f"forward_reservoir must be >= 1, got {self.forward_reservoir}"),
+            (_finite_at_least(self.spectral_radius, 0),
+             f"--spectral-radius must be >= 0, got {self.spectral_radius}"),
+            (self.noise is None or _finite_at_least(self.noise, 0),
+             f"--noise must be >= 0, got {self.noise}"),
+            (_finite_at_least(self.sensor_noise, 0),
+             f"--sensor-noise must be >= 0, got {self.sensor_noise}"),
+            (self.readout in ("pinv", "ridge"),
+             f"--readout must be pinv or ridge, got {self.readout!r}"),
+            (_finite_at_least(self.ridge, 0), f"--ridge must be >= 0, got {self.ridge}"),
+            (self.reps >= 1, f"--reps must be >= 1, got {self.reps}"),
+            (_finite_at_least(self.speed, 0) and 0 < self.speed <= 10,
+             f"--speed must be in (0, 10], got {self.speed}"),
+            (self.plant in ("batch", "env"), f"plant must be 'batch' or 'env', got {self.plant!r}"),
+            (self.inputs in INPUTS, f"inputs must be one of {INPUTS}, got {self.inputs!r}"),
+            (self.delay >= 0, f"delay must be >= 0 steps, got {self.delay}"),
+            (self.forward is None or self.forward in FORWARD_MODES,
+             f"forward must be None or one of {FORWARD_MODES}, got {self.forward!r}"),
+            (self.gain_schedule in GAIN_SCHEDULES,
+             f"gain schedule must be one of {GAIN_SCHEDULES}, got {self.gain_schedule!r}"),
+            (0 < self.gain_factor <= 1, f"gain factor must be in (0, 1], got {self.gain_factor}"),
+            (_finite_at_least(self.gain_value, 0),
+             f"feedback gain must be >= 0, got {self.gain_value}"),
+            (self.tt_cycles >= 1, f"tt_cycles must be >= 1, got {self.tt_cycles}"),
+            (self.test_washout_cycles >= 0,
+             f"test washout cycles must be >= 0, got {self.test_washout_cycles}"),
+            (self.leading_arm is None or self.leading_arm in ARMS,
+             f"leading arm must be None or one of {ARMS}, got {self.leading_arm!r}"),
+            (self.method != "true-target" or (self.forward is None and self.delay == 0
+                                              and self.leading_arm is None),
+             "the true-target architecture takes no forward model, delay or leading arm"),
+            (self.plant != "env" or (self.leading_arm is None and self.forward is None),
+             "the dm_control plant (plant='env') runs neither paper B's forced arm nor a "
+             "forward model; use plant='batch'"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise SkinnyInputError(message)
+
+    @property
+    def noise_level(self) -> float:
+        return DEFAULT_NOISE[self.method] if self.noise is None else self.noise
+
+    @property
+    def learning_cycles(self) -> int:
+        """Learning cycles per epoch: 1 for the original method; for the new method the
+        paper's Table 1 where it has β, else enough cycles for (1 − β)^n to fall below
+        5 % over all epochs (which reproduces the table for β = 0.1 and 0.05)."""
+        if self.cycles is not None:
+            return self.cycles
+        if self.method != "new":
+            return 1
+        for beta, cycles in PAPER_CYCLES_FOR_BETA.items():
+            if abs(self.beta - beta) < 1e-12:
+                return cycles
+        if self.beta >= 1:
+            return 1
+        total = math.ceil(math.log(0.05) / math.log(1.0 - self.beta))
+        return max(1, math.ceil(total / self.epochs))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready, with the derived ``learning_cycles`` and ``noise_level``."""
+        return {**asdict(self), "learning_cycles": self.learning_cycles,
+                "noise_level": self.noise_level}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> TrainConfig:
+        """From :meth:`to_dict` (or a ``config.json``'s ``config``): unknown keys are an
+        error, derived keys are ignored."""
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(d) - names - {"learning_cycles", "noise_level"})
+        if unknown:
+            raise SkinnyInputError(f"unknown training config field(s) {unknown}")
+        return cls(**{k: v for k, v in d.items() if k in names})
+
+
+def relative_cost(cfg: TrainConfig) -> float:
+    """A training's size, for scheduling sweeps (longest first): its cycles through the
+    movement (FEL: epochs x (learning cycles + washout + evaluation); true target: its
+    cycles; x reps; + the test), x N / 200 for reservoirs above 200 units."""
+    cycles = cfg.tt_cycles if cfg.method == "true-target" \
+        else cfg.epochs * (cfg.learning_cycles + 2)
+    return (cycles * cfg.reps + 1 + cfg.test_washout_cycles) * max(1.0, cfg.reservoir / 200)
+
+
+def with_overrides(cfg: TrainConfig, **changes: Any) -> TrainConfig:
+    """``cfg`` with the fields that are not None replaced (validated again)."""
+    return replace(cfg, **{k: v for k, v in changes.items() if v is not None})
