@@ -12,6 +12,9 @@ average at the start and end is recorded with the figures. Goals (issue 7):
 | ``fast_vs_naive`` (naive run-step cost over the fast path's) | >= 6 |
 | ``paper_e_full_s`` (complete paper-E table, 2 cores) | <= 20 s |
 | ``mackey_glass`` N = 1000, log10 NRMSE_84 | <= -4.5 |
+
+The speed figures are here; the accuracy one (Mackey-Glass) is in
+:mod:`skinny_mj.bench_mackey_glass`.
 """
 
 from __future__ import annotations
@@ -20,12 +23,13 @@ import os
 import resource
 import tempfile
 import time
-import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from skinny_mj.bench_mackey_glass import mackey_glass
 
 GOALS = {
     "esn_run_vs_reservoirpy_N200": (">=", 2.0),
@@ -72,7 +76,7 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
     n_in = 16
     esn = ESN(ESNConfig(n_inputs=n_in, n_outputs=4, n_reservoir=n_reservoir), seed=0)
     # reservoirpy builds its W as CSR; ours keeps CSC (a faster SciPy kernel)
-    w = esn._sparse.tocsr() if esn._sparse is not None else esn.W[0]
+    w = esn.W[0] if esn.sparse_reservoir is None else esn.sparse_reservoir.tocsr()
     theirs = Reservoir(units=n_reservoir, lr=1.0, W=w, Win=esn.W_in[0, :, :-1],
                        bias=esn.W_in[0, :, -1] * esn.cfg.bias, input_dim=n_in)
     theirs.initialize(np.zeros((1, n_in)))
@@ -112,7 +116,8 @@ def _lockstep_parts(n_runs: int, n_steps: int, seed: int = 0):
     traj = _movement(n_steps)
     speed = max_speeds(traj.angles, traj.dt)
     desired = traj.position_signals("cartesian")
-    esn = ESN(esn_config(TrainConfig(), desired.shape[1]), n_runs=n_runs, seed=seed)
+    cfg = TrainConfig()  # paper E exp. 5: desired next + sensed in, one command per DOF out
+    esn = ESN(esn_config(cfg, 2 * desired.shape[1], cfg.dof), n_runs=n_runs, seed=seed)
     plant = BatchPlant(4, "cartesian", traj, n_runs=n_runs, seeds=range(n_runs),
                        max_speed_rad_s=speed)
     return traj, speed, desired, esn, plant
@@ -217,10 +222,10 @@ def paper_e_full_s(workers: int | None = None, quick: bool = False,
     cores) through the engine's fast path, with the peak resident memory of this
     process and of the largest worker. ``quick`` runs ``build(quick=True)`` instead (a
     smoke test of this figure, not the figure)."""
-    import experiments
+    from skinny_mj import registry
     from skinny_mj.experiment import run_sweep
 
-    module = experiments.get("paper-e")
+    module = registry.get("paper-e")
     if only is None:
         only = tuple(getattr(module, "TABLE_1", {"1": 0, "2": 0, "3": 0, "4": 0, "5": 0,
                                                  "6": 0}))
@@ -228,14 +233,15 @@ def paper_e_full_s(workers: int | None = None, quick: bool = False,
     if workers is None:
         workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
             else (os.cpu_count() or 1)
-    exp = module.build(quick=quick, only=only)
+    exp = module.build(quick=quick)
     with tempfile.TemporaryDirectory(prefix="skinny-bench-") as tmp:
         out = Path(out_dir or tmp)
         start = time.perf_counter()
-        run_sweep(exp, out, workers=workers, progress=False)
+        results = run_sweep(exp, out, rows=list(only), workers=workers, progress=False)
         wall = time.perf_counter() - start
         n_runs = len(list((out / "runs").glob("*.json")))
-    return {"wall_s": wall, "workers": workers, "quick": quick, "rows": len(exp.rows),
+    n_rows = sum(1 for row in results["rows"] if row["n"] + row["n_error"] > 0)
+    return {"wall_s": wall, "workers": workers, "quick": quick, "rows": n_rows,
             "runs": n_runs, **peak_memory_mib()}
 
 
@@ -269,95 +275,6 @@ def _descendants(root: int) -> list[int]:
         kids = parents.get(todo.pop(), [])
         out += kids
         todo += kids
-    return out
-
-
-MG_HORIZON = 84
-
-
-def mackey_glass_series(trials: int, length: int, seed: int = 0) -> np.ndarray:
-    """(trials, length) squashed Mackey-Glass series, one attractor trajectory each."""
-    from controllers.esn import run_generators
-    from controllers.mackey_glass import mackey_glass as series
-
-    return np.stack([series(length, g) for g in run_generators(seed, trials)])
-
-
-def _nrmse84(free: np.ndarray, series: np.ndarray, washout: int, n_fit: int) -> float:
-    """Jaeger & Haas's NRMSE_84 over trials: sqrt(mean (y(84) - d(84))^2 / var(d))."""
-    variance = series[:, washout:n_fit].var()
-    err = free[:, MG_HORIZON - 1] - series[:, n_fit + MG_HORIZON - 1]
-    return float(np.sqrt(np.mean(err**2) / variance))
-
-
-def mackey_glass_ours(series: np.ndarray, n_reservoir: int, washout: int = 1000,
-                      seed: int = 0) -> np.ndarray:
-    """Our ESN (Jaeger & Haas's setup: output feedback, leak 0.6, spectral radius
-    0.95, bias 0.2, feedback scaling 0.56, state noise 1e-8, pinv readout), all trials
-    in lockstep; teacher-forced through the series minus the horizon, then 84 free
-    steps. Returns the free run (trials, 84)."""
-    from controllers.esn import ESN, ESNConfig, run_generators
-
-    trials, n_fit = series.shape[0], series.shape[1] - MG_HORIZON
-    cfg = ESNConfig(n_inputs=1, n_outputs=1, n_reservoir=n_reservoir, spectral_radius=0.95,
-                    bias=0.2, leak_rate=0.6, noise_level=1e-8, output_feedback=True,
-                    feedback_scaling=0.56, readout_activation="identity")
-    esn = ESN(cfg, n_runs=trials, rngs=run_generators(seed + 1, trials))
-    teacher = series[:, :n_fit, None]
-    zeros = np.zeros((trials, n_fit, 1))
-    _, states = esn.run(zeros, noise=True, teacher=teacher, washout=washout)
-    esn.fit(states, teacher[:, washout:])
-    esn.reset()
-    esn.run(zeros, noise=False, teacher=teacher)
-    return np.stack([esn.step(np.zeros((trials, 1)), noise=False)[:, 0]
-                     for _ in range(MG_HORIZON)], axis=1)
-
-
-def mackey_glass_reservoirpy(series: np.ndarray, n_reservoir: int, washout: int = 1000,
-                             seed: int = 0) -> np.ndarray:
-    """reservoirpy 0.4's own way on the same series: a ``Reservoir >> Ridge`` trained to
-    map d(t) to d(t + 1) (leak 0.6, spectral radius 0.95, ridge 1e-10), then run in a
-    closed loop for 84 steps from the end of the training data. Returns (trials, 84)."""
-    from reservoirpy.nodes import Reservoir, Ridge
-
-    n_fit = series.shape[1] - MG_HORIZON
-    free = np.empty((series.shape[0], MG_HORIZON))
-    for r, s in enumerate(series):
-        model = Reservoir(n_reservoir, lr=0.6, sr=0.95, input_scaling=1.0,
-                          rc_connectivity=min(1.0, 10 / n_reservoir), seed=seed + r) \
-            >> Ridge(ridge=1e-10)
-        model.fit(s[:n_fit - 1, None], s[1:n_fit, None], warmup=washout)
-        y = s[n_fit - 1:n_fit]
-        for k in range(MG_HORIZON):
-            y = model.step(y)
-            free[r, k] = y[0]
-    return free
-
-
-def mackey_glass(n_reservoir: int, trials: int, washout: int = 1000, train: int = 2000,
-                 seed: int = 0) -> dict:
-    """log10 NRMSE_84 of ours and of reservoirpy on the same ``trials`` series."""
-    series = mackey_glass_series(trials, washout + train + MG_HORIZON, seed)
-    n_fit = washout + train
-    start = time.perf_counter()
-    ours = _nrmse84(mackey_glass_ours(series, n_reservoir, washout, seed), series,
-                    washout, n_fit)
-    out: dict[str, Any] = {"N": n_reservoir, "trials": trials, "train": train,
-                           "ours_log10_nrmse84": float(np.log10(ours)),
-                           "ours_s": time.perf_counter() - start}
-    try:
-        import reservoirpy
-    except ImportError:
-        out["reservoirpy"] = "skipped: reservoirpy not installed"
-        return out
-    start = time.perf_counter()
-    with warnings.catch_warnings():  # its ridge solve warns on ill-conditioned Gram matrices
-        warnings.simplefilter("ignore")
-        free = mackey_glass_reservoirpy(series, n_reservoir, washout, seed)
-    theirs = _nrmse84(free, series, washout, n_fit)
-    out["reservoirpy_version"] = reservoirpy.__version__
-    out.update(reservoirpy_log10_nrmse84=float(np.log10(theirs)),
-               reservoirpy_s=time.perf_counter() - start)
     return out
 
 

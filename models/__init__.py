@@ -1,0 +1,1 @@
+"""Skinny's MJCF models (Menagerie layout), installed as the package data ``skinny_mj.models``."""
