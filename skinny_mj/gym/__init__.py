@@ -1,0 +1,77 @@
+"""Skinny as Gymnasium environments: ``import skinny_mj.gym`` registers the ids.
+
+>>> import gymnasium, skinny_mj.gym
+>>> env = gymnasium.make("SkinnyMJ/Skinny2D-v0")                       # doctest: +SKIP
+>>> envs = gymnasium.make_vec("SkinnyMJ/Skinny2D-v0", num_envs=64)     # doctest: +SKIP
+
+====================================  ===  ==========  ===================================
+id                                    DOF  actuation   action
+====================================  ===  ==========  ===================================
+``SkinnyMJ/Skinny2D-v0``              4    velocity    normalized joint velocity
+``SkinnyMJ/Skinny3D-v0``              8    velocity    normalized joint velocity
+``SkinnyMJ/Skinny2D-Torque-v0``       4    torque      normalized torque (x gear N m)
+``SkinnyMJ/Skinny3D-Torque-v0``       8    torque      normalized torque (x gear N m)
+====================================  ===  ==========  ===================================
+
+Every other argument of :func:`skinny_mj.task.load` is a ``make`` keyword
+(``signals``, ``trajectory``, ``sensor_noise``, ``seed``, ``max_speed_rad_s``,
+``speed_factor``). ``make_vec`` builds :class:`SkinnyVectorEnv` (the registered vector
+entry point: N robots in one MuJoCo model); ``make_vec(..., vectorization_mode="sync")``
+gives Gymnasium's ``SyncVectorEnv`` of N :class:`SkinnyEnv` with the same numbers.
+
+Why a direct ``gymnasium.Env`` and not ``shimmy``'s ``DmControlCompatibilityV0``: shimmy
+reseeds dm_control's legacy ``RandomState`` on ``reset(seed=)``, which our task never
+uses (it owns a ``numpy.random.Generator`` for the sensor noise), so two resets with the
+same seed give different observations and ``check_env`` fails ("Deterministic step
+observations are not equivalent", measured with shimmy 2.0.1); it would also expose the
+observation dict as a ``Dict`` of unbounded boxes (the integer ``step`` as an int64 box,
+joint angles in rad beside normalized signals), and it has no vector counterpart to check
+the lockstep :class:`skinny_mj.plant.BatchPlant` against. A small Env over
+:func:`skinny_mj.task.load` keeps the dm_control task as the one definition of physics,
+noise, reward and episode end, flattens the observation into one ``Box`` and makes
+``reset(seed=s)`` mean ``load(..., seed=s)``.
+Gymnasium stays optional: ``import skinny_mj`` never imports it (``pip install -e
+".[gym]"``).
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+import gymnasium
+
+NAMESPACE = "SkinnyMJ"
+IDS = {
+    f"{NAMESPACE}/Skinny2D-v0": {"dof": 4, "actuation": "velocity"},
+    f"{NAMESPACE}/Skinny3D-v0": {"dof": 8, "actuation": "velocity"},
+    f"{NAMESPACE}/Skinny2D-Torque-v0": {"dof": 4, "actuation": "torque"},
+    f"{NAMESPACE}/Skinny3D-Torque-v0": {"dof": 8, "actuation": "torque"},
+}
+
+
+def register() -> None:
+    """Register :data:`IDS` with Gymnasium (done on import; a second call is a no-op)."""
+    for env_id, kwargs in IDS.items():
+        if env_id in gymnasium.registry:
+            continue
+        gymnasium.register(
+            id=env_id,
+            entry_point="skinny_mj.gym.env:SkinnyEnv",
+            vector_entry_point="skinny_mj.gym.vector:SkinnyVectorEnv",
+            kwargs=dict(kwargs),
+        )
+
+
+register()
+
+_LAZY = {"SkinnyEnv": "skinny_mj.gym.env", "SkinnyVectorEnv": "skinny_mj.gym.vector"}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:  # the env modules import mujoco and dm_control: only on use
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'skinny_mj.gym' has no attribute {name!r}")
+
+
+__all__ = ["IDS", "NAMESPACE", "SkinnyEnv", "SkinnyVectorEnv", "register"]

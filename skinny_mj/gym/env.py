@@ -1,0 +1,149 @@
+"""One Skinny as a ``gymnasium.Env``: the dm_control task of :func:`skinny_mj.task.load`
+with a flat observation and Gymnasium's seeding.
+
+Observation, (3 n_signals,) float64, normalized units::
+
+    [ sensed(t) | desired(t) | desired_next(t) ]
+
+``sensed`` is the task's noisy position signals (unbounded: Gaussian sensor noise),
+``desired`` / ``desired_next`` the movement's signals now and one step ahead (bounded by
+the movement's range, at least [-1, 1]). Action, (n_dof,) float64 in [-1, 1]: a
+normalized joint velocity (``actuation="velocity"``) or torque (``"torque"``); values
+outside are clipped by the task. Reward: the task's, ``-mean |desired(t) - true(t)|``
+after the step. An episode is the movement, T - 1 steps; it ends with
+``truncated=True`` (the task has a time limit and no failure state, so never
+``terminated``), as dm_control marks it (``discount`` 1 on the last step). A diverging
+simulation raises dm_control's ``PhysicsError`` (then call ``reset``).
+
+Seeding: the task's noise Generator *is* the Env's ``np_random``; ``reset(seed=s)``
+starts it as ``numpy.random.default_rng(s)`` (what ``load(..., seed=s)`` does), and
+``reset()`` continues the stream, as the task does between episodes.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import dm_env
+import gymnasium
+import numpy as np
+from dm_control.rl.control import PhysicsError
+from gymnasium import spaces
+from gymnasium.utils import seeding
+
+from skinny_mj.task import Setup, load
+
+RENDER_CAMERA = "front"
+
+
+def resolve_trajectory(trajectory: Any, dof: int) -> Any:
+    """A movement name or file (:func:`skinny_mj.trajectories.load_movement`), an object
+    with ``.angles`` (T, dof) rad / ``.dt`` / ``.dof``, or None (the synthesized YMCA)."""
+    if isinstance(trajectory, str):
+        from skinny_mj.trajectories import load_movement
+
+        return load_movement(trajectory, dof)[0]
+    return trajectory
+
+
+def observation_space(setup: Setup) -> spaces.Box:
+    """The flat observation's ``Box``: sensed unbounded, the desired parts bounded by the
+    movement (at least [-1, 1], so rounding in the signals never leaves the box)."""
+    n = setup.desired.shape[1]
+    lo = min(-1.0, float(setup.desired.min()))
+    hi = max(1.0, float(setup.desired.max()))
+    low = np.concatenate([np.full(n, -np.inf), np.full(2 * n, lo)])
+    high = np.concatenate([np.full(n, np.inf), np.full(2 * n, hi)])
+    return spaces.Box(low, high, dtype=np.float64)
+
+
+def action_space(dof: int) -> spaces.Box:
+    """(dof,) normalized commands in [-1, 1]."""
+    return spaces.Box(-1.0, 1.0, (dof,), dtype=np.float64)
+
+
+class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
+    """Skinny imitating a movement (see the module docstring for spaces and episodes).
+
+    Parameters
+    ----------
+    dof, signals, actuation, sensor_noise, max_speed_rad_s, speed_factor :
+        as in :func:`skinny_mj.task.load`.
+    trajectory : see :func:`resolve_trajectory`; default the synthesized YMCA.
+    seed : seed of the noise Generator until ``reset(seed=...)`` replaces it.
+    render_mode : None or "rgb_array" (needs an OpenGL backend, e.g. ``MUJOCO_GL=egl``).
+    width, height : rendered image size in pixels (at most 640 x 480).
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
+
+    def __init__(
+        self,
+        dof: int = 4,
+        signals: str = "cartesian",
+        trajectory: Any = None,
+        actuation: str = "velocity",
+        sensor_noise: float = 0.01,
+        seed: int = 0,
+        max_speed_rad_s: float | np.ndarray | None = None,
+        speed_factor: float = 2.0,
+        render_mode: str | None = None,
+        width: int = 320,
+        height: int = 240,
+    ):
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.render_mode = render_mode
+        self.width, self.height = int(width), int(height)
+        self.dm_control_env = load(dof, signals, resolve_trajectory(trajectory, dof),
+                                   actuation, sensor_noise, seed, max_speed_rad_s,
+                                   speed_factor)
+        self.setup: Setup = self.dm_control_env.task.setup
+        self.observation_space = observation_space(self.setup)
+        self.action_space = action_space(dof)
+        # default_rng(seed) and Gymnasium's np_random(seed) are the same stream
+        self._np_random, self._np_random_seed = seeding.np_random(seed)
+        self._running = False
+
+    @property
+    def n_steps(self) -> int:
+        """Steps per episode: the movement's length T - 1."""
+        return self.dm_control_env.task.n_steps
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)
+        self.dm_control_env.task.rng = self.np_random  # the noise stream is the Env's Generator
+        ts = self.dm_control_env.reset()
+        self._running = True
+        return _flat(ts.observation), {}
+
+    def step(
+        self, action: np.ndarray
+    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if not self._running:
+            raise RuntimeError("SkinnyEnv: episode over (or not started); call reset()")
+        action = np.asarray(action, dtype=float).reshape(self.setup.dof)
+        try:
+            ts = self.dm_control_env.step(action)
+        except PhysicsError:  # diverged (the torque twin can): the episode is over
+            self._running = False
+            raise
+        last = ts.step_type == dm_env.StepType.LAST
+        terminated = bool(last and ts.discount == 0.0)  # never, for this task
+        self._running = not last
+        return _flat(ts.observation), float(ts.reward), terminated, last and not terminated, {}
+
+    def render(self) -> np.ndarray | None:
+        """(height, width, 3) uint8 picture from the front camera, or None."""
+        if self.render_mode != "rgb_array":
+            return None
+        physics = self.dm_control_env.physics
+        return physics.render(self.height, self.width, camera_id=RENDER_CAMERA)
+
+
+def _flat(observation: dict[str, np.ndarray]) -> np.ndarray:
+    return np.concatenate(
+        [observation["sensed"], observation["desired"], observation["desired_next"]]
+    )
