@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from skinny_mj.cli import main
+from skinny_mj.trajectories.samples import SAMPLE_ASF
 
-CMU = Path(__file__).resolve().parents[2] / "shared" / "mocap" / "cmu"
+CMU = SAMPLE_ASF.parent  # the CMU clips shipped with the package
 DATA = Path(__file__).parent / "data"
 
 
@@ -45,7 +46,6 @@ def test_track_ymca_writes_metrics_and_recording(dof, tmp_path, capsys):
     assert "position NRMSE" in capsys.readouterr().out
 
 
-@pytest.mark.skipif(not CMU.is_dir(), reason="../shared/mocap not beside the repo")
 def test_track_real_motion_capture_3d(tmp_path):
     out = tmp_path / "mocap"
     assert main(["track", "--dof", "8", "--trajectory", str(CMU / "md_03.amc"),

@@ -13,9 +13,10 @@ from skinny_mj.trajectories.asf_amc import load_asf_amc, parse_asf
 from skinny_mj.trajectories.bvh import load_bvh, parse_bvh
 from skinny_mj.trajectories.mocap_common import classify_arm_bone
 from skinny_mj.trajectories.retarget import clip_continuous, solve_angles
+from skinny_mj.trajectories.samples import SAMPLE_ASF
 
 DATA = Path(__file__).parent / "data"
-CMU = Path(__file__).resolve().parents[2] / "shared" / "mocap" / "cmu"  # ../shared beside the repo
+CMU = SAMPLE_ASF.parent  # the CMU clips shipped with the package
 DOFS = (4, 8)
 
 
@@ -225,7 +226,6 @@ def test_bad_bvh_motion(tmp_path, edit, match):
 # -- the shared CMU clips -------------------------------------------------------------------------
 
 
-@pytest.mark.skipif(not CMU.is_dir(), reason="shared CMU clips not present")
 @pytest.mark.parametrize("clip_name, frames", [("md_02", 1123), ("md_03", 434)])
 @pytest.mark.parametrize("dof", DOFS)
 def test_cmu_clips_retarget(clip_name, frames, dof):
@@ -246,7 +246,6 @@ def test_cmu_clips_retarget(clip_name, frames, dof):
     assert np.all(np.ptp(traj.angles[:, [0, dof // 2]], axis=0) > np.deg2rad(90))
 
 
-@pytest.mark.skipif(not CMU.is_dir(), reason="shared CMU clips not present")
 def test_cmu_skeleton_arms_and_torso():
     clip = load_asf_amc(CMU / "moderndance.asf", CMU / "md_03.amc")
     upper = np.linalg.norm(clip.elbow - clip.shoulder, axis=-1)

@@ -159,7 +159,6 @@ def test_excerpt_of_a_trajectory_file(tmp_path):
         load_movement(f"{path}@start=5,duration=2", 4)
 
 
-@pytest.mark.skipif(not MD02.is_file(), reason="shared CMU clip md_02 not present")
 def test_mocap_excerpt_reports_its_own_clipping():
     full, full_report = load_movement(MD02, 4)
     part, report = load_movement(f"{MD02}@start=3,duration=6.26", 4)
@@ -169,7 +168,6 @@ def test_mocap_excerpt_reports_its_own_clipping():
     assert inside > 0.8  # same retarget; only clip ramps at the excerpt's edges differ
 
 
-@pytest.mark.skipif(not MD02.is_file(), reason="shared CMU clip md_02 not present")
 def test_sweep_on_a_movement_excerpt(tmp_path):
     movement = f"{MD02}@start=3,duration=6.26"
     exp = paper_e.build(quick=True, movement=movement)
