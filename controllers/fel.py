@@ -23,7 +23,7 @@ every later fit, so it cannot poison its lockstep batch.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -36,12 +36,13 @@ from controllers.feedback import (
 )
 from controllers.metrics import motor_nrmse, position_nrmse
 from controllers.plant import Plant
+from controllers.rollout import INPUTS, Rollout, rollout, run_mean
+
+__all__ = ["FELConfig", "INPUTS", "Rollout", "rollout", "run_mean", "health", "train",
+           "TrainResult", "evaluate", "EvalResult"]
 
 _METHODS = ("original", "new")
 _SCHEDULES = ("linear", "multiplicative", "fixed")
-#: What the inverse model sees besides the forward model's prediction: the desired next
-#: position and the sensed one (papers A, C, D, E), or the sensed one only (paper B).
-INPUTS = ("desired+sensed", "sensed")
 
 
 @dataclass(frozen=True)
@@ -86,152 +87,6 @@ class FELConfig:
         if self.gain_schedule == "multiplicative":
             return multiplicative_gain(self.epochs, self.gain_factor)
         return fixed_gain(self.epochs, self.gain_value)
-
-
-def run_mean(a: np.ndarray) -> np.ndarray:
-    """Mean over every axis but the first, (R,), summed in the same order for every R.
-
-    A rollout's arrays are (R, T, ...) views of time-major buffers; reducing such a view
-    over several axes sums in another order than a single run's contiguous array, so a
-    lockstep run would differ from its single run in the last bits. Made contiguous
-    first (a no-op when R = 1), each run's sum is the single run's."""
-    a = np.ascontiguousarray(a)
-    return a.mean(axis=tuple(range(1, a.ndim)))
-
-
-@dataclass
-class Rollout:
-    """One cycle of R runs. T = len(desired).
-
-    commands (R, T-1, n_dof) as sent; y_esn (R, T-1, n_dof) ESN outputs;
-    u_error (R, T, n_dof); sensed, true_signals (R, T, n_sig); angles (R, T, n_joints)
-    the plant's joint angles, rad (n_joints = n_dof unless part of the body is forced,
-    as paper B's leading arm); states (R, T-1, D) the inverse model's extended
-    states; fm_states (R, T-1, D_fm) or None;
-    predictions (R, T, n_sig) the forward model's p(t) or None.
-    """
-
-    commands: np.ndarray
-    y_esn: np.ndarray
-    u_error: np.ndarray
-    sensed: np.ndarray
-    true_signals: np.ndarray
-    angles: np.ndarray
-    states: np.ndarray
-    fm_states: np.ndarray | None = None
-    predictions: np.ndarray | None = None
-
-    def select(self, r: int) -> Rollout:
-        """Run ``r`` of a lockstep rollout (arrays keep R = 1; views, not copies)."""
-        if self.commands.shape[0] == 1:
-            return self
-        return Rollout(**{f.name: None if getattr(self, f.name) is None
-                          else getattr(self, f.name)[r:r + 1] for f in fields(self)})
-
-    @property
-    def y_est(self) -> np.ndarray:
-        """Estimated target y_est(t) = command(t) + u_error(t+1), (R, T-1, n_dof)."""
-        return self.commands + self.u_error[:, 1:]
-
-    @property
-    def correction_ratio(self) -> np.ndarray:
-        """Online correction ratio per run (R,): mean |command - y_ESN| / mean |command|."""
-        num = run_mean(np.abs(self.commands - self.y_esn))
-        return num / np.maximum(run_mean(np.abs(self.commands)), 1e-12)
-
-
-def rollout(
-    esn: ESN,
-    plant: Plant,
-    desired: np.ndarray,
-    gain: float | np.ndarray,
-    *,
-    noise: bool = True,
-    feedback: FeedbackController | None = None,
-    delay_steps: int = 0,
-    forward=None,
-    buffers: dict | None = None,
-    inputs: str = "desired+sensed",
-) -> Rollout:
-    """Run one cycle: plant reset to the first pose, ESN state carried on.
-
-    Parameters
-    ----------
-    desired : (T, n_sig) desired position signals, normalized.
-    gain : K, scalar or (R,).
-    noise : reservoir noise on (washout/learning) or off (evaluation/test).
-    forward : optional :class:`controllers.forward_model.ForwardModel`, whose
-        prediction p(t) is appended to the inverse model's input.
-    inputs : "desired+sensed" (ESN input [d(t+1); s_in(t)]) or "sensed" ([s_in(t)]);
-        the forward model's p(t) is appended in both cases.
-    buffers : optional dict the rollout keeps its arrays in and reuses on the next call
-        with the same dict (fresh pages of a few MB per rollout cost about as much as
-        the control step); the returned Rollout's arrays are then views that the next
-        such call overwrites. :func:`train` passes one per training.
-    """
-    feedback = feedback or FeedbackController()
-
-    def array(name: str, shape: tuple[int, ...], dtype=np.float64) -> np.ndarray:
-        if buffers is None:
-            return np.empty(shape, dtype)
-        out = buffers.get(name)
-        if out is None or out.shape != shape or out.dtype != dtype:
-            out = buffers[name] = np.empty(shape, dtype)
-        return out
-
-    desired = np.asarray(desired, float)
-    n_steps, n_runs = desired.shape[0], esn.n_runs
-    gain = np.broadcast_to(np.asarray(gain, float), (n_runs,))[:, None]
-    # Time-major buffers (T, R, ...): each step writes contiguous rows, not R rows a
-    # whole movement apart (scattered first touches of fresh pages cost more than the
-    # writes). The Rollout holds their (R, T, ...) views.
-    if inputs not in INPUTS:
-        raise ValueError(f"inputs must be one of {INPUTS}, got {inputs!r}")
-    if plant.n_runs != n_runs:
-        raise ValueError(f"{n_runs} networks for {plant.n_runs} plant runs")
-    n_sig, n_dof = plant.n_signals, plant.n_dof
-    n_des = desired.shape[1] if inputs == "desired+sensed" else 0
-    sensed = array("sensed", (n_steps, n_runs, n_sig))
-    true = array("true", (n_steps, n_runs, n_sig))
-    first = plant.reset()
-    angles0 = plant.joint_angles()  # the whole body's: more than n_dof when part is forced
-    angles = array("angles", (n_steps, n_runs, angles0.shape[1]))
-    u_error = array("u_error", (n_steps, n_runs, n_dof))
-    commands = array("commands", (n_steps - 1, n_runs, n_dof))
-    y_esn = array("y_esn", (n_steps - 1, n_runs, n_dof))
-    states = array("states", (n_steps - 1, n_runs, esn.cfg.n_extended), esn.dtype)
-    fm_states = None if forward is None else array(
-        "fm_states", (n_steps - 1, n_runs, forward.esn.cfg.n_extended))
-    predictions = None if forward is None else array("predictions", (n_steps, n_runs, n_sig))
-    sensed[0] = first
-    true[0] = plant.true_signals()
-    angles[0] = angles0
-    if forward is not None:
-        predictions[0] = sensed[0]
-    u_in = np.empty((n_runs, n_des + n_sig * (1 if forward is None else 2)))
-    for t in range(n_steps - 1):
-        s_in = sensed[max(t - delay_steps, 0)]
-        if n_des:
-            u_in[:, :n_des] = desired[t + 1]  # the ESN's input [d(t+1); s(t); p(t)]
-        u_in[:, n_des:n_des + n_sig] = s_in
-        if forward is not None:
-            u_in[:, n_des + n_sig:] = predictions[t]
-        y_esn[t] = esn.step(u_in, noise=noise, out_extended=states[t])
-        u_error[t] = feedback.u_error(desired[t], sensed[t], plant)
-        command = commands[t]  # clip(y_esn + K u_error), in place
-        np.multiply(gain, u_error[t], out=command)
-        command += y_esn[t]
-        np.maximum(command, -1.0, out=command)  # np.clip, without its Python wrapper
-        np.minimum(command, 1.0, out=command)
-        if forward is not None:
-            predictions[t + 1] = forward.step(s_in, command, noise=noise)
-            fm_states[t] = forward.esn.extended
-        sensed[t + 1] = plant.step(command)
-        true[t + 1] = plant.true_signals()
-        angles[t + 1] = plant.joint_angles()
-    u_error[-1] = feedback.u_error(desired[-1], sensed[-1], plant)
-    return Rollout(*(None if a is None else np.swapaxes(a, 0, 1) for a in (
-        commands, y_esn, u_error, sensed, true, angles, states, fm_states, predictions)))
 
 
 @dataclass
@@ -295,6 +150,8 @@ def train(
     feedback: FeedbackController | None = None,
     forward=None,
     scored: np.ndarray | None = None,
+    hook=None,
+    readout_fit=None,
 ) -> TrainResult:
     """Train the inverse model ``esn`` (R runs) by FEL on ``plant``.
 
@@ -308,6 +165,11 @@ def train(
         its ``mode`` is "serial".
     scored : indices of the signals the position curve scores (default all; paper B
         scores the lagging arm's only).
+    hook : optional rollout hook (:func:`rollout`), e.g. the torque loop.
+    readout_fit : optional fitter replacing ``esn.fit`` (e.g.
+        :class:`controllers.ridge_select.RidgeSelector`, lambda per run on a validation
+        cycle): ``observe(states, targets, runs)`` after each washout cycle and
+        ``fit(esn, states, targets, runs, epoch)`` on each learning cycle.
     """
     gains = cfg.gains()
     n_runs, n_epochs = esn.n_runs, cfg.epochs
@@ -321,19 +183,26 @@ def train(
     # one set of rollout arrays for the whole training: each rollout is used (fit,
     # metrics) before the next overwrites it, and the last one is the last evaluation
     kw = {"feedback": feedback, "delay_steps": cfg.delay_steps, "forward": forward,
-          "buffers": {}, "inputs": cfg.inputs}
+          "buffers": {}, "inputs": cfg.inputs, "hook": hook}
     for epoch, gain in enumerate(gains):
         esn.reset()
         if forward is not None:
             forward.esn.reset()
         ro = rollout(esn, plant, desired, gain, noise=True, **kw)
         _mark_failures(esn, ro, result, epoch)
+        if readout_fit is not None:
+            readout_fit.observe(ro.states, beta * ro.y_est + (1.0 - beta) * ro.y_esn,
+                                ~result.failed)
         _tick(progress, epoch, 0)
         for cycle in range(1, cfg.learning_cycles + 1):
             ro = rollout(esn, plant, desired, gain, noise=True, **kw)
             _mark_failures(esn, ro, result, epoch)
             alive = ~result.failed
-            esn.fit(ro.states, beta * ro.y_est + (1.0 - beta) * ro.y_esn, runs=alive)
+            if readout_fit is None:
+                esn.fit(ro.states, beta * ro.y_est + (1.0 - beta) * ro.y_esn, runs=alive)
+            else:
+                readout_fit.fit(esn, ro.states, beta * ro.y_est + (1.0 - beta) * ro.y_esn,
+                                alive, epoch)
             if forward is not None and forward.mode != "serial":
                 forward.fit_rollout(ro, runs=alive)
             _tick(progress, epoch, cycle)
@@ -370,18 +239,25 @@ def evaluate(
     inputs: str = "desired+sensed",
     washout_cycles: int = 0,
     scored: np.ndarray | None = None,
+    gain: float = 0.0,
+    hook=None,
+    noise: bool = False,
 ) -> EvalResult:
     """Test: reset, ``washout_cycles`` cycles without scoring (papers B, C: one
-    "initialization cycle"), then one scored cycle; K = 0, no noise, no learning."""
+    "initialization cycle"), then one scored cycle; no noise, no learning, feedback
+    gain ``gain`` (K = 0: the inverse model alone; > 0: the feedback left on); ``hook``
+    as in :func:`rollout`; ``noise=True``: reservoir noise on, as the thesis's toolbox
+    ran its tests (issue 12)."""
     if washout_cycles < 0:
         raise ValueError(f"washout cycles must be >= 0, got {washout_cycles}")
     esn.reset()
     if forward is not None:
         forward.esn.reset()
-    kw = {"noise": False, "delay_steps": delay_steps, "forward": forward, "inputs": inputs}
+    kw = {"noise": noise, "delay_steps": delay_steps, "forward": forward, "inputs": inputs,
+          "hook": hook}
     for _ in range(washout_cycles):
-        rollout(esn, plant, desired, 0.0, **kw)
-    ro = rollout(esn, plant, desired, 0.0, **kw)
+        rollout(esn, plant, desired, gain, **kw)
+    ro = rollout(esn, plant, desired, gain, **kw)
     reasons = health(esn, ro)
     failed = np.array([r is not None for r in reasons])
     pos = np.where(failed, np.nan, _scored_nrmse(ro, desired, scored))

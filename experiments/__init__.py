@@ -1,6 +1,7 @@
-"""One module per paper; each regenerates its table and figures through the shared engine
-(:mod:`skinny_mj.experiment`). A module exposes ``NAME``, ``build(quick, movement, asf)
--> Experiment`` and ``report(results, out_dir) -> str`` (figures + the paper's claims).
+"""One module per paper, and per question beyond the thesis; each regenerates its table
+and figures through the shared engine (:mod:`skinny_mj.experiment`, whose docstring is the
+contract). A module exposes ``NAME``, ``build(*, quick, movement, asf, dof, signals) ->
+Experiment`` and ``report(results, out_dir) -> str`` (figures + claims).
 """
 
 from __future__ import annotations
@@ -17,6 +18,13 @@ REGISTRY = {
     "paper-c": "experiments.paper_c",
     "paper-d": "experiments.paper_d",
     "paper-e": "experiments.paper_e",
+    "generalization": "experiments.generalization",
+    "ridge-vs-new": "experiments.ridge_vs_new",
+    "figure-eight": "experiments.figure_eight",
+    "mackey-glass": "experiments.mackey_glass",
+    "adaptation": "experiments.adaptation",
+    "fidelity-e": "experiments.fidelity_e",
+    "dynamic": "experiments.dynamic",
 }
 
 

@@ -26,15 +26,16 @@ import functools
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
 from controllers import fel
-from controllers.esn import ESN, ESNConfig
+from controllers.esn import ESN
 from controllers.forward_model import ForwardModel
 from controllers.true_target import TrueTargetConfig, train_true_target
-from skinny_mj import ideal
+from skinny_mj import ideal, protocol
+from skinny_mj import torque_training as torque
 from skinny_mj.config import (  # noqa: F401  (re-exported: the training API in one place)
     DEFAULT_NOISE,
     METHODS,
@@ -43,97 +44,16 @@ from skinny_mj.config import (  # noqa: F401  (re-exported: the training API in 
     relative_cost,
     with_overrides,
 )
-from skinny_mj.errors import SkinnyInputError
-
-
-class RunStreams(NamedTuple):
-    """The random streams of one run (see the module docstring)."""
-
-    esn: np.random.Generator
-    plant_seed: int
-    forward: np.random.Generator
-
-
-def run_streams(seed: int) -> RunStreams:
-    """The inverse ESN's Generator, the plant's sensor-noise seed and the forward
-    ESN's Generator for run ``seed``."""
-    esn_ss, plant_ss, fm_ss = np.random.SeedSequence(int(seed)).spawn(3)
-    return RunStreams(np.random.default_rng(esn_ss),
-                      int(plant_ss.generate_state(1, np.uint64)[0]),
-                      np.random.default_rng(fm_ss))
-
-
-def load_trajectory(cfg: TrainConfig):
-    """The movement of one repetition (at cfg.speed) and its retarget report."""
-    from skinny_mj.trajectories import load_movement
-
-    return load_movement(cfg.trajectory, cfg.dof, asf=cfg.asf, speed=cfg.speed)
-
-
-def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
-    """(n_dof,) rad/s: 2 x the fastest speed per DOF of ``trajectory`` (one repetition)
-    or of the movement named by ``cfg.max_speed_from``, so that networks trained on
-    different movements share one command scale (paper C)."""
-    from skinny_mj.ideal import max_speeds
-    from skinny_mj.trajectories import load_movement
-
-    if cfg.max_speed_from is not None:
-        trajectory, _ = load_movement(cfg.max_speed_from, cfg.dof, asf=cfg.asf)
-    return max_speeds(trajectory.angles, trajectory.dt)
-
-
-def make_plant(cfg: TrainConfig, trajectory, plant_seeds: Sequence[int],
-               max_speed_rad_s: np.ndarray):
-    """The plant of ``cfg`` imitating ``trajectory``, one run per plant seed."""
-    from skinny_mj.plant import BatchPlant, EnvPlant
-
-    seeds = [int(s) for s in plant_seeds]
-    common = dict(n_runs=len(seeds), seeds=seeds, sensor_noise=cfg.sensor_noise,
-                  actuation=cfg.actuation, max_speed_rad_s=max_speed_rad_s)
-    if cfg.leading_arm is not None:
-        from skinny_mj.bimanual import BimanualPlant
-
-        return BimanualPlant(cfg.dof, cfg.signals, trajectory, cfg.leading_arm, **common)
-    if cfg.plant == "env":
-        from skinny_mj.task import load
-
-        if len(seeds) != 1:
-            raise ValueError("the dm_control path steps one run per environment")
-        env = load(cfg.dof, cfg.signals, trajectory, actuation=cfg.actuation,
-                   sensor_noise=cfg.sensor_noise, seed=seeds[0], max_speed_rad_s=max_speed_rad_s)
-        return EnvPlant(env)
-    return BatchPlant(cfg.dof, cfg.signals, trajectory, **common)
-
-
-def esn_config(cfg: TrainConfig, n_inputs: int, n_outputs: int,
-               n_reservoir: int | None = None) -> ESNConfig:
-    try:
-        return ESNConfig(
-            n_inputs=n_inputs, n_outputs=n_outputs,
-            n_reservoir=cfg.reservoir if n_reservoir is None else n_reservoir,
-            spectral_radius=cfg.spectral_radius, noise_level=cfg.noise_level,
-            readout=cfg.readout, ridge_lambda=cfg.ridge,
-        )
-    except ValueError as err:
-        raise SkinnyInputError(str(err)) from None
-
-
-def controlled_dofs(cfg: TrainConfig) -> np.ndarray | None:
-    """Body DOFs the ESN drives: None for all, paper B's lagging arm's otherwise."""
-    if cfg.leading_arm is None:
-        return None
-    from skinny_mj.bimanual import arm_dofs
-
-    return arm_dofs(cfg.dof, "left" if cfg.leading_arm == "right" else "right")
-
-
-def true_commands_of(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) -> np.ndarray:
-    """(T-1, n_controlled) the analytic commands of ``trajectory`` for the ESN's DOFs."""
-    from skinny_mj.ideal import true_commands
-
-    commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
-    dofs = controlled_dofs(cfg)
-    return commands if dofs is None else commands[:, dofs]
+from skinny_mj.run_parts import (  # noqa: F401  (re-exported)
+    RunStreams,
+    controlled_dofs,
+    esn_config,
+    full_scale_speeds,
+    load_trajectory,
+    make_plant,
+    run_streams,
+    true_commands_of,
+)
 
 
 @dataclass
@@ -186,9 +106,6 @@ def build_run(cfg: TrainConfig, seeds: Sequence[int]) -> Run:
     """The parts of ``len(seeds)`` runs of ``cfg`` in lockstep (see :class:`Run`)."""
     from skinny_mj import body
 
-    if cfg.actuation != "velocity" and cfg.method != "true-target":
-        raise SkinnyInputError("feedback-error learning on the torque body needs a feedback "
-                               "controller in torque units; train with actuation='velocity'")
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("build_run needs at least one seed")
@@ -200,7 +117,7 @@ def build_run(cfg: TrainConfig, seeds: Sequence[int]) -> Run:
     dofs = controlled_dofs(cfg)
     n_out = cfg.dof if dofs is None else len(dofs)
     n_in = (n_sig if cfg.inputs == "desired+sensed" else 0) + n_sig \
-        + (n_sig if cfg.forward is not None else 0)
+        + (n_sig if cfg.forward is not None else 0) + torque.n_extra_inputs(cfg)
     esn = ESN(esn_config(cfg, n_in, n_out), n_runs=len(seeds), rngs=[s.esn for s in streams])
     forward = None
     if cfg.forward is not None:
@@ -235,6 +152,7 @@ class Training:
     fel: fel.TrainResult | None = None
     true_target: Any = None
     pretrain_prediction_nrmse: np.ndarray | None = None
+    ridge_lambda: np.ndarray | None = None  # (R, E) lambda chosen per epoch (ridge_select)
 
 
 def train_run(run: Run, progress: Callable[[int, int], None] | None = None) -> Training:
@@ -245,12 +163,19 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None) -> T
             run.trajectory.position_signals(cfg.signals),
             true_commands_of(cfg, run.trajectory, run.max_speed_rad_s),
             cfg.delay, sensor_noise=cfg.sensor_noise)
+    if cfg.method == "none":  # the feedback controller alone: nothing to learn
+        return out
     if cfg.method == "true-target":
         tt = TrueTargetConfig(method="original" if cfg.beta >= 1 else "new", beta=cfg.beta,
-                              cycles=cfg.tt_cycles, noise=cfg.noise_level > 0)
+                              cycles=cfg.tt_cycles, noise=cfg.noise_level > 0,
+                              input_noise=cfg.tt_input_noise)
         out.true_target = train_true_target(
             run.esn, run.desired, run.true_commands, tt,
-            one_step=ideal.one_step_positions(run.training, cfg.signals, run.max_speed_rad_s))
+            one_step=None if cfg.actuation == "torque" else  # (kinematic one-step map)
+            ideal.one_step_positions(run.training, cfg.signals, run.max_speed_rad_s),
+            extra_inputs=torque.teacher_inputs(cfg, run.training, run.max_speed_rad_s)
+            if cfg.actuation == "torque" else None,
+            input_rngs=[protocol.tt_input_rng(s) for s in run.seeds])
         _report(progress, 1, 1)
         return out
     fcfg = run.fel_config()
@@ -260,8 +185,18 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None) -> T
     def tick(epoch: int, cycle: int) -> None:
         _report(progress, epoch * per_epoch + cycle + 1, total)
 
+    selector = None
+    if cfg.ridge_select:  # issue 16: lambda per run and fit, on a validation cycle
+        from controllers.ridge_select import RidgeSelector
+
+        selector = RidgeSelector(run.esn, cfg.epochs)
     out.fel = fel.train(run.esn, run.plant, run.desired, fcfg, true_commands=run.true_commands,
-                        progress=tick, forward=run.forward, scored=run.scored)
+                        progress=tick, forward=run.forward, scored=run.scored,
+                        feedback=protocol.feedback_of(cfg.u_error_gain),
+                        hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s),
+                        readout_fit=selector)
+    if selector is not None:
+        out.ridge_lambda = selector.chosen
     return out
 
 
@@ -277,11 +212,14 @@ class TestOutcome:
     trajectory: Any = field(repr=False)
     desired: np.ndarray = field(repr=False)
     true_commands: np.ndarray = field(repr=False)
+    #: torque body: per-run torque figures and series (:func:`torque_training.test_torques`)
+    torque: dict | None = field(default=None, repr=False)
 
 
 def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = None,
              plant=None) -> list[TestOutcome]:
-    """Test the R trained networks of ``run`` (K = 0, no noise, no learning) on
+    """Test the R trained networks of ``run`` (K = 0, no learning, reservoir noise
+    only with ``cfg.test_noise``) on
     ``trajectory`` (default: one repetition of the training movement), after
     ``cfg.test_washout_cycles`` unscored cycles, with ``run``'s full-scale speeds.
 
@@ -293,17 +231,20 @@ def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = N
     if plant is None:
         seeds = run.plant_seeds if plant_seeds is None else plant_seeds
         plant = make_plant(cfg, trajectory, seeds, run.max_speed_rad_s)
+        torque.perturb(plant, cfg.test_payload_kg, cfg.test_mass_scale)  # torque: robustness
     desired = trajectory.position_signals(cfg.signals)
+    hook = torque.hook_for(cfg, trajectory, run.max_speed_rad_s)
     commands = true_commands_of(cfg, trajectory, run.max_speed_rad_s)
     ev = fel.evaluate(run.esn, plant, desired, commands, cfg.delay, run.forward,
                       inputs=cfg.inputs, washout_cycles=cfg.test_washout_cycles,
-                      scored=run.scored)
+                      scored=run.scored, noise=cfg.test_noise, gain=cfg.test_gain, hook=hook)
     return [TestOutcome(
         position_nrmse=None if ev.failed[r] else float(ev.position_nrmse[r]),
         motor_nrmse=None if ev.failed[r] else float(ev.motor_nrmse[r]),
         failed=bool(ev.failed[r]), fail_reason=ev.fail_reason[r],
         rollout=ev.rollout.select(r), trajectory=trajectory, desired=desired,
         true_commands=commands,
+        torque=None if hook is None else torque.test_torques(hook, ev.rollout, plant, r),
     ) for r in range(run.esn.n_runs)]
 
 
@@ -360,12 +301,18 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
     if trained.true_target is not None:
         tt = trained.true_target
         metrics["train"] = {"motor_nrmse": float(tt.motor_nrmse[r]),
-                            "position_nrmse": float(tt.position_nrmse[r])}
+                            "position_nrmse": None if tt.position_nrmse is None
+                            else float(tt.position_nrmse[r])}
+    elif trained.fel is None:  # method "none": nothing was trained
+        metrics["train"] = {}
     else:
         result = trained.fel
         curve = result.to_dict()
         metrics["train"] = {"gains": curve["gains"], "position_nrmse": curve["position_nrmse"][r],
                             "motor_nrmse": curve["motor_nrmse"][r]}
+        if trained.ridge_lambda is not None:
+            metrics["train"]["ridge_lambda"] = [None if not np.isfinite(v) else float(v)
+                                                for v in trained.ridge_lambda[r]]
         if result.failed[r]:
             metrics.update(failed=True, fail_reason=result.fail_reason[r],
                            fail_epoch=result.fail_epoch[r])
@@ -377,6 +324,9 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
     else:
         metrics["test"] = {"position_nrmse": test.position_nrmse,
                            "motor_nrmse": test.motor_nrmse}
+    if test.torque is not None:
+        metrics["test"]["torque"] = test.torque["metrics"]
+        metrics["train_warnings"] = torque.train_warnings(run)
     if trained.pretrain_prediction_nrmse is not None:
         metrics["pretrain_prediction_nrmse"] = float(trained.pretrain_prediction_nrmse[r])
     metrics.update(
