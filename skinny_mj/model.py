@@ -23,7 +23,7 @@ import mujoco
 import numpy as np
 
 from skinny_mj import body
-from skinny_mj.errors import SkinnyInputError
+from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 
 MODELS_ENV_VAR = "SKINNY_MJ_MODELS"
 ACTUATIONS = ("velocity", "torque")
@@ -83,8 +83,9 @@ def models_dir() -> Path:
     try:
         return Path(str(files("skinny_mj.models").joinpath("skinny")))
     except ModuleNotFoundError:  # an install from before the models were package data
-        raise SkinnyInputError(f"skinny_mj.models is not installed: reinstall the package "
-                               f"(pip install -e .) or set {MODELS_ENV_VAR}") from None
+        raise SkinnyEnvironmentError(f"skinny_mj.models is not installed: reinstall the "
+                                     f"package (pip install -e .) or set {MODELS_ENV_VAR}"
+                                     ) from None
 
 
 def _check(dof: int, actuation: str = "velocity") -> None:
@@ -101,9 +102,10 @@ def xml_path(dof: int, scene: bool = True) -> Path:
     name = f"{'scene' if scene else 'skinny'}_{_VARIANT[dof]}.xml"
     path = models_dir() / name
     if not path.is_file():
-        raise SkinnyInputError(
-            f"model file not found (set {MODELS_ENV_VAR} to the models/skinny folder)", path=path
-        )
+        # a missing model is the installation's fault (or $SKINNY_MJ_MODELS'), not the
+        # user's input: an environment error, exit 1
+        raise SkinnyEnvironmentError(
+            f"{path}: model file not found (set {MODELS_ENV_VAR} to the models/skinny folder)")
     return path
 
 
@@ -166,6 +168,10 @@ def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
     """Edit Skinny's spec into the torque twin (see the module docstring)."""
     spec.option.timestep = TORQUE_TIMESTEP_S
     spec.option.integrator = TORQUE_INTEGRATOR
+    # No solver warm start: warm-started, the constraint solver's iterations at a joint
+    # limit depend on every copy of a lockstep batch (1e-13 rad apart after 6 s); cold,
+    # each copy is bit for bit one robot alone (tests/test_dynamic.py)
+    spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_WARMSTART)
     for side in body.SIDES:
         for name, seg in segment_inertias().items():
             b = spec.body(f"{side}_{name}")

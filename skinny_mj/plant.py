@@ -73,6 +73,20 @@ class EnvPlant:
         jac = self.physics.signal_jacobian(self.signals)
         return (jac * (self.max_speed_rad_s * self.dt))[None]
 
+    # -- torque loop (controllers.torque_fel): (1, n_dof) each, as BatchPlant's
+    def joint_velocities(self) -> np.ndarray:
+        return self.physics.data.qvel[self.physics.layout.dof_adr][None].copy()
+
+    def bias_torque_nm(self) -> np.ndarray:
+        return self.physics.data.qfrc_bias[self.physics.layout.dof_adr][None].copy()
+
+    def actuator_force_nm(self) -> np.ndarray:
+        return self.physics.data.qfrc_actuator[self.physics.layout.dof_adr][None].copy()
+
+    def warning_count(self) -> int:
+        """MuJoCo warnings (``data.warning``, every mjtWarning) of the current episode."""
+        return sum(int(w.number) for w in self.physics.data.ptr.warning)
+
 
 class BatchPlant:
     """R copies of Skinny as one MuJoCo model, stepped without dm_control.
@@ -176,8 +190,30 @@ class BatchPlant:
         out += self._true()  # true + noise, as the task adds them
         return out
 
+    # -- torque loop (controllers.torque_fel) ------------------------------------------
+    def joint_velocities(self) -> np.ndarray:
+        """(R, n_dof) joint velocities, rad/s (noise-free: a tachometer)."""
+        return self._qvel[:, self._dof_sel].copy()
+
+    def bias_torque_nm(self) -> np.ndarray:
+        """(R, n_dof) ``qfrc_bias`` of the current state (gravity, Coriolis), N m."""
+        return self.data.qfrc_bias.reshape(self.n_runs, -1)[:, self._dof_sel].copy()
+
+    def actuator_force_nm(self) -> np.ndarray:
+        """(R, n_dof) joint torque the motors applied in the last step, N m
+        (``qfrc_actuator``: gear x ``actuator_force``, after the joints' actfrcrange)."""
+        return self.data.qfrc_actuator.reshape(self.n_runs, -1)[:, self._dof_sel].copy()
+
+    def warning_count(self) -> int:
+        """MuJoCo warnings (``data.warning``, summed over every mjtWarning) since this
+        plant was built, over all R runs (they share one MjData)."""
+        return self._warnings + sum(int(w.number) for w in self.data.warning)
+
     # -- Plant protocol --------------------------------------------------------------
     def reset(self) -> np.ndarray:
+        # mj_resetData clears data.warning: keep the count across cycles
+        self._warnings = getattr(self, "_warnings", 0) + sum(int(w.number)
+                                                             for w in self.data.warning)
         mujoco.mj_resetData(self.model, self.data)
         self._forward_without_actuation()
         self.set_joint_angles(np.broadcast_to(self.setup.start_rad, (self.n_runs, self.n_dof)))

@@ -1,0 +1,203 @@
+"""Dynamic control (issue 14): the torque-driven Skinny, with mass, gravity and torque
+limits, learns YMCA and a real clip with an ESN inverse-dynamics model.
+
+Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` with
+``actuation="torque"`` (:mod:`skinny_mj.torque_training`):
+
+- ``table``: for 2D and 3D (``2d``, ``3d``) and YMCA and an excerpt of CMU clip md_02
+  (``ymca``, ``md02``): ``pd`` the PD teacher alone (K = 1 fixed, nothing learned),
+  ``ct`` computed torque alone (PD + the inverse-dynamics torque of the desired motion),
+  ``fel-orig`` ESN + FEL original method, ``fel-new`` ESN + FEL new β (0.1, 3 cycles),
+  ``fel-new-gff`` the same with the gravity feed-forward ``qfrc_bias / limit``, ``tt``
+  the true-target architecture (torques of ``mj_inverse``, β = 0.1, 50 cycles). The
+  learned rows train with K 1 -> 0 over 10 epochs and are tested at K = 0 (the ESN
+  alone, plus the feed-forward in ``fel-new-gff``).
+- ``robust`` (2D, YMCA): the test plant carries a 1 kg point mass at the right hand's
+  centre of mass (``payload1``) or every arm link's mass and inertia x 1.2 / x 0.8
+  (``mass+20``, ``mass-20``); ``fel-new-gff`` tested at K = 0 (``-k0``) and with the
+  PD left on at K = 1 (``-k1``), and ``pd`` (K = 1).
+- ``kinematic``: ``2d-ymca-kinematic`` is the velocity-servo run of the same schedule
+  (paper E exp. 5), for the wall-time ratio.
+
+Metrics per run: test position / motor NRMSE (motor: against the normalized
+inverse-dynamics torques), mean |applied torque| (N m), positive motor work (J), max
+|commanded| and |applied| torque / limit, MuJoCo warnings of the training and test
+plants (``data.warning``, every mjtWarning), and the wall time per run (lockstep batch
+/ R). Goal (issue 14): the ESN alone (K = 0) on YMCA, position NRMSE <= 0.03 (2D) and
+<= 0.06 (3D); a target to measure against, not a number tuned to.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from skinny_mj.config import TrainConfig, relative_cost
+from skinny_mj.experiment import Experiment, Row, RunFailed
+
+NAME = "dynamic"
+#: controller id -> TrainConfig changes
+CONTROLLERS = {
+    "pd": {"method": "none", "test_gain": 1.0},
+    "ct": {"method": "none", "test_gain": 1.0, "feedback": "computed-torque"},
+    "fel-orig": {"method": "original"},
+    "fel-new": {"method": "new", "beta": 0.1},
+    "fel-new-gff": {"method": "new", "beta": 0.1, "gravity_feedforward": True},
+    "tt": {"method": "true-target", "beta": 0.1},
+}
+#: perturbation id -> test-plant changes
+PERTURBATIONS = {"payload1": {"test_payload_kg": 1.0}, "mass+20": {"test_mass_scale": 1.2},
+                 "mass-20": {"test_mass_scale": 0.8}}
+#: issue 14's goals for the ESN alone on YMCA (position NRMSE), by body
+GOALS = {"2d": 0.03, "3d": 0.06}
+TABLE_COLUMNS = {"position_nrmse": "test position NRMSE", "motor_nrmse": "test motor NRMSE",
+                 "mean_abs_torque_nm": "mean |τ| (N m)", "energy_j": "motor work (J)",
+                 "max_torque_ratio": "max |τ|/limit", "warnings": "MuJoCo warnings",
+                 "train_wall_s": "wall per run (s)"}
+
+
+@dataclass(frozen=True)
+class Config:
+    """Shared parameters; rows vary the rest."""
+
+    bodies: tuple[str, ...] = ("2d", "3d")
+    ymca: str = "ymca"
+    clip: str = "md_02.amc@start=3,duration=6.26"
+    signals: str = "cartesian"
+    epochs: int = 10
+    runs: int = 10
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Config:
+        names = {f.name for f in dataclasses.fields(cls)}
+        return cls(**{k: tuple(v) if isinstance(v, list) else v
+                      for k, v in d.items() if k in names})
+
+
+def all_rows(cfg: Config) -> tuple[Row, ...]:
+    out = []
+    for bd in cfg.bodies:
+        for mv, traj in (("ymca", cfg.ymca), ("md02", cfg.clip)):
+            for ctl, changes in CONTROLLERS.items():
+                out.append(Row(f"{bd}-{mv}-{ctl}", {"dof": 4 if bd == "2d" else 8,
+                                                    "trajectory": traj, **changes}))
+    if "2d" in cfg.bodies:
+        for pert, changes in PERTURBATIONS.items():
+            for ctl, gain in (("fel-new-gff-k0", 0.0), ("fel-new-gff-k1", 1.0)):
+                out.append(Row(f"2d-ymca-{pert}-{ctl}", {
+                    "dof": 4, "trajectory": cfg.ymca, **CONTROLLERS["fel-new-gff"],
+                    "test_gain": gain, **changes}))
+            out.append(Row(f"2d-ymca-{pert}-pd", {"dof": 4, "trajectory": cfg.ymca,
+                                                  **CONTROLLERS["pd"], **changes}))
+        out.append(Row("2d-ymca-kinematic", {"dof": 4, "trajectory": cfg.ymca,
+                                             "actuation": "velocity", "method": "new"}))
+    return tuple(out)
+
+
+def groups(every: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
+    """``table``, ``robust``, ``kinematic`` and one group per body (``2d``, ``3d``)."""
+    out: dict[str, tuple[str, ...]] = {}
+    for row in every:
+        kind = "kinematic" if row.row_id.endswith("kinematic") else \
+            "robust" if any(p in row.row_id for p in PERTURBATIONS) else "table"
+        for g in (kind, f"{kind}-{row.row_id[:2]}"):
+            out[g] = (*out.get(g, ()), row.row_id)
+    return out
+
+
+def train_config(cfg: Config, row: Row) -> TrainConfig:
+    p = dict(row.params)
+    return TrainConfig(**{"actuation": "torque", "signals": cfg.signals,
+                          "epochs": cfg.epochs, **p})
+
+
+def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
+    """Several seeds of one row in lockstep; seed by seed what each gets alone."""
+    from skinny_mj.training import train_batch
+
+    out = []
+    for o in train_batch(train_config(cfg, row), seeds):
+        m = o.metrics
+        if m["failed"]:
+            out.append(RunFailed(m.get("fail_reason") or "diverged"))
+            continue
+        metrics = {"position_nrmse": m["test"]["position_nrmse"],
+                   "motor_nrmse": m["test"]["motor_nrmse"], "train_wall_s": m["wall_s"]}
+        tq = m["test"].get("torque")
+        if tq is not None:
+            metrics.update({k: tq[k] for k in ("mean_abs_torque_nm", "energy_j",
+                                               "max_commanded_ratio", "max_applied_ratio")})
+            metrics["max_torque_ratio"] = max(tq["max_commanded_ratio"],
+                                              tq["max_applied_ratio"])
+            metrics["warnings"] = tq["warnings"] + (m.get("train_warnings") or 0)
+        out.append(metrics)
+    return out
+
+
+def run_one(cfg: Config, row: Row, seed: int) -> dict:
+    (out,) = run_batch(cfg, row, [seed])
+    if isinstance(out, Exception):
+        raise out
+    return out
+
+
+def cost(cfg: Config, row: Row) -> float:
+    """Relative cost: the training's cycles (a torque cycle costs ~2 velocity cycles)."""
+    tc = train_config(cfg, row)
+    return relative_cost(tc) * (2.0 if tc.actuation == "torque" else 1.0)
+
+
+def build(*, quick: bool = False, movement: str | None = None, asf: str | None = None,
+          dof: int | None = None, signals: str | None = None) -> Experiment:
+    """The sweep. ``quick``: 2 runs of 2 epochs (a smoke test). ``movement`` replaces the
+    clip (``asf`` is not needed for the shipped CMU clips); ``dof`` 4 or 8 keeps one body;
+    ``signals`` the position signals (default Cartesian)."""
+    changes: dict = {}
+    if movement is not None:
+        changes["clip"] = str(movement)
+    if dof is not None:
+        changes["bodies"] = ("2d",) if int(dof) == 4 else ("3d",)
+    if signals is not None:
+        changes["signals"] = signals
+    if quick:
+        changes.update(epochs=2, runs=2)
+    cfg = Config(**changes)
+    every = all_rows(cfg)
+    return Experiment(name=NAME, rows=every, groups=groups(every),
+                      run_one=functools.partial(run_one, cfg), config=cfg, runs=cfg.runs,
+                      table_columns=TABLE_COLUMNS, run_batch=functools.partial(run_batch, cfg),
+                      cost=functools.partial(cost, cfg))
+
+
+def report(results: dict, out_dir: Path) -> str:
+    """The goals, the torque limits and warnings, and the wall-time ratio, from the run
+    files on disk."""
+    from experiments.claims import values
+
+    out_dir = Path(out_dir)
+    cfg = Config.from_dict(json.loads((out_dir / "config.json").read_text())["config"])
+    lines = []
+    for bd in cfg.bodies:
+        for ctl in ("fel-orig", "fel-new", "fel-new-gff", "tt"):
+            v = values(out_dir, f"{bd}-ymca-{ctl}", "position_nrmse")
+            if v:
+                hits = sum(x <= GOALS[bd] for x in v)
+                lines.append(f"goal {bd} YMCA {ctl} (K = 0) position NRMSE <= {GOALS[bd]}: "
+                             f"{hits} / {len(v)} runs, best {min(v):.4f}")
+    ratios = [x for row in results.get("rows", [])
+              for x in values(out_dir, row["row"], "max_torque_ratio")]
+    warns = [x for row in results.get("rows", []) for x in values(out_dir, row["row"], "warnings")]
+    if ratios:
+        lines.append(f"max |torque| / limit over {len(ratios)} runs: {max(ratios):.6f}")
+    if warns:
+        lines.append(f"MuJoCo warnings over {len(warns)} runs: {int(sum(warns))}")
+    kin = values(out_dir, "2d-ymca-kinematic", "train_wall_s")
+    dyn = values(out_dir, "2d-ymca-fel-new", "train_wall_s")
+    if kin and dyn:
+        ratio = (sum(dyn) / len(dyn)) / (sum(kin) / len(kin))
+        lines.append(f"wall per run, torque FEL new / kinematic (2D YMCA): {ratio:.2f}x "
+                     "(goal <= 3x)")
+    return "\n".join(lines)

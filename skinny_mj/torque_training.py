@@ -1,0 +1,160 @@
+"""The torque body in the one training path (issue 14): what ``actuation="torque"`` adds.
+
+:mod:`skinny_mj.training` calls these when ``cfg.actuation == "torque"``:
+
+- :func:`hook_for`: the :class:`controllers.torque_fel.TorqueLoop` of a movement (the
+  rollout hook: velocity inputs, the PD teacher, the gravity feed-forward);
+- :func:`true_torques`: the inverse model's true target, the torques of
+  ``mj_inverse`` along the desired motion (:meth:`skinny_mj.dynamics.Dynamics.
+  trajectory_torques_nm`), normalized by the limits (T-1, n_dof);
+- :func:`teacher_inputs`: the true-target architecture's extra teacher-forced inputs
+  [qd_d(t+1); qd_d(t)] / v_max, as the rollout's [qd_d(t+1); qd(t)] / v_max;
+- :func:`perturb`: the robustness test plant (payload, link masses);
+- :func:`controller`: the PD teacher with gains scaled to the limits.
+
+The feedback teacher (:class:`controllers.torque_feedback.TorqueFeedbackController`):
+gains :meth:`TorqueGains.from_limits` (0.1 rad asks for 50 % of the limit, critically
+damped, capped at omega dt = 0.5 with each joint's smallest own inertia over its range,
+dt = 20 ms), joint-space error for joint signals, the damped Jacobian otherwise.
+Desired velocities are those of the clamped cubic spline that
+``trajectory_torques_nm`` differentiates (so the PD's velocity reference and the
+true target describe one motion). Velocity inputs and the PD's velocity are the
+plant's noise-free joint velocities (sensor noise is on the positions only).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import mujoco
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from controllers.torque_feedback import TorqueFeedbackController, TorqueGains
+from controllers.torque_fel import TorqueLoop
+from skinny_mj import body
+from skinny_mj.config import TrainConfig
+
+#: Bodies whose mass and inertia ``test_mass_scale`` scales (both arms), and the hand
+#: that carries ``test_payload_kg`` (a point mass at its centre of mass: the hand's CoM
+#: and its inertia about the CoM are unchanged, only its mass grows).
+ARM_BODIES = tuple(f"{side}_{seg}" for side in body.SIDES
+                   for seg in ("upper_arm", "forearm", "hand"))
+PAYLOAD_BODY = "right_hand"
+
+
+@functools.lru_cache(maxsize=4)
+def _dynamics(dof: int):
+    from skinny_mj.dynamics import Dynamics
+    from skinny_mj.model import load_model
+
+    return Dynamics(load_model(dof, "torque"))
+
+
+@functools.lru_cache(maxsize=8)
+def controller(dof: int, signals: str) -> TorqueFeedbackController:
+    """The PD teacher of the torque body (see the module docstring)."""
+    dyn = _dynamics(dof)
+    inertia_min, _ = dyn.inertia_range()
+    gains = TorqueGains.from_limits(dyn.torque_limits_nm(), inertia_min, dt=body.CONTROL_DT_S)
+    if signals == "joint":
+        lo, hi = body.joint_ranges(dof).T
+        return TorqueFeedbackController(gains, mode="joint",
+                                        signal_per_rad=tuple((2.0 / (hi - lo)).tolist()))
+    return TorqueFeedbackController(gains)
+
+
+def torque_limits_nm(dof: int) -> np.ndarray:
+    """(n_dof,) peak torques, N m (what a normalized command of 1 means)."""
+    return _dynamics(dof).torque_limits_nm()
+
+
+def desired_velocities_rad_s(angles: np.ndarray, dt: float) -> np.ndarray:
+    """(T, n_dof) joint velocities, rad/s, of the clamped cubic spline through ``angles``
+    (T, n_dof) rad (at rest at both ends, as ``trajectory_torques_nm`` assumes)."""
+    angles = np.asarray(angles, float)
+    t = dt * np.arange(len(angles))
+    return CubicSpline(t, angles, axis=0, bc_type="clamped")(t, 1)
+
+
+def true_torques(dof: int, trajectory) -> np.ndarray:
+    """(T-1, n_dof) the zero-order-hold inverse-dynamics torques of ``trajectory``
+    divided by the limits (normalized torque; can exceed 1 where the movement asks
+    more than the motors have)."""
+    dyn = _dynamics(dof)
+    return dyn.normalize(dyn.trajectory_torques_nm(trajectory.angles, trajectory.dt))
+
+
+def teacher_inputs(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) -> np.ndarray | None:
+    """(T-1, 2 n_dof) [qd_d(t+1); qd_d(t)] / v_max, or None without velocity inputs."""
+    if not cfg.uses_velocity_inputs:
+        return None
+    v = desired_velocities_rad_s(trajectory.angles, trajectory.dt) / max_speed_rad_s
+    return np.concatenate([v[1:], v[:-1]], axis=1)
+
+
+def n_extra_inputs(cfg: TrainConfig) -> int:
+    """ESN inputs the torque loop appends (2 n_dof with velocity inputs, else 0)."""
+    return 2 * cfg.dof if cfg.actuation == "torque" and cfg.uses_velocity_inputs else 0
+
+
+def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) -> TorqueLoop | None:
+    """The torque loop of ``trajectory`` (None for the velocity servo)."""
+    if cfg.actuation != "torque":
+        return None
+    ff = true_torques(cfg.dof, trajectory) if cfg.feedback == "computed-torque" else None
+    return TorqueLoop(controller(cfg.dof, cfg.signals),
+                      desired_velocities_rad_s(trajectory.angles, trajectory.dt),
+                      np.asarray(max_speed_rad_s, float),
+                      velocity_inputs=cfg.uses_velocity_inputs,
+                      gravity_feedforward=cfg.gravity_feedforward, inverse_dynamics=ff)
+
+
+def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0) -> None:
+    """Change the test plant's model fields in place (every copy of a batch): each arm
+    link's ``body_mass`` and ``body_inertia`` x ``mass_scale`` (centres of mass kept),
+    then ``payload_kg`` added to the right hand's mass at its centre of mass; the derived
+    constants are recomputed (``mj_setConst``). The controllers are not told."""
+    if payload_kg == 0 and mass_scale == 1:
+        return
+    model, data = (plant.model, plant.data) if hasattr(plant, "model") else \
+        (plant.physics.model.ptr, plant.physics.data.ptr)
+    for i in range(model.nbody):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, i) or ""
+        base = name.rsplit("/", 1)[-1]
+        if base in ARM_BODIES:
+            model.body_mass[i] *= mass_scale
+            model.body_inertia[i] *= mass_scale
+        if base == PAYLOAD_BODY:
+            model.body_mass[i] += payload_kg
+    mujoco.mj_setConst(model, data)
+
+
+def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
+    """Run r's torque figures of the test cycle that ``hook`` saw last.
+
+    Returns ``{"metrics": {...}, "series": {...}}``: metrics (JSON-ready) as
+    :meth:`TorqueLoop.metrics` plus ``warnings`` (MuJoCo ``data.warning`` counts of the
+    test plant, summed over mjtWarning and over its lockstep runs, which share one
+    MjData) and ``within_limits`` (commanded and applied |torque| <= limit, 1e-9
+    slack); series (for recordings): ``commanded_nm`` (T-1, n_dof) = command x limit,
+    ``applied_nm`` (T-1, n_dof) ``actuator_force``, ``gravity_nm`` (T, n_dof) the bias
+    torque ``qfrc_bias`` of each state, ``limit_nm`` (n_dof,).
+    """
+    limit = hook.controller.gains.limit
+    figures = hook.metrics(rollout.commands, plant.dt)
+    metrics = {k: float(v[r]) for k, v in figures.items()}
+    metrics["warnings"] = int(plant.warning_count())
+    metrics["within_limits"] = bool(max(metrics["max_commanded_ratio"],
+                                        metrics["max_applied_ratio"]) <= 1 + 1e-9)
+    series = {"commanded_nm": rollout.commands[r] * limit,
+              "applied_nm": hook.applied_nm[:, r].copy(),
+              "gravity_nm": hook.bias_nm[:, r].copy(), "limit_nm": limit.copy()}
+    return {"metrics": metrics, "series": series}
+
+
+def train_warnings(run) -> int | None:
+    """MuJoCo warnings of ``run``'s training plant (None if it never built one)."""
+    plant = run.__dict__.get("plant")  # the cached property, if it was ever used
+    return None if plant is None or not hasattr(plant, "warning_count") \
+        else int(plant.warning_count())

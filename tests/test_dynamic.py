@@ -1,0 +1,89 @@
+"""Issue 14: the torque body in the one training path (config, lockstep, torques, test
+plant perturbations) and the ``dynamic`` experiment's rows."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.training import TrainConfig, build_run, train_batch
+
+
+@pytest.mark.parametrize("changes", [
+    {"gravity_feedforward": True},  # torque settings on the velocity servo
+    {"test_mass_scale": 1.2},
+    {"actuation": "torque", "feedback": "computed-torque"},  # CT is a controller alone
+    {"actuation": "torque", "method": "none"},  # the controller alone needs K > 0
+    {"actuation": "torque", "forward": "parallel"},
+    {"actuation": "torque", "method": "true-target", "gravity_feedforward": True},
+])
+def test_torque_settings_are_validated(changes):
+    with pytest.raises(SkinnyInputError):
+        TrainConfig(**changes)
+
+
+def test_velocity_runs_take_no_torque_inputs():
+    run = build_run(TrainConfig(epochs=1), [0])
+    assert run.esn.cfg.n_inputs == 2 * run.desired.shape[1]
+    torque = build_run(TrainConfig(actuation="torque", epochs=1), [0])
+    assert torque.esn.cfg.n_inputs == 2 * torque.desired.shape[1] + 2 * 4
+
+
+def test_torque_lockstep_is_each_run_alone():
+    cfg = TrainConfig(actuation="torque", gravity_feedforward=True, epochs=1, cycles=1)
+    both = train_batch(cfg, [3, 4])
+    alone = train_batch(cfg, [4])[0]
+    np.testing.assert_array_equal(both[1].test.rollout.commands, alone.test.rollout.commands)
+    assert both[1].metrics["test"] == alone.metrics["test"]
+
+
+def test_controller_alone_stays_within_limits_without_warnings():
+    (out,) = train_batch(TrainConfig(actuation="torque", method="none", test_gain=1.0), [0])
+    tq = out.metrics["test"]["torque"]
+    assert tq["within_limits"] and tq["warnings"] == 0 and tq["mean_abs_torque_nm"] > 0
+    series = out.test.torque["series"]
+    # the motors apply what was commanded (x gear): the limits are the only clamp
+    np.testing.assert_allclose(series["applied_nm"], series["commanded_nm"], atol=1e-9)
+    assert np.all(np.abs(series["commanded_nm"]) <= series["limit_nm"] + 1e-9)
+    # held still at the first pose, the bias torque is gravity's: not zero
+    assert np.abs(series["gravity_nm"][0]).max() > 1.0
+
+
+def test_perturbed_test_plant_changes_every_copy():
+    from skinny_mj.plant import BatchPlant
+    from skinny_mj.torque_training import perturb
+
+    plant = BatchPlant(4, "cartesian", None, n_runs=2, actuation="torque")
+    names = [mujoco.mj_id2name(plant.model, mujoco.mjtObj.mjOBJ_BODY, i)
+             for i in range(plant.model.nbody)]
+    before = plant.model.body_mass.copy()
+    perturb(plant, payload_kg=1.0, mass_scale=1.2)
+    for r in range(2):
+        hand = names.index(f"r{r}/right_hand")
+        fore = names.index(f"r{r}/left_forearm")
+        assert plant.model.body_mass[hand] == pytest.approx(1.2 * before[hand] + 1.0)
+        assert plant.model.body_mass[fore] == pytest.approx(1.2 * before[fore])
+    torso = names.index("r0/torso")
+    assert plant.model.body_mass[torso] == before[torso]
+
+
+def test_true_target_learns_torques_with_velocity_inputs():
+    (out,) = train_batch(TrainConfig(actuation="torque", method="true-target", beta=1.0), [0])
+    assert not out.failed
+    assert out.metrics["train"]["motor_nrmse"] < 0.5  # teacher-forced fit of the torques
+
+
+def test_dynamic_experiment_rows():
+    from experiments import dynamic
+
+    exp = dynamic.build(quick=True)
+    ids = {r.row_id for r in exp.rows}
+    assert {"2d-ymca-pd", "3d-md02-tt", "2d-ymca-payload1-fel-new-gff-k1",
+            "2d-ymca-kinematic"} <= ids
+    assert set(exp.groups["table"]) == {i for i in ids if "kinematic" not in i
+                                        and not any(p in i for p in dynamic.PERTURBATIONS)}
+    cfg = dynamic.train_config(exp.config, next(r for r in exp.rows
+                                                 if r.row_id == "2d-ymca-mass-20-pd"))
+    assert cfg.actuation == "torque" and cfg.test_mass_scale == 0.8 and cfg.method == "none"
