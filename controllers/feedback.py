@@ -73,6 +73,9 @@ class FeedbackController:
     mode: str = "jacobian"
     damping: float = 1e-4
     signal_per_rad: tuple[float, ...] | None = None
+    #: scalar on u_error (issue 12: the thesis leaves its scale unstated); 1 = the
+    #: one-step correction itself, and then no multiplication at all (bit for bit)
+    gain: float = 1.0
 
     def __post_init__(self) -> None:
         if self.mode not in ("jacobian", "joint"):
@@ -81,14 +84,18 @@ class FeedbackController:
             raise ValueError("joint-space feedback needs signal_per_rad")
         if self.damping < 0:
             raise ValueError(f"damping must be >= 0, got {self.damping}")
+        if not self.gain > 0:
+            raise ValueError(f"u_error gain must be > 0, got {self.gain}")
 
     def u_error(self, desired: np.ndarray, sensed: np.ndarray, plant) -> np.ndarray:
         """u_error (R, n_dof) for desired (n_sig,) or (R, n_sig) and sensed (R, n_sig)."""
         if self.mode == "joint":
-            return joint_space_error(
+            out = joint_space_error(
                 desired, sensed, np.asarray(self.signal_per_rad), plant.max_speed_rad_s, plant.dt
             )
-        return jacobian_error(desired, sensed, plant.command_jacobian(), self.damping)
+        else:
+            out = jacobian_error(desired, sensed, plant.command_jacobian(), self.damping)
+        return out if self.gain == 1.0 else self.gain * out
 
 
 def linear_gain(epochs: int) -> np.ndarray:

@@ -29,6 +29,9 @@ class TrueTargetConfig:
     beta: float = 0.1
     cycles: int = 50
     noise: bool = True
+    #: SD of Gaussian noise added to the teacher-forced inputs (not the targets) in
+    #: every training cycle, normalized signal units (issue 12; 0 = none, bit for bit)
+    input_noise: float = 0.0
 
     def __post_init__(self) -> None:
         if self.method not in ("original", "new"):
@@ -37,6 +40,8 @@ class TrueTargetConfig:
             raise ValueError(f"beta must be in (0, 1], got {self.beta}")
         if self.cycles < 1:
             raise ValueError(f"cycles must be >= 1, got {self.cycles}")
+        if not self.input_noise >= 0:
+            raise ValueError(f"input noise must be >= 0, got {self.input_noise}")
 
 
 @dataclass
@@ -62,6 +67,8 @@ def train_true_target(
     true_commands: np.ndarray,
     cfg: TrueTargetConfig,
     one_step: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+    input_rngs: list[np.random.Generator] | None = None,
+    extra_inputs: np.ndarray | None = None,
 ) -> TrueTargetResult:
     """Fit ``esn`` (R runs) to the true commands with teacher forcing.
 
@@ -70,17 +77,33 @@ def train_true_target(
     desired : (T, n_sig) desired signals.  true_commands : (T-1, n_dof).
     one_step : optional map (positions (T-1, n_sig), commands (R, T-1, n_dof)) ->
         next positions (R, T-1, n_sig), for the teacher-forced position error.
+    input_rngs : one Generator per run for ``cfg.input_noise`` (needed when it is > 0).
+    extra_inputs : optional (T-1, n_extra) teacher-forced inputs appended after
+        [d(t+1); d(t)], as a rollout hook appends its own (the torque loop's desired
+        velocities, :mod:`controllers.torque_fel`).
     """
-    inputs = np.broadcast_to(teacher_forced_inputs(desired), (esn.n_runs, len(desired) - 1,
-                                                               2 * desired.shape[1]))
+    forced = teacher_forced_inputs(desired)
+    if extra_inputs is not None:
+        forced = np.concatenate([forced, np.asarray(extra_inputs, float)], axis=1)
+    inputs = np.broadcast_to(forced, (esn.n_runs, *forced.shape))
     y_true = np.broadcast_to(true_commands, (esn.n_runs, *true_commands.shape))
     beta = 1.0 if cfg.method == "original" else cfg.beta
     cycles = 1 if cfg.method == "original" else cfg.cycles
+    clean = inputs
+    if cfg.input_noise > 0 and (input_rngs is None or len(input_rngs) != esn.n_runs):
+        raise ValueError("input noise needs one Generator per run (input_rngs)")
+
+    def noisy() -> np.ndarray:  # fresh noise per cycle: the toolbox's noisy teacher forcing
+        if cfg.input_noise == 0:
+            return clean
+        return clean + np.stack([g.normal(0.0, cfg.input_noise, clean.shape[1:])
+                                 for g in input_rngs])
+
     esn.reset()
-    esn.run(inputs, noise=cfg.noise)
+    esn.run(noisy(), noise=cfg.noise)
     reuse = _SameStates(esn)
     for _ in range(cycles):
-        y_esn, states = esn.run(inputs, noise=cfg.noise)
+        y_esn, states = esn.run(noisy(), noise=cfg.noise)
         esn.fit(states, beta * y_true + (1.0 - beta) * y_esn, factors=reuse(states))
     esn.reset()
     esn.run(inputs, noise=False)

@@ -93,7 +93,8 @@ def prepare(
         actuation=actuation,
         sensor_noise=float(sensor_noise),
         angles=angles,
-        desired=body.position_signals(angles, dof, signals),
+        desired=trajectory.position_signals(signals) if hasattr(trajectory, "position_signals")
+        else body.position_signals(angles, dof, signals),  # explicit recorded signals
         start_rad=start,
         max_speed_rad_s=speed,
         dt=dt,

@@ -288,8 +288,14 @@ def retarget(
     cutoff_hz: float = 6.0,
     dt: float = DEFAULT_DT_S,
     window_s: tuple[float, float | None] | None = None,
+    targets: str = "angles",
 ) -> tuple[Trajectory, RetargetReport]:
     """Joint-angle retargeting of a capture onto Skinny (see the module docstring).
+
+    ``targets="positions"`` (issue 12): the subject's own unit segment vectors (low-passed
+    and resampled the same way, renormalized; 2D: their frontal projection) become the
+    explicit desired Cartesian signals, reachable or not, and the angles their inverse
+    kinematics (:func:`skinny_mj.trajectories.ik.refine` from the clipped angles).
 
     ``window_s = (start_s, duration_s)`` keeps only that excerpt (duration None: to the
     end); it is cut after the low-pass and resampling (no filter edge effects) and
@@ -314,6 +320,8 @@ def retarget(
         angles, name = np.array(part.angles), part.name
     angles, excess = clip_continuous(angles, dof)
     clipped = Trajectory(angles, dt, name)
+    if targets == "positions":
+        clipped = _position_targets(clipped, upper, fore, clip.fps, cutoff_hz, window_s)
     report = clip_report(
         excess,
         dof,
@@ -324,3 +332,20 @@ def retarget(
         interpolated_samples=filled,
     )
     return clipped, report
+
+
+def _position_targets(traj: Trajectory, upper: np.ndarray, fore: np.ndarray, fps: float,
+                      cutoff_hz: float, window_s) -> Trajectory:
+    """``traj`` (clipped angles at 50 Hz) with the capture's unit segment vectors as its
+    explicit desired Cartesian signals and its angles refined onto them."""
+    from skinny_mj.trajectories import ik
+
+    dirs = np.concatenate([upper, fore], axis=1).reshape(len(upper), -1)  # (T, 12)
+    dirs = resample_to(lowpass(dirs, fps, cutoff_hz), fps, traj.dt)
+    if window_s is not None:
+        start = int(round(float(window_s[0]) / traj.dt))
+        dirs = dirs[start:start + len(traj)]
+    dirs = _unit(dirs.reshape(len(dirs), 2, 2, 3))
+    target = ik.target_signals(dirs[:, 0], dirs[:, 1], traj.dof)  # (upper, fore) x arms
+    angles = ik.refine(traj.angles, target, traj.dof)
+    return Trajectory(angles, traj.dt, f"{traj.name}-positions", {"cartesian": target})

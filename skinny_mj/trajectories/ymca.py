@@ -55,6 +55,7 @@ POSES_3D_DEG: dict[str, tuple[float, ...]] = {
 # Timing in steps of 0.02 s: (target pose, move steps, hold steps). The first pose is
 # held for _START_HOLD steps; the last hold fills the sequence up to YMCA_STEPS.
 _START_HOLD = 10
+START_HOLD_STEPS = _START_HOLD  # public: the recorded-like YMCA (human.py) times from it
 SCHEDULE: tuple[tuple[str, int, int], ...] = (
     ("Y", 30, 25),
     ("M", 30, 25),

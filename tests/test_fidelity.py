@@ -1,0 +1,153 @@
+"""Issue 12: the recorded-like YMCA, explicit desired signals, position retargeting and
+the toolbox's protocol options (each default = today's behaviour)."""
+
+import numpy as np
+import pytest
+
+from controllers.esn import ESN, ESNConfig
+from controllers.feedback import FeedbackController
+from controllers.fel import FELConfig, evaluate, train
+from controllers.plant import ToyPlant, toy_movement
+from controllers.true_target import TrueTargetConfig, train_true_target
+from skinny_mj import body
+from skinny_mj.config import TrainConfig
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.trajectories import Trajectory, excerpt, ik, load_movement, sample_clip, ymca
+from skinny_mj.trajectories.human import markers, movement_stats, ymca_recorded
+
+LIMITS = np.tile([0.0, np.pi], (4, 1))
+
+
+def _toy(noise=0.2):
+    q, speed, commands = toy_movement(60, 4, seed=0)
+    plant = ToyPlant(2, q[0], LIMITS, speed, seed=3)
+    return plant, plant.signals_of(q), commands, ESNConfig(8, 4, n_reservoir=40, noise_level=noise)
+
+
+def test_protocol_fields_default_to_todays_behaviour_and_validate():
+    cfg = TrainConfig()
+    assert (cfg.test_noise, cfg.u_error_gain, cfg.tt_input_noise, cfg.retarget) == \
+        (False, 1.0, 0.0, "angles")
+    assert {"test_noise", "u_error_gain", "tt_input_noise", "retarget"} <= set(cfg.to_dict())
+    for bad in ({"u_error_gain": 0.0}, {"tt_input_noise": -1.0}, {"retarget": "bones"},
+                {"test_noise": 1}):
+        with pytest.raises(SkinnyInputError):
+            TrainConfig(**bad)
+
+
+def test_u_error_gain_scales_u_error_and_training_follows():
+    plant, desired, commands, cfg = _toy()
+    sensed = plant.reset()
+    base = FeedbackController().u_error(desired[5], sensed, plant)
+    np.testing.assert_array_equal(FeedbackController(gain=1.0).u_error(desired[5], sensed, plant),
+                                  base)
+    np.testing.assert_allclose(FeedbackController(gain=2.0).u_error(desired[5], sensed, plant),
+                               2 * base)
+    fcfg = FELConfig(epochs=2, learning_cycles=1)
+    runs = []
+    for fb in (None, FeedbackController(gain=1.0), FeedbackController(gain=0.5)):
+        p, d, c, ecfg = _toy()
+        runs.append(train(ESN(ecfg, n_runs=2, seed=1), p, d, fcfg, c, feedback=fb))
+    np.testing.assert_array_equal(runs[0].position_nrmse, runs[1].position_nrmse)
+    assert not np.allclose(runs[0].position_nrmse, runs[2].position_nrmse)
+
+
+def test_test_noise_is_a_parameter_off_by_default():
+    results = []
+    for noise in (None, False, True):
+        plant, desired, commands, cfg = _toy()
+        esn = ESN(cfg, n_runs=2, seed=1)
+        esn.W_out[...] = np.random.default_rng(0).normal(0, 0.1, esn.W_out.shape)  # "trained"
+        kw = {} if noise is None else {"noise": noise}
+        results.append(evaluate(esn, plant, desired, commands, **kw).position_nrmse)
+    np.testing.assert_array_equal(results[0], results[1])
+    assert not np.allclose(results[1], results[2])
+
+
+def test_teacher_forcing_input_noise_perturbs_inputs_only_and_is_seeded():
+    _, desired, commands, cfg = _toy(noise=0.0)
+
+    def fit(sd, seed=0):
+        esn = ESN(cfg, n_runs=2, seed=1)
+        rngs = [np.random.default_rng(seed + r) for r in range(2)]
+        tt = TrueTargetConfig(method="original", input_noise=sd)
+        return train_true_target(esn, desired, commands, tt, input_rngs=rngs).motor_nrmse
+
+    clean = fit(0.0)
+    esn = ESN(cfg, n_runs=2, seed=1)
+    np.testing.assert_array_equal(
+        clean, train_true_target(esn, desired, commands, TrueTargetConfig(method="original"))
+        .motor_nrmse)
+    np.testing.assert_array_equal(fit(0.05), fit(0.05))
+    assert np.all(fit(0.05) > clean)  # noisy inputs: the fit to clean inputs is worse
+    with pytest.raises(ValueError):
+        train_true_target(ESN(cfg, n_runs=2, seed=1), desired, commands,
+                          TrueTargetConfig(input_noise=0.1))
+
+
+def test_explicit_desired_signals_travel_with_the_trajectory(tmp_path):
+    traj = ymca(4)
+    sig = traj.position_signals("cartesian") * 0.9  # not Skinny's kinematics of the angles
+    t = Trajectory(traj.angles, traj.dt, "x", {"cartesian": sig})
+    np.testing.assert_array_equal(t.position_signals("cartesian"), sig)
+    np.testing.assert_array_equal(t.position_signals("joint"), traj.position_signals("joint"))
+    np.testing.assert_array_equal(t.repeat(2).position_signals("cartesian"), np.tile(sig, (2, 1)))
+    assert t.resample(0.5).position_signals("cartesian").shape == (626, 8)
+    np.testing.assert_array_equal(excerpt(t, 1.0, 2.0).position_signals("cartesian"),
+                                  sig[50:150])
+    loaded = Trajectory.load(t.save(tmp_path / "t.npz"))
+    np.testing.assert_array_equal(loaded.position_signals("cartesian"), sig)
+    with pytest.raises(SkinnyInputError):
+        t.save(tmp_path / "t.csv")
+    with pytest.raises(SkinnyInputError):
+        Trajectory(traj.angles, traj.dt, "x", {"cartesian": sig[:, :4]})
+
+
+def test_ik_recovers_skinnys_own_angles():
+    for dof in (4, 8):
+        q = ymca(dof).angles
+        seg = body.segment_vectors(q, dof)
+        unit = seg / np.linalg.norm(seg, axis=-1, keepdims=True)
+        angles, target = ik.solve(unit[:, :, 0], unit[:, :, 1], dof)
+        np.testing.assert_allclose(target, body.cartesian_signals(q, dof), atol=1e-12)
+        assert ik.residual(angles, target, dof).max() < 1e-6
+
+
+def test_recorded_ymca_is_seeded_never_still_and_not_always_reachable_in_2d():
+    a = ymca_recorded(4, 0)
+    assert len(a) == 313 and a.desired is not None
+    np.testing.assert_array_equal(markers(0), markers(0))  # the capture, seeded
+    assert not np.allclose(markers(0), markers(1))
+    s2, s3, smooth = movement_stats(a), movement_stats(ymca_recorded(8)), movement_stats(ymca(4))
+    assert s2["still_steps"] == 0 and smooth["still_steps"] > 100
+    assert s2["unreachable_fraction"] > 0.1 and s3["unreachable_fraction"] == 0.0
+    assert smooth["unreachable_fraction"] == 0.0
+
+
+def test_build_run_picks_up_explicit_signals():
+    from skinny_mj.training import build_run
+
+    run = build_run(TrainConfig(trajectory="ymca-recorded", reservoir=20, epochs=1), [0])
+    np.testing.assert_array_equal(run.desired, ymca_recorded(4).position_signals("cartesian"))
+    assert not np.allclose(run.desired, body.cartesian_signals(run.trajectory.angles, 4))
+
+
+def test_position_retargeting_of_motion_capture():
+    clip = f"{sample_clip('md_02')}@start=3,duration=2"
+    by_angles, _ = load_movement(clip, 8)
+    by_pos, _ = load_movement(clip, 8, retarget="positions")
+    assert by_angles.desired is None and by_pos.desired["cartesian"].shape == (100, 12)
+    target = by_pos.desired["cartesian"]
+    assert ik.residual(by_pos.angles, target, 8).mean() <= \
+        ik.residual(by_angles.angles, target, 8).mean() + 1e-12
+    with pytest.raises(SkinnyInputError):
+        load_movement(clip, 8, retarget="bones")
+
+
+def test_trajectory_show_cli(capsys):
+    from skinny_mj.cli import main
+
+    assert main(["trajectory", "show", "ymca-smooth"]) == 0
+    assert "still_steps                      162" in capsys.readouterr().out
+    assert main(["trajectory", "show", "nope"]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
