@@ -4,10 +4,22 @@
 ``load_movement(name_or_path, dof)`` also reads trajectory files (.npz/.csv) and motion
 capture (.amc with its .asf, .bvh), and returns the trajectory with a report of how
 much had to be clipped into Skinny's joint ranges.
+
+Two generated names (not in :func:`names`, which lists the fixed movements):
+
+- motor babbling, ``babble`` or ``babble:seed=3,duration=20`` (also ``vmin=``,
+  ``vmax=``: the segments' peak speeds, rad/s; see
+  :mod:`skinny_mj.trajectories.babble`), with the usual ``@SPEED`` suffix;
+- a training set of several movements, ``set:ymca+babble:seed=1+md_03.amc``: the pieces
+  (any names or files, excerpts included) joined by slow minimum-jerk bridges (peak
+  2 rad/s, >= 0.5 s) that carry the arms from one piece's last pose to the next one's
+  first, so the set is one smooth movement (:func:`training_set`; ``load_movement``
+  only, as pieces may be files; an ``.amc`` piece takes the ``asf`` given).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from pathlib import Path
 
@@ -16,7 +28,9 @@ import numpy as np
 from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.trajectories import patterns
+from skinny_mj.trajectories.babble import babble, bridge, parse_babble_name
 from skinny_mj.trajectories.retarget import RetargetReport, clip_report, range_excess
+from skinny_mj.trajectories.samples import SAMPLE_CLIPS, sample_clip
 from skinny_mj.trajectories.trajectory import Trajectory, excerpt
 from skinny_mj.trajectories.ymca import letter_end_steps, ymca
 
@@ -57,8 +71,21 @@ def _mirror(side: str) -> Callable[[int], Trajectory]:
     return make
 
 
+def _recorded(unit_2d: bool) -> Callable[[int], Trajectory]:
+    def make(dof: int) -> Trajectory:
+        """The recorded-like YMCA (``skinny_mj.trajectories.human``), default seed."""
+        from skinny_mj.trajectories.human import ymca_recorded
+
+        return ymca_recorded(dof, unit_2d=unit_2d)
+
+    return make
+
+
 _MOVEMENTS: dict[str, Callable[[int], Trajectory]] = {
     "ymca": ymca,
+    "ymca-smooth": lambda dof: ymca(dof).with_name("ymca-smooth"),  # today's ymca, by name
+    "ymca-recorded": _recorded(False),
+    "ymca-recorded-unit2d": _recorded(True),
     "y": _y,
     "y-pure": _y_pure,
     "ym": _ym,
@@ -84,7 +111,8 @@ def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajec
     """
     _check_dof(dof)
     base, _, suffix = str(name).strip().lower().partition("@")
-    if base not in names():
+    babbling = parse_babble_name(base)
+    if base not in names() and babbling is None:
         raise SkinnyInputError(f"unknown movement {name!r}; valid names: {', '.join(names())}")
     if suffix:
         if speed != 1.0:
@@ -93,7 +121,11 @@ def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajec
             speed = float(suffix)
         except ValueError:
             raise SkinnyInputError(f"bad speed suffix in {name!r} (use e.g. 'ymca@0.5')") from None
-    if base in _MOVEMENTS:
+    if babbling is not None:
+        traj = babble(dof, seed=int(babbling["seed"]), duration_s=babbling["duration"],
+                      v_min=babbling["vmin"], v_max=babbling["vmax"]
+                      ).resample(speed).repeat(reps)
+    elif base in _MOVEMENTS:
         traj = _MOVEMENTS[base](dof).resample(speed).repeat(reps)
     else:  # a rhythmic pattern is a function of the leader's phase: made at that speed
         traj = patterns.pattern_trajectory(base, dof, speed).repeat(reps)
@@ -152,6 +184,7 @@ def load_movement(
     reps: int = 1,
     fps: float | None = None,
     cutoff_hz: float = 6.0,
+    retarget: str = "angles",
 ) -> tuple[Trajectory, RetargetReport]:
     """Any movement: a library name, a ``.npz``/``.csv`` trajectory, ``.amc`` (+ ``asf``,
     or the single ``.asf`` in the same folder) or ``.bvh`` motion capture.
@@ -160,14 +193,21 @@ def load_movement(
     and a :class:`RetargetReport` saying how much was clipped (zero for library names).
     ``fps`` overrides the capture rate of an .amc (default 120 Hz, CMU's) or a .bvh.
     A file may carry an excerpt, ``PATH@start=S,duration=D`` (see :func:`split_excerpt`);
-    the report then covers the excerpt only.
+    the report then covers the excerpt only. ``retarget="positions"``: motion capture's
+    desired signals are the subject's normalized segment vectors (see ``retarget``).
     """
+    if retarget not in ("angles", "positions"):
+        raise SkinnyInputError(f"retarget must be 'angles' or 'positions', got {retarget!r}")
     _check_dof(dof)
+    if str(name_or_path).strip().lower().startswith(SET_PREFIX):
+        traj, report = training_set(str(name_or_path), dof, asf=asf, fps=fps,
+                                    cutoff_hz=cutoff_hz, retarget=retarget)
+        return traj.resample(speed).repeat(reps), report
     text, window = split_excerpt(str(name_or_path))
     suffix = Path(text).suffix.lower()
     if suffix not in _FILE_SUFFIXES:
         base = text.strip().lower().partition("@")[0]
-        if base in names() or not Path(text).exists():
+        if base in names() or parse_babble_name(base) is not None or not Path(text).exists():
             traj = get(text, dof, speed=speed, reps=reps)
             excess = range_excess(traj.angles, dof)
             return traj, clip_report(excess, dof, source=text, source_fps=1.0 / traj.dt)
@@ -175,6 +215,9 @@ def load_movement(
             "unknown movement file type (use .npz, .csv, .amc with .asf, or .bvh)", path=text
         )
     path = Path(text)
+    if not path.is_file() and str(path.parent) == "." and path.stem in SAMPLE_CLIPS \
+            and suffix == ".amc":
+        path = sample_clip(path.stem)  # a bare shipped clip name: md_02.amc, md_03.amc
     if not path.is_file():
         raise SkinnyInputError("no such file", path=path)
     if suffix in (".npz", ".csv"):
@@ -186,7 +229,7 @@ def load_movement(
         report = clip_report(excess, dof, source=str(path), source_fps=1.0 / raw.dt)
         traj = clipped
     else:
-        from skinny_mj.trajectories.retarget import retarget
+        from skinny_mj.trajectories.retarget import retarget as retarget_clip
 
         if suffix == ".amc":
             from skinny_mj.trajectories.asf_amc import load_asf_amc
@@ -196,6 +239,61 @@ def load_movement(
             from skinny_mj.trajectories.bvh import load_bvh
 
             clip = load_bvh(path, fps=fps)
-        traj, report = retarget(clip, dof, cutoff_hz=cutoff_hz, window_s=window)
+        traj, report = retarget_clip(clip, dof, cutoff_hz=cutoff_hz, window_s=window,
+                                     targets=retarget)
     traj = traj.resample(speed).repeat(reps)
     return traj, report
+
+
+SET_PREFIX = "set:"
+
+
+def set_pieces(name: str) -> list[str]:
+    """``"set:ymca+babble:seed=1+md_03.amc"`` -> ``["ymca", "babble:seed=1", "md_03.amc"]``."""
+    text = str(name).strip()
+    if not text.lower().startswith(SET_PREFIX):
+        raise SkinnyInputError(f"a training set is named set:A+B+..., got {name!r}")
+    pieces = [p.strip() for p in text[len(SET_PREFIX):].split("+")]
+    if not pieces or any(not p for p in pieces) or any(
+            p.lower().startswith(SET_PREFIX) for p in pieces):
+        raise SkinnyInputError(f"bad training set {name!r}: use set:A+B+... with no empty "
+                               "or nested pieces")
+    return pieces
+
+
+def training_set(name: str, dof: int, *, asf: str | Path | None = None,
+                 fps: float | None = None, cutoff_hz: float = 6.0, retarget: str = "angles"
+                 ) -> tuple[Trajectory, RetargetReport]:
+    """The pieces of ``set:A+B+...`` (each through :func:`load_movement`) joined by
+    minimum-jerk bridges (:func:`skinny_mj.trajectories.babble.bridge`).
+
+    Returns the joined trajectory (named by ``name``) and a report whose counts add up
+    over the pieces (largest excess over all; rate and cutoff of the first piece)."""
+    parts: list[np.ndarray] = []
+    reports: list[RetargetReport] = []
+    dt = None
+    for piece in set_pieces(name):
+        is_amc = split_excerpt(piece)[0].lower().endswith(".amc")
+        traj, report = load_movement(piece, dof, asf=asf if is_amc else None, fps=fps,
+                                     cutoff_hz=cutoff_hz, retarget=retarget)
+        if dt is not None and abs(traj.dt - dt) > 1e-12:
+            raise SkinnyInputError(f"training set {name!r}: pieces at different time steps")
+        dt = traj.dt
+        if parts:
+            parts.append(bridge(parts[-1][-1], traj.angles[0], dt))
+        parts.append(traj.angles)
+        reports.append(report)
+    joined = Trajectory(np.concatenate(parts), dt, str(name).strip())
+    first = reports[0]
+    per_dof = {k: sum(int(r.clipped_per_dof.get(k, 0)) for r in reports)
+               for k in first.clipped_per_dof}
+    excess = {k: max(float(r.max_excess_deg_per_dof.get(k, 0.0)) for r in reports)
+              for k in first.max_excess_deg_per_dof}
+    return joined, dataclasses.replace(
+        first, source=str(name).strip(), steps=len(joined),
+        source_frames=sum(int(r.source_frames) for r in reports),
+        clipped_samples=sum(int(r.clipped_samples) for r in reports),
+        clipped_steps=sum(int(r.clipped_steps) for r in reports), clipped_per_dof=per_dof,
+        max_excess_deg=max(float(r.max_excess_deg) for r in reports),
+        max_excess_deg_per_dof=excess,
+        interpolated_samples=sum(int(r.interpolated_samples) for r in reports))

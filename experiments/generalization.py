@@ -1,0 +1,257 @@
+"""Generalization (issue 13, the thesis's RQ3): which training movement teaches an inverse
+model that imitates movements it never saw?
+
+A train-set x test-movement matrix for three bodies/representations: 2D joint angles
+(``j2``, paper C's), 2D Cartesian (``c2``, paper E's) and 3D Cartesian (``c3``, paper D's).
+Rows are training sets (:data:`TRAIN_SETS`): the thesis's (YMCA only, paper C) and ours —
+YMCA with its mirrors, motor babbling (:mod:`skinny_mj.trajectories.babble`) of several
+durations and speed ranges, the real CMU clips leave-one-clip-out (train on md_03, test
+on md_02 and the other way round), the first seconds of a clip (its rest is the unseen
+excerpt), and mixtures joined by minimum-jerk bridges (``set:A+B``). Two rows vary the
+network instead of the movement: the reservoir size (N = 400) and the command scale
+(full scale = 4x instead of 2x the training movement's fastest speed per DOF).
+
+Every network is trained once (paper E's experiment 5 schedule: new method, β = 0.1,
+3 learning cycles x 10 epochs, K 1 -> 0, N = 200, spectral radius 0.5) and tested on
+every column (:data:`TESTS`: the YMCA family with mirrors and speeds, both clips whole and
+their unseen tails, and an unseen babble) with :func:`skinny_mj.training.evaluate`
+after one unscored washout cycle, K = 0. Per cell (:mod:`skinny_mj.imitation`): position
+NRMSE, DTW NRMSE (:mod:`skinny_mj.dtw`), the fraction of steps within 5° per joint,
+per-joint RMS error, the timing lag, the produced angles scored on Cartesian signals,
+the fraction of true-command samples beyond full scale (|c| > 1 before clipping, the
+run's own scale) and what that alone costs: the position NRMSE of the exact inverse
+model clipped at full scale (:func:`clipped_ideal_nrmse`, a kinematic bound).
+Paper E's schedule instead of paper C's (N = 1000, 150 epochs) keeps the whole matrix
+near the issue's ~20 min on one worker (measured: 21.5 min for 240 runs on a shared
+2-core machine): the thesis's own row at its size is paper C's sweep
+(``skinny experiment paper-c``). Every seed of a row trains on the same babble draw
+(``seed=0``; lockstep needs one movement): the babble's own variability is not sampled.
+
+The bimanual patterns of paper B are left out as test movements: they are defined for
+one forced arm and one driven arm, not for a network that drives both.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from skinny_mj import body
+from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.imitation import imitation_metrics, saturation  # noqa: F401 (API)
+
+NAME = "generalization"
+#: Representation id -> (dof, signals).
+REPRESENTATIONS = {"j2": (4, "joint"), "c2": (4, "cartesian"), "c3": (8, "cartesian")}
+#: Training set id -> (movement, TrainConfig changes).
+TRAIN_SETS: dict[str, tuple[str, dict]] = {
+    "ymca": ("ymca", {}),  # the thesis's (paper C)
+    "ymca-mirrors": ("set:ymca+mirror-right+mirror-left", {}),
+    "babble5": ("babble:seed=0,duration=5", {}),
+    "babble15": ("babble:seed=0,duration=15", {}),
+    "babble15-slow": ("babble:seed=0,duration=15,vmin=0.5,vmax=4", {}),
+    "babble15+ymca": ("set:babble:seed=0,duration=15+ymca", {}),
+    "md_03": ("md_03.amc", {}),  # leave-one-clip-out: md_02 is unseen
+    "md_02": ("md_02.amc", {}),  # md_03 is unseen
+    "md_02-head": ("md_02.amc@start=0,duration=5", {}),  # md_02's tail is unseen
+    "babble15+md_03": ("set:babble:seed=0,duration=15+md_03.amc", {}),
+    "babble15-N400": ("babble:seed=0,duration=15", {"reservoir": 400}),
+    "babble15-scale4": ("babble:seed=0,duration=15", {"full_scale_factor": 4.0}),
+}
+#: Rows added after the first full sweep (issue 12's recorded-like YMCA), last in the
+#: experiment so every earlier row keeps its place and seeds: (representation, set id).
+EXTRA_ROWS = (("j2", "ymca-recorded"), ("c2", "ymca-recorded"))
+TRAIN_SETS_EXTRA = {"ymca-recorded": ("ymca-recorded", {})}
+#: Test column id -> movement.
+TESTS = {
+    "ymca": "ymca", "y": "y", "y-pure": "y-pure", "ym": "ym",
+    "mirror-right": "mirror-right", "mirror-left": "mirror-left",
+    "ymca@0.5": "ymca@0.5", "ymca@1.5": "ymca@1.5",
+    "md_02": "md_02.amc", "md_03": "md_03.amc",
+    "md_02-tail": "md_02.amc@start=5", "md_03-tail": "md_03.amc@start=2",
+    "babble-new": "babble:seed=99,duration=10",
+}
+#: Test columns (part of) each training set contains: not "unseen" for that row.
+SEEN = {
+    "ymca": {"ymca", "ymca@0.5", "ymca@1.5"},
+    "ymca-mirrors": {"ymca", "ymca@0.5", "ymca@1.5", "mirror-right", "mirror-left"},
+    "babble15+ymca": {"ymca", "ymca@0.5", "ymca@1.5"},
+    "md_03": {"md_03", "md_03-tail"}, "md_02": {"md_02", "md_02-tail"},
+    "md_02-head": {"md_02"}, "babble15+md_03": {"md_03", "md_03-tail"},
+}
+#: Training sets of the Cartesian representations (the full list is j2's, paper C's own
+#: representation): the ~20 min budget of one worker does not hold all twelve three times.
+CORE_SETS = ("ymca", "babble5", "babble15", "babble15+ymca", "md_03", "md_02")
+QUICK_SETS = ("ymca", "babble5", "md_03")
+QUICK_TESTS = ("ymca", "md_02", "md_02-tail")
+
+
+@dataclass(frozen=True)
+class Config:
+    """The matrix's schedule (paper E experiment 5) and its size."""
+
+    representations: tuple[str, ...] = tuple(REPRESENTATIONS)
+    train_sets: tuple[str, ...] = tuple(TRAIN_SETS)
+    cartesian_sets: tuple[str, ...] = CORE_SETS  # c2 and c3 rows
+    tests: tuple[str, ...] = tuple(TESTS)
+    reservoir: int = 200
+    epochs: int = 10
+    test_washout_cycles: int = 1
+    runs: int = 10
+
+
+def train_config(cfg: Config, row: Row):
+    """The row's :class:`TrainConfig`: paper E exp. 5 on the row's training set."""
+    from skinny_mj.config import TrainConfig
+
+    dof, signals = REPRESENTATIONS[row.params["rep"]]
+    movement, changes = {**TRAIN_SETS, **TRAIN_SETS_EXTRA}[row.params["train"]]
+    kw = {"reservoir": cfg.reservoir, **changes}
+    return TrainConfig(dof=dof, signals=signals, trajectory=movement, epochs=cfg.epochs,
+                       test_washout_cycles=cfg.test_washout_cycles, **kw)
+
+
+@functools.lru_cache(maxsize=64)
+def load_test(movement: str, dof: int):
+    """A test movement for ``dof`` (cached: every row of a worker reuses it)."""
+    from skinny_mj.trajectories import load_movement
+
+    return load_movement(movement, dof)[0]
+
+
+def clipped_ideal_nrmse(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarray,
+                        signals: str) -> float:
+    """Position NRMSE of the exact inverse model whose commands are clipped to [-1, 1]
+    (kinematic: q(t+1) = q(t) + clip(c) v_max dt, no sensor noise): what the command
+    scale alone costs on ``angles`` (T, n_dof) rad, a lower bound for any network."""
+    from controllers.metrics import position_nrmse
+
+    step = np.asarray(max_speed_rad_s) * dt
+    q = np.empty_like(angles)
+    q[0] = angles[0]
+    for t in range(1, len(angles)):  # sequential: each step starts where the last ended
+        q[t] = q[t - 1] + np.clip((angles[t] - q[t - 1]) / step, -1.0, 1.0) * step
+    dof = angles.shape[1]
+    return float(position_nrmse(body.position_signals(q, dof, signals)[None],
+                                body.position_signals(angles, dof, signals))[0])
+
+
+def run_one(cfg: Config, row: Row, seed: int) -> dict:
+    (out,) = run_batch(cfg, row, [seed])
+    if isinstance(out, Exception):
+        raise out
+    return out
+
+
+def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
+    """Train the row's R networks once in lockstep, then test them on every column."""
+    from skinny_mj.training import build_run, evaluate, train_run
+
+    start = time.perf_counter()
+    tcfg = train_config(cfg, row)
+    run = build_run(tcfg, seeds)
+    result = train_run(run).fel
+    train_wall = (time.perf_counter() - start) / len(seeds)
+    traj = run.trajectory
+    outs: list = [{
+        "train_position_nrmse": float(result.position_nrmse[r, -1]),
+        "train_steps": len(traj), "train_wall_s": train_wall, "n_test_failed": 0,
+        "train_coverage": coverage(traj.angles, tcfg.dof),
+        "train_speed_p99_rad_s": float(np.percentile(np.abs(traj.velocities()), 99)),
+        "max_speed_rad_s": [float(v) for v in run.max_speed_rad_s],
+    } for r in range(len(seeds))]
+    for col in cfg.tests:
+        test = load_test(TESTS[col], tcfg.dof)
+        sat = saturation(test.angles, test.dt, run.max_speed_rad_s)
+        bound = clipped_ideal_nrmse(test.angles, test.dt, run.max_speed_rad_s, tcfg.signals)
+        for out, outcome in zip(outs, evaluate(run, test), strict=True):
+            out[f"{col}__saturated"] = sat
+            out[f"{col}__clipped_ideal_nrmse"] = bound
+            if outcome.failed:
+                out["n_test_failed"] += 1
+                continue
+            out.update({f"{col}__{k}": v
+                        for k, v in imitation_metrics(outcome, tcfg.dof).items()})
+    wall = (time.perf_counter() - start) / len(seeds)
+    for r, out in enumerate(outs):
+        out["wall_s"] = wall
+        if result.failed[r]:
+            outs[r] = RunFailed(f"epoch {result.fail_epoch[r]}: {result.fail_reason[r]}")
+    return outs
+
+
+def coverage(angles: np.ndarray, dof: int, bins: int = 6) -> float:
+    """Fraction of the joint space a movement visits: per arm, the occupied cells of a
+    ``bins``-per-DOF grid over the arm's joint ranges, over all cells; mean of the arms."""
+    q = body.normalize_angles(np.asarray(angles), dof)  # [-1, 1] per DOF
+    cells = np.clip(((q + 1.0) / 2.0 * bins).astype(int), 0, bins - 1)
+    n_arm = dof // 2
+    return float(np.mean([len({tuple(c) for c in cells[:, a * n_arm:(a + 1) * n_arm]})
+                          / bins**n_arm for a in range(2)]))
+
+
+def rows(cfg: Config) -> tuple[Row, ...]:
+    """j2: every training set; c2, c3: ``cfg.cartesian_sets`` (of ``cfg.train_sets``);
+    then :data:`EXTRA_ROWS` (full sweep only)."""
+    main = [Row(f"{rep}-{ts}", {"rep": rep, "train": ts, "movement": TRAIN_SETS[ts][0]})
+            for rep in cfg.representations for ts in cfg.train_sets
+            if rep == "j2" or ts in cfg.cartesian_sets]
+    extra = [Row(f"{rep}-{ts}", {"rep": rep, "train": ts, "movement": TRAIN_SETS_EXTRA[ts][0]})
+             for rep, ts in EXTRA_ROWS
+             if rep in cfg.representations and cfg.train_sets == tuple(TRAIN_SETS)]
+    return tuple(main + extra)
+
+
+def build(*, quick: bool = False, movement: str | None = None, asf: str | None = None,
+          dof: int | None = None, signals: str | None = None) -> Experiment:
+    """The matrix. ``dof``/``signals``: only that representation (``--dof 4 --signals
+    joint`` = j2); ``movement``: not supported (the rows are the training sets).
+    ``quick``: N = 50, 2 epochs, 2 runs, 3 sets x 3 tests on j2 (a smoke test)."""
+    from skinny_mj.errors import SkinnyInputError
+
+    if movement is not None or asf is not None:
+        raise SkinnyInputError("generalization's rows are its training sets; --movement "
+                               "is not an option here (train one with skinny train)")
+    changes: dict = {}
+    if dof is not None or signals is not None:
+        want = (dof or 4, signals or "cartesian")
+        changes["representations"] = tuple(k for k, v in REPRESENTATIONS.items() if v == want)
+        if not changes["representations"]:
+            raise SkinnyInputError(f"no representation {want}; known: {REPRESENTATIONS}")
+    if quick:
+        changes.update(reservoir=50, epochs=2, runs=2, train_sets=QUICK_SETS,
+                       tests=QUICK_TESTS)
+        changes.setdefault("representations", ("j2",))
+    cfg = Config(**changes)
+    rs = rows(cfg)
+    groups = {rep: tuple(r.row_id for r in rs if r.params["rep"] == rep)
+              for rep in cfg.representations}
+    extra = tuple(f"{rep}-{ts}" for rep, ts in EXTRA_ROWS if f"{rep}-{ts}" in
+                  {r.row_id for r in rs})
+    if extra:
+        groups["extra"] = extra
+    table = {"train_position_nrmse": "train pos", "ymca__position_nrmse": "YMCA pos",
+             "md_02__position_nrmse": "md_02 pos", "md_03__position_nrmse": "md_03 pos",
+             "train_wall_s": "train s/run"}
+    return Experiment(name=NAME, rows=rs, run_one=functools.partial(run_one, cfg),
+                      config=cfg, runs=cfg.runs, table_columns=table,
+                      run_batch=functools.partial(run_batch, cfg),
+                      cost=functools.partial(cost, cfg), groups=groups)
+
+
+def cost(cfg: Config, row: Row) -> float:
+    """Relative cost: training steps x (N / 200), 3D x 1.5."""
+    tcfg = train_config(cfg, row)
+    n = len(load_test(tcfg.trajectory, tcfg.dof))
+    return n * max(1.0, tcfg.reservoir / 200) * (1.5 if tcfg.dof == 8 else 1.0)
+
+
+def report(results: dict, out_dir: Path) -> str:
+    """Matrices, figures and findings (:mod:`experiments.generalization_report`)."""
+    from experiments import generalization_report
+
+    return generalization_report.report(results, Path(out_dir))
