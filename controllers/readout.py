@@ -137,6 +137,9 @@ def small_solver(r_m: np.ndarray, transpose: bool = False
     rcond, _ = lapack.dtrcon(r_m, norm="1")
     if rcond * PINV_DIRECT_COND > 1.0:
         return lambda b: lapack.dtrtrs(r_m, b, trans=int(transpose))[0]
+    if not np.all(np.isfinite(r_m)):  # a diverged run's states (NaN/inf): the SVD would
+        # raise "did not converge"; a NaN readout lets health() fail that run with a reason
+        return lambda b: np.full(np.shape(b), np.nan)
     u, sv, vt = np.linalg.svd(np.triu(r_m))  # R = U S V^T, R^T = V S U^T
     large = sv > PINV_RCOND * sv.max()
     inv = np.divide(1.0, sv, out=np.zeros_like(sv), where=large)
@@ -178,3 +181,81 @@ def solve_readout(cfg: ESNConfig, states: np.ndarray, targets: np.ndarray, runs:
     if cfg.readout == "pinv":  # (r, D, n_out); m[runs] would copy all the states
         return pinv_solve(m if runs.size == m.shape[0] else m[runs], s[runs])
     return np.stack([ridge_solve(m[i], s[i], cfg.ridge_lambda) for i in runs])
+
+
+class RLS:
+    """Recursive least squares for R readouts in lockstep (the FORCE rule of Sussillo &
+    Abbott 2009 is RLS on the network's own output).
+
+    After the samples (x_1, s_1) ... (x_T, s_T), with forgetting factor ``forgetting``
+    = 1 and P_0 = I / lambda, W equals the ridge solution
+    (M^T M + lambda I)^-1 M^T S of :func:`ridge_solve` on the same data (exactly in
+    exact arithmetic: both minimise the same quadratic); with forgetting g < 1 each
+    old sample's weight decays by g per step (memory about 1 / (1 - g) steps).
+
+    Parameters
+    ----------
+    w : (R, n_out, D) readouts, updated IN PLACE (pass ``esn.W_out`` to train an ESN
+        online; a float64 array).
+    ridge_lambda : lambda > 0 of P_0 = I / lambda (ignored when ``p0`` is given).
+    forgetting : g in (0, 1].
+    p0 : optional (R, D, D) initial inverse Gram (e.g. :meth:`from_states`).
+
+    Attributes
+    ----------
+    P : (R, D, D) the running inverse of the (forgetting-weighted) Gram + lambda I.
+    """
+
+    def __init__(self, w: np.ndarray, ridge_lambda: float = 1.0, forgetting: float = 1.0,
+                 p0: np.ndarray | None = None):
+        if w.ndim != 3 or w.dtype != np.float64:
+            raise ValueError(f"w must be a (R, n_out, D) float64 array, got {w.shape} {w.dtype}")
+        if not 0 < forgetting <= 1:
+            raise ValueError(f"forgetting factor must be in (0, 1], got {forgetting}")
+        n_runs, _, d = w.shape
+        if p0 is None:
+            if not ridge_lambda > 0:
+                raise ValueError(f"RLS needs ridge lambda > 0, got {ridge_lambda}")
+            p0 = np.broadcast_to(np.eye(d) / ridge_lambda, (n_runs, d, d))
+        if p0.shape != (n_runs, d, d):
+            raise ValueError(f"p0 must be {(n_runs, d, d)}, got {p0.shape}")
+        self.W, self.P, self.forgetting = w, np.array(p0, np.float64), float(forgetting)
+
+    @classmethod
+    def from_states(cls, w: np.ndarray, states: np.ndarray, ridge_lambda: float,
+                    forgetting: float = 1.0) -> RLS:
+        """RLS that continues a ridge fit on ``states`` (R, T, D): P_0 = (M^T M +
+        lambda I)^-1, so (forgetting 1) further updates give ridge on all the data."""
+        m = np.asarray(states, np.float64)
+        gram = np.swapaxes(m, 1, 2) @ m + ridge_lambda * np.eye(m.shape[2])
+        return cls(w, forgetting=forgetting, p0=np.linalg.inv(gram))
+
+    def update(self, x: np.ndarray, target: np.ndarray,
+               runs: np.ndarray | None = None) -> np.ndarray:
+        """One sample per run: x (R, D) extended state, target (R, n_out) (in the
+        readout's linear domain). ``runs``: (R,) bool, runs to update (others keep W
+        and P). Returns the a-priori error target - W x (R, n_out)."""
+        x = np.asarray(x, np.float64)
+        px = np.matmul(self.P, x[..., None])[..., 0]  # (R, D)
+        gain = px / (self.forgetting + np.sum(x * px, axis=1))[:, None]  # (R, D)
+        err = np.asarray(target, np.float64) - np.matmul(self.W, x[..., None])[..., 0]
+        new_p = (self.P - gain[:, :, None] * px[:, None, :]) / self.forgetting
+        if runs is None:
+            self.W += err[:, :, None] * gain[:, None, :]
+            self.P = new_p
+        else:
+            sel = np.asarray(runs, bool)
+            self.W[sel] += err[sel][:, :, None] * gain[sel][:, None, :]
+            self.P[sel] = new_p[sel]
+        return err
+
+
+def rls_solve(m: np.ndarray, s: np.ndarray, ridge_lambda: float,
+              forgetting: float = 1.0) -> np.ndarray:
+    """W (D, n) from RLS run over the rows of M (T, D), S (T, n) from W = 0, P_0 = I /
+    lambda: with ``forgetting`` 1 the same problem as :func:`ridge_solve`."""
+    w = np.zeros((1, s.shape[1], m.shape[1]))
+    rls = RLS(w, ridge_lambda, forgetting)
+    for t in range(m.shape[0]):
+        rls.update(m[t][None], s[t][None])
+    return w[0].T

@@ -29,19 +29,26 @@ def _nrmse84(free: np.ndarray, series: np.ndarray, washout: int, n_fit: int) -> 
     return float(np.sqrt(np.mean(err**2) / variance))
 
 
+def esn_config(n_reservoir: int):
+    """Jaeger & Haas's Mackey-Glass ESN (output feedback, leak 0.6, spectral radius
+    0.95, bias 0.2, feedback scaling 0.56, state noise 1e-8, pinv, identity readout)."""
+    from controllers.esn import ESNConfig
+
+    return ESNConfig(n_inputs=1, n_outputs=1, n_reservoir=n_reservoir, spectral_radius=0.95,
+                     bias=0.2, leak_rate=0.6, noise_level=1e-8, output_feedback=True,
+                     feedback_scaling=0.56, readout_activation="identity")
+
+
 def mackey_glass_ours(series: np.ndarray, n_reservoir: int, washout: int = 1000,
                       seed: int = 0) -> np.ndarray:
     """Our ESN (Jaeger & Haas's setup: output feedback, leak 0.6, spectral radius
     0.95, bias 0.2, feedback scaling 0.56, state noise 1e-8, pinv readout), all trials
     in lockstep; teacher-forced through the series minus the horizon, then 84 free
     steps. Returns the free run (trials, 84)."""
-    from controllers.esn import ESN, ESNConfig, run_generators
+    from controllers.esn import ESN, run_generators
 
     trials, n_fit = series.shape[0], series.shape[1] - MG_HORIZON
-    cfg = ESNConfig(n_inputs=1, n_outputs=1, n_reservoir=n_reservoir, spectral_radius=0.95,
-                    bias=0.2, leak_rate=0.6, noise_level=1e-8, output_feedback=True,
-                    feedback_scaling=0.56, readout_activation="identity")
-    esn = ESN(cfg, n_runs=trials, rngs=run_generators(seed + 1, trials))
+    esn = ESN(esn_config(n_reservoir), n_runs=trials, rngs=run_generators(seed + 1, trials))
     teacher = series[:, :n_fit, None]
     zeros = np.zeros((trials, n_fit, 1))
     _, states = esn.run(zeros, noise=True, teacher=teacher, washout=washout)
@@ -53,21 +60,22 @@ def mackey_glass_ours(series: np.ndarray, n_reservoir: int, washout: int = 1000,
 
 
 def mackey_glass_reservoirpy(series: np.ndarray, n_reservoir: int, washout: int = 1000,
-                             seed: int = 0) -> np.ndarray:
+                             seed: int = 0, horizon: int = MG_HORIZON) -> np.ndarray:
     """reservoirpy 0.4's own way on the same series: a ``Reservoir >> Ridge`` trained to
     map d(t) to d(t + 1) (leak 0.6, spectral radius 0.95, ridge 1e-10), then run in a
-    closed loop for 84 steps from the end of the training data. Returns (trials, 84)."""
+    closed loop for ``horizon`` (84) steps from the end of the training data (the last
+    ``horizon`` samples are not trained on). Returns (trials, horizon)."""
     from reservoirpy.nodes import Reservoir, Ridge
 
-    n_fit = series.shape[1] - MG_HORIZON
-    free = np.empty((series.shape[0], MG_HORIZON))
+    n_fit = series.shape[1] - horizon
+    free = np.empty((series.shape[0], horizon))
     for r, s in enumerate(series):
         model = Reservoir(n_reservoir, lr=0.6, sr=0.95, input_scaling=1.0,
                           rc_connectivity=min(1.0, 10 / n_reservoir), seed=seed + r) \
             >> Ridge(ridge=1e-10)
         model.fit(s[:n_fit - 1, None], s[1:n_fit, None], warmup=washout)
         y = s[n_fit - 1:n_fit]
-        for k in range(MG_HORIZON):
+        for k in range(horizon):
             y = model.step(y)
             free[r, k] = y[0]
     return free

@@ -1,0 +1,57 @@
+"""Online learning inside the closed loop: an RLS (FORCE-style) readout update per
+control step, for :func:`controllers.fel.rollout`'s ``online`` hook.
+
+At step t the rollout knows u_error(t), so FEL's estimated target of the step before,
+y_est(t-1) = command(t-1) + u_error(t), is available one step late; :class:`OnlineRLS`
+then updates every run's readout with (extended state(t-1), beta y_est(t-1) +
+(1 - beta) y_ESN(t-1)), the new method's blend (beta = 1: FEL's plain target), through
+atanh for a tanh readout as the batch fit does. The next step's output already uses the
+updated readout. R runs update in lockstep (:class:`controllers.readout.RLS`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controllers.esn import ESN
+from controllers.readout import RLS
+
+
+class OnlineRLS:
+    """Per-step RLS on an ESN's readout (``esn.W_out`` is updated in place).
+
+    Parameters
+    ----------
+    esn : the ESN whose readout learns (float64).
+    forgetting : RLS forgetting factor g in (0, 1]; memory about 1 / (1 - g) steps.
+    ridge_lambda : P_0 = I / lambda when ``states`` is None.
+    states : optional (R, T, D) extended states of the last batch fit: P_0 = (M^T M +
+        lambda I)^-1, so the online updates continue that fit instead of starting from a
+        prior that trusts the trained readout as much as lambda says.
+    beta : blend of the target with the network's own output (1: y_est alone).
+    runs : (R,) bool, the runs that learn (default all; e.g. the healthy ones).
+    """
+
+    def __init__(self, esn: ESN, forgetting: float = 0.999, ridge_lambda: float = 1e-2,
+                 states: np.ndarray | None = None, beta: float = 1.0,
+                 runs: np.ndarray | None = None):
+        if esn.W_out.dtype != np.float64:
+            raise ValueError("online RLS needs a float64 ESN")
+        if not 0 < beta <= 1:
+            raise ValueError(f"beta must be in (0, 1], got {beta}")
+        self.esn, self.beta = esn, float(beta)
+        self.runs = None if runs is None else np.asarray(runs, bool)
+        self.rls = RLS(esn.W_out, ridge_lambda, forgetting) if states is None else \
+            RLS.from_states(esn.W_out, states, ridge_lambda, forgetting)
+        self.updates = 0
+
+    def update(self, state: np.ndarray, y_esn: np.ndarray, y_est: np.ndarray) -> None:
+        """One step: state (R, D), y_esn and y_est (R, n_out) of the step before."""
+        target = y_est if self.beta == 1.0 else self.beta * y_est + (1.0 - self.beta) * y_esn
+        cfg = self.esn.cfg
+        if cfg.readout_activation == "tanh":
+            target = np.arctanh(np.clip(target, -cfg.target_clip, cfg.target_clip))
+        if self.rls.W is not self.esn.W_out:  # the ESN's readout was replaced (a batch fit)
+            self.rls.W = self.esn.W_out
+        self.rls.update(state, target, self.runs)
+        self.updates += 1

@@ -1,0 +1,130 @@
+"""What ``figure-eight`` and ``mackey-glass`` share: the rows (ways to fit one ESN with
+output feedback), lockstep runs of all seeds, the free-run metrics, the report.
+
+Rows (``method`` in a row's params):
+
+- ``ordinary``: one teacher-forced fit (:func:`controllers.generation.fit_ordinary`);
+- ``new``: paper E's β method, β = 0.1 over 30 cycles (Table 1's 3 per epoch x 10),
+  teacher fed back, blended target (:func:`controllers.generation.fit_beta`);
+- ``new-blend``: the same, the fed-back value the blend of teacher and own output;
+- ``force``: FORCE, online RLS with the own output fed back (figure-eight only);
+- ``reservoirpy``: reservoirpy 0.4 on the same data (optional extra ``bench``).
+
+A seed gives the series (Mackey-Glass: its own attractor trajectory) and the ESN's
+weights and noise: ``np.random.SeedSequence(seed).spawn(2)``. Our rows step all seeds in
+lockstep (bit for bit each seed alone); wall time = batch / R.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from controllers import generation as gen
+from controllers.esn import ESN, ESNConfig
+from experiments.claims import claim_lines
+from skinny_mj.experiment import Row
+
+METHODS = ("ordinary", "new", "new-blend", "force", "reservoirpy")
+BETA, CYCLES = 0.1, 30
+COLUMNS = {"free_nrmse": "free-run NRMSE", "horizon": "horizon (steps)",
+           "stable": "stable", "fit_wall_s": "fit wall (s)"}
+
+
+def streams(seed: int) -> tuple[np.random.Generator, np.random.Generator]:
+    """(data Generator, ESN Generator) of run ``seed``."""
+    data, net = np.random.SeedSequence(int(seed)).spawn(2)
+    return np.random.default_rng(data), np.random.default_rng(net)
+
+
+def rows(methods: tuple[str, ...], runs: int) -> tuple[Row, ...]:
+    return tuple(Row(m, {"method": m}, runs=runs) for m in methods)
+
+
+def fit_ours(method: str, esn: ESN, inputs: np.ndarray, teacher: np.ndarray,
+             washout: int, force_lambda: float) -> None:
+    """Fit ``esn`` (R runs) the row's way; afterwards the state is at the end of the
+    teacher (noise-free re-drive for the batch fits), ready to run free."""
+    if method == "force":
+        gen.fit_force(esn, inputs, teacher, washout, ridge_lambda=force_lambda)
+        return
+    if method == "ordinary":
+        gen.fit_ordinary(esn, inputs, teacher, washout)
+    else:
+        gen.fit_beta(esn, inputs, teacher, washout, BETA, CYCLES,
+                     feedback="blend" if method == "new-blend" else "teacher")
+    esn.reset()
+    esn.run(inputs, noise=False, teacher=teacher)
+
+
+def run_ours(method: str, cfg: ESNConfig, seeds: list[int],
+             data: Callable[[np.random.Generator], np.ndarray], n_fit: int, washout: int,
+             force_lambda: float = 1e-4) -> tuple[np.ndarray, np.ndarray, float]:
+    """(free run (R, H, n), target (R, H, n), wall per run): all seeds in lockstep."""
+    series = np.stack([data(streams(s)[0]) for s in seeds])  # (R, L, n)
+    esn = ESN(cfg, n_runs=len(seeds), rngs=[streams(s)[1] for s in seeds])
+    teacher, target = series[:, :n_fit], series[:, n_fit:]
+    inputs = np.zeros((len(seeds), n_fit, cfg.n_inputs))
+    start = time.perf_counter()
+    fit_ours(method, esn, inputs, teacher, washout, force_lambda)
+    wall = (time.perf_counter() - start) / len(seeds)
+    free = gen.free_run(esn, np.zeros((len(seeds), target.shape[1], cfg.n_inputs)))
+    return free, target, wall
+
+
+def metrics(free: np.ndarray, target: np.ndarray, period: int, scale: float) -> list[dict]:
+    """Per run: NRMSE over the first ``period`` free steps, horizon before the error
+    exceeds 0.1 x ``scale`` (the teacher's std), last-period amplitude ratio, stable
+    (finite, bounded and that ratio within [0.8, 1.25])."""
+    hz = gen.horizon(free, target, 0.1, scale)
+    out = []
+    for r in range(free.shape[0]):
+        f, d = free[r], target[r]
+        finite = bool(np.all(np.isfinite(f)))
+        err = float(np.sqrt(np.mean((f[:period] - d[:period]) ** 2)) / scale) if finite \
+            else None
+        amp = float(np.mean(f[-period:].std(axis=0) / d[-period:].std(axis=0))) \
+            if finite else None
+        out.append({"free_nrmse": err, "horizon": int(hz[r]), "amplitude_ratio": amp,
+                    "stable": float(finite and amp is not None and 0.8 <= amp <= 1.25
+                                    and float(np.max(np.abs(f))) < 10)})
+    return out
+
+
+def claims_for(kind: str) -> list:
+    return [
+        (f"{kind}: the new β method runs free longer than the ordinary fit", "mean", "new",
+         "horizon", ">", "mean", "ordinary"),
+        (f"{kind}: the new β method with blended feedback runs free longer than the ordinary "
+         "fit", "mean", "new-blend", "horizon", ">", "mean", "ordinary"),
+        (f"{kind}: ours (ordinary) runs free at least as long as reservoirpy", "mean",
+         "ordinary", "horizon", ">=", "mean", "reservoirpy"),
+        (f"{kind}: the ordinary fit's free-run error is below the new method's", "median",
+         "ordinary", "free_nrmse", "<", "median", "new"),
+    ]
+
+
+def report(results: dict, out_dir: Path, kind: str, extra: list[str] | None = None) -> str:
+    """Box plots of horizon and free-run NRMSE per row, the claims, the median run's
+    free run of each row as a PNG."""
+    from skinny_mj.plots import boxplot_png
+    from skinny_mj.sweep.stats import load_runs
+
+    out_dir = Path(out_dir)
+    runs = load_runs(out_dir)
+    ids = [r["row"] for r in json.loads((out_dir / "config.json").read_text())["rows"]]
+    lines = []
+    for metric, label in (("horizon", "free-run horizon (steps)"),
+                          ("free_nrmse", "free-run NRMSE")):
+        data = {i: [r["metrics"][metric] for r in runs if r["row"] == i
+                    and r["status"] == "ok" and r["metrics"].get(metric) is not None]
+                for i in ids}
+        if any(data.values()):
+            png = boxplot_png(out_dir / f"{metric}.png", data, label, title=f"{kind}: {label}")
+            lines.append(f"figure: {png.name}")
+    lines.append(claim_lines(out_dir, claims_for(kind)))
+    return "\n".join(lines + (extra or []))
