@@ -1,0 +1,172 @@
+"""``skinny view`` and the saved blueprint, looked at as a person would: a screenshot of
+the native rerun viewer under Xvfb (Debian ``xvfb`` + ``mesa-vulkan-drivers``; ``.ci/run``
+installs them), checked from its pixels."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skinny_mj import body, trajectories
+from skinny_mj.cli import main
+from skinny_mj.recording import ACTUAL_RGB, DESIRED_RGB, write_recording
+
+
+def _write_run(path: Path, dof: int) -> Path:
+    """A run of YMCA whose actual arms lag the desired ones by 0.2 s (two arm colours)."""
+    traj = trajectories.get("ymca", dof)
+    lag = np.concatenate([np.repeat(traj.angles[:1], 10, axis=0), traj.angles[:-10]])
+    desired = traj.position_signals("cartesian")
+    commands = np.clip(np.diff(lag, axis=0) * 5.0, -1.0, 1.0)
+    actual = desired.copy()
+    actual[10:] = desired[:-10]
+    return write_recording(
+        path, dt=body.CONTROL_DT_S, dof=dof, dof_names=list(body.dof_names(dof)),
+        signal_names=list(body.signal_names(dof, "cartesian")), desired_angles=traj.angles,
+        actual_angles=lag, commands=commands, desired_signals=desired, actual_signals=actual,
+        title=f"viewer test, {dof} DOF", curves={"train_position_nrmse": np.geomspace(1, .1, 5)})
+
+
+@pytest.fixture(scope="module")
+def run_3d(tmp_path_factory) -> Path:
+    return _write_run(tmp_path_factory.mktemp("view") / "sweep" / "row-1" / "run.rrd", 8)
+
+
+def test_view_headless_prints_the_command(run_3d, monkeypatch, capsys):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    folder = run_3d.parents[1]
+    (folder / ".hidden.rrd.tmp").write_bytes(b"")  # an atomic-write leftover: not a recording
+    assert main(["view", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert "no display" in out and f"rerun {run_3d}" in out and ".hidden" not in out
+
+
+def test_view_web_command_binds_localhost(run_3d, capsys):
+    assert main(["view", str(run_3d), "--web", "--dry-run", "--web-port", "9123"]) == 0
+    cmd = capsys.readouterr().out.split()
+    assert cmd[cmd.index("--bind") + 1] == "127.0.0.1" and "0.0.0.0" not in cmd
+    assert cmd[cmd.index("--web-viewer-port") + 1] == "9123" and cmd[-1] == str(run_3d)
+
+
+@pytest.mark.parametrize("make", ["missing", "empty-dir", "not-rrd"])
+def test_view_bad_path_is_one_line_exit_2(make, tmp_path, capsys):
+    path = tmp_path / "x.json"
+    if make == "empty-dir":
+        path = tmp_path
+    elif make == "not-rrd":
+        path.write_text("{}")
+    assert main(["view", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0]
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _listening(port: int) -> list[str]:
+    """Local addresses (hex, as /proc/net/tcp{,6} writes them) listening on ``port``."""
+    found = []
+    for name in ("/proc/net/tcp", "/proc/net/tcp6"):
+        for line in Path(name).read_text().splitlines()[1:]:
+            local, state = line.split()[1], line.split()[3]
+            addr, hex_port = local.split(":")
+            if state == "0A" and int(hex_port, 16) == port:  # 0A = LISTEN
+                found.append(addr)
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/net/tcp").is_file(), reason="needs Linux /proc/net/tcp")
+def test_web_viewer_listens_on_127_0_0_1_only(run_3d):
+    web, grpc = _free_port(), _free_port()
+    env = {**os.environ, "BROWSER": "true"}  # never open a browser from a test
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "skinny_mj.cli", "view", str(run_3d), "--web", "--web-port",
+         str(web), "--grpc-port", str(grpc)], stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not (_listening(web) and _listening(grpc)):
+            assert proc.poll() is None, "the web viewer exited"
+            time.sleep(0.2)
+        addresses = _listening(web) + _listening(grpc)
+    finally:
+        os.killpg(proc.pid, signal.SIGTERM)
+        proc.wait(timeout=30)
+    assert len(addresses) >= 2 and set(addresses) == {"0100007F"}  # 127.0.0.1, nothing else
+
+
+# -- the screenshot ---------------------------------------------------------------------
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
+def _separator_columns(code: np.ndarray, rows: slice) -> list[tuple[int, int]]:
+    """Columns that are one non-background colour over >= 95 % of ``rows``: the borders
+    between the viewer's panels and views."""
+    values, counts = np.unique(code, return_counts=True)
+    background = values[counts.argmax()]
+    band = code[rows]
+    mode = np.median(band, axis=0)  # a colour that fills >= 95 % of a column is its median
+    is_line = (mode != background) & ((band == mode).mean(axis=0) >= 0.95)
+    return _runs(is_line)
+
+
+def _near(pixels: np.ndarray, rgb: tuple[int, int, int], tol: int = 60) -> np.ndarray:
+    return np.abs(pixels - np.array(rgb)).sum(axis=2) <= tol
+
+
+def view_rectangles(img: np.ndarray) -> tuple[tuple[int, int, int, int], tuple[int, int]]:
+    """The 3D view's (x0, x1, y0, y1) and the plots' column span (x0, x1), in pixels,
+    from the borders in a screenshot of the saved blueprint (blueprint panel | 3D view |
+    plots | selection panel)."""
+    code = img @ np.array([1, 256, 65536])
+    h = img.shape[0]
+    cols = _separator_columns(code, slice(int(0.1 * h), int(0.6 * h)))
+    assert len(cols) >= 3, f"expected 3 panel borders, found columns {cols}"
+    border = cols[1][0]  # between the 3D view and the plots: it spans the views' height
+    line = code[:, border] == code[int(0.3 * h), border]
+    (y0, y1), = [r for r in _runs(line) if r[0] <= int(0.3 * h) < r[1]]
+    return (cols[0][1], cols[1][0], y0, y1), (cols[1][1], cols[2][0])
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("rerun") is None,
+                    reason="needs Debian packages xvfb and mesa-vulkan-drivers (.ci/run "
+                    "installs them) and the rerun viewer")
+def test_viewer_screenshot_frames_both_arms_and_plots_have_lines(run_3d, tmp_path):
+    from PIL import Image
+
+    shot = tmp_path / "viewer.png"
+    result = subprocess.run(
+        ["xvfb-run", "-a", "rerun", "--screenshot-to", str(shot), "--window-size", "1600x1000",
+         str(run_3d)], capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    assert result.returncode == 0 and shot.is_file(), result.stderr[-2000:]
+    img = np.asarray(Image.open(shot).convert("RGB")).astype(np.int64)
+    (x0, x1, y0, y1), (p0, p1) = view_rectangles(img)
+    pose = img[y0:y1, x0:x1]
+    arms = _near(pose, DESIRED_RGB) | _near(pose, ACTUAL_RGB)
+    ys, xs = np.nonzero(arms)
+    w, h = x1 - x0, y1 - y0
+    assert arms.sum() > 300, "no arm pixels in the 3D view"
+    # both arms whole: clear of the view's edges, one either side of the middle
+    assert xs.min() > 0.03 * w and xs.max() < 0.97 * w, (xs.min(), xs.max(), w)
+    assert ys.min() > 0.05 * h and ys.max() < 0.97 * h, (ys.min(), ys.max(), h)
+    assert xs.min() < 0.4 * w and xs.max() > 0.6 * w
+    assert _near(pose, ACTUAL_RGB).sum() > 50, "the actual (orange) arms are not drawn"
+    # the plots: desired-blue lines across the time axis, not just the legend's dots
+    plots = _near(img[y0:y1, p0:p1], DESIRED_RGB)
+    cols_with_line = np.flatnonzero(plots.any(axis=0))
+    assert plots.sum() > 2000 and np.ptp(cols_with_line) > 0.8 * (p1 - p0)
