@@ -1,4 +1,4 @@
-"""User-facing input errors: the CLI prints one line and exits with code 2."""
+"""User-facing errors: bad input (exit 2) and environment faults (exit 1), one line each."""
 
 from __future__ import annotations
 
@@ -19,3 +19,10 @@ class SkinnyInputError(ValueError):
         super().__init__(where + message)
         self.path = None if path is None else Path(path)
         self.line = line
+
+
+class SkinnyEnvironmentError(OSError):
+    """A fault of the machine, not of the user's input: an output folder that cannot be
+    written or is full, no OpenGL backend, a missing model folder, an unreachable
+    cluster. The CLI prints it as one line and exits with code 1 (as for any OSError).
+    """

@@ -106,7 +106,7 @@ __all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "select_rows
            "run_sweep", "aggregate", "markdown_table", "execute_run", "execute_batch",
            "default_out_dir"]
 
-_SAFE_NAME = re.compile(r"^[A-Za-z0-9_.][A-Za-z0-9_.+=-]*$")
+_SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+=-]*$")  # no "..", no hidden file
 
 
 @dataclass(frozen=True)

@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import argparse
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from skinny_mj.errors import SkinnyInputError
+from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.io import atomic_path
 
 # A pose that shows every DOF: right arm raised and bent, left arm half raised.
@@ -22,6 +23,13 @@ _SHOW_POSE = {
     4: [2.3, 0.9, 1.2, 0.4],
     8: [2.3, 0.3, 0.4, 0.9, 1.2, -0.3, -0.4, 0.4],
 }
+
+
+def _no_backend(exc: Exception) -> SkinnyEnvironmentError:
+    return SkinnyEnvironmentError(
+        f"no OpenGL rendering backend (MUJOCO_GL={os.environ.get('MUJOCO_GL')!r}: "
+        f"{type(exc).__name__}: {exc}); install EGL or OSMesa (Debian: libegl1, "
+        "libosmesa6) and set MUJOCO_GL=egl or osmesa")
 
 
 def render_png(
@@ -46,7 +54,13 @@ def render_png(
     """
     os.environ.setdefault("MUJOCO_GL", "egl")
     import matplotlib.image
-    import mujoco
+
+    try:  # the GL backend is loaded at import: osmesa without libOSMesa fails here
+        with warnings.catch_warnings():  # glfw warns without a display; the error says so
+            warnings.simplefilter("ignore")
+            import mujoco
+    except Exception as exc:
+        raise _no_backend(exc) from None
 
     from skinny_mj.model import load_model
     from skinny_mj.physics import Layout
@@ -60,7 +74,12 @@ def render_png(
         raise SkinnyInputError(f"angles must be {dof} finite numbers (rad), got {q.shape}")
     Layout(model).set_joint_angles(data, q)
     mujoco.mj_forward(model, data)
-    renderer = mujoco.Renderer(model, height=height, width=width)
+    try:
+        with warnings.catch_warnings():  # glfw warns per failed call; the error says it all
+            warnings.simplefilter("ignore")
+            renderer = mujoco.Renderer(model, height=height, width=width)
+    except Exception as exc:  # each backend fails its own way (FatalError, AttributeError..)
+        raise _no_backend(exc) from None
     try:
         renderer.update_scene(data, camera="front")
         pixels = renderer.render()

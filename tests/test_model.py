@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from skinny_mj import body
-from skinny_mj.errors import SkinnyInputError
+from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.model import TORQUE_GEAR_NM, load_model, models_dir, xml_path
 from skinny_mj.physics import SkinnyPhysics
 
@@ -153,5 +153,5 @@ def test_bad_arguments_and_model_override(monkeypatch, tmp_path):
         load_model(4, "position")
     monkeypatch.setenv("SKINNY_MJ_MODELS", str(tmp_path))
     assert models_dir() == tmp_path
-    with pytest.raises(SkinnyInputError, match="not found"):
+    with pytest.raises(SkinnyEnvironmentError, match="not found"):  # exit 1, not 2
         load_model(4)

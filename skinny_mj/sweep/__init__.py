@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from skinny_mj.errors import SkinnyInputError
+from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.sweep.stats import to_jsonable
 
 if TYPE_CHECKING:
@@ -128,22 +128,39 @@ def execute_batch(run_batch: Callable[[Row, list[int]], list[Any]],
 
 def iter_joblib(fn: Callable[[Any], Any], jobs: Sequence[Any], workers: int) -> Iterator[Any]:
     """``fn(job)`` for every job in ``workers`` loky processes, yielded as they finish."""
+    from concurrent.futures import BrokenExecutor
+
     from joblib import Parallel, delayed, parallel_config
 
     # One BLAS/OpenMP thread per worker: with several processes, more threads
     # oversubscribe the cores and slow every step down 5-25x.
     with parallel_config(backend="loky", inner_max_num_threads=1):
         parallel = Parallel(n_jobs=workers, return_as="generator_unordered")
-        yield from parallel(delayed(fn)(job) for job in jobs)
+        try:
+            yield from parallel(delayed(fn)(job) for job in jobs)
+        except BrokenExecutor as exc:  # a worker was killed (OOM killer, kill -9)
+            raise SkinnyEnvironmentError(
+                f"a worker process died mid-run ({' '.join(str(exc).split()[:14])}...); "
+                "every run that finished is saved: continue with --resume") from None
+
+
+#: Seconds to wait for a remote Dask scheduler before giving up (Dask's default is 30 s).
+DASK_CONNECT_TIMEOUT_S = 10
 
 
 def iter_dask(fn: Callable[[Any], Any], jobs: Sequence[Any], workers: int, scheduler: str,
               keys: Sequence[str]) -> Iterator[Any]:
     """``fn(job)`` on a Dask cluster: ``scheduler`` is ``"local"`` (a LocalCluster of
     ``workers`` processes on 127.0.0.1) or an address ``tcp://host:port``; ``keys`` name
-    the tasks (one per job, unique)."""
+    the tasks (one per job, unique). Connects at once (not at the first result), so an
+    unreachable scheduler is an error before the sweep starts."""
+    client, cluster = _dask_client(workers, scheduler)
+    return _dask_results(client, cluster, fn, jobs, keys)
+
+
+def _dask_client(workers: int, scheduler: str) -> tuple[Any, Any]:
     try:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import Client, LocalCluster
     except ImportError as exc:
         raise SkinnyInputError(
             "--scheduler needs Dask distributed: pip install 'skinny-mj[dask]'") from exc
@@ -154,10 +171,23 @@ def iter_dask(fn: Callable[[Any], Any], jobs: Sequence[Any], workers: int, sched
                                env={k: "1" for k in THREAD_ENV})
         client = Client(cluster)
     elif scheduler.startswith(("tcp://", "tls://", "ws://", "wss://")):
-        client = Client(scheduler)
+        try:
+            client = Client(scheduler, timeout=DASK_CONNECT_TIMEOUT_S)
+        except OSError as exc:  # refused or timed out (TimeoutError is an OSError)
+            raise SkinnyEnvironmentError(
+                f"cannot reach the Dask scheduler {scheduler} within "
+                f"{DASK_CONNECT_TIMEOUT_S} s ({' '.join(str(exc).split())}); is it "
+                "running, and is the address right?") from None
     else:
         raise SkinnyInputError(f"scheduler must be 'local' or an address like "
                                f"tcp://host:8786, got {scheduler!r}")
+    return client, cluster
+
+
+def _dask_results(client: Any, cluster: Any, fn: Callable[[Any], Any], jobs: Sequence[Any],
+                  keys: Sequence[str]) -> Iterator[Any]:
+    from dask.distributed import as_completed
+
     try:
         futures = [client.submit(fn, job, pure=False, key=f"run-{key}")
                    for job, key in zip(jobs, keys, strict=True)]

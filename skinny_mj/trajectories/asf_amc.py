@@ -65,6 +65,14 @@ def _axis_matrix(angles: np.ndarray, order: str) -> np.ndarray:
     return euler_matrices(angles[None, :], order.lower())[0]
 
 
+def _axis_order(text: str, path: Path, line: int) -> str:
+    """An axis line's rotation order: three of X, Y, Z (e.g. ``XYZ``)."""
+    if len(text) != 3 or any(c not in "xyz" for c in text.lower()):
+        raise SkinnyInputError(f"axis order must be three of X, Y, Z, got {text!r}",
+                               path=path, line=line)
+    return text
+
+
 def parse_asf(path: str | Path) -> Skeleton:
     """Read an ASF skeleton. Raises SkinnyInputError (file, line) on malformed input."""
     path = Path(path)
@@ -95,7 +103,7 @@ def parse_asf(path: str | Path) -> Skeleton:
                 if bad:
                     raise SkinnyInputError(f"unknown root channel(s) {bad}", path=path, line=no)
             elif key == "axis" and len(tok) > 1:
-                root_order = tok[1]
+                root_order = _axis_order(tok[1], path, no)
             elif key == "position":
                 root_pos = np.array(to_floats(tok[1:4], path, no, count=3))
             elif key == "orientation":
@@ -119,7 +127,7 @@ def parse_asf(path: str | Path) -> Skeleton:
                 cur.length_m = to_floats(tok[1:2], path, no, count=1)[0]
             elif key == "axis":
                 vals = to_floats(tok[1:4], path, no, count=3)
-                order = tok[4] if len(tok) > 4 else "XYZ"
+                order = _axis_order(tok[4] if len(tok) > 4 else "XYZ", path, no)
                 cur.axis = _axis_matrix(np.array(vals) * angle_scale, order)
             elif key == "dof":
                 cur.dofs = tuple(t.lower() for t in tok[1:])
@@ -190,6 +198,8 @@ def parse_amc(path: str | Path, skeleton: Skeleton) -> dict[str, np.ndarray]:
     if not frames:
         raise SkinnyInputError("no frames", path=path)
     expected = set().union(*frames)
+    if not expected:
+        raise SkinnyInputError("frames hold no bone values", path=path, line=frame_lines[0])
     for frame, no in zip(frames, frame_lines, strict=True):
         if set(frame) != expected:
             missing = sorted(expected - set(frame))

@@ -4,6 +4,12 @@ A trajectory is what Skinny is asked to imitate: ``angles`` (T, n_dof) in radian
 fixed step ``dt`` (0.02 s = 50 Hz), columns in :func:`skinny_mj.body.dof_names` order.
 It is immutable; every operation returns a new one.
 
+Optional explicit desired signals (issue 12): ``desired = {"cartesian": (T, n_sig)}``,
+a recorded position signal that is NOT Skinny's own kinematics of ``angles`` (a human's
+normalized segment vectors, reachable or not); ``angles`` are then its inverse
+kinematics (the true commands). :meth:`Trajectory.position_signals` returns them when
+present; every time operation carries them along; ``.npz`` stores them.
+
 Files: ``.npz`` (arrays ``angles`` and ``meta``, a JSON string; loaded with
 ``allow_pickle=False``) and ``.csv`` (a ``# dt=...`` comment line, a header with the
 DOF names, one row per step, floats written with 17 significant digits so that the
@@ -16,6 +22,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,6 +51,7 @@ class Trajectory:
     angles: np.ndarray
     dt: float = DEFAULT_DT_S
     name: str = "trajectory"
+    desired: dict | None = None  # {signals: (T, n_signals)} explicit desired signals
 
     def __post_init__(self) -> None:
         try:
@@ -72,6 +80,7 @@ class Trajectory:
         object.__setattr__(self, "angles", a)
         object.__setattr__(self, "dt", dt)
         object.__setattr__(self, "name", str(self.name))
+        object.__setattr__(self, "desired", _check_desired(self.desired, a, self.name))
 
     # -- basic properties -------------------------------------------------------------
     @property
@@ -98,7 +107,14 @@ class Trajectory:
     def position_signals(self, signals: str = "joint") -> np.ndarray:
         """Normalized position signals (T, n_signals), see ``body.position_signals``."""
         body.check_signals(signals)
+        if self.desired and signals in self.desired:
+            return np.array(self.desired[signals])
         return body.position_signals(self.angles, self.dof, signals)
+
+    def _map(self, angles: np.ndarray, name: str, fn) -> Trajectory:
+        """A new trajectory of ``angles`` whose explicit signals are ``fn(signals)``."""
+        desired = None if not self.desired else {k: fn(v) for k, v in self.desired.items()}
+        return Trajectory(angles, self.dt, name, desired)
 
     def velocities(self) -> np.ndarray:
         """Joint velocities (T-1, n_dof), rad/s: forward differences / dt."""
@@ -132,7 +148,8 @@ class Trajectory:
         src = np.arange(len(self), dtype=float)
         dst = np.linspace(0.0, len(self) - 1.0, n)
         angles = PchipInterpolator(src, self.angles, axis=0)(dst)
-        return Trajectory(angles, self.dt, f"{self.name}@{speed:g}")
+        return self._map(angles, f"{self.name}@{speed:g}",
+                         lambda v: PchipInterpolator(src, v, axis=0)(dst))
 
     def repeat(self, n: int) -> Trajectory:
         """The movement ``n`` times in a row ((n*T, n_dof))."""
@@ -140,11 +157,12 @@ class Trajectory:
             raise SkinnyInputError(f"repetitions must be an integer >= 1, got {n!r}")
         if n == 1:
             return self
-        return Trajectory(np.tile(self.angles, (int(n), 1)), self.dt, f"{self.name}x{n}")
+        return self._map(np.tile(self.angles, (int(n), 1)), f"{self.name}x{n}",
+                         lambda v: np.tile(v, (int(n), 1)))
 
     def reversed(self) -> Trajectory:
         """The movement played backwards."""
-        return Trajectory(self.angles[::-1], self.dt, f"{self.name}-reversed")
+        return self._map(self.angles[::-1], f"{self.name}-reversed", lambda v: v[::-1])
 
     def concat(self, other: Trajectory) -> Trajectory:
         """This movement followed by ``other`` (same dof and dt)."""
@@ -154,14 +172,15 @@ class Trajectory:
             raise SkinnyInputError(f"cannot join dof={self.dof} and dof={other.dof} trajectories")
         if not math.isclose(other.dt, self.dt, rel_tol=1e-9):
             raise SkinnyInputError(f"cannot join dt={self.dt} s and dt={other.dt} s trajectories")
-        return Trajectory(
-            np.concatenate([self.angles, other.angles]), self.dt, f"{self.name}+{other.name}"
-        )
+        keys = set(self.desired or {}) & set(other.desired or {})  # signals both carry
+        desired = {k: np.concatenate([self.desired[k], other.desired[k]]) for k in keys}
+        return Trajectory(np.concatenate([self.angles, other.angles]), self.dt,
+                          f"{self.name}+{other.name}", desired or None)
 
     __add__ = concat
 
     def with_name(self, name: str) -> Trajectory:
-        return Trajectory(self.angles, self.dt, name)
+        return Trajectory(self.angles, self.dt, name, self.desired)
 
     def clip_to_range(self) -> tuple[Trajectory, int]:
         """Clip every angle into ``body.joint_ranges``; returns the clipped trajectory and
@@ -170,7 +189,8 @@ class Trajectory:
         outside = int(np.count_nonzero((self.angles < lo) | (self.angles > hi)))
         if outside == 0:
             return self, 0
-        return Trajectory(np.clip(self.angles, lo, hi), self.dt, self.name), outside
+        return Trajectory(np.clip(self.angles, lo, hi), self.dt, self.name,
+                          self.desired), outside
 
     # -- files ------------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
@@ -185,9 +205,12 @@ class Trajectory:
                 "dof": self.dof,
                 "dof_names": list(self.dof_names),
             }
+            extra = {f"desired_{k}": v for k, v in (self.desired or {}).items()}
             with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-                np.savez(fh, angles=self.angles, meta=np.array(json.dumps(meta)))
+                np.savez(fh, angles=self.angles, meta=np.array(json.dumps(meta)), **extra)
             return path
+        if suffix == ".csv" and self.desired:
+            raise SkinnyInputError("explicit desired signals are stored in .npz only", path=path)
         if suffix == ".csv":
             buf = io.StringIO()
             buf.write(f"# skinny-mj trajectory; name={self.name}; dt={self.dt!r}; dof={self.dof}\n")
@@ -224,16 +247,20 @@ def _load_npz(path: Path) -> Trajectory:
                 raise SkinnyInputError("npz needs arrays 'angles' and 'meta'", path=path)
             angles = np.asarray(data["angles"])
             meta = json.loads(str(data["meta"]))
+            desired = {k[len("desired_"):]: np.asarray(data[k])
+                       for k in data.files if k.startswith("desired_")} or None
     except SkinnyInputError:
         raise
-    except (OSError, ValueError, EOFError) as exc:  # zip errors, pickled objects, bad JSON
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:  # zip errors,
+        # pickled objects, bad JSON (BadZipFile: a zip header with no zip after it)
         raise SkinnyInputError(f"not a readable trajectory npz ({exc})", path=path) from None
     if not isinstance(meta, dict):
         raise SkinnyInputError("'meta' must be a JSON object", path=path)
     if angles.ndim != 2 or angles.shape[1] not in body.ARM_JOINTS:
         raise SkinnyInputError(f"angles must be (T, 4 or 8), got shape {angles.shape}", path=path)
     names = meta.get("dof_names")
-    if names is not None and tuple(names) != body.dof_names(angles.shape[1]):
+    if names is not None and (not isinstance(names, list)
+                              or tuple(names) != body.dof_names(angles.shape[1])):
         raise SkinnyInputError(f"DOF names {names} do not match dof={angles.shape[1]}", path=path)
     if meta.get("dof", angles.shape[1]) != angles.shape[1]:
         raise SkinnyInputError(
@@ -245,8 +272,9 @@ def _load_npz(path: Path) -> Trajectory:
     if len(bad):
         raise SkinnyInputError(f"non-finite angle at step {bad[0][0]}, DOF {bad[0][1]}", path=path)
     try:
-        return Trajectory(angles, meta.get("dt", DEFAULT_DT_S), meta.get("name", path.stem))
-    except SkinnyInputError as exc:
+        return Trajectory(angles, meta.get("dt", DEFAULT_DT_S), meta.get("name", path.stem),
+                          desired)
+    except (SkinnyInputError, TypeError, ValueError) as exc:  # e.g. "dt": "x" in meta
         raise SkinnyInputError(str(exc), path=path) from None
 
 
@@ -327,4 +355,23 @@ def excerpt(traj: Trajectory, start_s: float, duration_s: float | None) -> Traje
             f"(0-{traj.duration_s:g} s)"
         )
     label = f"{start_s:g}s" if duration_s is None else f"{start_s:g}s+{duration_s:g}s"
-    return Trajectory(traj.angles[start : start + n], traj.dt, f"{traj.name}[{label}]")
+    return traj._map(traj.angles[start : start + n], f"{traj.name}[{label}]",
+                     lambda v: v[start : start + n])
+
+
+def _check_desired(desired: dict | None, angles: np.ndarray, name: str) -> dict | None:
+    """Explicit desired signals as read-only float arrays, or a SkinnyInputError."""
+    if not desired:
+        return None
+    out = {}
+    for key, value in dict(desired).items():
+        if key not in body.SIGNALS:
+            raise SkinnyInputError(f"trajectory {name!r}: unknown desired signals {key!r}")
+        v = np.array(value, dtype=float)
+        shape = (angles.shape[0], body.n_signals(angles.shape[1], key))
+        if v.shape != shape or not np.all(np.isfinite(v)):
+            raise SkinnyInputError(f"trajectory {name!r}: desired {key!r} signals must be "
+                                   f"finite, shape {shape}, got {v.shape}")
+        v.setflags(write=False)
+        out[key] = v
+    return out

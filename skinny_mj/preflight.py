@@ -1,0 +1,84 @@
+"""Checks a command makes before any long work: can it write its output, can it render.
+
+Each failure is a :class:`~skinny_mj.errors.SkinnyEnvironmentError` (the CLI prints one
+line and exits 1), raised before the training or the sweep starts rather than after it.
+Nothing here imports mujoco: :func:`check_gl` must run before the first import.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+from pathlib import Path
+
+from skinny_mj.errors import SkinnyEnvironmentError
+
+__all__ = ["GL_BACKENDS", "MIN_FREE_BYTES", "check_gl", "check_writable", "check_free_space"]
+
+#: MUJOCO_GL values mujoco accepts on Linux (mujoco/rendering/classic/gl_context.py);
+#: any other value makes ``import mujoco`` itself raise.
+GL_BACKENDS = ("disable", "disabled", "off", "false", "0", "enable", "enabled", "on",
+               "true", "1", "glfw", "", "glx", "egl", "osmesa")
+#: Bytes the probe writes: enough to see a disk that is already full, not to fill one.
+_PROBE_BYTES = 4096
+#: Free space an output folder needs before a command starts (a run's JSON, model and
+#: figures take < 1 MiB; a recording checks its own size with :func:`check_free_space`).
+MIN_FREE_BYTES = 1 << 20
+
+
+def check_gl() -> None:
+    """Refuse a ``MUJOCO_GL`` that mujoco would refuse at import, with the valid values."""
+    value = os.environ.get("MUJOCO_GL", "").lower().strip()
+    if value not in GL_BACKENDS:
+        raise SkinnyEnvironmentError(
+            f"MUJOCO_GL={os.environ['MUJOCO_GL']!r} is not a rendering backend mujoco knows; "
+            "use egl (GPU or Mesa EGL), osmesa (software) or glfw (a display), or "
+            "unset it")
+
+
+def check_writable(folder: str | Path) -> Path:
+    """Check that ``folder`` (created later if missing) can take files, without creating it.
+
+    Writes a small hidden probe file, through the same atomic write every result uses,
+    into ``folder`` or its nearest existing ancestor, and removes it again.
+
+    Raises
+    ------
+    SkinnyEnvironmentError
+        If an ancestor is a file (ENOTDIR), the file system is read-only, the folder is
+        not writable, or the disk is full; the message names the folder and the reason.
+    """
+    from skinny_mj.io import atomic_write_bytes
+
+    folder = Path(folder)
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    try:
+        if not existing.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(existing))
+        probe = existing / f".skinny-write-probe-{os.getpid()}"
+        atomic_write_bytes(probe, b"\0" * _PROBE_BYTES)
+        probe.unlink()
+        check_free_space(existing, MIN_FREE_BYTES)
+    except SkinnyEnvironmentError:
+        raise
+    except OSError as exc:
+        reason = exc.strerror or str(exc)
+        raise SkinnyEnvironmentError(
+            f"cannot write the output folder {folder} ({reason}: {existing}); "
+            "choose another --out") from None
+    return folder
+
+
+def check_free_space(folder: str | Path, need_bytes: int) -> None:
+    """Refuse to start a write of about ``need_bytes`` into ``folder`` (an existing
+    directory) when the disk has less free: rerun's file writer can hang forever on a
+    full disk (rerun 0.41: ``save`` never returns), so a recording looks first."""
+    import shutil
+
+    free = shutil.disk_usage(folder).free
+    if free < need_bytes:
+        raise SkinnyEnvironmentError(
+            f"the disk holding {folder} is full: {free / 2**20:.2f} MiB free, "
+            f"{need_bytes / 2**20:.2f} MiB needed; free some space or choose another --out")

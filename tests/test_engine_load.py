@@ -1,0 +1,42 @@
+"""Load (issue 15): the parent's memory does not grow with the run records of a sweep.
+
+A fresh process runs 800 trivial runs, each with a 400-float trace in its run file
+(~9 KB a run); the parent's peak RSS over its baseline must stay far below what holding
+every record takes (measured 14.4 MB for these 800). The 10 000-run figures are
+in benchmarks/bench_engine_load.py and docs/results/reliability.md.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+_CHILD = r"""
+import json, resource, sys
+import numpy as np
+from skinny_mj.experiment import Experiment, Row, run_sweep
+
+def run_one(row, seed):
+    return {"x": float(seed % 97), "trace": np.random.default_rng(seed).normal(size=400)}
+
+exp = Experiment("load", tuple(Row(f"r{i}") for i in range(5)), run_one, runs=160)
+rss = lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+warm = Experiment("load", exp.rows, run_one, runs=2)  # imports, first writes; a peak
+run_sweep(warm, sys.argv[1], workers=1, progress=False)  # this small leaves room to grow
+base = rss()
+results = run_sweep(exp, sys.argv[2], workers=1, progress=False)
+print(json.dumps({"growth_mb": rss() - base, "n_ok": results["n_ok"]}))
+"""
+
+
+def test_sweep_memory_does_not_grow_with_its_run_records(tmp_path):
+    env = {**os.environ, "MUJOCO_GL": "disabled", "OMP_NUM_THREADS": "1"}
+    proc = subprocess.run([sys.executable, "-c", _CHILD, str(tmp_path / "warm"),
+                           str(tmp_path / "load")], env=env, capture_output=True, text=True,
+                          check=True)
+    figures = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert figures["n_ok"] == 800
+    # measured: 0.6 MB; holding every record (load_runs) instead: 14.4 MB
+    assert figures["growth_mb"] < 5.0, figures
