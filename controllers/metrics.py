@@ -38,3 +38,49 @@ def position_nrmse(true_signals: np.ndarray, desired: np.ndarray) -> np.ndarray:
 def motor_nrmse(commands: np.ndarray, true_commands: np.ndarray) -> np.ndarray:
     """Motor error (R,): commands (R, T-1, n_dof) vs true commands (T-1, n_dof)."""
     return nrmse(commands, true_commands)
+
+
+# -- motion-imitation metrics beside NRMSE (issue 13) -----------------------------------
+def fraction_within(actual: np.ndarray, target: np.ndarray, tolerance: float) -> np.ndarray:
+    """Per signal, the fraction of steps with |actual - target| <= ``tolerance``.
+
+    Parameters
+    ----------
+    actual : (..., T, n) e.g. produced joint angles, rad.
+    target : broadcastable to ``actual``, e.g. desired (T, n) angles, rad.
+    tolerance : in the signals' unit (5° = ``np.radians(5)`` for angles).
+
+    Returns
+    -------
+    (..., n) fractions in [0, 1].
+    """
+    diff = np.abs(np.asarray(actual, float) - np.asarray(target, float))
+    return np.mean(diff <= tolerance, axis=-2)
+
+
+def rmse_per_signal(actual: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """(..., n) root mean square error over time per signal (e.g. per joint, rad)."""
+    diff = np.asarray(actual, float) - np.asarray(target, float)
+    return np.sqrt(np.mean(diff**2, axis=-2))
+
+
+def timing_lag(actual: np.ndarray, target: np.ndarray, max_lag: int) -> int:
+    """The shift (steps) by which ``actual`` trails ``target``: the lag in
+    [-max_lag, max_lag] maximizing the cross-correlation of the mean-removed signals,
+    summed over signals (positive = actual late).
+
+    Parameters
+    ----------
+    actual, target : (T, n) one run's signals, T > 2 max_lag.
+    max_lag : largest shift tried, steps.
+    """
+    a = np.asarray(actual, float)
+    b = np.broadcast_to(np.asarray(target, float), a.shape)
+    a, b = a - a.mean(axis=0), b - b.mean(axis=0)
+    t = a.shape[0]
+    if t <= 2 * max_lag:
+        raise ValueError(f"timing_lag needs T > 2 max_lag, got T={t}, max_lag={max_lag}")
+    # mean over the overlap (not the sum) so long and short overlaps compare fairly
+    score = [np.mean(a[k:] * b[:t - k]) if k >= 0 else np.mean(a[:t + k] * b[-k:])
+             for k in range(-max_lag, max_lag + 1)]
+    return int(np.argmax(score)) - max_lag

@@ -279,23 +279,52 @@ def _descendants(root: int) -> list[int]:
 
 
 # -- the command ------------------------------------------------------------------------
-def run(quick: bool = False, workers: int | None = None) -> dict:
-    """Every figure; ``quick`` = shorter timings, fewer trials, no ``paper_e_full_s``."""
+#: The figures :func:`run` measures, in order (its ``progress`` is called with each).
+RUN_STEPS = ("esn_run_vs_reservoirpy", "control_step_over_physics", "lockstep_speedup",
+             "fast_vs_naive", "mackey_glass", "paper_e_full_s")
+
+
+def run(quick: bool = False, workers: int | None = None,
+        progress: Callable[[str], None] | None = None) -> dict:
+    """Every figure; ``quick`` = shorter timings, fewer trials, no ``paper_e_full_s``.
+    ``progress(name)`` is called before each of :data:`RUN_STEPS` (for a bar)."""
+    tick = progress or (lambda name: None)
     reps = 2 if quick else 5
     steps = 100 if quick else 312
     figures: dict[str, Any] = {"load_avg_start": os.getloadavg()}
+    tick(RUN_STEPS[0])
     figures["esn_run_vs_reservoirpy"] = [
         esn_run_vs_reservoirpy(n, 300 if quick else 1000, reps) for n in (200, 1000)]
+    tick(RUN_STEPS[1])
     figures["control_step_over_physics"] = control_step_over_physics(steps, reps)
+    tick(RUN_STEPS[2])
     figures["lockstep_speedup"] = lockstep_speedup(1, 1 if quick else 2)
+    tick(RUN_STEPS[3])
     figures["fast_vs_naive"] = fast_vs_naive(steps, reps)
+    tick(RUN_STEPS[4])
     figures["mackey_glass"] = mackey_glass(1000, 2 if quick else 10)
+    tick(RUN_STEPS[5])
     figures["paper_e_full_s"] = ({"skipped": "--quick"} if quick
                                  else paper_e_full_s(workers))
     figures["load_avg_end"] = os.getloadavg()
     figures["cpu_count"] = os.cpu_count()
     figures["summary"] = summary(figures)
     return figures
+
+
+def run_with_bar(quick: bool = False, workers: int | None = None, show: bool = True) -> dict:
+    """:func:`run` with a tqdm bar over :data:`RUN_STEPS` on stderr (``show``)."""
+    import sys
+
+    from tqdm import tqdm
+
+    with tqdm(total=len(RUN_STEPS), desc="bench", unit="figure", file=sys.stderr,
+              disable=not show, leave=False) as bar:
+        def tick(name: str) -> None:
+            bar.set_postfix_str(name)  # the steps before ``name`` are done
+            bar.update(RUN_STEPS.index(name) - bar.n)
+
+        return run(quick=quick, workers=workers, progress=tick)
 
 
 def summary(figures: dict) -> dict[str, dict]:

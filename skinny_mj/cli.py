@@ -35,11 +35,14 @@ def _add_movement_args(p: argparse.ArgumentParser, *, default: str | None = "ymc
         default=default,
         required=default is None,
         help="movement name (see `skinny trajectory list`) or a file: .npz/.csv trajectory, "
-        ".amc (with --asf) or .bvh motion capture (default: %(default)s)",
+        f".amc (with --asf) or .bvh motion capture (default: {default})",
     )
     p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc trajectory")
     p.add_argument("--speed", type=float, default=1.0, help="speed factor, e.g. 0.5 or 1.5")
     p.add_argument("--reps", type=_positive_int, default=1, help="repetitions of the movement")
+    p.add_argument("--retarget", choices=("angles", "positions"), default="angles",
+                   help="motion capture: joint angles, or the subject's normalized segment "
+                   "vectors as desired positions (default: %(default)s)")
 
 
 def _add_plant_args(p: argparse.ArgumentParser) -> None:
@@ -48,8 +51,25 @@ def _add_plant_args(p: argparse.ArgumentParser) -> None:
         "--signals",
         choices=("joint", "cartesian"),
         default="cartesian",
-        help="position signals the controller sees (default: %(default)s)",
+        help="position signals the controller sees (default: cartesian)",
     )
+
+
+_UNSET = object()
+
+
+def given_options(argv: Sequence[str]) -> set[str]:
+    """The option dests ``argv`` sets explicitly (not by default): ``--config`` fills
+    only the others from its file, so a default never overrides a file's field.
+
+    ``argv`` is parsed again with every sub-command's defaults set to a sentinel
+    (``set_defaults``): the dests that do not hold it were on the command line.
+    """
+    dests = set(vars(build_parser().parse_args(argv)))
+    parser = build_parser()
+    for sub in parser.subcommands.values():
+        sub.set_defaults(**dict.fromkeys(dests, _UNSET))
+    return {k for k, v in vars(parser.parse_args(argv)).items() if v is not _UNSET}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -74,6 +94,11 @@ def build_parser() -> argparse.ArgumentParser:
     _add_plant_args(p)
     _add_movement_args(p)
     p.add_argument("--method", choices=("original", "new", "true-target"), default="new")
+    p.add_argument("--actuation", choices=("velocity", "torque"), default="velocity",
+                   help="velocity servo (the thesis's) or the torque body with mass and "
+                   "gravity (ESN inverse dynamics, PD teacher; issue 14)")
+    p.add_argument("--gravity-feedforward", action="store_true",
+                   help="torque: add the gravity (bias) torque to the command, not learned")
     p.add_argument("--beta", type=float, default=0.1, help="β of the new method, in (0, 1]")
     p.add_argument("--cycles", type=_positive_int, help="learning cycles per epoch")
     p.add_argument("--epochs", type=_positive_int, default=10)
@@ -82,9 +107,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--noise", type=float, help="reservoir noise level ν (default by method)")
     p.add_argument("--readout", choices=("pinv", "ridge"), default="pinv")
     p.add_argument("--ridge", type=float, default=1e-6, help="λ for --readout ridge")
+    p.add_argument("--test-noise", action="store_true",
+                   help="reservoir noise on during the test (the thesis's toolbox)")
+    p.add_argument("--u-error-gain", type=float, default=1.0, help="scalar on u_error")
+    p.add_argument("--tt-input-noise", type=_nonnegative_float, default=0.0,
+                   help="SD of noise on the true-target's teacher-forced inputs")
     p.add_argument("--sensor-noise", type=_nonnegative_float, default=0.01)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, help="output folder (default: results/train/<time>)")
+    p.add_argument("--config", type=Path, help="repeat a run: its metrics.json (or a bare "
+                   "TrainConfig JSON); flags given as well override its fields")
+    p.add_argument("--preset", choices=("general",), help="a named configuration; flags "
+                   "given as well override its fields. general: the inverse model for unseen "
+                   "movements (issue 13): 2D, joint-angle signals, 15 s of motor babbling "
+                   "(random minimum-jerk moves over every joint's whole range, 1-8 rad/s), "
+                   "full scale 4x its fastest speed, paper E exp. 5 schedule; of 12 training "
+                   "sets in `skinny experiment generalization` it had the lowest error on "
+                   "real dance it never saw (position NRMSE 0.009 on CMU md_02, 10 seeds). "
+                   "Then: skinny test --model M --trajectory CLIP.amc --asf SKELETON.asf")
 
     p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
     p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny train`")
@@ -96,6 +136,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("trajectory", help="list or export movements")
     tsub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
     tsub.add_parser("list", help="list the built-in movements")
+    w = tsub.add_parser("show", help="a movement's statistics (still steps, peak speeds, "
+                        "unreachable targets, tremor band)")
+    w.add_argument("name")
+    w.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    w.add_argument("--asf", type=Path)
+    w.add_argument("--retarget", choices=("angles", "positions"), default="angles")
     e = tsub.add_parser("export", help="write a movement to .npz or .csv")
     e.add_argument("name")
     e.add_argument("--dof", type=int, choices=(4, 8), default=4)
@@ -122,6 +168,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the networks' position signals (default: the paper's)")
     p.add_argument("--rows", help="comma-separated row ids and groups to run (default: all); "
                    "seeds are the full sweep's")
+    p.add_argument("--config", type=Path, help="repeat a sweep: its config.json (options, "
+                   "rows, runs); flags given as well override them")
 
     p = sub.add_parser("bench", help="measure the fast path: ratios vs reservoirpy, physics, "
                        "the naive loop (prints a table)")
@@ -137,22 +185,52 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--width", type=_positive_int, default=640)
     p.add_argument("--height", type=_positive_int, default=480)
     p.add_argument("--out", type=Path, required=True)
+
+    p = sub.add_parser("view", help="open a recording (or a results folder's) in the rerun "
+                       "viewer; headless, print the command")
+    p.add_argument("path", type=Path, help="a .rrd file or a folder holding some")
+    p.add_argument("--web", action="store_true",
+                   help="serve the web viewer on 127.0.0.1 (this machine only)")
+    p.add_argument("--web-port", type=_positive_int, default=9090, help="HTTP port for --web")
+    p.add_argument("--grpc-port", type=_positive_int, default=9876,
+                   help="port the web viewer reads the data from, for --web")
+    p.add_argument("--dry-run", action="store_true", help="print the viewer command only")
+
+    for name in ("demo", "train", "experiment", "bench"):  # the long commands
+        sub.choices[name].add_argument(
+            "--quiet", "-q", action="store_true",
+            help="no progress bar (also off when stderr is not a terminal)")
+    parser.subcommands = sub.choices  # name -> sub-command parser (for given_options)
     return parser
+
+
+def _one_line(err: BaseException) -> str:
+    return " ".join(str(err).split()) or type(err).__name__
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
+    if getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None:
+        args.given = given_options(argv)  # which flags override file/preset
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
     os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
     from skinny_mj import commands
 
     handler = getattr(commands, f"cmd_{args.command}")
     try:
+        from skinny_mj.preflight import check_gl
+
+        check_gl()  # a MUJOCO_GL mujoco refuses would fail at its import, as a traceback
         return int(handler(args) or 0)
     except SkinnyInputError as err:
-        print(f"skinny {args.command}: error: {err}", file=sys.stderr)
+        print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
         return 2
+    except OSError as err:  # the machine, not the input: unwritable or full disk, no GL,
+        # no model folder, an unreachable scheduler, a worker killed (SkinnyEnvironmentError)
+        print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +17,7 @@ import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
+from skinny_mj.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
 
 DEFAULT_RESULTS = Path("results")
 
@@ -27,13 +29,18 @@ def _timestamped(kind: str) -> Path:
 
 
 def _out_dir(args: argparse.Namespace, kind: str) -> Path:
-    return Path(args.out) if args.out is not None else _timestamped(kind)
+    """``--out`` (default ``results/<kind>/<time>``), checked writable before the work
+    (a read-only, full or file-blocked folder is an environment error, exit 1)."""
+    from skinny_mj.preflight import check_writable
+
+    return check_writable(Path(args.out) if args.out is not None else _timestamped(kind))
 
 
 def _load_movement(args: argparse.Namespace, dof: int):
     from skinny_mj.trajectories import load_movement
 
-    return load_movement(args.trajectory, dof, asf=args.asf, speed=args.speed, reps=args.reps)
+    return load_movement(args.trajectory, dof, asf=args.asf, speed=args.speed, reps=args.reps,
+                         retarget=getattr(args, "retarget", "angles"))
 
 
 def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_angles, commands,
@@ -51,19 +58,25 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
     )
 
 
+def _progress_on(quiet: bool) -> bool:
+    """Progress bars only for a person watching: not with --quiet, not into a log."""
+    return not quiet and sys.stderr.isatty()
+
+
 class _Progress:
     """A tqdm bar on a terminal; silent otherwise (logs stay clean)."""
 
-    def __init__(self, desc: str):
+    def __init__(self, desc: str, quiet: bool = False):
         self.bar = None
         self.desc = desc
+        self.quiet = quiet
 
     def __call__(self, done: int, total: int) -> None:
         if self.bar is None:
             from tqdm import tqdm
 
             self.bar = tqdm(total=total, desc=self.desc, unit="cycle", file=sys.stderr,
-                            disable=not sys.stderr.isatty(), leave=False)
+                            disable=not _progress_on(self.quiet), leave=False)
         self.bar.update(done - self.bar.n)
 
     def close(self) -> None:
@@ -112,23 +125,10 @@ def cmd_track(args: argparse.Namespace) -> int:
 
 
 # -- train / demo / test ----------------------------------------------------------------
-def _train_config(args: argparse.Namespace):
-    from skinny_mj.training import TrainConfig
-
-    if not 0.0 < args.speed <= 10.0:
-        raise SkinnyInputError(f"--speed must be in (0, 10], got {args.speed}")
-    return TrainConfig(
-        dof=args.dof, signals=args.signals, trajectory=str(args.trajectory),
-        asf=None if args.asf is None else str(args.asf), speed=args.speed, reps=args.reps,
-        method=args.method, beta=args.beta, cycles=args.cycles, epochs=args.epochs,
-        reservoir=args.reservoir, spectral_radius=args.spectral_radius, noise=args.noise,
-        readout=args.readout, ridge=args.ridge, sensor_noise=args.sensor_noise,
-    )
-
-
-def _write_run(out: Path, outcome, title: str) -> None:
+def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> None:
     """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png; for a
-    failed (diverged) run only metrics.json, which says why."""
+    failed (diverged) run only metrics.json, which says why. The model's metadata says
+    what it was trained on (``training``: movement, its pieces, steps, seconds, preset)."""
     from skinny_mj.plots import learning_curve_png
     from skinny_mj.recording import record_test
 
@@ -145,21 +145,38 @@ def _write_run(out: Path, outcome, title: str) -> None:
     record_test(out / "run.rrd", outcome, title)
     outcome.esn.save(out / "model.npz", metadata={
         "dof": cfg.dof, "signals": cfg.signals, "sensor_noise": cfg.sensor_noise,
+        "actuation": cfg.actuation,
         "max_speed_rad_s": [float(v) for v in outcome.max_speed_rad_s],
         "trained_on": cfg.trajectory, "config": outcome.metrics["config"],
+        "training": _training_metadata(outcome, preset),
     })
     atomic_write_json(out / "metrics.json", outcome.metrics)
 
 
-def _train_and_write(cfg, seed: int, out: Path, title: str):
+def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
+    """What a model was trained on (issue 13): the movement, its pieces (a ``set:``),
+    steps and seconds per cycle, repetitions, the seed and the preset."""
+    from skinny_mj.trajectories.library import SET_PREFIX, set_pieces
+
+    cfg, steps = outcome.config, int(outcome.metrics["steps_per_cycle"])
+    name = str(cfg.trajectory)
+    pieces = set_pieces(name) if name.lower().startswith(SET_PREFIX) else [name]
+    return {"movement": name, "pieces": pieces, "asf": cfg.asf, "speed": cfg.speed,
+            "reps": cfg.reps, "steps_per_cycle": steps,
+            "seconds_per_cycle": steps * outcome.test.trajectory.dt,
+            "seed": int(outcome.seed), "preset": preset}
+
+
+def _train_and_write(cfg, seed: int, out: Path, title: str, quiet: bool = False,
+                     preset: str | None = None):
     from skinny_mj.training import train
 
-    bar = _Progress(title)
+    bar = _Progress(title, quiet)
     try:
         outcome = train(cfg, seed, progress=bar)
     finally:
         bar.close()
-    _write_run(out, outcome, title)
+    _write_run(out, outcome, title, preset)
     return outcome
 
 
@@ -168,9 +185,12 @@ def _fmt(v: float | None) -> str:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    cfg = _train_config(args)
+    from skinny_mj.config_files import train_config
+
+    cfg, seed = train_config(args)
     out = _out_dir(args, "train")
-    outcome = _train_and_write(cfg, args.seed, out, f"{cfg.method} on {cfg.trajectory}")
+    outcome = _train_and_write(cfg, seed, out, f"{cfg.method} on {cfg.trajectory}",
+                               quiet=args.quiet, preset=getattr(args, "preset", None))
     m = outcome.metrics
     if outcome.failed:
         print(f"skinny train: run failed: {m.get('fail_reason')} (details in {out}/metrics.json)",
@@ -191,7 +211,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print("paper E experiment 5 - new method, beta = 0.1, 3 learning cycles x 10 epochs, "
           "feedback gain K 1 -> 0, then a test with the feedback controller off.")
     start = time.perf_counter()
-    outcome = _train_and_write(cfg, args.seed, out, "demo: paper E exp. 5")
+    outcome = _train_and_write(cfg, args.seed, out, "demo: paper E exp. 5", quiet=args.quiet)
     wall = time.perf_counter() - start
     m = outcome.metrics
     paper = registry.get("paper-e").PAPER_TABLE_2["5"]
@@ -223,7 +243,7 @@ def cmd_test(args: argparse.Namespace) -> int:
     try:
         meta = read_metadata(path)
         esn = ESN.load(path)
-    except (OSError, ValueError, KeyError) as err:
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as err:  # BadZipFile: "PK.."
         raise SkinnyInputError(f"not a model written by `skinny train` ({err})",
                                path=path) from None
     if not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
@@ -247,6 +267,12 @@ def cmd_test(args: argparse.Namespace) -> int:
         "fail_reason": test.fail_reason,
         "test": {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse},
     }
+    if not test.failed and cfg.actuation == "velocity":  # issue 13: DTW, within 5°, lag
+        from skinny_mj.imitation import imitation_metrics, saturation
+
+        # beside "test" (which stays the train command's own test dict, key for key)
+        metrics["imitation"] = {**imitation_metrics(test, dof),
+                                "saturated": saturation(traj.angles, traj.dt, run.max_speed_rad_s)}
     out = _out_dir(args, "test")
     ro = test.rollout
     _recording(out / "run.rrd", dof=dof, signals=signals, desired_angles=traj.angles,
@@ -259,6 +285,12 @@ def cmd_test(args: argparse.Namespace) -> int:
         return 1
     print(f"test on {traj.name}: position NRMSE {_fmt(test.position_nrmse)}, motor NRMSE "
           f"{_fmt(test.motor_nrmse)} -> {out}")
+    extra = metrics.get("imitation", {})
+    if extra:
+        dtw = extra.get("dtw_nrmse")
+        print(f"  DTW NRMSE {'n/a (pip install dtaidistance)' if dtw is None else f'{dtw:.4f}'}"
+              f", within 5°: {100 * extra['within5']:.1f} % of steps, lag {extra['lag_s']:+.2f}"
+              f" s, commands beyond full scale: {100 * extra['saturated']:.1f} %")
     return 0
 
 
@@ -271,6 +303,17 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
             traj = get(name, 4)
             print(f"{name:14} {len(traj):5d} steps  {traj.duration_s:6.2f} s")
         print("speed variants: NAME@0.5, NAME@1.5 (or --speed); repetitions: --reps N")
+        return 0
+    if args.action == "show":
+        from skinny_mj.trajectories.human import movement_stats
+
+        ns = argparse.Namespace(trajectory=args.name, asf=args.asf, speed=1.0, reps=1,
+                                retarget=args.retarget)
+        traj, _ = _load_movement(ns, args.dof)
+        print(f"{traj.name} (dof {args.dof}, explicit desired signals: "
+              f"{sorted(traj.desired) if traj.desired else 'none'})")
+        for key, value in movement_stats(traj).items():
+            print(f"  {key:32} {value:.4g}")
         return 0
     ns = argparse.Namespace(trajectory=args.name, asf=args.asf, speed=args.speed, reps=args.reps)
     traj, _ = _load_movement(ns, args.dof)
@@ -314,12 +357,20 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     options = {"quick": bool(args.quick), "movement": args.movement,
                "asf": None if args.asf is None else str(args.asf), "dof": args.dof,
                "signals": args.signals}
+    from skinny_mj import config_files as cf  # --config: the file's options, rows, runs
+
+    options, rows, runs, invocation = cf.apply_sweep_config(args, options, rows)
     exp = module.build(**options)
+    cf.check_experiment(invocation, exp)
     out = Path(args.out) if args.out is not None else default_out_dir(exp.name)
+    from skinny_mj.preflight import check_writable
+
+    check_writable(out)  # before the sweep, not after its first run
     start = time.perf_counter()
-    results = run_sweep(exp, out, rows=rows, runs=args.runs, workers=args.workers,
-                        resume=args.resume, scheduler=args.scheduler, progress=True,
-                        options=options)
+    results = run_sweep(exp, out, rows=rows, runs=runs, workers=args.workers,
+                        resume=args.resume, scheduler=args.scheduler,
+                        progress=_progress_on(args.quiet), options=options)
+    cf.warn_if_rebuilt_differs(invocation, out)
     wall = time.perf_counter() - start
     claims = module.report(results, out)
     table = (out / "table.md").read_text()
@@ -338,7 +389,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from skinny_mj import bench
     from skinny_mj.io import atomic_write_json
 
-    figures = bench.run(quick=args.quick, workers=args.workers)
+    figures = bench.run_with_bar(quick=args.quick, workers=args.workers,
+                                 show=_progress_on(args.quiet))
     print(bench.table(figures))
     if args.out is not None:
         atomic_write_json(Path(args.out), figures)

@@ -10,12 +10,20 @@ grouped as the thesis's papers vary it:
 - movement: ``trajectory`` (+ ``asf``), ``speed``, ``reps``, ``max_speed_from`` (the
   movement whose speeds set full scale);
 - ESN: ``reservoir``, ``spectral_radius``, ``noise``, ``readout``, ``ridge``,
-  ``inputs`` (desired + sensed, or sensed only as in paper B);
+  ``ridge_select`` (lambda per FEL fit from a log grid, on a validation cycle:
+  :mod:`controllers.ridge_select`), ``inputs`` (desired + sensed, or sensed only as in paper B);
 - architecture: ``delay`` (steps on the sensed input to the internal models, paper A),
   ``forward`` (a forward model: parallel, serial or hybrid, paper A) and its size;
 - schedule: ``method`` (original, new β, true target), ``beta``, ``cycles``,
   ``epochs``, the feedback gain schedule (linear 1 → 0, ×factor per epoch, fixed),
-  ``tt_cycles``, and ``test_washout_cycles`` (unscored cycles before the scored test).
+  ``tt_cycles``, and ``test_washout_cycles`` (unscored cycles before the scored test);
+- torque (``actuation="torque"``, issue 14; :mod:`skinny_mj.torque_training`): the
+  ``feedback`` teacher ("pd"; "computed-torque" for the controller alone),
+  ``gravity_feedforward`` (bias torque / limit added to the command, not learned),
+  ``velocity_inputs`` (None: on for torque) and the test plant's ``test_payload_kg``
+  (in the right hand) and ``test_mass_scale`` (every arm link);
+- test: ``test_gain`` (K at test: 0 = the ESN alone; > 0 = the feedback left on);
+  ``method="none"`` trains nothing, so the test is the feedback controller alone.
 
 A paper's row is ``dataclasses.replace(base, ...)`` of this one dataclass; the
 defaults are paper E's experiment 5.
@@ -35,15 +43,17 @@ __all__ = ["TrainConfig", "relative_cost", "with_overrides", "check_dof", "check
            "check_actuation", "METHODS", "SIGNALS", "ACTUATIONS", "DEFAULT_NOISE",
            "PAPER_CYCLES_FOR_BETA"]
 
-METHODS = ("original", "new", "true-target")
+METHODS = ("original", "new", "true-target", "none")
+FEEDBACKS = ("pd", "computed-torque")
 INPUTS = ("desired+sensed", "sensed")
 FORWARD_MODES = ("parallel", "serial", "hybrid")
 GAIN_SCHEDULES = ("linear", "multiplicative", "fixed")
 ARMS = ("right", "left")
+RETARGETS = ("angles", "positions")
 #: Learning cycles per epoch the paper derived from its Figure 3 (paper E, Table 1).
 PAPER_CYCLES_FOR_BETA = {0.3: 2, 0.1: 3, 0.05: 6}
 #: Reservoir noise the paper chose per method (paper E, Fig. 5).
-DEFAULT_NOISE = {"original": 0.03, "new": 0.2, "true-target": 0.2}
+DEFAULT_NOISE = {"original": 0.03, "new": 0.2, "true-target": 0.2, "none": 0.0}
 
 
 def _finite_at_least(value: float, low: float) -> bool:
@@ -69,12 +79,14 @@ class TrainConfig:
     speed: float = 1.0
     reps: int = 1
     max_speed_from: str | None = None  # movement whose speeds set full scale (None: this one)
+    full_scale_factor: float = 2.0  # full scale = this x the fastest speed per DOF (issue 13)
     # ESN
     reservoir: int = 200
     spectral_radius: float = 0.5
     noise: float | None = None  # reservoir noise ν; None: DEFAULT_NOISE[method]
     readout: str = "pinv"
     ridge: float = 1e-6
+    ridge_select: bool = False  # ridge: lambda per run and fit on a validation cycle (issue 16)
     inputs: str = "desired+sensed"
     # architecture (paper A)
     delay: int = 0  # steps by which the internal models' sensed input lags
@@ -90,6 +102,18 @@ class TrainConfig:
     gain_value: float = 0.65  # fixed: K (paper A)
     tt_cycles: int = 50  # true-target with β < 1: cycles (paper D: 50 rounds); β = 1: one fit
     test_washout_cycles: int = 0  # unscored K = 0 cycles before the scored test (papers B, C)
+    test_gain: float = 0.0  # K at test: 0 = the ESN alone, > 0 = the feedback left on
+    # torque (actuation="torque" only; skinny_mj.torque_training)
+    feedback: str = "pd"  # FEL's teacher; "computed-torque" (PD + ID): the controller alone
+    gravity_feedforward: bool = False  # add qfrc_bias / limit to the command (not learned)
+    velocity_inputs: bool | None = None  # [qd_d(t+1); qd(t)] / v_max inputs; None: torque
+    test_payload_kg: float = 0.0  # point mass at the right hand's CoM in the test plant
+    test_mass_scale: float = 1.0  # every arm link's mass and inertia x this at test
+    # the toolbox's protocol (issue 12); defaults are today's behaviour, bit for bit
+    test_noise: bool = False  # reservoir noise during the K = 0 test (the toolbox: on)
+    u_error_gain: float = 1.0  # scalar on the feedback controller's u_error (thesis: unstated)
+    tt_input_noise: float = 0.0  # Gaussian SD on the true-target's teacher-forced inputs
+    retarget: str = "angles"  # motion capture: by joint angles, or "positions" (segment vectors)
 
     def __post_init__(self) -> None:
         check_dof(self.dof)
@@ -113,7 +137,13 @@ class TrainConfig:
             (self.readout in ("pinv", "ridge"),
              f"--readout must be pinv or ridge, got {self.readout!r}"),
             (_finite_at_least(self.ridge, 0), f"--ridge must be >= 0, got {self.ridge}"),
+            (not self.ridge_select or (self.readout == "ridge" and self.method in
+                                       ("original", "new") and self.actuation == "velocity"),
+             "ridge_select chooses the ridge lambda of FEL fits on a validation cycle: it "
+             "needs readout='ridge', method original or new, and the velocity body"),
             (self.reps >= 1, f"--reps must be >= 1, got {self.reps}"),
+            (_finite_at_least(self.full_scale_factor, 1e-9) and self.full_scale_factor > 0,
+             f"full_scale_factor must be > 0, got {self.full_scale_factor}"),
             (_finite_at_least(self.speed, 0) and 0 < self.speed <= 10,
              f"--speed must be in (0, 10], got {self.speed}"),
             (self.plant in ("batch", "env"), f"plant must be 'batch' or 'env', got {self.plant!r}"),
@@ -129,11 +159,43 @@ class TrainConfig:
             (self.tt_cycles >= 1, f"tt_cycles must be >= 1, got {self.tt_cycles}"),
             (self.test_washout_cycles >= 0,
              f"test washout cycles must be >= 0, got {self.test_washout_cycles}"),
+            (isinstance(self.test_noise, bool), f"test_noise must be a bool, got "
+                                                 f"{self.test_noise!r}"),
+            (_finite_at_least(self.u_error_gain, 0) and self.u_error_gain > 0,
+             f"--u-error-gain must be > 0, got {self.u_error_gain}"),
+            (_finite_at_least(self.tt_input_noise, 0),
+             f"--tt-input-noise must be >= 0, got {self.tt_input_noise}"),
+            (self.retarget in RETARGETS,
+             f"--retarget must be one of {RETARGETS}, got {self.retarget!r}"),
             (self.leading_arm is None or self.leading_arm in ARMS,
              f"leading arm must be None or one of {ARMS}, got {self.leading_arm!r}"),
             (self.method != "true-target" or (self.forward is None and self.delay == 0
                                               and self.leading_arm is None),
              "the true-target architecture takes no forward model, delay or leading arm"),
+            (_finite_at_least(self.test_gain, 0), f"test gain must be >= 0, got {self.test_gain}"),
+            (self.method != "none" or self.test_gain > 0,
+             "method 'none' tests the feedback controller alone: it needs test_gain > 0"),
+            (self.feedback in FEEDBACKS,
+             f"feedback must be one of {FEEDBACKS}, got {self.feedback!r}"),
+            (self.feedback == "pd" or self.method == "none", "the computed-torque controller "
+             "runs alone (method 'none'); FEL's teacher is the PD part"),
+            (self.actuation == "torque" or (
+                self.feedback == "pd" and not self.gravity_feedforward
+                and not self.velocity_inputs and self.test_payload_kg == 0
+                and self.test_mass_scale == 1),
+             "feedback, gravity_feedforward, velocity_inputs, test_payload_kg and "
+             "test_mass_scale are torque settings: use actuation='torque'"),
+            (self.actuation != "torque" or (self.forward is None and self.delay == 0
+                                            and self.leading_arm is None
+                                            and self.inputs == "desired+sensed"),
+             "the torque body runs without a forward model, delay, leading arm or "
+             "sensed-only inputs"),
+            (not self.gravity_feedforward or self.method in ("original", "new"),
+             "gravity_feedforward goes with feedback-error learning (original or new)"),
+            (_finite_at_least(self.test_payload_kg, 0),
+             f"test payload must be >= 0 kg, got {self.test_payload_kg}"),
+            (_finite_at_least(self.test_mass_scale, 0) and self.test_mass_scale > 0,
+             f"test mass scale must be > 0, got {self.test_mass_scale}"),
             (self.plant != "env" or (self.leading_arm is None and self.forward is None),
              "the dm_control plant (plant='env') runs neither paper B's forced arm nor a "
              "forward model; use plant='batch'"),
@@ -145,6 +207,12 @@ class TrainConfig:
     @property
     def noise_level(self) -> float:
         return DEFAULT_NOISE[self.method] if self.noise is None else self.noise
+
+    @property
+    def uses_velocity_inputs(self) -> bool:
+        """Velocity inputs on: as set, else on for the torque body."""
+        return self.actuation == "torque" if self.velocity_inputs is None \
+            else bool(self.velocity_inputs)
 
     @property
     def learning_cycles(self) -> int:
@@ -176,7 +244,25 @@ class TrainConfig:
         unknown = sorted(set(d) - names - {"learning_cycles", "noise_level"})
         if unknown:
             raise SkinnyInputError(f"unknown training config field(s) {unknown}")
-        return cls(**{k: v for k, v in d.items() if k in names})
+        fields = {k: v for k, v in d.items() if k in names}
+        for f in dataclasses.fields(cls):  # a file's "reps": null must not reach a `>=`
+            if f.name in fields and not _has_type(fields[f.name], str(f.type)):
+                raise SkinnyInputError(f"bad training config (field {f.name!r} must be "
+                                       f"{f.type}, got {fields[f.name]!r})")
+        return cls(**fields)
+
+
+_TYPES = {"int": (int,), "float": (int, float), "str": (str,), "bool": (bool,),
+          "None": (type(None),)}
+
+
+def _has_type(value: Any, annotation: str) -> bool:
+    """``value`` fits a field annotated ``annotation`` ("int", "float | None", ...); a
+    bool is no int or float here (JSON true is not 1)."""
+    kinds = [k.strip() for k in annotation.split("|")]
+    if isinstance(value, bool):
+        return "bool" in kinds
+    return any(isinstance(value, _TYPES.get(k, (object,))) for k in kinds)
 
 
 def relative_cost(cfg: TrainConfig) -> float:
@@ -184,7 +270,7 @@ def relative_cost(cfg: TrainConfig) -> float:
     movement (FEL: epochs x (learning cycles + washout + evaluation); true target: its
     cycles; x reps; + the test), x N / 200 for reservoirs above 200 units."""
     cycles = cfg.tt_cycles if cfg.method == "true-target" \
-        else cfg.epochs * (cfg.learning_cycles + 2)
+        else 0 if cfg.method == "none" else cfg.epochs * (cfg.learning_cycles + 2)
     return (cycles * cfg.reps + 1 + cfg.test_washout_cycles) * max(1.0, cfg.reservoir / 200)
 
 

@@ -32,6 +32,7 @@ import numpy as np
 from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path
+from skinny_mj.preflight import check_free_space
 
 DESIRED_RGB = (40, 120, 230)
 ACTUAL_RGB = (240, 120, 30)
@@ -41,6 +42,10 @@ TORSO_RGB = (170, 170, 170)
 PELVIS_HEIGHT_M = 0.95
 HEAD_CENTRE_M = (0.0, 0.0, 1.64)
 HEAD_HALF_SIZES_M = (0.08, 0.095, 0.115)
+#: The 3D view's eye (world m): in front of Skinny, level with his chest, looking at the
+#: middle of what the arms can reach (x within +-0.76 m, z 0.87 .. 1.93 m at the wrists).
+FRONT_EYE_M = (0.0, -3.6, 1.45)
+LOOK_TARGET_M = (0.0, 0.0, 1.35)
 _ROLE_RGB = {"desired": DESIRED_RGB, "actual": ACTUAL_RGB, "sensed": SENSED_RGB,
              "command": COMMAND_RGB}
 
@@ -96,7 +101,12 @@ def _blueprint(has_curves: bool, application_id: str):
         tabs.append(named(rrb.TimeSeriesView(origin="/curves", name="learning curves"),
                           "curves"))
     tabs.append(named(rrb.TextDocumentView(origin="/info", name="info"), "info"))
-    pose = named(rrb.Spatial3DView(origin="/pose", name="pose"), "pose")
+    # Without an eye the viewer frames the bounding box from above-behind, zoomed onto
+    # the head with the arms off screen; from the front (Skinny faces -y) at a distance
+    # that fits both arms fully stretched up and out in the tall, narrow pose panel.
+    eye = rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=FRONT_EYE_M,
+                            look_target=LOOK_TARGET_M, eye_up=(0.0, 0.0, 1.0))
+    pose = named(rrb.Spatial3DView(origin="/pose", name="pose", eye_controls=eye), "pose")
     series = named(rrb.Vertical(right, left, named(rrb.Tabs(*tabs), "tabs")), "series")
     root = named(rrb.Horizontal(pose, series, column_shares=[2, 3]), "root")
     return rrb.Blueprint(root, collapse_panels=False)
@@ -160,6 +170,7 @@ def write_recording(
     metadata: Mapping[str, Any] | None = None,
     curves: Mapping[str, np.ndarray] | None = None,
     application_id: str = "skinny-mj",
+    torques: Mapping[str, np.ndarray] | None = None,
 ) -> Path:
     """Write one run as an ``.rrd`` file (atomically) with a default blueprint.
 
@@ -180,6 +191,10 @@ def write_recording(
     curves : name -> (E,) per-epoch values, or (R, E) for R runs; logged on timeline
         ``epoch`` under ``/curves/<name>`` (``/curves/<name>/run_<r>`` for 2-D).
     application_id : rerun application id.
+    torques : torque body (issue 14), optional: ``commanded_nm`` and ``applied_nm``
+        (T-1, n_dof) N m (command x limit; the motors' ``qfrc_actuator``),
+        ``gravity_nm`` (T, n_dof) the bias torque of each state, ``limit_nm`` (n_dof,);
+        logged under ``/torques/<dof>/{commanded,applied,gravity,+limit,-limit}``.
 
     Returns
     -------
@@ -218,11 +233,18 @@ def write_recording(
     )
 
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # A recording is ~6 bytes per logged value (0.53 MB for YMCA in 2D); x4 plus slack.
+    logged = [desired_angles, actual_angles, commands, desired_signals, actual_signals,
+              sensed_signals, *curve_arrays.values(), *(torques or {}).values()]
+    check_free_space(path.parent, (8 << 20) + 4 * sum(np.asarray(a).nbytes for a in logged
+                                                       if a is not None))
     with atomic_path(path) as tmp:
         rec = rr.RecordingStream(application_id, recording_id=rec_id, send_properties=False)
         rec.set_log_time_enabled(False)
         rec.set_log_tick_enabled(False)
-        rec.save(tmp, default_blueprint=_blueprint(bool(curve_arrays), application_id))
+        _io(path, rec.save, tmp, default_blueprint=_blueprint(bool(curve_arrays),
+                                                            application_id))
         if title:
             rec.send_recording_name(title)
         rec.log("/info", rr.TextDocument(info, media_type=rr.MediaType.MARKDOWN), static=True)
@@ -243,6 +265,8 @@ def write_recording(
             for role, sig in sig_roles:
                 _log_style(rec, f"/signals/{name}/{role}", role, _ROLE_RGB[role])
                 _send_series(rec, f"/signals/{name}/{role}", sig[:, j], steps, dt)
+        if torques is not None:
+            _log_torques(rec, torques, dof_names, steps, dt)
         _send_pose(rec, "/pose/desired", desired_angles, dof, dt, DESIRED_RGB)
         _send_pose(rec, "/pose/actual", actual_angles, dof, dt, ACTUAL_RGB)
         for name, values in curve_arrays.items():
@@ -252,9 +276,25 @@ def write_recording(
                 rec.send_columns(entity,
                                  indexes=[rr.TimeColumn("epoch", sequence=np.arange(len(row)))],
                                  columns=rr.Scalars.columns(scalars=row))
-        rec.flush()
+        _io(path, rec.flush, timeout_sec=FLUSH_TIMEOUT_S)
         rec.disconnect()
     return path
+
+
+#: Longest wait for rerun's file writer: with no timeout a writer thread that died (a
+#: full disk) can leave flush() waiting forever.
+FLUSH_TIMEOUT_S = 120.0
+
+
+def _io(path: Path, call: Any, *args: Any, **kwargs: Any) -> None:
+    """``call(*args, **kwargs)``, rerun's write failures (a RuntimeError: full disk, dead
+    writer thread, timeout) turned into one-line environment errors naming ``path``."""
+    from skinny_mj.errors import SkinnyEnvironmentError
+
+    try:
+        call(*args, **kwargs)
+    except RuntimeError as exc:
+        raise SkinnyEnvironmentError(f"cannot write the recording {path}: {exc}") from None
 
 
 def _log_style(rec, entity: str, label: str, rgb) -> None:
@@ -310,6 +350,25 @@ def read_recording_series(path: str | Path, entity: str, timeline: str | None = 
     return val[np.argsort(idx, kind="stable")]
 
 
+def _log_torques(rec, torques: Mapping[str, np.ndarray], dof_names: list[str],
+                 steps: np.ndarray, dt: float) -> None:
+    """The torque series of :func:`write_recording` (``torques``), N m."""
+    limit = np.asarray(torques["limit_nm"], float)
+    n = len(steps)
+    series = {"commanded": (np.asarray(torques["commanded_nm"], float), steps[:-1]),
+              "applied": (np.asarray(torques["applied_nm"], float), steps[:-1]),
+              "gravity": (np.asarray(torques["gravity_nm"], float), steps),
+              "+limit": (np.broadcast_to(limit, (n, len(limit))), steps),
+              "-limit": (np.broadcast_to(-limit, (n, len(limit))), steps)}
+    colors = {"commanded": COMMAND_RGB, "applied": ACTUAL_RGB, "gravity": DESIRED_RGB,
+              "+limit": (128, 128, 128), "-limit": (128, 128, 128)}
+    for i, name in enumerate(dof_names):
+        for role, (values, t) in series.items():
+            entity = f"/torques/{name}/{role}"
+            _log_style(rec, entity, f"{role} torque (N m)", colors[role])
+            _send_series(rec, entity, np.ascontiguousarray(values[:, i]), t, dt)
+
+
 def record_test(path: str | Path, outcome: Any, title: str,
                 metadata: Mapping[str, Any] | None = None) -> Path:
     """Write the closed-loop test of a trained run (a
@@ -330,4 +389,5 @@ def record_test(path: str | Path, outcome: Any, title: str,
         commands=ro.commands[0], desired_signals=test.desired,
         actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0], title=title,
         metadata=meta, curves=curves,
+        torques=None if test.torque is None else test.torque["series"],
     )
