@@ -290,6 +290,10 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
     run = build_run(cfg, seeds)
     trained = train_run(run, progress)
     tests = evaluate(run)
+    if len(seeds) > 1 and physics_warnings(run, tests[0]):
+        # the lockstep runs share one MjData, which MuJoCo resets whole when one run
+        # diverges: the batch no longer equals its runs alone, so run them alone
+        raise PhysicsBatchError(f"MuJoCo warnings in a lockstep batch of {len(seeds)} runs")
     return [_outcome(run, trained, r, test, (time.perf_counter() - start) / len(seeds))
             for r, test in enumerate(tests)]
 
@@ -327,6 +331,11 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
     if test.torque is not None:
         metrics["test"]["torque"] = test.torque["metrics"]
         metrics["train_warnings"] = torque.train_warnings(run)
+        n_warnings = physics_warnings(run, test)
+        if n_warnings and not metrics["failed"]:  # MuJoCo reset a diverged simulation
+            metrics.update(failed=True, fail_reason=f"physics diverged: {n_warnings} MuJoCo "
+                           "warning(s) in training or test")
+            metrics["test"].update(position_nrmse=None, motor_nrmse=None)
     if trained.pretrain_prediction_nrmse is not None:
         metrics["pretrain_prediction_nrmse"] = float(trained.pretrain_prediction_nrmse[r])
     metrics.update(
@@ -337,6 +346,19 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
     )
     return TrainOutcome(run.cfg, run.seeds[r], metrics, esn_run(run.esn, r), test,
                         run.max_speed_rad_s)
+
+
+def physics_warnings(run: Run, test: TestOutcome) -> int:
+    """MuJoCo warnings of the torque body's training and test plants (0 for the velocity
+    servo); counted over a lockstep batch's shared simulation."""
+    if test.torque is None:
+        return 0
+    return (torque.train_warnings(run) or 0) + int(test.torque["metrics"]["warnings"])
+
+
+class PhysicsBatchError(RuntimeError):
+    """A lockstep batch whose shared simulation diverged (the engine then runs its seeds
+    one at a time, each failing or not on its own)."""
 
 
 def esn_run(esn: ESN, r: int) -> ESN:

@@ -87,3 +87,19 @@ def test_dynamic_experiment_rows():
     cfg = dynamic.train_config(exp.config, next(r for r in exp.rows
                                                  if r.row_id == "2d-ymca-mass-20-pd"))
     assert cfg.actuation == "torque" and cfg.test_mass_scale == 0.8 and cfg.method == "none"
+
+
+def test_a_diverged_simulation_fails_the_run_and_splits_a_batch(monkeypatch):
+    """MuJoCo resets a diverged simulation (all copies of a batch at once) and only logs a
+    warning: a torque run with warnings is a failed run, never an ok one, and a lockstep
+    batch with warnings is run again one seed at a time by the engine."""
+    from skinny_mj.plant import BatchPlant
+    from skinny_mj.training import PhysicsBatchError
+
+    monkeypatch.setattr(BatchPlant, "warning_count", lambda self: 3)
+    cfg = TrainConfig(actuation="torque", method="none", test_gain=1.0)
+    (out,) = train_batch(cfg, [0])
+    assert out.failed and "physics diverged" in out.metrics["fail_reason"]
+    assert out.metrics["test"]["position_nrmse"] is None
+    with pytest.raises(PhysicsBatchError):
+        train_batch(cfg, [0, 1])
