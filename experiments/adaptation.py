@@ -37,6 +37,7 @@ import numpy as np
 from experiments.claims import claim_lines
 from skinny_mj.config import TrainConfig
 from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.sweep import one_of_batch
 
 NAME = "adaptation"
 CHANGES = ("gain", "offset")
@@ -122,10 +123,7 @@ def summary(cfg: Config, curve: np.ndarray) -> dict:
 
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    (out,) = run_batch(cfg, row, [seed])
-    if isinstance(out, Exception):
-        raise out
-    return out
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
 
 
 def build(quick: bool = False, movement: str | None = None, asf: str | None = None,

@@ -37,6 +37,7 @@ from pathlib import Path
 
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.sweep import one_of_batch
 
 NAME = "dynamic"
 #: controller id -> TrainConfig changes
@@ -138,10 +139,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
 
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    (out,) = run_batch(cfg, row, [seed])
-    if isinstance(out, Exception):
-        raise out
-    return out
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
 
 
 def cost(cfg: Config, row: Row) -> float:

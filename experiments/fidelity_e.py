@@ -22,6 +22,7 @@ from pathlib import Path
 from experiments import paper_e
 from skinny_mj.config import relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.sweep import one_of_batch
 
 NAME = "fidelity-e"
 MD02 = "md_02.amc@start=3,duration=6.26"  # paper E's md_02 excerpt (docs/RESULTS.md)
@@ -99,10 +100,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
 
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    (out,) = run_batch(cfg, row, [seed])
-    if isinstance(out, Exception):
-        raise out
-    return out
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
 
 
 def build(quick: bool = False, movement: str | None = None, asf: str | None = None,

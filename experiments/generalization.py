@@ -43,6 +43,7 @@ import numpy as np
 from skinny_mj import body
 from skinny_mj.experiment import Experiment, Row, RunFailed
 from skinny_mj.imitation import imitation_metrics, saturation  # noqa: F401 (API)
+from skinny_mj.sweep import one_of_batch
 
 NAME = "generalization"
 #: Representation id -> (dof, signals).
@@ -141,10 +142,7 @@ def clipped_ideal_nrmse(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarr
 
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    (out,) = run_batch(cfg, row, [seed])
-    if isinstance(out, Exception):
-        raise out
-    return out
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
 
 
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:

@@ -29,6 +29,7 @@ import numpy as np
 from controllers.fel import run_mean
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.sweep import one_of_batch
 
 NAME = "paper-a"
 ARCHITECTURES = ("inverse", "parallel", "serial", "hybrid")
@@ -151,10 +152,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
     """One (architecture, delay) training run: :func:`run_batch` of one seed."""
-    (out,) = run_batch(cfg, row, [seed])
-    if isinstance(out, Exception):
-        raise out
-    return out
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
 
 
 def cost(cfg: Config, row: Row) -> float:

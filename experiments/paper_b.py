@@ -26,6 +26,7 @@ import numpy as np
 from skinny_mj.body import CONTROL_DT_S
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.sweep import one_of_batch
 from skinny_mj.trajectories.patterns import PATTERNS, PREFIX
 
 NAME = "paper-b"
@@ -132,10 +133,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
     """One run of ``row``: :func:`run_batch` of one seed."""
-    (out,) = run_batch(cfg, row, [seed])
-    if isinstance(out, Exception):
-        raise out
-    return out
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
 
 
 def rows() -> tuple[Row, ...]:

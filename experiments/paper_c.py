@@ -56,6 +56,7 @@ import numpy as np
 from controllers.metrics import nrmse
 from skinny_mj import body
 from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.sweep import one_of_batch
 from skinny_mj.trajectories import sample_clip
 
 NAME = "paper-c"
@@ -165,10 +166,7 @@ def elbow_range(angles: np.ndarray, dof: int) -> float:
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
     """Train on the row's movement (paper C §3.5), then test on every column (§3.6)."""
-    (out,) = run_batch(cfg, row, [seed])
-    if isinstance(out, Exception):
-        raise out
-    return out
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
 
 
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:

@@ -35,6 +35,7 @@ import numpy as np
 
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.sweep import one_of_batch
 
 NAME = "paper-e"
 
@@ -153,10 +154,7 @@ def cycles_to_converge(curve: np.ndarray, tolerance: float) -> int:
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
     """One run of any row: :func:`run_batch` of one seed."""
-    (out,) = run_batch(cfg, row, [seed])
-    if isinstance(out, Exception):
-        raise out
-    return out
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
 
 
 def group_of(row_id: str) -> str:

@@ -33,6 +33,7 @@ from experiments import paper_e
 from experiments.claims import claim_lines
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.sweep import one_of_batch
 
 NAME = "ridge-vs-new"
 #: md_02's excerpt: seconds 3 to 9.26 (313 steps at 50 Hz, as one YMCA).
@@ -148,10 +149,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
 
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    (out,) = run_batch(cfg, row, [seed])
-    if isinstance(out, Exception):
-        raise out
-    return out
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
 
 
 def claims(mv: str) -> list:

@@ -25,7 +25,7 @@ from skinny_mj.sweep.stats import to_jsonable
 if TYPE_CHECKING:
     from skinny_mj.experiment import Row, RunSpec
 
-__all__ = ["THREAD_ENV", "RunFailed", "execute_run", "execute_batch", "iter_joblib",
+__all__ = ["THREAD_ENV", "RunFailed", "one_of_batch", "execute_run", "execute_batch", "iter_joblib",
            "iter_dask"]
 
 #: The BLAS/OpenMP thread variables pinned to 1 in every worker process.
@@ -36,6 +36,16 @@ class RunFailed(RuntimeError):
     """Raised by ``run_one`` (or returned by ``run_batch``) for a run whose network
     diverged: the run is recorded as ``"failed"`` with this message as its reason. Any
     other exception is a bug and is recorded as ``"error"``."""
+
+
+def one_of_batch(run_batch: Callable[[Row, list[int]], list[Any]], row: Row,
+                 seed: int) -> Mapping[str, Any]:
+    """``run_one`` from a lockstep ``run_batch``: the batch of one seed, its
+    :class:`RunFailed` (or any other exception instance) raised."""
+    (out,) = run_batch(row, [seed])
+    if isinstance(out, BaseException):
+        raise out
+    return out
 
 
 def _record(spec: RunSpec, experiment_name: str) -> dict[str, Any]:
