@@ -61,6 +61,18 @@ def _damping_matrix(n: int, damping: float) -> np.ndarray:
     return out
 
 
+def check_error_mode(mode: str, signal_per_rad, damping: float) -> None:
+    """Validate how a feedback controller turns position errors into joint errors:
+    ``mode`` "jacobian" or "joint" (the latter needs ``signal_per_rad``), ``damping`` >= 0.
+    Shared by the velocity and the torque controllers."""
+    if mode not in ("jacobian", "joint"):
+        raise ValueError(f"feedback mode must be 'jacobian' or 'joint', got {mode!r}")
+    if mode == "joint" and signal_per_rad is None:
+        raise ValueError("joint-space feedback needs signal_per_rad")
+    if damping < 0:
+        raise ValueError(f"damping must be >= 0, got {damping}")
+
+
 @dataclass(frozen=True)
 class FeedbackController:
     """Turns position errors into motor errors for a plant.
@@ -78,12 +90,7 @@ class FeedbackController:
     gain: float = 1.0
 
     def __post_init__(self) -> None:
-        if self.mode not in ("jacobian", "joint"):
-            raise ValueError(f"feedback mode must be 'jacobian' or 'joint', got {self.mode!r}")
-        if self.mode == "joint" and self.signal_per_rad is None:
-            raise ValueError("joint-space feedback needs signal_per_rad")
-        if self.damping < 0:
-            raise ValueError(f"damping must be >= 0, got {self.damping}")
+        check_error_mode(self.mode, self.signal_per_rad, self.damping)
         if not self.gain > 0:
             raise ValueError(f"u_error gain must be > 0, got {self.gain}")
 

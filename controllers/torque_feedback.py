@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controllers.feedback import jacobian_error
+from controllers.feedback import check_error_mode, jacobian_error
 
 
 @dataclass(frozen=True)
@@ -151,12 +151,7 @@ class TorqueFeedbackController:
     signal_per_rad: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
-        if self.mode not in ("jacobian", "joint"):
-            raise ValueError(f"feedback mode must be 'jacobian' or 'joint', got {self.mode!r}")
-        if self.mode == "joint" and self.signal_per_rad is None:
-            raise ValueError("joint-space feedback needs signal_per_rad")
-        if self.damping < 0:
-            raise ValueError(f"damping must be >= 0, got {self.damping}")
+        check_error_mode(self.mode, self.signal_per_rad, self.damping)
 
     def joint_error_rad(self, desired: np.ndarray, sensed: np.ndarray, plant) -> np.ndarray:
         """(R, n_dof) joint-space position error, rad, of desired (n_sig,) or (R, n_sig)
