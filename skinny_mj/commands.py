@@ -45,7 +45,8 @@ def _load_movement(args: argparse.Namespace, dof: int):
 
 def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_angles, commands,
                desired_signals, actual_signals, sensed_signals=None, title: str = "",
-               metadata: dict | None = None, curves: dict | None = None) -> Path:
+               metadata: dict | None = None, curves: dict | None = None,
+               torques: dict | None = None) -> Path:
     from skinny_mj import body
     from skinny_mj.recording import write_recording
 
@@ -54,7 +55,7 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
         signal_names=list(body.signal_names(dof, signals)), desired_angles=desired_angles,
         actual_angles=actual_angles, commands=commands, desired_signals=desired_signals,
         actual_signals=actual_signals, sensed_signals=sensed_signals, title=title,
-        metadata=metadata, curves=curves,
+        metadata=metadata, curves=curves, torques=torques,
     )
 
 
@@ -267,6 +268,8 @@ def cmd_test(args: argparse.Namespace) -> int:
         "fail_reason": test.fail_reason,
         "test": {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse},
     }
+    if test.torque is not None:  # torque body: limits, |torque|, work, MuJoCo warnings
+        metrics["test"]["torque"] = test.torque["metrics"]
     if not test.failed and cfg.actuation == "velocity":  # issue 13: DTW, within 5°, lag
         from skinny_mj.imitation import imitation_metrics, saturation
 
@@ -278,7 +281,8 @@ def cmd_test(args: argparse.Namespace) -> int:
     _recording(out / "run.rrd", dof=dof, signals=signals, desired_angles=traj.angles,
                actual_angles=ro.angles[0], commands=ro.commands[0], desired_signals=test.desired,
                actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0],
-               title=f"test on {traj.name}", metadata=metrics)
+               title=f"test on {traj.name}", metadata=metrics,
+               torques=None if test.torque is None else test.torque["series"])
     atomic_write_json(out / "metrics.json", metrics)
     if test.failed:
         print(f"skinny test: the network diverged: {test.fail_reason}", file=sys.stderr)

@@ -55,8 +55,16 @@ TORQUE_INTEGRATOR = mujoco.mjtIntegrator.mjINT_RK4
 # elbow movement (~8 N m s/rad); a free-swinging forearm's damping ratio is ~0.56. The
 # controllers add the active impedance.
 TORQUE_JOINT_DAMPING = 0.5
-# Rotor inertia (kg m^2): a human joint has none, and the step check needs none.
+# Rotor inertia (kg m^2): a human joint has none; the 2D arm and the elbows need none.
 TORQUE_ARMATURE = 0.0
+# ... except the 3D arm's three shoulder hinges (benchmarks/torque_stability_check.py):
+# flexion pressed past its soft limit toward 90 deg aligns the abduction and rotation
+# axes, M turns singular and RK4 diverges (MuJoCo's BADQACC/BADQVEL) under saturated
+# torques at any step (1 ms too); 5e-4 still fails 12-18 of 20 bang-bang runs, 1e-3 none of 40.
+# The value is the reflected inertia of a humanoid-arm motor at these torques: Unitree
+# G1's 5020 (25 N m), rotor J (0.139, 0.017, 0.169)e-4 kg m^2 through a 16:1 two-stage
+# planetary gear, J1 (N1 N2)^2 + J2 N2^2 + J3 = 0.00361 kg m^2.
+TORQUE_ARMATURE_3D_SHOULDER = 0.0036
 BODY_MASS_KG = 70.0  # the stated body whose arm the twin is (ICRP reference man)
 # de Leva (1996, J Biomech 29:1223, Table 4), males: mass / body mass, CoM distance from
 # the proximal end / segment length, radii of gyration / length about the sagittal
@@ -116,7 +124,8 @@ def load_spec(dof: int, actuation: str = "velocity", scene: bool = True) -> mujo
     (:data:`TORQUE_GEAR_NM`, N m; ctrlrange and forcerange [-1, 1], the joint's
     actuatorfrcrange +-gear), gravity compensation off, the arm bodies' inertials from
     :func:`segment_inertias`, joint damping :data:`TORQUE_JOINT_DAMPING` and armature
-    :data:`TORQUE_ARMATURE`, :data:`TORQUE_INTEGRATOR` at :data:`TORQUE_TIMESTEP_S`. The
+    :data:`TORQUE_ARMATURE` (the 3D shoulder hinges :data:`TORQUE_ARMATURE_3D_SHOULDER`),
+    :data:`TORQUE_INTEGRATOR` at :data:`TORQUE_TIMESTEP_S`. The
     joints keep their limits (soft MuJoCo constraints). The velocity servo is the XML
     as it is."""
     _check(dof, actuation)
@@ -185,7 +194,8 @@ def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
         limit = TORQUE_GEAR_NM[name.split("_", 1)[1]]
         joint = spec.joint(name)
         joint.damping[0] = TORQUE_JOINT_DAMPING
-        joint.armature = TORQUE_ARMATURE
+        joint.armature = TORQUE_ARMATURE_3D_SHOULDER if dof == 8 and "shoulder" in name \
+            else TORQUE_ARMATURE
         joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
         joint.actfrcrange = [-limit, limit]
         act = spec.actuator(name)

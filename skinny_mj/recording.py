@@ -7,6 +7,7 @@ Layout of the entity tree (``rerun run.rrd`` opens on the saved default blueprin
 - ``/signals/<signal>/{desired,actual,sensed}``: the normalized position signals.
 - ``/pose/{desired,actual}``: both arms as 3D line strips (shoulder, elbow, wrist) in
   world metres; ``/pose/torso`` and ``/pose/head`` are static.
+- ``/torques/<dof>/{commanded,applied,gravity,limit_upper,limit_lower}``: N m (torque body).
 - ``/curves/<name>``: learning curves on their own timeline ``epoch``.
 - ``/info``: a static Markdown document with the DOFs, their ranges and the metadata.
 
@@ -87,7 +88,8 @@ def _info_markdown(title: str, dof: int, dof_names: Sequence[str], signal_names:
     return "\n".join(lines)
 
 
-def _blueprint(has_curves: bool, application_id: str):
+def _blueprint(has_curves: bool, application_id: str,
+               torque_dofs: Sequence[str] | None = None):
     import rerun.blueprint as rrb
 
     def named(item, name: str):
@@ -107,7 +109,15 @@ def _blueprint(has_curves: bool, application_id: str):
     eye = rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=FRONT_EYE_M,
                             look_target=LOOK_TARGET_M, eye_up=(0.0, 0.0, 1.0))
     pose = named(rrb.Spatial3DView(origin="/pose", name="pose", eye_controls=eye), "pose")
-    series = named(rrb.Vertical(right, left, named(rrb.Tabs(*tabs), "tabs")), "series")
+    rows, shares = [right, left], None
+    if torque_dofs:  # issue 14: per DOF commanded, applied, gravity torque, limits (N m);
+        views = [named(rrb.TimeSeriesView(  # no legend: it would cover a small view
+            origin=f"/torques/{n}", name="τ " + n.replace("shoulder_", ""),
+            plot_legend=rrb.PlotLegend(visible=False)), f"torque-{n}") for n in torque_dofs]
+        rows.append(named(rrb.Grid(*views, grid_columns=len(views) // 2), "torques"))
+        shares = [2.0, 2.0, 3.0, 2.0]
+    series = named(rrb.Vertical(*rows, named(rrb.Tabs(*tabs), "tabs"), row_shares=shares),
+                   "series")
     root = named(rrb.Horizontal(pose, series, column_shares=[2, 3]), "root")
     return rrb.Blueprint(root, collapse_panels=False)
 
@@ -194,7 +204,7 @@ def write_recording(
     torques : torque body (issue 14), optional: ``commanded_nm`` and ``applied_nm``
         (T-1, n_dof) N m (command x limit; the motors' ``qfrc_actuator``),
         ``gravity_nm`` (T, n_dof) the bias torque of each state, ``limit_nm`` (n_dof,);
-        logged under ``/torques/<dof>/{commanded,applied,gravity,+limit,-limit}``.
+        logged under ``/torques/<dof>/{commanded,applied,gravity,limit_upper,limit_lower}``.
 
     Returns
     -------
@@ -227,7 +237,7 @@ def write_recording(
     info = _info_markdown(title, dof, dof_names, signal_names, dt, n_steps, metadata)
     rec_id = _recording_id(
         [desired_angles, actual_angles, commands, desired_signals, actual_signals,
-         sensed_signals, *curve_arrays.values()],
+         sensed_signals, *curve_arrays.values(), *(torques or {}).values()],
         json.dumps([dt, dof, dof_names, signal_names, title, application_id,
                     sorted(curve_arrays)]) + info,
     )
@@ -243,8 +253,8 @@ def write_recording(
         rec = rr.RecordingStream(application_id, recording_id=rec_id, send_properties=False)
         rec.set_log_time_enabled(False)
         rec.set_log_tick_enabled(False)
-        _io(path, rec.save, tmp, default_blueprint=_blueprint(bool(curve_arrays),
-                                                            application_id))
+        _io(path, rec.save, tmp, default_blueprint=_blueprint(
+            bool(curve_arrays), application_id, dof_names if torques is not None else None))
         if title:
             rec.send_recording_name(title)
         rec.log("/info", rr.TextDocument(info, media_type=rr.MediaType.MARKDOWN), static=True)
@@ -354,19 +364,16 @@ def _log_torques(rec, torques: Mapping[str, np.ndarray], dof_names: list[str],
                  steps: np.ndarray, dt: float) -> None:
     """The torque series of :func:`write_recording` (``torques``), N m."""
     limit = np.asarray(torques["limit_nm"], float)
-    n = len(steps)
-    series = {"commanded": (np.asarray(torques["commanded_nm"], float), steps[:-1]),
-              "applied": (np.asarray(torques["applied_nm"], float), steps[:-1]),
-              "gravity": (np.asarray(torques["gravity_nm"], float), steps),
-              "+limit": (np.broadcast_to(limit, (n, len(limit))), steps),
-              "-limit": (np.broadcast_to(-limit, (n, len(limit))), steps)}
-    colors = {"commanded": COMMAND_RGB, "applied": ACTUAL_RGB, "gravity": DESIRED_RGB,
-              "+limit": (128, 128, 128), "-limit": (128, 128, 128)}
+    bound, grey = np.broadcast_to(limit, (len(steps), len(limit))), (128, 128, 128)
+    series = {"commanded": (torques["commanded_nm"], steps[:-1], COMMAND_RGB),
+              "applied": (torques["applied_nm"], steps[:-1], ACTUAL_RGB),
+              "gravity": (torques["gravity_nm"], steps, DESIRED_RGB),
+              "limit_upper": (bound, steps, grey), "limit_lower": (-bound, steps, grey)}
     for i, name in enumerate(dof_names):
-        for role, (values, t) in series.items():
+        for role, (values, t, rgb) in series.items():
             entity = f"/torques/{name}/{role}"
-            _log_style(rec, entity, f"{role} torque (N m)", colors[role])
-            _send_series(rec, entity, np.ascontiguousarray(values[:, i]), t, dt)
+            _log_style(rec, entity, f"{role} torque (N m)", rgb)
+            _send_series(rec, entity, np.asarray(values, float)[:, i].copy(), t, dt)
 
 
 def record_test(path: str | Path, outcome: Any, title: str,

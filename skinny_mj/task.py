@@ -85,6 +85,7 @@ def prepare(
         speed = np.broadcast_to(np.asarray(max_speed_rad_s, dtype=float), (dof,)).copy()
         if not np.all(np.isfinite(speed) & (speed > 0)):
             raise SkinnyInputError(f"max_speed_rad_s must be finite and > 0, got {speed}")
+    speed.flags.writeable = False  # the plant's full scale: its own, read-only copy
     rng = body.joint_ranges(dof)
     start = np.clip(angles[0], rng[:, 0] + LIMIT_MARGIN_RAD, rng[:, 1] - LIMIT_MARGIN_RAD)
     return Setup(

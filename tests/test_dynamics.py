@@ -11,6 +11,7 @@ import pytest
 from skinny_mj import body
 from skinny_mj.dynamics import Dynamics
 from skinny_mj.model import (
+    TORQUE_ARMATURE_3D_SHOULDER,
     TORQUE_GEAR_NM,
     forearm_hand_inertia,
     load_model,
@@ -75,6 +76,7 @@ def test_mass_matrix_and_velocity_forces_are_the_two_link_arm(dyn):
     m1, r1, i1, m2, r2, i2 = _two_link()
     rng = np.random.default_rng(0)
     cols = _abd_elbow(dyn.n_dof)
+    i1 += TORQUE_ARMATURE_3D_SHOULDER if dyn.n_dof == 8 else 0.0  # the abduction's rotor
     for _ in range(5):
         th, ph = rng.uniform(0.2, 2.9, 2)
         q = _pose(dyn.n_dof, th, ph)

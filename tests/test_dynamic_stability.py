@@ -1,0 +1,132 @@
+"""Issue 14, the torque twin's last items: the 3D shoulder's armature keeps saturated
+torques from diverging, the velocity servo and the 2D arm are unchanged, a plant's full
+scale is its own read-only array, and ``skinny test`` on a torque model records the
+torques beside the command (the default blueprint shows them)."""
+
+from __future__ import annotations
+
+import json
+
+import mujoco
+import numpy as np
+import pytest
+
+from skinny_mj import body
+from skinny_mj.model import (
+    TORQUE_ARMATURE,
+    TORQUE_ARMATURE_3D_SHOULDER,
+    load_model,
+    xml_path,
+)
+from skinny_mj.plant import BatchPlant
+from skinny_mj.recording import recording_entities
+
+TORQUE_ROLES = ("commanded", "applied", "gravity", "limit_upper", "limit_lower")
+
+
+def test_armature_sits_on_the_3d_shoulder_hinges_only():
+    m3 = load_model(8, "torque")
+    for name in body.dof_names(8):
+        want = TORQUE_ARMATURE_3D_SHOULDER if "shoulder" in name else TORQUE_ARMATURE
+        assert m3.dof_armature[m3.joint(name).dofadr[0]] == want
+    assert TORQUE_ARMATURE == 0.0 and TORQUE_ARMATURE_3D_SHOULDER > 0
+    np.testing.assert_array_equal(load_model(4, "torque").dof_armature, 0.0)
+    for dof in (4, 8):  # the velocity servo is the XML as it is
+        servo = load_model(dof)
+        np.testing.assert_array_equal(servo.dof_armature, 0.0)
+        assert servo.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+        assert servo.opt.timestep == mujoco.MjModel.from_xml_path(str(xml_path(dof))).opt.timestep
+
+
+def _bang_bang(model: mujoco.MjModel, seed: int, seconds: float) -> str | None:
+    """Full random-sign torques held 1-5 control steps (the stress test of
+    ``benchmarks/torque_stability_check.py``); the first MuJoCo warning, or None."""
+    data = mujoco.MjData(model)
+    rng = np.random.default_rng(seed)
+    lo, hi = model.jnt_range.T
+    data.qpos[:] = rng.uniform(lo + 0.05, hi - 0.05)
+    sub, left = int(round(0.02 / model.opt.timestep)), 0
+    for _ in range(int(seconds / 0.02)):
+        if left <= 0:
+            data.ctrl[:], left = rng.choice([-1.0, 1.0], model.nu), int(rng.integers(1, 6))
+        left -= 1
+        mujoco.mj_step(model, data, sub)
+        fired = [mujoco.mjtWarning(i).name for i, w in enumerate(data.warning) if w.number]
+        if fired:
+            return fired[0]
+    return None
+
+
+@pytest.mark.parametrize("seed", [2, 8])
+def test_saturated_torques_diverged_without_the_armature_and_stay_clean_with_it(seed):
+    """Seeds 2 and 8 blew up within 0.3 s on the model as it was (armature 0): the
+    shoulder's singular inertia at flexion ~90 deg; with the armature, 1 s is clean."""
+    bare = load_model(8, "torque")
+    bare.dof_armature[:] = 0.0
+    assert _bang_bang(bare, seed, 1.0) in ("mjWARN_BADQACC", "mjWARN_BADQVEL", "mjWARN_BADQPOS")
+    assert _bang_bang(load_model(8, "torque"), seed, 1.0) is None
+
+
+def test_each_plant_has_its_own_read_only_full_scale():
+    speed = np.array([3.0, 4.0, 5.0, 6.0])
+    a = BatchPlant(4, "joint", n_runs=1, max_speed_rad_s=speed)
+    b = BatchPlant(4, "joint", n_runs=2, max_speed_rad_s=speed)
+    assert not np.shares_memory(a.max_speed_rad_s, b.max_speed_rad_s)
+    assert not np.shares_memory(a.max_speed_rad_s, speed)
+    with pytest.raises(ValueError, match="read-only"):
+        a.max_speed_rad_s[0] = 1.0
+    speed[0] = 1.0  # the caller's array is the caller's
+    assert a.max_speed_rad_s[0] == 3.0 and b.max_speed_rad_s[0] == 3.0
+    default = BatchPlant(4, "joint", n_runs=1)  # the movement's own full scale
+    assert not default.max_speed_rad_s.flags.writeable
+
+
+def _blueprint_origins(path) -> set[str]:
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(str(path))
+    out = set()
+    for chunk in reader.stream(store=reader.blueprints()[0]):
+        batch = chunk.to_record_batch()
+        for name in batch.schema.names:
+            if "origin" in name.lower():
+                out |= {v for row in batch.column(name).to_pylist() for v in (row or [])}
+    return out
+
+
+def _untrained_torque_model(path) -> None:
+    """A torque model file as ``skinny train`` writes it, its readout untrained (zero:
+    the ESN commands no torque), so ``skinny test`` runs one cheap test cycle."""
+    from skinny_mj.training import TrainConfig, build_run
+
+    cfg = TrainConfig(actuation="torque", epochs=1)
+    run = build_run(cfg, [1])
+    run.esn.save(path, metadata={"dof": cfg.dof, "signals": cfg.signals,
+                                 "sensor_noise": cfg.sensor_noise, "actuation": "torque",
+                                 "max_speed_rad_s": [float(v) for v in run.max_speed_rad_s],
+                                 "trained_on": cfg.trajectory, "config": cfg.to_dict()})
+
+
+def test_skinny_test_on_a_torque_model_records_the_torques(tmp_path):
+    from skinny_mj.cli import main
+    from skinny_mj.recording import read_recording_series
+
+    model, tested = tmp_path / "model.npz", tmp_path / "test"
+    _untrained_torque_model(model)
+    main(["test", "--model", str(model), "--seed", "1", "--out", str(tested)])
+    metrics = json.loads((tested / "metrics.json").read_text())
+    torque = metrics["test"]["torque"]
+    assert torque["within_limits"] and torque["warnings"] == 0
+    rrd = tested / "run.rrd"
+    entities = set(recording_entities(rrd))
+    names = body.dof_names(4)
+    assert {f"/torques/{n}/{r}" for n in names for r in TORQUE_ROLES} <= entities
+    applied = read_recording_series(rrd, "/torques/right_elbow_flexion/applied")
+    command = read_recording_series(rrd, "/skinny/right/elbow_flexion/command")
+    commanded = read_recording_series(rrd, "/torques/right_elbow_flexion/commanded")
+    upper = read_recording_series(rrd, "/torques/right_elbow_flexion/limit_upper")
+    gravity = read_recording_series(rrd, "/torques/right_elbow_flexion/gravity")
+    np.testing.assert_allclose(commanded, command * upper[0], rtol=1e-12)  # command x limit
+    np.testing.assert_allclose(applied, commanded, rtol=1e-9, atol=1e-12)  # within limits
+    assert len(gravity) == len(command) + 1 and np.ptp(gravity) > 0.1  # the arm swings
+    assert {f"/torques/{n}" for n in names} <= _blueprint_origins(rrd)  # shown by default
