@@ -152,6 +152,7 @@ def train(
     scored: np.ndarray | None = None,
     hook=None,
     readout_fit=None,
+    observe: Callable[[int, int, Rollout, np.ndarray | None], None] | None = None,
 ) -> TrainResult:
     """Train the inverse model ``esn`` (R runs) by FEL on ``plant``.
 
@@ -170,6 +171,11 @@ def train(
         :class:`controllers.ridge_select.RidgeSelector`, lambda per run on a validation
         cycle): ``observe(states, targets, runs)`` after each washout cycle and
         ``fit(esn, states, targets, runs, epoch)`` on each learning cycle.
+    observe : optional diagnostics callback (paper E §5.1), called after every cycle as
+        ``observe(epoch, cycle, ro, y_used)`` (cycle numbered as for ``progress``);
+        ``y_used`` (R, T-1, n_dof) is the target the readout was fitted to on a learning
+        cycle, None on the washout and evaluation cycles. ``ro``'s arrays are reused by
+        the next cycle: copy what you keep. It must not change ``esn`` or ``ro``.
     """
     gains = cfg.gains()
     n_runs, n_epochs = esn.n_runs, cfg.epochs
@@ -193,6 +199,8 @@ def train(
         if readout_fit is not None:
             readout_fit.observe(ro.states, beta * ro.y_est + (1.0 - beta) * ro.y_esn,
                                 ~result.failed)
+        if observe is not None:
+            observe(epoch, 0, ro, None)
         _tick(progress, epoch, 0)
         for cycle in range(1, cfg.learning_cycles + 1):
             ro = rollout(esn, plant, desired, gain, noise=True, **kw)
@@ -205,6 +213,8 @@ def train(
                                 alive, epoch)
             if forward is not None and forward.mode != "serial":
                 forward.fit_rollout(ro, runs=alive)
+            if observe is not None:
+                observe(epoch, cycle, ro, beta * ro.y_est + (1.0 - beta) * ro.y_esn)
             _tick(progress, epoch, cycle)
         ro = rollout(esn, plant, desired, gain, noise=False, **kw)
         _mark_failures(esn, ro, result, epoch)
@@ -213,6 +223,8 @@ def train(
         if true_commands is not None:
             result.motor_nrmse[alive, epoch] = motor_nrmse(ro.commands, true_commands)[alive]
         result.last_rollout = ro
+        if observe is not None:
+            observe(epoch, cfg.learning_cycles + 1, ro, None)
         _tick(progress, epoch, cfg.learning_cycles + 1)
     return result
 

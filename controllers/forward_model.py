@@ -3,7 +3,10 @@
 Modes: "parallel" (trained alongside FEL on every learning cycle), "serial"
 (pre-trained on the desired movement with its true commands, then frozen) and
 "hybrid" (pre-trained, then trained on like parallel). ``s_in`` is the sensed
-signal as the internal models see it, i.e. delayed by ``delay_steps``.
+signal as the internal models see it, i.e. delayed by ``delay_steps``. ``chained``
+(fidelity-a's variant): when there is a delay, the position input is instead the
+model's own previous prediction p(t) (it runs ahead of the delayed sensing on its own
+predictions), and pre-training fits the one-step map [d(t); c(t)] -> d(t+1).
 """
 
 from __future__ import annotations
@@ -23,12 +26,18 @@ class ForwardModel:
     ----------
     esn : the network (R runs, like the inverse model it serves).
     mode : "parallel", "serial" or "hybrid".
+    chained : with a delay, feed the model its own previous prediction, not s_in.
     """
 
-    def __init__(self, esn: ESN, mode: str = "serial") -> None:
+    def __init__(self, esn: ESN, mode: str = "serial", chained: bool = False) -> None:
         if mode not in MODES:
             raise ValueError(f"forward model mode must be one of {MODES}, got {mode!r}")
-        self.esn, self.mode = esn, mode
+        self.esn, self.mode, self.chained = esn, mode, bool(chained)
+
+    def begin(self, plant) -> None:
+        """Called by the rollout before each cycle with the plant it drives (a model
+        that reads a forced arm's command, :class:`controllers.arm_forward.ArmForwardModels`,
+        binds it here); this one needs nothing from the plant."""
 
     def step(self, sensed: np.ndarray, command: np.ndarray, noise: bool = True) -> np.ndarray:
         """Prediction (R, n_sig) of the next position from sensed (R, n_sig) and

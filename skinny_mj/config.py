@@ -13,7 +13,10 @@ grouped as the thesis's papers vary it:
   ``ridge_select`` (lambda per FEL fit from a log grid, on a validation cycle:
   :mod:`controllers.ridge_select`), ``inputs`` (desired + sensed, or sensed only as in paper B);
 - architecture: ``delay`` (steps on the sensed input to the internal models, paper A),
-  ``forward`` (a forward model: parallel, serial or hybrid, paper A) and its size;
+  ``forward`` (a forward model: parallel, serial or hybrid, paper A), its size and its
+  ``forward_input`` (the delayed sensed position, or its own chained prediction);
+  ``forward_sharing`` (paper B's plant: one forward model per arm and what the lagging
+  arm gets of the leading arm's, :mod:`controllers.arm_forward`; issue 16);
 - schedule: ``method`` (original, new β, true target), ``beta``, ``cycles``,
   ``epochs``, the feedback gain schedule (linear 1 → 0, ×factor per epoch, fixed),
   ``tt_cycles``, and ``test_washout_cycles`` (unscored cycles before the scored test);
@@ -47,6 +50,8 @@ METHODS = ("original", "new", "true-target", "none")
 FEEDBACKS = ("pd", "computed-torque")
 INPUTS = ("desired+sensed", "sensed")
 FORWARD_MODES = ("parallel", "serial", "hybrid")
+FORWARD_INPUTS = ("sensed", "chained")
+FORWARD_SHARING = ("none", "predictions", "commands")
 GAIN_SCHEDULES = ("linear", "multiplicative", "fixed")
 ARMS = ("right", "left")
 RETARGETS = ("angles", "positions")
@@ -92,6 +97,11 @@ class TrainConfig:
     delay: int = 0  # steps by which the internal models' sensed input lags
     forward: str | None = None  # forward model: None, "parallel", "serial" or "hybrid"
     forward_reservoir: int = 100
+    forward_input: str = "sensed"  # its position input: the (delayed) sensed s(t - d), or
+    # "chained": its own previous prediction p(t) when the delay hides s(t) (fidelity-a)
+    # paper B + A (issue 16): per-arm forward models; the lagging arm gets of the leader's
+    # "none", its forward model's "predictions" or its "commands" (None: one forward model)
+    forward_sharing: str | None = None
     # schedule
     method: str = "new"
     beta: float = 0.1
@@ -151,6 +161,15 @@ class TrainConfig:
             (self.delay >= 0, f"delay must be >= 0 steps, got {self.delay}"),
             (self.forward is None or self.forward in FORWARD_MODES,
              f"forward must be None or one of {FORWARD_MODES}, got {self.forward!r}"),
+            (self.forward_input in FORWARD_INPUTS and (self.forward_input == "sensed"
+                                                       or self.forward is not None),
+             f"forward_input must be one of {FORWARD_INPUTS} ('chained' with a forward "
+             f"model), got {self.forward_input!r}"),
+            (self.forward_sharing is None or (
+                self.forward_sharing in FORWARD_SHARING and self.leading_arm is not None
+                and self.forward == "parallel" and self.signals == "joint"),
+             f"forward_sharing must be None or one of {FORWARD_SHARING}, with a leading "
+             f"arm, forward='parallel' and joint signals; got {self.forward_sharing!r}"),
             (self.gain_schedule in GAIN_SCHEDULES,
              f"gain schedule must be one of {GAIN_SCHEDULES}, got {self.gain_schedule!r}"),
             (0 < self.gain_factor <= 1, f"gain factor must be in (0, 1], got {self.gain_factor}"),

@@ -21,10 +21,10 @@ whatever the movement, so the default output folder stays ``results/<NAME>/<time
 **An Experiment holds ALL its rows**, always; ``build`` never filters them. Selection
 is the engine's: ``run_sweep(..., rows=["5", "fig4"])`` takes row ids and group names
 (``Experiment.groups``: group name -> row ids, e.g. ``{"table": ("1", ..., "6")}``).
-A run's seed is ``run_seed(base_seed, row_index, run_index)`` with ``row_index`` the
-row's place in the full ``Experiment.rows``, so ``--rows`` reproduces the full sweep's
-files bit for bit. An unknown entry raises :class:`SkinnyInputError` naming the known
-ids and groups.
+A run's seed is ``run_seed(base_seed, row_index, run_index)``, ``row_index`` the row's
+(or its ``Row.seeds_of`` row's) place in the full ``Experiment.rows``, so ``--rows``
+reproduces the full sweep's files bit for bit. An unknown entry raises
+:class:`SkinnyInputError` naming the known ids and groups.
 
 **A run** is ``run_one(row, seed) -> Mapping`` of metrics (numbers are aggregated; other
 JSON-able values are kept in the run file only). It is shipped to worker processes with
@@ -113,14 +113,15 @@ _SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+=-]*$")  # no "..", no hidde
 class Row:
     """One row of a paper's table: its id, the parameters that differ, the paper's values.
 
-    ``runs``: this row's run count when it differs from the experiment's (e.g. a figure
-    the paper ran 10 times beside a table of 20); ``--runs N`` caps it at N.
+    ``runs``: this row's run count if not the experiment's (``--runs N`` caps it at N);
+    ``seeds_of``: a row whose seeds this row takes (a paired comparison), None its own.
     """
 
     row_id: str
     params: Mapping[str, Any] = field(default_factory=dict)
     paper: Mapping[str, float] = field(default_factory=dict)
     runs: int | None = None
+    seeds_of: str | None = None
 
     def __post_init__(self) -> None:
         if not _SAFE_NAME.match(self.row_id):
@@ -161,6 +162,8 @@ class Experiment:
         ids = [r.row_id for r in self.rows]
         if not ids or len(set(ids)) != len(ids):
             raise SkinnyInputError(f"experiment {self.name!r} needs unique row ids, got {ids}")
+        if bad := [r.row_id for r in self.rows if r.seeds_of not in (None, *ids)]:
+            raise SkinnyInputError(f"experiment {self.name!r}: rows {bad}: seeds_of no row")
         groups = {str(g): (m,) if isinstance(m, str) else tuple(m)
                   for g, m in self.groups.items()}
         for group, members in groups.items():
@@ -225,7 +228,8 @@ def _config_dict(experiment: Experiment, runs: int) -> dict[str, Any]:
         "experiment": experiment.name,
         "config": cfg,
         "rows": [{"row": r.row_id, "params": dict(r.params), "paper": dict(r.paper),
-                  **({} if r.runs is None else {"runs": r.runs})} for r in experiment.rows],
+                  **{k: getattr(r, k) for k in ("runs", "seeds_of") if getattr(r, k) is not None}}
+                 for r in experiment.rows],
         "groups": {g: list(m) for g, m in experiment.groups.items()},
         "runs": runs,
         "base_seed": experiment.base_seed,
@@ -247,14 +251,12 @@ def _batches(specs: list[RunSpec], size: int) -> list[list[RunSpec]]:
     by_row: dict[str, list[RunSpec]] = {}
     for spec in specs:
         by_row.setdefault(spec.row.row_id, []).append(spec)
-    return [group[i:i + size] for group in by_row.values()
-            for i in range(0, len(group), size)]
+    return [group[i:i + size] for group in by_row.values() for i in range(0, len(group), size)]
 
 
 def default_out_dir(experiment_name: str, root: str | Path = "results") -> Path:
     """``results/<experiment>/<UTC timestamp>``."""
-    stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%d-%H%M%S")
-    return Path(root) / experiment_name / stamp
+    return Path(root) / experiment_name / _dt.datetime.now(_dt.UTC).strftime("%Y%m%d-%H%M%S")
 
 
 def _key(job: RunSpec | list[RunSpec]) -> str:
@@ -262,8 +264,8 @@ def _key(job: RunSpec | list[RunSpec]) -> str:
 
 
 def _run_specs(experiment: Experiment, runs: int, selected: Sequence[Row]) -> list[RunSpec]:
-    chosen = {r.row_id for r in selected}
-    return [RunSpec(row, i, k, run_seed(experiment.base_seed, i, k))
+    chosen, pos = {r.row_id for r in selected}, {r.row_id: i for i, r in enumerate(experiment.rows)}
+    return [RunSpec(row, i, k, run_seed(experiment.base_seed, pos[row.seeds_of or row.row_id], k))
             for k in range(runs) for i, row in enumerate(experiment.rows)
             if row.row_id in chosen and (row.runs is None or k < row.runs)]
 
@@ -299,8 +301,7 @@ def _report(bar: Any, records: list[dict[str, Any]]) -> None:
     for rec in records:
         name = f"{rec['row']}-{rec['seed']}.json"
         if rec["status"] == "error":
-            bar.write(f"run {name} errored (a bug, not data): {rec['error']}",
-                      file=sys.stderr)
+            bar.write(f"run {name} errored (a bug, not data): {rec['error']}", file=sys.stderr)
         elif rec["status"] == "failed":
             bar.write(f"run {name} failed (diverged): {rec['fail_reason']}", file=sys.stderr)
 
@@ -389,8 +390,7 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
             records = result if isinstance(result, list) else [result]
             for record in records:
                 # The parent writes every file, so remote Dask workers need no shared disk.
-                atomic_write_json(runs_dir / f"{record['row']}-{record['seed']}.json",
-                                  record)
+                atomic_write_json(runs_dir / f"{record['row']}-{record['seed']}.json", record)
                 bar.update(1)
             _report(bar, records)
 

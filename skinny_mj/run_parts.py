@@ -108,3 +108,26 @@ def true_commands_of(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) 
     commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
     dofs = controlled_dofs(cfg)
     return commands if dofs is None else commands[:, dofs]
+
+
+def arm_forward_models(cfg: TrainConfig, rngs: Sequence[np.random.Generator]):
+    """Paper B's per-arm forward models (:class:`controllers.arm_forward.ArmForwardModels`,
+    ``cfg.forward_sharing``): the lagging arm's network from each run's forward stream,
+    the leading arm's (shared predictions only) from a child of that stream."""
+    from controllers.arm_forward import ArmForwardModels
+    from controllers.esn import ESN
+    from skinny_mj.bimanual import arm_signals
+
+    lead_side = cfg.leading_arm
+    lag_side = "left" if lead_side == "right" else "right"
+    lag_sig, lead_sig = (arm_signals(cfg.dof, cfg.signals, s) for s in (lag_side, lead_side))
+    n_arm = len(controlled_dofs(cfg))
+
+    def nets(n_sig: int, streams):
+        fm_cfg = esn_config(cfg, n_sig + n_arm, n_sig, cfg.forward_reservoir)
+        return ESN(fm_cfg, n_runs=len(streams), rngs=streams)
+
+    lag = nets(len(lag_sig), list(rngs))
+    lead = nets(len(lead_sig), [g.spawn(1)[0] for g in rngs]) \
+        if cfg.forward_sharing == "predictions" else None
+    return ArmForwardModels(lag, lead, lag_sig, lead_sig, cfg.forward_sharing)

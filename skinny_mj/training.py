@@ -46,6 +46,7 @@ from skinny_mj.config import (  # noqa: F401  (re-exported: the training API in 
 )
 from skinny_mj.run_parts import (  # noqa: F401  (re-exported)
     RunStreams,
+    arm_forward_models,
     controlled_dofs,
     esn_config,
     full_scale_speeds,
@@ -120,10 +121,12 @@ def build_run(cfg: TrainConfig, seeds: Sequence[int]) -> Run:
         + (n_sig if cfg.forward is not None else 0) + torque.n_extra_inputs(cfg)
     esn = ESN(esn_config(cfg, n_in, n_out), n_runs=len(seeds), rngs=[s.esn for s in streams])
     forward = None
-    if cfg.forward is not None:
+    if cfg.forward_sharing is not None:  # issue 16: one forward model per arm (paper B)
+        forward = arm_forward_models(cfg, [s.forward for s in streams])
+    elif cfg.forward is not None:
         fm_cfg = esn_config(cfg, n_sig + n_out, n_sig, cfg.forward_reservoir)
         forward = ForwardModel(ESN(fm_cfg, n_runs=len(seeds), rngs=[s.forward for s in streams]),
-                               cfg.forward)
+                               cfg.forward, chained=cfg.forward_input == "chained")
     return Run(cfg=cfg, seeds=seeds, trajectory=trajectory, training=training, report=report,
                max_speed_rad_s=max_speed, esn=esn, forward=forward,
                plant_seeds=[s.plant_seed for s in streams],
@@ -155,14 +158,17 @@ class Training:
     ridge_lambda: np.ndarray | None = None  # (R, E) lambda chosen per epoch (ridge_select)
 
 
-def train_run(run: Run, progress: Callable[[int, int], None] | None = None) -> Training:
-    """Train ``run``'s networks in place. ``progress(done, total)`` after every cycle."""
+def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
+              observe: Callable[..., None] | None = None) -> Training:
+    """Train ``run``'s networks in place. ``progress(done, total)`` after every cycle;
+    ``observe``: FEL's optional per-cycle diagnostics callback (:func:`controllers.fel.train`,
+    e.g. paper E §5.1's y_est / y_used per epoch; ignored by the true-target architecture)."""
     cfg, out = run.cfg, Training()
     if run.forward is not None and cfg.forward in ("serial", "hybrid"):
         out.pretrain_prediction_nrmse = run.forward.pretrain(
             run.trajectory.position_signals(cfg.signals),
-            true_commands_of(cfg, run.trajectory, run.max_speed_rad_s),
-            cfg.delay, sensor_noise=cfg.sensor_noise)
+            true_commands_of(cfg, run.trajectory, run.max_speed_rad_s),  # chained: one step
+            0 if cfg.forward_input == "chained" else cfg.delay, sensor_noise=cfg.sensor_noise)
     if cfg.method == "none":  # the feedback controller alone: nothing to learn
         return out
     if cfg.method == "true-target":
@@ -194,7 +200,7 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None) -> T
                         progress=tick, forward=run.forward, scored=run.scored,
                         feedback=protocol.feedback_of(cfg.u_error_gain),
                         hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s),
-                        readout_fit=selector)
+                        readout_fit=selector, observe=observe)
     if selector is not None:
         out.ridge_lambda = selector.chosen
     return out

@@ -42,6 +42,8 @@ the true commands' source. Deterministic for a seed.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from skinny_mj import body
@@ -137,15 +139,22 @@ def ymca_recorded(dof: int = 4, seed: int = DEFAULT_SEED, *,
     to unit length per frame (so the 2D targets are reachable up to marker effects);
     default: unit 3D vectors, then projected (the issue's reading)."""
     body.check_dof(dof)
+    angles, target = _solved(dof, seed, unit_2d)
+    name = "ymca-recorded" + ("-unit2d" if unit_2d else "") \
+        + ("" if seed == DEFAULT_SEED else f"-s{seed}")
+    return Trajectory(angles.copy(), DEFAULT_DT_S, name, {"cartesian": target.copy()})
+
+
+@functools.lru_cache(maxsize=16)
+def _solved(dof: int, seed: int, unit_2d: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The markers' IK (about 1 s), once per process and (dof, seed, reading); the
+    caller gets copies, so the cached arrays are never changed."""
     pts = markers(seed)[::DECIMATE]
     seg = np.stack([pts[:, :, 1] - pts[:, :, 0], pts[:, :, 2] - pts[:, :, 1]], axis=2)
     if unit_2d and dof == 4:
         seg[..., 1] = 0.0  # the frontal projection, then normalized below
     seg = seg / np.linalg.norm(seg, axis=-1, keepdims=True)
-    angles, target = ik.solve(seg[:, :, 0], seg[:, :, 1], dof)
-    name = "ymca-recorded" + ("-unit2d" if unit_2d else "") \
-        + ("" if seed == DEFAULT_SEED else f"-s{seed}")
-    return Trajectory(angles, DEFAULT_DT_S, name, {"cartesian": target})
+    return ik.solve(seg[:, :, 0], seg[:, :, 1], dof)
 
 
 def movement_stats(traj: Trajectory) -> dict[str, float]:
