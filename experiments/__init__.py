@@ -18,13 +18,18 @@ REGISTRY = {
     "paper-c": "experiments.paper_c",
     "paper-d": "experiments.paper_d",
     "paper-e": "experiments.paper_e",
+    "paper-e-explain": "experiments.paper_e_explain",
     "generalization": "experiments.generalization",
     "ridge-vs-new": "experiments.ridge_vs_new",
     "figure-eight": "experiments.figure_eight",
     "mackey-glass": "experiments.mackey_glass",
     "adaptation": "experiments.adaptation",
     "fidelity-e": "experiments.fidelity_e",
+    "fidelity-a": "experiments.fidelity_a",
+    "bimanual-delay": "experiments.bimanual_delay",
+    "fidelity-d": "experiments.fidelity_d",
     "dynamic": "experiments.dynamic",
+    "three-d": "experiments.three_d",
 }
 
 

@@ -29,6 +29,8 @@ def ratios(results: dict, cfg) -> list[dict]:
                 for metric in ("position_nrmse", "motor_nrmse"):
                     key = ("noisy_" if noisy else "") + metric
                     e = {x: _stat(results, f"{m}-g{g:g}-e{x}", key) for x in ("1", "2", "5")}
+                    if not any(n_ok + n_failed for _, _, n_ok, n_failed in e.values()):
+                        continue  # a cell not run (``--rows``): no line of NaNs
                     out.append({"movement": m, "gain": g, "test_noise": noisy,
                                 "metric": metric, "exp": e,
                                 "ratio_2_5": e["2"][0] / e["5"][0],
@@ -65,9 +67,12 @@ def _figure(rows: list[dict], cfg, path: Path, thesis: dict) -> None:
     for ax, metric in zip(axes, ("position_nrmse", "motor_nrmse"), strict=True):
         for i, m in enumerate(cfg.movements):
             for noisy, style in ((False, "o-"), (True, "s--")):
-                ys = [r["ratio_2_5"] for r in rows if r["movement"] == m and
-                      r["metric"] == metric and r["test_noise"] == noisy]
-                ax.plot(cfg.gains, ys, style, color=f"C{i}",
+                cell = [r for r in rows if r["movement"] == m and
+                        r["metric"] == metric and r["test_noise"] == noisy]
+                if not cell:
+                    continue
+                ax.plot([r["gain"] for r in cell], [r["ratio_2_5"] for r in cell], style,
+                        color=f"C{i}",
                         label=f"{m}, test noise {'on' if noisy else 'off'}")
         ax.axhline(thesis[metric], color="k", lw=1, ls=":", label="thesis")
         ax.axhline(1.0, color="grey", lw=0.5)

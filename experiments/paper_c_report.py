@@ -119,7 +119,7 @@ def claims(runs: list[dict], dof: int = 4) -> list[str]:
                      f"ratio {ratio:.3f} (YMCA-trained on YM: {ref:.3f})"))
     produced = _mean(runs, "y", "ymca__elbow_range_rad")
     trained = _mean(runs, "y", "train_elbow_range_rad")
-    wanted = elbow_range(load(Config(real_movement=None), "ymca").angles, dof)
+    wanted = elbow_range(load(Config(dof=dof, real_movement=None), "ymca").angles, dof)
     out.append(_line(None if not np.isfinite(produced) else bool(produced > trained),
                      "Y -> YMCA: more elbow motion than trained on",
                      f"produced elbow range {np.degrees(produced):.1f}° vs "
@@ -160,6 +160,14 @@ def claims(runs: list[dict], dof: int = 4) -> list[str]:
     return out
 
 
+def sweep_dof(out_dir: Path) -> int:
+    """The body's DOF of the sweep in ``out_dir`` (its config.json; 4 if it has none)."""
+    import json
+
+    path = Path(out_dir) / "config.json"
+    return int(json.loads(path.read_text())["config"].get("dof", 4)) if path.is_file() else 4
+
+
 def report(results: dict, out_dir: Path) -> str:
     """The train x test heat maps, shoulder-vs-elbow figures, learning curves, claims."""
     from skinny_mj.io import atomic_write_text
@@ -168,6 +176,7 @@ def report(results: dict, out_dir: Path) -> str:
 
     out_dir = Path(out_dir)
     runs = _runs(out_dir)
+    dof = sweep_dof(out_dir)
     if not runs:
         return "- [n/a] no finished runs"
     text = []
@@ -192,13 +201,13 @@ def report(results: dict, out_dir: Path) -> str:
     for name, row, col, title in figs:
         produced = _first_angles(runs, row, col)
         if produced is not None:
-            cases = [(title, get(col), produced)]
+            cases = [(title, get(col, dof), produced)]
             if row == "y":
-                cases.insert(0, ("Y (training movement)", get("y"), None))
+                cases.insert(0, ("Y (training movement)", get("y", dof), None))
             arm_figure_png(out_dir / f"{name}.png",
-                           [(t, d.angles, p) for t, d, p in cases])
+                           [(t, d.angles, p) for t, d, p in cases], dof)
     rss = [x["metrics"].get("peak_rss_mb") for x in runs if x["metrics"].get("peak_rss_mb")]
-    lines = claims(runs)
+    lines = claims(runs, dof)
     if rss:
         lines.append(f"- [info] peak RSS per worker process: max {max(rss):.0f} MB")
     return "\n".join(text) + "\n\n" + "\n".join(lines)

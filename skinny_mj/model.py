@@ -15,6 +15,7 @@ lengths (:func:`segment_inertias`), torques are limited to conservative human st
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.resources import files
 from pathlib import Path
@@ -218,9 +219,11 @@ def load_model(dof: int, actuation: str = "velocity") -> mujoco.MjModel:
 BATCH_PREFIX = "r{}/"  # names of copy r in :func:`load_batch_model`
 
 
-def load_batch_model(dof: int, copies: int, actuation: str = "velocity") -> mujoco.MjModel:
+def load_batch_model(dof: int, copies: int, actuation: str = "velocity",
+                     edit: Callable[[mujoco.MjSpec], None] | None = None) -> mujoco.MjModel:
     """``copies`` independent Skinnies (no scene) in one model, for stepping many runs
-    with one ``mj_step``.
+    with one ``mj_step``; ``edit`` (optional) changes each copy's spec before it is
+    attached (a variant of the body, e.g. :func:`skinny_mj.perturb.lengthen_forearm`).
 
     Copy r's elements are named ``r{r}/<name>`` and laid out as contiguous blocks in
     copy order (bodies after the world body, joints, dofs, qpos, sites, actuators), so
@@ -239,6 +242,8 @@ def load_batch_model(dof: int, copies: int, actuation: str = "velocity") -> mujo
     parent.compiler.degree = one.compiler.degree
     parent.compiler.autolimits = one.compiler.autolimits
     for r in range(copies):
-        parent.attach(load_spec(dof, actuation, scene=False), prefix=BATCH_PREFIX.format(r),
-                      frame=parent.worldbody.add_frame())
+        robot = load_spec(dof, actuation, scene=False)
+        if edit is not None:
+            edit(robot)
+        parent.attach(robot, prefix=BATCH_PREFIX.format(r), frame=parent.worldbody.add_frame())
     return parent.compile()

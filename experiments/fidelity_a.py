@@ -1,0 +1,241 @@
+"""Issue 12, paper A: why does our inverse-only error saturate at 8.5–9 %, not 10–20 %?
+
+Paper A's runs (``experiments.paper_a.MODEL`` / ``train_config``, imported) measured
+three ways at once. K is fixed (0.65) through paper A's training, so nothing in epochs
+1..E depends on E: ONE training of E epochs records, at every checkpoint epoch c <= E
+(:data:`CHECKPOINTS`), what a c-epoch run would report (``tests/test_fidelity_a.py``
+checks that a short run equals a long run's checkpoint, bit for bit):
+
+- ``train_*_e<c>``: the evaluation cycle of epoch c (K = 0.65, reservoir noise off) —
+  where paper A measures ("the performance error in the last epoch");
+- ``test_*_e<c>``: a closed-loop test of the networks as they are after epoch c (K = 0,
+  noise off) on a fresh plant (its sensor noise restarts from the run's plant seed, so
+  every checkpoint's test sees the same noise; paper A's ``test_position_nrmse`` runs on
+  the training plant, its noise stream continuing). The test resets the reservoir
+  states, which the next epoch resets anyway: training goes on unchanged.
+
+Each in two metrics: ``nrmse`` (sqrt(MSE) / 2, per signal, averaged: ours) and ``mad``
+= mean |desired − actual| / 2 over steps and signals, the thesis's "mean difference
+between the desired state and the actual state" as a fraction of the signal range (its
+other reading, a fraction of the half-range 1, is 2 × ``mad``). Also the feedback share
+and correction ratio (paper A's "online correction ratio"), and with a forward model its
+prediction error p(t) vs the actual x(t) (``pred_nrmse``, ``pred_mad``).
+
+Rows ``<architecture>[-chained]-d<delay>``; ``chained``: the forward model fed its own
+previous prediction instead of the delayed sensed position (``TrainConfig.forward_input``).
+:data:`PLAN` gives each row its epochs (the compute budget: see docs/results/fidelity-a.md).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from experiments import paper_a
+from skinny_mj.config import TrainConfig, relative_cost
+from skinny_mj.experiment import Experiment, Row
+from skinny_mj.sweep import one_of_batch
+
+NAME = "fidelity-a"
+#: Epochs at which a run's metrics are recorded (those <= the row's epochs, and its last).
+CHECKPOINTS = (1, 2, 5, 10, 20, 50, 100, 150)
+#: The epochs the tables report.
+TABLE_EPOCHS = (10, 50, 150)
+#: (architecture, forward input, delay, epochs): the sweep, sized for one shared core
+#: (docs/results/fidelity-a.md). Inverse only d4 gets the long run (150 epochs: its
+#: checkpoints give 10, 50, 150); the rest 10 epochs, paper A's schedule.
+PLAN = (
+    ("inverse", "sensed", 0, 10), ("inverse", "sensed", 2, 10), ("inverse", "sensed", 4, 150),
+    ("inverse", "sensed", 6, 10), ("inverse", "sensed", 10, 10),
+    ("serial", "sensed", 0, 10), ("serial", "sensed", 2, 10), ("serial", "sensed", 4, 10),
+    ("serial", "sensed", 6, 10), ("serial", "sensed", 10, 10),
+    ("parallel", "sensed", 4, 10), ("parallel", "sensed", 10, 10),
+    ("hybrid", "sensed", 4, 10), ("hybrid", "sensed", 10, 10),
+    ("serial", "chained", 4, 10), ("parallel", "chained", 4, 10), ("hybrid", "chained", 4, 10),
+)
+QUICK_PLAN = (("inverse", "sensed", 0, 3), ("inverse", "sensed", 4, 3),
+              ("serial", "sensed", 4, 2), ("parallel", "sensed", 4, 2),
+              ("hybrid", "sensed", 4, 2), ("serial", "chained", 4, 2))
+#: The thesis's numbers for these quantities (paper A §4.1–4.2 text; its figures give no
+#: table), beside ours in the report.
+THESIS = paper_a.PAPER_TEXT
+
+
+@dataclass(frozen=True)
+class Config:
+    """The study: paper A's run (``model``; its ``epochs`` is replaced per row), the plan,
+    seeds per row and the checkpoints."""
+
+    model: TrainConfig = field(default_factory=lambda: paper_a.MODEL)
+    plan: tuple[tuple[str, str, int, int], ...] = PLAN
+    runs: int = 5
+    checkpoints: tuple[int, ...] = CHECKPOINTS
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Config:
+        """From ``config.json``'s ``config``."""
+        names = {f.name for f in dataclasses.fields(cls)}
+        kw = {k: v for k, v in d.items() if k in names}
+        if "model" in kw:
+            kw["model"] = TrainConfig.from_dict(kw["model"])
+        if "plan" in kw:
+            kw["plan"] = tuple(tuple(p) for p in kw["plan"])
+        if "checkpoints" in kw:
+            kw["checkpoints"] = tuple(kw["checkpoints"])
+        return cls(**kw)
+
+
+def row_id(architecture: str, forward_input: str, delay: int) -> str:
+    return f"{architecture}{'-chained' if forward_input == 'chained' else ''}-d{delay}"
+
+
+def rows(cfg: Config) -> tuple[Row, ...]:
+    return tuple(Row(row_id(a, i, d), {"architecture": a, "forward_input": i, "delay": d,
+                                       "epochs": e}) for a, i, d, e in cfg.plan)
+
+
+def train_config(cfg: Config, row: Row) -> TrainConfig:
+    """Paper A's run of the row (:func:`paper_a.train_config`), with its epochs and the
+    forward model's input."""
+    p = row.params
+    base = paper_a.Config(model=replace(cfg.model, epochs=int(p["epochs"])))
+    tc = paper_a.train_config(base, Row(row.row_id, {"architecture": p["architecture"],
+                                                     "delay": p["delay"]}))
+    return replace(tc, forward_input=p["forward_input"])
+
+
+def checkpoints_of(cfg: Config, epochs: int) -> tuple[int, ...]:
+    return tuple(sorted({c for c in cfg.checkpoints if c <= epochs} | {epochs}))
+
+
+def _mad(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Mean |a - b| / 2 per run, (R,), for (R, T, n) and (R or T, ..., n)."""
+    from controllers.fel import run_mean
+
+    return run_mean(np.abs(a - b)) / 2.0
+
+
+def _cycle_metrics(ro, desired: np.ndarray, prefix: str) -> dict[str, np.ndarray]:
+    """Per-run metrics (R,) of one closed-loop cycle ``ro`` (the feedback share and
+    correction ratio only with the feedback on: in training)."""
+    from controllers.forward_model import rollout_prediction_error
+
+    out = {f"{prefix}_mad": _mad(ro.true_signals, desired)}
+    if prefix == "train":
+        out.update({"train_share": paper_a.feedback_share(ro),
+                    "train_ratio": np.array(ro.correction_ratio)})
+    if ro.predictions is not None:
+        out[f"{prefix}_pred_nrmse"] = rollout_prediction_error(ro)
+        out[f"{prefix}_pred_mad"] = _mad(ro.predictions[:, 1:], ro.true_signals[:, 1:])
+    return out
+
+
+def _test_metrics(run) -> dict[str, np.ndarray]:
+    """The K = 0 test of ``run``'s networks as they are, on a fresh plant, (R,) each."""
+    from skinny_mj.training import evaluate
+
+    tests = evaluate(run)
+    ro = _stack_rollouts([t.rollout for t in tests])
+    out = _cycle_metrics(ro, run.desired, "test")
+    failed = np.array([t.failed for t in tests], float)
+    out = {k: np.where(failed > 0, np.nan, v) for k, v in out.items()}
+    out["test_nrmse"] = np.array([np.nan if t.failed else t.position_nrmse for t in tests])
+    out["test_motor_nrmse"] = np.array([np.nan if t.failed else t.motor_nrmse for t in tests])
+    out["test_failed"] = failed
+    return out
+
+
+def _stack_rollouts(ros: list):
+    """One R-run Rollout from R one-run selections (the test's per-run views)."""
+    from controllers.rollout import Rollout
+
+    return Rollout(**{f.name: None if getattr(ros[0], f.name) is None else
+                      np.concatenate([getattr(r, f.name) for r in ros])
+                      for f in dataclasses.fields(Rollout)})
+
+
+def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
+    """Train one row for its epochs, recording every checkpoint (see the module doc)."""
+    from skinny_mj.training import build_run, train_run
+
+    run = build_run(train_config(cfg, row), seeds)
+    checks = checkpoints_of(cfg, run.cfg.epochs)
+    last_cycle = run.cfg.learning_cycles + 1
+    recorded: dict[int, dict[str, np.ndarray]] = {}
+
+    def observe(epoch: int, cycle: int, ro, y_used) -> None:
+        if cycle == last_cycle and epoch + 1 in checks:  # the epoch's evaluation cycle
+            rec = _cycle_metrics(ro, run.desired, "train")
+            rec.update(_test_metrics(run))
+            recorded[epoch + 1] = rec
+
+    trained = train_run(run, observe=observe)
+    result = trained.fel
+    outs: list = []
+    for r in range(len(seeds)):
+        ok_epochs = run.cfg.epochs if not result.failed[r] else int(result.fail_epoch[r])
+        out: dict = {"epochs_ok": float(ok_epochs)}
+        for c in checks:
+            alive = c <= ok_epochs  # the run had not diverged by the end of epoch c
+            out[f"train_failed_e{c}"] = 0.0 if alive else 1.0
+            out[f"train_nrmse_e{c}"] = float(result.position_nrmse[r, c - 1]) if alive \
+                else float("nan")
+            for name, values in recorded[c].items():
+                keep = alive or name == "test_failed"
+                out[f"{name}_e{c}"] = float(values[r]) if keep else float("nan")
+        if trained.pretrain_prediction_nrmse is not None:
+            out["pretrain_prediction_nrmse"] = float(trained.pretrain_prediction_nrmse[r])
+        out["curve_train_nrmse"] = [None if not np.isfinite(v) else float(v)
+                                    for v in result.position_nrmse[r]]
+        outs.append(out)
+    return outs
+
+
+def run_one(cfg: Config, row: Row, seed: int) -> dict:
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
+
+
+def quick_config() -> Config:
+    """A smoke test (N = 100 / 50, 2 cycles, 2–3 epochs, 2 runs), not a result."""
+    return Config(model=replace(paper_a.MODEL, reservoir=100, forward_reservoir=50, cycles=2),
+                  plan=QUICK_PLAN, runs=2, checkpoints=(1, 2, 3))
+
+
+def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
+          dof: int | None = None, signals: str | None = None) -> Experiment:
+    """The plan's rows; ``movement``/``asf``/``dof``/``signals`` replace paper A's YMCA,
+    2D joint angles (None: the paper's)."""
+    cfg = quick_config() if quick else Config()
+    changes = {k: v for k, v in (("trajectory", movement), ("dof", dof),
+                                 ("signals", signals)) if v is not None}
+    if movement is not None:
+        changes["asf"] = None if asf is None else str(asf)
+    cfg = replace(cfg, model=replace(cfg.model, **changes))
+    every = rows(cfg)
+    groups = {a: tuple(r.row_id for r in every if r.params["architecture"] == a
+                       and r.params["forward_input"] == "sensed")
+              for a in paper_a.ARCHITECTURES}
+    groups["chained"] = tuple(r.row_id for r in every if r.params["forward_input"] == "chained")
+    groups = {k: v for k, v in groups.items() if v}
+    last = max(TABLE_EPOCHS[0], 1) if not quick else 2
+    return Experiment(
+        name=NAME, rows=every, groups=groups, run_one=functools.partial(run_one, cfg),
+        run_batch=functools.partial(run_batch, cfg), config=cfg, runs=cfg.runs,
+        cost=lambda row: relative_cost(train_config(cfg, row)),
+        table_columns=(f"train_nrmse_e{last}", f"train_mad_e{last}", f"test_nrmse_e{last}",
+                       f"test_mad_e{last}", f"train_pred_nrmse_e{last}"),
+    )
+
+
+def report(results: dict, out_dir: Path) -> str:
+    """tables.md (error and prediction-error tables, the claims) and the figures."""
+    from experiments.fidelity_a_report import write_report
+
+    out_dir = Path(out_dir)
+    cfg = Config.from_dict(json.loads((out_dir / "config.json").read_text())["config"])
+    return write_report(out_dir, cfg)

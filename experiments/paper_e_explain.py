@@ -1,0 +1,231 @@
+"""Paper E §5.1 measured: why the new method beats the original (Figs. 7–10).
+
+"We trained the same initial network with the setups in experiments 1 (original, 1 rep.),
+2 (original, 5 rep.), and 5 (new, β = 0.1) and studied how the ESN output, the actual
+position sequence, the estimated target, and the target used for weight calculation
+evolved during the training epochs" (paper E §5.1). The thesis shows one network's
+curves by eye; here every seed's are measured, per epoch:
+
+- NRMSE against the true (analytic) commands and roughness (RMS of the second
+  difference, :func:`roughness`) of y_est (the FEL target estimate), y_used (the target
+  fitted: β y_est + (1 − β) y_ESN; = y_est for the original method) and the ESN output
+  (during the learning cycle, reservoir noise on, and after the fit, on the epoch's
+  noise-free evaluation cycle);
+- the quality of teacher forcing: position NRMSE of the plant's (noise-free) positions
+  against the desired ones during the learning cycle (Fig. 10 plots "the position
+  sequences in epoch 5"; the positions that are the ESN's "current position" input).
+
+The rows are paper E's exps 1, 2 and 5 (``paper_e.TABLE_1`` / ``paper_e.train_config``,
+imported). **One initial network per seed:** rows ``2`` and ``5`` take row ``1``'s seeds
+(:attr:`skinny_mj.experiment.Row.seeds_of`), so the three rows of run k train from the
+same seed and share the ESN weights, the initial readout, the reservoir-noise and the
+sensor-noise streams (``run_streams(seed)``); exp 1's runs are paper-e row 1's runs,
+seed for seed.
+
+A run whose network diverges keeps its diagnostics up to the failing epoch (None after
+it): the run file is status ``ok`` with ``diverged`` = 1 and no test NRMSE, because the
+training curves are this experiment's data. Figures and the table: ``report``
+(:mod:`experiments.paper_e_explain_report`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from controllers.metrics import nrmse, position_nrmse
+from controllers.rollout import Rollout
+from experiments import paper_e
+from skinny_mj.config import TrainConfig, relative_cost
+from skinny_mj.experiment import Experiment, Row, run_seed
+from skinny_mj.sweep import one_of_batch
+from skinny_mj.sweep.stats import to_jsonable
+
+NAME = "paper-e-explain"
+EXPS = ("1", "2", "5")  # paper E §5.1: original 1 rep, original 5 reps, new β = 0.1
+#: epochs (1-based) whose first-repetition signals the run file keeps for the figures
+SERIES_EPOCHS = (1, 5, 10)
+SERIES_RUNS = 2  # runs (by run index) whose signals are kept: the figures show index 0
+#: learning-cycle series (R, E, C) and evaluation-cycle series (R, E) a run keeps
+LEARN_KEYS = ("est_nrmse", "est_rough", "used_nrmse", "used_rough", "esn_learn_nrmse",
+              "esn_learn_rough", "tf_position_nrmse", "tf_sensed_nrmse")
+EVAL_KEYS = ("esn_nrmse", "esn_rough", "eval_position_nrmse")
+
+
+@dataclass(frozen=True)
+class Config:
+    """Paper E's network and schedule (:class:`paper_e.Config`), 20 runs per row."""
+
+    dof: int = 4
+    signals: str = "cartesian"
+    trajectory: str = "ymca"
+    asf: str | None = None
+    reservoir: int = 200
+    epochs: int = 10
+    runs: int = 20
+    base_seed: int = 0
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Config:
+        names = {f.name for f in dataclasses.fields(cls)}
+        return cls(**{k: v for k, v in d.items() if k in names})
+
+
+def roughness(y: np.ndarray) -> np.ndarray:
+    """Roughness of signals: per signal the RMS over time of the second difference
+    y(t+1) − 2 y(t) + y(t−1), then the mean over signals (NRMSE's convention).
+
+    y : (..., T, n) signals (e.g. commands in [-1, 1]), T >= 3. Returns (...)."""
+    y = np.ascontiguousarray(y, float)
+    d2 = y[..., 2:, :] - 2.0 * y[..., 1:-1, :] + y[..., :-2, :]
+    return np.sqrt(np.mean(d2**2, axis=-2)).mean(axis=-1)
+
+
+def train_config(cfg: Config, row: Row) -> TrainConfig:
+    """Paper E's training of exp ``row.params["exp"]`` (its Table 1 row), unchanged."""
+    method, beta, cycles, reps = paper_e.TABLE_1[row.params["exp"]]
+    base = paper_e.Config(dof=cfg.dof, signals=cfg.signals, trajectory=cfg.trajectory,
+                          asf=cfg.asf, reservoir=cfg.reservoir, epochs=cfg.epochs)
+    return paper_e.train_config(base, Row(row.params["exp"], {
+        "method": method, "beta": beta, "cycles": cycles, "reps": reps}))
+
+
+class EpochDiagnostics:
+    """``observe`` callback for :func:`controllers.fel.train`: per run, epoch and learning
+    cycle the NRMSE (vs the true commands) and roughness of y_est, y_used and y_ESN, the
+    teacher-forcing position NRMSE, and the first repetition's signals of some epochs.
+
+    true_commands : (T-1, n_dof) of the training sequence; desired : (T, n_sig);
+    one_rep : steps of one repetition (the series kept); n_runs, epochs, cycles."""
+
+    def __init__(self, true_commands: np.ndarray, desired: np.ndarray, one_rep: int,
+                 n_runs: int, epochs: int, cycles: int,
+                 series_epochs: tuple[int, ...] = SERIES_EPOCHS) -> None:
+        self.true_commands, self.desired, self.one_rep = true_commands, desired, one_rep
+        self.learn = {k: np.full((n_runs, epochs, cycles), np.nan) for k in LEARN_KEYS}
+        self.eval = {k: np.full((n_runs, epochs), np.nan) for k in EVAL_KEYS}
+        self.cycles = cycles
+        self.keep = sorted({min(e, epochs) - 1 for e in series_epochs})
+        self.series: dict[int, dict[str, np.ndarray]] = {e: {} for e in self.keep}
+        self.initial_output: np.ndarray | None = None
+
+    def __call__(self, epoch: int, cycle: int, ro: Rollout, y_used: np.ndarray | None) -> None:
+        n = self.one_rep
+        if cycle == 0:
+            if epoch == 0:  # the initial network's output (W_out = 0: all zero)
+                self.initial_output = ro.y_esn[:, : n - 1].copy()
+            return
+        if y_used is None:  # the evaluation cycle: the ESN output after this epoch's fits
+            self.eval["esn_nrmse"][:, epoch] = nrmse(ro.y_esn, self.true_commands)
+            self.eval["esn_rough"][:, epoch] = roughness(ro.y_esn)
+            self.eval["eval_position_nrmse"][:, epoch] = position_nrmse(ro.true_signals,
+                                                                        self.desired)
+            if epoch in self.series:
+                self.series[epoch]["y_esn"] = ro.y_esn[:, : n - 1].copy()
+            return
+        c = cycle - 1
+        for name, y in (("est", ro.y_est), ("used", y_used), ("esn_learn", ro.y_esn)):
+            self.learn[f"{name}_nrmse"][:, epoch, c] = nrmse(y, self.true_commands)
+            self.learn[f"{name}_rough"][:, epoch, c] = roughness(y)
+        self.learn["tf_position_nrmse"][:, epoch, c] = position_nrmse(ro.true_signals,
+                                                                      self.desired)
+        self.learn["tf_sensed_nrmse"][:, epoch, c] = position_nrmse(ro.sensed, self.desired)
+        if epoch in self.series and c == self.cycles - 1:  # the epoch's last fit
+            s = self.series[epoch]
+            s["y_est"], s["y_used"] = ro.y_est[:, : n - 1].copy(), y_used[:, : n - 1].copy()
+            s["positions"] = ro.true_signals[:, :n].copy()
+
+    def metrics(self, r: int, fail_epoch: int | None, with_series: bool = True) -> dict:
+        """Run ``r``'s JSON-ready diagnostics (None from its failing epoch on); with
+        ``with_series`` also the kept epochs' signals (one repetition)."""
+        def clean(a: np.ndarray) -> list:
+            a = np.round(np.array(a, float), 6)
+            if fail_epoch is not None:
+                a[fail_epoch:] = np.nan
+            return to_jsonable(a)  # NaN -> None
+
+        def rounded(a: np.ndarray) -> list:
+            return np.round(a, 4).tolist()
+
+        out: dict = {f"{k}_per_cycle": clean(v[r]) for k, v in self.learn.items()}
+        out.update({k: clean(v[r, :, -1]) for k, v in self.learn.items()})  # last cycle
+        out.update({k: clean(v[r]) for k, v in self.eval.items()})
+        for k in (*self.learn, *self.eval):  # scalar columns for the engine's table
+            for e in (1, 5, len(out[k])):
+                v = out[k][e - 1] if e <= len(out[k]) else None
+                out[f"{k}_e{e}"] = v
+        out["true_rough"] = float(roughness(self.true_commands))
+        if not with_series:
+            return out
+        alive = [e for e in self.keep if fail_epoch is None or e < fail_epoch]
+        out["series"] = {"epochs": [e + 1 for e in alive],
+                         **{k: [rounded(self.series[e][k][r]) for e in alive]
+                            for k in ("y_est", "y_used", "y_esn", "positions")},
+                         "initial_output": rounded(self.initial_output[r])}
+        return out
+
+
+def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
+    """Seeds of one row in lockstep (row ``1``'s seeds in every row: :func:`all_rows`)."""
+    from skinny_mj.training import build_run, evaluate, train_run
+
+    shared = list(seeds)
+    keep = {run_seed(cfg.base_seed, 0, k) for k in range(SERIES_RUNS)}  # the kept signals
+    run = build_run(train_config(cfg, row), shared)
+    diag = EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory),
+                            len(shared), run.cfg.epochs, run.cfg.learning_cycles)
+    trained = train_run(run, observe=diag).fel
+    tests = evaluate(run)
+    out = []
+    for r, test in enumerate(tests):
+        failed = bool(trained.failed[r] or test.failed)
+        out.append({
+            "network_seed": shared[r], "diverged": int(failed),
+            "fail_reason": trained.fail_reason[r] or (test.fail_reason if failed else None),
+            "position_nrmse": None if failed else test.position_nrmse,
+            "motor_nrmse": None if failed else test.motor_nrmse,
+            **diag.metrics(r, trained.fail_epoch[r], with_series=shared[r] in keep),
+        })
+    return out
+
+
+def run_one(cfg: Config, row: Row, seed: int) -> dict:
+    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
+
+
+def all_rows() -> tuple[Row, ...]:
+    return tuple(Row(e, {"exp": e}, {k: v for k, v in zip(
+        ("position_nrmse", "position_nrmse_var", "motor_nrmse", "motor_nrmse_var"),
+        paper_e.PAPER_TABLE_2[e], strict=True)}, seeds_of=None if e == EXPS[0] else EXPS[0])
+        for e in EXPS)
+
+
+def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
+          dof: int | None = None, signals: str | None = None) -> Experiment:
+    """Exps 1, 2, 5 from one network per seed; ``quick``: 2 runs of 2 epochs."""
+    changes: dict = {k: v for k, v in (("trajectory", movement), ("dof", dof),
+                                       ("signals", signals)) if v is not None}
+    if movement is not None:
+        changes["asf"] = None if asf is None else str(asf)
+    cfg = Config(**({"runs": 2, "epochs": 2} if quick else {}), **changes)
+    return Experiment(
+        name=NAME, rows=all_rows(), run_one=functools.partial(run_one, cfg), config=cfg,
+        runs=cfg.runs, base_seed=cfg.base_seed,
+        table_columns=("est_rough_e1", "used_rough_e5", "esn_rough_e5", "tf_position_nrmse_e5",
+                       "position_nrmse", "motor_nrmse"),
+        run_batch=functools.partial(run_batch, cfg),
+        cost=lambda row: relative_cost(train_config(cfg, row)))
+
+
+def report(results: dict, out_dir: Path) -> str:
+    """explain.md (per-epoch table) and fig7_*.png … fig10_*.png."""
+    from experiments.paper_e_explain_report import write_report
+
+    out_dir = Path(out_dir)
+    cfg = Config.from_dict(json.loads((out_dir / "config.json").read_text())["config"])
+    return write_report(out_dir, cfg)

@@ -1,0 +1,96 @@
+"""fidelity-a: one long training's checkpoints equal short trainings; the chained forward
+model's input; the report on a tiny sweep."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from experiments import fidelity_a, paper_a
+from skinny_mj.config import TrainConfig
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.experiment import Row
+
+TINY = fidelity_a.Config(model=replace(paper_a.MODEL, reservoir=30, forward_reservoir=20,
+                                       cycles=1, trajectory="y"), runs=2, checkpoints=(1, 2))
+SEEDS = [11, 12]
+
+
+def _row(arch: str, delay: int, epochs: int, forward_input: str = "sensed") -> Row:
+    return Row(fidelity_a.row_id(arch, forward_input, delay),
+               {"architecture": arch, "forward_input": forward_input, "delay": delay,
+                "epochs": epochs})
+
+
+def _numbers(out: dict, suffix: str) -> dict:
+    return {k: v for k, v in out.items() if k.endswith(suffix)}
+
+
+@pytest.mark.parametrize("arch,forward_input", [("hybrid", "sensed"), ("serial", "chained")])
+def test_a_short_run_equals_the_long_runs_checkpoint(arch, forward_input):
+    """A 1-epoch run = the 2-epoch run's epoch-1 record, bit for bit; the 2-epoch record is
+    paper A's own last-epoch metrics of a 2-epoch run, and the K = 0 tests at the
+    checkpoints leave the training curve as it is without them."""
+    short = fidelity_a.run_batch(TINY, _row(arch, 3, 1, forward_input), SEEDS)
+    long = fidelity_a.run_batch(TINY, _row(arch, 3, 2, forward_input), SEEDS)
+    for s, g in zip(short, long, strict=True):
+        first = _numbers(s, "_e1")
+        assert len(first) >= 10 and first == _numbers(g, "_e1")  # NaN-free, bit for bit
+        assert s["curve_train_nrmse"] == g["curve_train_nrmse"][:1]
+        assert set(_numbers(g, "_e2")) == {k.replace("_e1", "_e2") for k in first}
+    if forward_input == "chained":
+        return
+    pa_cfg = paper_a.Config(model=replace(TINY.model, epochs=2))
+    theirs = paper_a.run_batch(pa_cfg, Row(f"{arch}-d3", {"architecture": arch, "delay": 3}),
+                               SEEDS)
+    for o, t in zip(long, theirs, strict=True):
+        assert o["curve_train_nrmse"] == t["curve_performance_nrmse"]
+        assert o["train_nrmse_e2"] == t["performance_nrmse"]
+        assert o["train_mad_e2"] == t["performance_mae"]
+        assert o["train_share_e2"] == t["feedback_share"]
+        assert o["train_pred_nrmse_e2"] == t["prediction_nrmse"]
+        assert o["pretrain_prediction_nrmse"] == t["pretrain_prediction_nrmse"]
+
+
+def test_chained_forward_model_is_fed_its_own_prediction():
+    from skinny_mj.training import build_run, train_run
+
+    cfg = replace(TINY.model, epochs=1, delay=3, forward="parallel")
+    for forward_input in ("sensed", "chained"):
+        run = build_run(replace(cfg, forward_input=forward_input), SEEDS[:1])
+        ro = train_run(run).fel.last_rollout
+        n_res, n_sig = run.forward.esn.cfg.n_reservoir, run.desired.shape[1]
+        fed = ro.fm_states[:, :, n_res:n_res + n_sig]  # the position part of its input
+        t = np.arange(fed.shape[1])
+        expected = ro.predictions[:, t] if forward_input == "chained" \
+            else ro.sensed[:, np.maximum(t - 3, 0)]
+        np.testing.assert_array_equal(fed, expected)
+
+
+def test_chained_without_delay_is_the_sensed_forward_model():
+    a = fidelity_a.run_batch(TINY, _row("hybrid", 0, 1, "chained"), SEEDS[:1])
+    b = fidelity_a.run_batch(TINY, _row("hybrid", 0, 1, "sensed"), SEEDS[:1])
+    assert a == b
+    with pytest.raises(SkinnyInputError, match="forward_input"):
+        TrainConfig(forward_input="chained")  # no forward model to chain
+
+
+@pytest.mark.slow  # ~6 s CPU: the report on a tiny sweep
+def test_quick_sweep_writes_tables_and_figures(tmp_path):
+    from skinny_mj.experiment import run_sweep
+
+    tiny = replace(TINY, model=replace(TINY.model, reservoir=10, forward_reservoir=10), runs=2,
+                   plan=tuple((a, "sensed", 2, 1) for a in paper_a.ARCHITECTURES),
+                   checkpoints=(1,))
+    exp = fidelity_a.build(quick=True)
+    exp = replace(exp, rows=fidelity_a.rows(tiny), config=tiny, runs=2,
+                  run_one=lambda row, seed: fidelity_a.run_one(tiny, row, seed),
+                  run_batch=lambda row, seeds: fidelity_a.run_batch(tiny, row, seeds),
+                  groups={}, table_columns=("train_nrmse_e1",))
+    results = run_sweep(exp, tmp_path, workers=1, progress=False)
+    text = fidelity_a.report(results, tmp_path)
+    assert "highest prediction error" in text and "parallel ≈ hybrid" in text
+    assert "| serial-d2 | 1 | 2 |" in (tmp_path / "tables.md").read_text()
+    assert (tmp_path / "fig5_band.png").stat().st_size > 1000
