@@ -29,7 +29,6 @@ plants (``data.warning``, every mjtWarning), and the wall time per run (lockstep
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import json
 from dataclasses import dataclass
@@ -38,6 +37,7 @@ from pathlib import Path
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
 from skinny_mj.sweep import one_of_batch
+from skinny_mj.sweep.options import config_from_dict
 
 NAME = "dynamic"
 #: controller id -> TrainConfig changes
@@ -73,9 +73,7 @@ class Config:
 
     @classmethod
     def from_dict(cls, d: dict) -> Config:
-        names = {f.name for f in dataclasses.fields(cls)}
-        return cls(**{k: tuple(v) if isinstance(v, list) else v
-                      for k, v in d.items() if k in names})
+        return config_from_dict(cls, d)
 
 
 def all_rows(cfg: Config) -> tuple[Row, ...]:

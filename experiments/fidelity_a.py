@@ -40,6 +40,7 @@ from experiments import paper_a
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row
 from skinny_mj.sweep import one_of_batch
+from skinny_mj.sweep.options import movement_changes
 
 NAME = "fidelity-a"
 #: Epochs at which a run's metrics are recorded (those <= the row's epochs, and its last).
@@ -211,10 +212,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     """The plan's rows; ``movement``/``asf``/``dof``/``signals`` replace paper A's YMCA,
     2D joint angles (None: the paper's)."""
     cfg = quick_config() if quick else Config()
-    changes = {k: v for k, v in (("trajectory", movement), ("dof", dof),
-                                 ("signals", signals)) if v is not None}
-    if movement is not None:
-        changes["asf"] = None if asf is None else str(asf)
+    changes = movement_changes(movement, asf, dof, signals)
     cfg = replace(cfg, model=replace(cfg.model, **changes))
     every = rows(cfg)
     groups = {a: tuple(r.row_id for r in every if r.params["architecture"] == a

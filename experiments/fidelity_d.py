@@ -22,7 +22,6 @@ The thesis (paper D Table 1, TT): position train NRMSE 0.0033-0.0092, position t
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import json
 from dataclasses import dataclass, replace
@@ -32,6 +31,7 @@ from experiments import paper_d
 from skinny_mj.config import relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
 from skinny_mj.sweep import one_of_batch
+from skinny_mj.sweep.options import config_from_dict
 
 NAME = "fidelity-d"
 MOVEMENTS = {"recorded": "ymca-recorded", "smooth": "ymca-smooth"}
@@ -65,9 +65,7 @@ class Config:
 
     @classmethod
     def from_dict(cls, d: dict) -> Config:
-        names = {f.name for f in dataclasses.fields(cls)}
-        return cls(**{k: tuple(v) if isinstance(v, list) else v
-                      for k, v in d.items() if k in names})
+        return config_from_dict(cls, d)
 
 
 def cell_id(movement: str, reservoir: int, input_noise: float) -> str:

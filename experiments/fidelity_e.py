@@ -13,7 +13,6 @@ The thesis's ratio: exp 2 / exp 5 = 0.1088 / 0.0245 = 4.4 (position), 0.2435 / 0
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import json
 from dataclasses import dataclass, replace
@@ -23,6 +22,7 @@ from experiments import paper_e
 from skinny_mj.config import relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
 from skinny_mj.sweep import one_of_batch
+from skinny_mj.sweep.options import config_from_dict
 
 NAME = "fidelity-e"
 MD02 = "md_02.amc@start=3,duration=6.26"  # paper E's md_02 excerpt (docs/RESULTS.md)
@@ -46,9 +46,7 @@ class Config:
 
     @classmethod
     def from_dict(cls, d: dict) -> Config:
-        names = {f.name for f in dataclasses.fields(cls)}
-        return cls(**{k: tuple(v) if isinstance(v, list) else v
-                      for k, v in d.items() if k in names})
+        return config_from_dict(cls, d)
 
 
 def _trajectory(key: str) -> tuple[str, str]:

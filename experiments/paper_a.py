@@ -30,6 +30,7 @@ from controllers.fel import run_mean
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
 from skinny_mj.sweep import one_of_batch
+from skinny_mj.sweep.options import movement_changes
 
 NAME = "paper-a"
 ARCHITECTURES = ("inverse", "parallel", "serial", "hybrid")
@@ -171,10 +172,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     """The sweep over (architecture, delay); ``movement``/``asf``/``dof``/``signals``
     replace the paper's YMCA, 2D joint angles (None: the paper's)."""
     cfg = quick_config() if quick else Config()
-    changes = {k: v for k, v in (("trajectory", movement), ("dof", dof),
-                                 ("signals", signals)) if v is not None}
-    if movement is not None:
-        changes["asf"] = None if asf is None else str(asf)
+    changes = movement_changes(movement, asf, dof, signals)
     cfg = replace(cfg, model=replace(cfg.model, **changes))
     return Experiment(
         name=NAME, rows=rows(cfg.delays), run_one=functools.partial(run_one, cfg),

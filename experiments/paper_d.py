@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from skinny_mj.experiment import Experiment, Row
+from skinny_mj.sweep.options import movement_changes
 from skinny_mj.training import TrainConfig, TrainOutcome, train
 
 NAME = "paper-d"
@@ -181,10 +182,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     (a library name, a file, or an excerpt such as
     ``../shared/mocap/cmu/md_02.amc@start=3,duration=6.26``) replaces YMCA in training
     and testing; ``dof``/``signals`` another body (None: the paper's 3D Cartesian)."""
-    changes = {k: v for k, v in (("trajectory", movement), ("dof", dof),
-                                 ("signals", signals)) if v is not None}
-    if movement is not None:
-        changes["asf"] = None if asf is None else str(asf)
+    changes = movement_changes(movement, asf, dof, signals)
     cfg = dataclasses.replace(quick_config() if quick else Config(), **changes)
     return Experiment(
         name=NAME, rows=rows(), run_one=functools.partial(run_one, cfg), config=cfg,

@@ -25,7 +25,6 @@ The paper's numbers are shown beside ours, labelled; never in place of ours.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import json
 from dataclasses import dataclass
@@ -36,6 +35,7 @@ import numpy as np
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
 from skinny_mj.sweep import one_of_batch
+from skinny_mj.sweep.options import config_from_dict, movement_changes
 
 NAME = "paper-e"
 
@@ -104,9 +104,7 @@ class Config:
     @classmethod
     def from_dict(cls, d: dict) -> Config:
         """From ``config.json`` (lists back to tuples)."""
-        names = {f.name for f in dataclasses.fields(cls)}
-        return cls(**{k: tuple(v) if isinstance(v, list) else v
-                      for k, v in d.items() if k in names})
+        return config_from_dict(cls, d)
 
 
 def train_config(cfg: Config, row: Row) -> TrainConfig:
@@ -212,10 +210,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     """The sweep; ``quick``: see :meth:`Config.quick`. ``movement`` (+ ``asf``), ``dof``,
     ``signals``: train and test every row on another movement or body (None: the
     paper's)."""
-    changes = {k: v for k, v in (("trajectory", movement), ("dof", dof),
-                                 ("signals", signals)) if v is not None}
-    if movement is not None:
-        changes["asf"] = None if asf is None else str(asf)
+    changes = movement_changes(movement, asf, dof, signals)
     cfg = Config.quick(**changes) if quick else Config(**changes)
     every = rows(cfg)
     return Experiment(

@@ -30,7 +30,6 @@ training curves are this experiment's data. Figures and the table: ``report``
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import json
 from dataclasses import dataclass
@@ -44,6 +43,7 @@ from experiments import paper_e
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, run_seed
 from skinny_mj.sweep import one_of_batch
+from skinny_mj.sweep.options import config_from_dict, movement_changes
 from skinny_mj.sweep.stats import to_jsonable
 
 NAME = "paper-e-explain"
@@ -72,8 +72,7 @@ class Config:
 
     @classmethod
     def from_dict(cls, d: dict) -> Config:
-        names = {f.name for f in dataclasses.fields(cls)}
-        return cls(**{k: v for k, v in d.items() if k in names})
+        return config_from_dict(cls, d)
 
 
 def roughness(y: np.ndarray) -> np.ndarray:
@@ -208,10 +207,7 @@ def all_rows() -> tuple[Row, ...]:
 def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
           dof: int | None = None, signals: str | None = None) -> Experiment:
     """Exps 1, 2, 5 from one network per seed; ``quick``: 2 runs of 2 epochs."""
-    changes: dict = {k: v for k, v in (("trajectory", movement), ("dof", dof),
-                                       ("signals", signals)) if v is not None}
-    if movement is not None:
-        changes["asf"] = None if asf is None else str(asf)
+    changes = movement_changes(movement, asf, dof, signals)
     cfg = Config(**({"runs": 2, "epochs": 2} if quick else {}), **changes)
     return Experiment(
         name=NAME, rows=all_rows(), run_one=functools.partial(run_one, cfg), config=cfg,
