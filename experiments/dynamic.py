@@ -16,6 +16,9 @@ Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` 
   centre of mass (``payload1``) or every arm link's mass and inertia x 1.2 / x 0.8
   (``mass+20``, ``mass-20``); ``fel-new-gff`` tested at K = 0 (``-k0``) and with the
   PD left on at K = 1 (``-k1``), and ``pd`` (K = 1).
+- ``table`` also holds ``<body>-rec-<controller>`` (pd, ct, fel-new, fel-new-gff) on the
+  recorded-like YMCA (``ymca-recorded``: never still, marker noise), the movement of the
+  issue's goal.
 - ``kinematic``: ``2d-ymca-kinematic`` is the velocity-servo run of the same schedule
   (paper E exp. 5), for the wall-time ratio.
 
@@ -66,6 +69,7 @@ class Config:
 
     bodies: tuple[str, ...] = ("2d", "3d")
     ymca: str = "ymca"
+    recorded: str = "ymca-recorded"  # the recorded-like YMCA (issue 12), the goal's movement
     clip: str = "md_02.amc@start=3,duration=6.26"
     signals: str = "cartesian"
     epochs: int = 10
@@ -93,6 +97,10 @@ def all_rows(cfg: Config) -> tuple[Row, ...]:
                                                   **CONTROLLERS["pd"], **changes}))
         out.append(Row("2d-ymca-kinematic", {"dof": 4, "trajectory": cfg.ymca,
                                              "actuation": "velocity", "method": "new"}))
+    for bd in cfg.bodies:  # appended last, so the rows above keep their seeds
+        for ctl in ("pd", "ct", "fel-new", "fel-new-gff"):
+            out.append(Row(f"{bd}-rec-{ctl}", {"dof": 4 if bd == "2d" else 8,
+                                               "trajectory": cfg.recorded, **CONTROLLERS[ctl]}))
     return tuple(out)
 
 
