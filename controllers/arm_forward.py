@@ -76,6 +76,7 @@ class ArmForwardModels:
     sharing : "none", "predictions" or "commands" (see the module docstring).
     """
 
+    chained = False  # always fed the (delayed) sensed positions (ForwardModel's option)
     mode = "parallel"
 
     def __init__(self, lag: ESN, lead: ESN | None, lag_signals: np.ndarray,

@@ -156,6 +156,8 @@ def rollout(
     if forward is not None:
         predictions[0] = sensed[0]
         forward.begin(plant)
+    # chained: the forward model's own p(t) stands in for the delayed s_in
+    chained = forward is not None and delay_steps > 0 and forward.chained
     n_hook = 0 if hook is None else hook.n_inputs
     u_in = np.empty((n_runs, n_des + n_sig * (1 if forward is None else 2) + n_hook))
     ff = None if hook is None else array("feedforward", (n_steps - 1, n_runs, n_dof))
@@ -184,10 +186,9 @@ def rollout(
             command += ff[t]
         np.maximum(command, -1.0, out=command)  # np.clip, without its Python wrapper
         np.minimum(command, 1.0, out=command)
-        if forward is not None:  # chained: its own p(t) stands in for the delayed s_in
-            chained = delay_steps > 0 and getattr(forward, "chained", False)
-            fm_in = predictions[t] if chained else s_in
-            predictions[t + 1] = forward.step(fm_in, command, noise=noise)
+        if forward is not None:
+            predictions[t + 1] = forward.step(predictions[t] if chained else s_in, command,
+                                              noise=noise)
             fm_states[t] = forward.esn.extended
         sensed[t + 1] = plant.step(command)
         if hook is not None:
