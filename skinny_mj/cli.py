@@ -221,9 +221,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler = getattr(commands, f"cmd_{args.command}")
     try:
         from skinny_mj.preflight import check_gl
+        from skinny_mj.threads import one_blas_thread
 
         check_gl()  # a MUJOCO_GL mujoco refuses would fail at its import, as a traceback
-        return int(handler(args) or 0)
+        with one_blas_thread():  # same bits whatever the machine's BLAS threads
+            return int(handler(args) or 0)
     except SkinnyInputError as err:
         print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
         return 2

@@ -55,6 +55,7 @@ from skinny_mj.run_parts import (  # noqa: F401  (re-exported)
     run_streams,
     true_commands_of,
 )
+from skinny_mj.threads import single_threaded
 
 
 @dataclass
@@ -103,6 +104,7 @@ class Run:
                              inputs=cfg.inputs)
 
 
+@single_threaded
 def build_run(cfg: TrainConfig, seeds: Sequence[int]) -> Run:
     """The parts of ``len(seeds)`` runs of ``cfg`` in lockstep (see :class:`Run`)."""
     from skinny_mj import body
@@ -158,6 +160,7 @@ class Training:
     ridge_lambda: np.ndarray | None = None  # (R, E) lambda chosen per epoch (ridge_select)
 
 
+@single_threaded
 def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
               observe: Callable[..., None] | None = None) -> Training:
     """Train ``run``'s networks in place. ``progress(done, total)`` after every cycle;
@@ -222,6 +225,7 @@ class TestOutcome:
     torque: dict | None = field(default=None, repr=False)
 
 
+@single_threaded
 def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = None,
              plant=None) -> list[TestOutcome]:
     """Test the R trained networks of ``run`` (K = 0, no learning, reservoir noise
@@ -279,6 +283,7 @@ def train(cfg: TrainConfig, seed: int = 0,
     return train_batch(cfg, [seed], progress)[0]
 
 
+@single_threaded
 def train_batch(cfg: TrainConfig, seeds: Sequence[int],
                 progress: Callable[[int, int], None] | None = None) -> list[TrainOutcome]:
     """Train R = len(seeds) runs of ``cfg`` in lockstep; run r equals ``train(cfg, seeds[r])``.
