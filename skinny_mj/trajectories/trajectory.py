@@ -33,6 +33,9 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path, atomic_write_text
 
 DEFAULT_DT_S = body.CONTROL_DT_S  # movements are sampled at the control rate
+#: Largest |angle| a movement may hold, rad (joint ranges are within +-pi; a larger
+#: finite value is clipped, but one near the float limit overflows in speeds and degrees).
+MAX_ABS_ANGLE_RAD = 1000.0
 MIN_SPEED, MAX_SPEED = 0.0, 10.0  # resample(speed) accepts MIN_SPEED < speed <= MAX_SPEED
 _FORMAT_VERSION = 1
 
@@ -72,6 +75,12 @@ class Trajectory:
             t, j = np.argwhere(~np.isfinite(a))[0]
             raise SkinnyInputError(
                 f"trajectory {self.name!r}: non-finite angle at step {t}, DOF {j}"
+            )
+        if np.any(np.abs(a) > MAX_ABS_ANGLE_RAD):  # finite, but its speeds and degrees
+            t, j = np.argwhere(np.abs(a) > MAX_ABS_ANGLE_RAD)[0]  # would overflow to inf
+            raise SkinnyInputError(
+                f"trajectory {self.name!r}: angle {a[t, j]:g} rad at step {t}, DOF {j} is not "
+                f"a joint angle (|angle| <= {MAX_ABS_ANGLE_RAD:g} rad)"
             )
         dt = float(self.dt)
         if not (math.isfinite(dt) and dt > 0):
@@ -369,9 +378,11 @@ def _check_desired(desired: dict | None, angles: np.ndarray, name: str) -> dict 
             raise SkinnyInputError(f"trajectory {name!r}: unknown desired signals {key!r}")
         v = np.array(value, dtype=float)
         shape = (angles.shape[0], body.n_signals(angles.shape[1], key))
-        if v.shape != shape or not np.all(np.isfinite(v)):
+        if v.shape != shape or not np.all(np.isfinite(v)) \
+                or np.any(np.abs(v) > MAX_ABS_ANGLE_RAD):
             raise SkinnyInputError(f"trajectory {name!r}: desired {key!r} signals must be "
-                                   f"finite, shape {shape}, got {v.shape}")
+                                   f"finite, at most {MAX_ABS_ANGLE_RAD:g} in magnitude, "
+                                   f"shape {shape}; got shape {v.shape}")
         v.setflags(write=False)
         out[key] = v
     return out
