@@ -129,7 +129,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=("original", "new", "true-target"), default="new")
     p.add_argument("--actuation", choices=("velocity", "torque"), default="velocity",
                    help="velocity servo (the thesis's) or the torque body with mass and "
-                   "gravity (ESN inverse dynamics, PD teacher; issue 14)")
+                   "gravity (ESN inverse dynamics, PD teacher)")
     p.add_argument("--gravity-feedforward", action="store_true",
                    help="torque: add the gravity (bias) torque to the command, not learned")
     p.add_argument("--beta", type=float, default=0.1, help="β of the new method, in (0, 1]")
@@ -152,7 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "TrainConfig JSON); flags given as well override its fields")
     p.add_argument("--preset", choices=("general",), help="a named configuration; flags "
                    "given as well override its fields. general: the inverse model for unseen "
-                   "movements (issue 13): 2D, joint-angle signals, 15 s of motor babbling "
+                   "movements: 2D, joint-angle signals, 15 s of motor babbling "
                    "(random minimum-jerk moves over every joint's whole range, 1-8 rad/s), "
                    "full scale 4x its fastest speed, paper E exp. 5 schedule; of 12 training "
                    "sets in `skinny experiment generalization` it had the lowest error on "
