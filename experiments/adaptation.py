@@ -1,5 +1,5 @@
 """Adaptation: a lasting change of the plant during performance, the feedback controller
-left on and learning continuing online (issue 16, item 4).
+left on and learning continuing online.
 
 Each run trains paper E's experiment 5 (new method, β = 0.1, N = 200, YMCA; the
 torque rows: the same on the torque twin, ``actuation="torque"``, as

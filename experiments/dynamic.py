@@ -1,4 +1,4 @@
-"""Dynamic control (issue 14): the torque-driven Skinny, with mass, gravity and torque
+"""Dynamic control: the torque-driven Skinny, with mass, gravity and torque
 limits, learns YMCA and a real clip with an ESN inverse-dynamics model.
 
 Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` with
@@ -18,7 +18,7 @@ Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` 
   PD left on at K = 1 (``-k1``), and ``pd`` (K = 1).
 - ``table`` also holds ``<body>-rec-<controller>`` (pd, ct, fel-new, fel-new-gff) on the
   recorded-like YMCA (``ymca-recorded``: never still, marker noise), the movement of the
-  issue's goal.
+  goal below.
 - ``kinematic``: ``2d-ymca-kinematic`` is the velocity-servo run of the same schedule
   (paper E exp. 5), for the wall-time ratio.
 
@@ -26,7 +26,7 @@ Metrics per run: test position / motor NRMSE (motor: against the normalized
 inverse-dynamics torques), mean |applied torque| (N m), positive motor work (J), max
 |commanded| and |applied| torque / limit, MuJoCo warnings of the training and test
 plants (``data.warning``, every mjtWarning), and the wall time per run (lockstep batch
-/ R). Goal (issue 14): the ESN alone (K = 0) on YMCA, position NRMSE <= 0.03 (2D) and
+/ R). Goal: the ESN alone (K = 0) on YMCA, position NRMSE <= 0.03 (2D) and
 <= 0.06 (3D); a target to measure against, not a number tuned to.
 """
 

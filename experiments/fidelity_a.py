@@ -1,4 +1,4 @@
-"""Issue 12, paper A: why does our inverse-only error saturate at 8.5–9 %, not 10–20 %?
+"""Paper A's fidelity: why does our inverse-only error saturate at 8.5–9 %, not 10–20 %?
 
 Paper A's runs (``experiments.paper_a.MODEL`` / ``train_config``, imported) measured
 three ways at once. K is fixed (0.65) through paper A's training, so nothing in epochs

@@ -1,4 +1,4 @@
-"""Issue 12, paper D: which true-target cell trains in the thesis's range, and tests how?
+"""Paper D's fidelity: which true-target cell trains in the thesis's range, and tests how?
 
 Paper D's true-target (TT) half (``experiments.paper_d.EXPERIMENTS`` / ``train_configs``,
 imported) × Gaussian input noise on the teacher-forced inputs (``tt_input_noise``, SD in

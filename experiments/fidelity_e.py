@@ -1,4 +1,4 @@
-"""Issue 12, paper E: where does the original method's exp 2 / exp 5 ratio reach ×4.4?
+"""Paper E's fidelity: where does the original method's exp 2 / exp 5 ratio reach ×4.4?
 
 Paper E's exps 1, 2 and 5 (``experiments.paper_e.TABLE_1`` / ``train_config``, imported)
 × movement {recorded-like YMCA (``ymca-recorded``), ``ymca-smooth`` (today's ``ymca``),

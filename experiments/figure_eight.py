@@ -1,5 +1,5 @@
 """Figure-eight generation with output feedback (Jaeger): does paper E's new β method
-beat the ordinary teacher-forced fit, FORCE and reservoirpy? (issue 16, item 2)
+beat the ordinary teacher-forced fit, FORCE and reservoirpy?
 
 One ESN (N = 200, spectral radius 0.8, input scaling 0.5 on the bias, output feedback
 scaling 1, identity readout, uniform state noise 1e-3, pinv) learns the 1:2 Lissajous

@@ -1,4 +1,4 @@
-"""Generalization (issue 13, the thesis's RQ3): which training movement teaches an inverse
+"""Generalization (the thesis's RQ3): which training movement teaches an inverse
 model that imitates movements it never saw?
 
 A train-set x test-movement matrix for three bodies/representations: 2D joint angles
@@ -22,7 +22,7 @@ the fraction of true-command samples beyond full scale (|c| > 1 before clipping,
 run's own scale) and what that alone costs: the position NRMSE of the exact inverse
 model clipped at full scale (:func:`clipped_ideal_nrmse`, a kinematic bound).
 Paper E's schedule instead of paper C's (N = 1000, 150 epochs) keeps the whole matrix
-near the issue's ~20 min on one worker (measured: 21.5 min for 240 runs on a shared
+near 20 min on one worker (measured: 21.5 min for 240 runs on a shared
 2-core machine): the thesis's own row at its size is paper C's sweep
 (``skinny experiment paper-c``). Every seed of a row trains on the same babble draw
 (``seed=0``; lockstep needs one movement): the babble's own variability is not sampled.

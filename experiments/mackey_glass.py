@@ -1,5 +1,5 @@
 """Mackey-Glass (τ = 17) 84-step prediction with output feedback: does paper E's new β
-method beat the ordinary teacher-forced fit and reservoirpy? (issue 16, item 2)
+method beat the ordinary teacher-forced fit and reservoirpy?
 
 Jaeger & Haas (2004)'s task and network (:func:`skinny_mj.bench_mackey_glass.esn_config`:
 leak 0.6, spectral radius 0.95, bias 0.2, feedback scaling 0.56, state noise 1e-8,

@@ -180,7 +180,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
           dof: int | None = None, signals: str | None = None) -> Experiment:
     """The sweep: one row per experiment, both architectures per run. ``movement``
     (a library name, a file, or an excerpt such as
-    ``../shared/mocap/cmu/md_02.amc@start=3,duration=6.26``) replaces YMCA in training
+    ``md_02.amc@start=3,duration=6.26``) replaces YMCA in training
     and testing; ``dof``/``signals`` another body (None: the paper's 3D Cartesian)."""
     changes = movement_changes(movement, asf, dof, signals)
     cfg = dataclasses.replace(quick_config() if quick else Config(), **changes)

@@ -14,10 +14,10 @@ Rows of one sweep, grouped by id (``--rows table,fig3,fig4,fig5``; or single ids
   method with 5 repetitions, (b) new method β = 0.1 with 1 repetition, N = 200,
   10 runs per level.
 
-Defaults per SPEC §4/§5 (N = 200, spectral radius 0.5, reservoir noise 0.03 original /
+The thesis's defaults (N = 200, spectral radius 0.5, reservoir noise 0.03 original /
 0.2 new, sensor noise 0.01, 10 epochs, K 1 → 0). ``--movement`` trains and tests every
 row on another movement, e.g. an excerpt of motion capture:
-``--movement ../shared/mocap/cmu/md_02.amc@start=3,duration=6.26`` (recorded in
+``--movement md_02.amc@start=3,duration=6.26`` (recorded in
 config.json and the table heading); ``--dof 8`` runs it on the 3D body.
 
 The paper's numbers are shown beside ours, labelled; never in place of ours.

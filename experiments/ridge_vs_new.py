@@ -1,5 +1,5 @@
 """Ridge vs new: does a ridge readout (lambda chosen per fit on a validation cycle) with
-the original FEL method match paper E's new β method? (issue 16, item 1)
+the original FEL method match paper E's new β method?
 
 Rows, on each of two movements (``ymca-*``: the YMCA of paper E; ``md02-*``: CMU
 modern dance md_02, seconds 3 to 9.26, the length of one YMCA):

@@ -1,4 +1,4 @@
-"""Three-d (issue 16): papers A, B and C on the 3D body (8 DOF, Cartesian signals) beside
+"""Three-d: papers A, B and C on the 3D body (8 DOF, Cartesian signals) beside
 their own 2D joint-angle setting, in one sweep with the same seeds.
 
 Rows ``<paper>-<dim>-<paper row>`` (``a-2d-serial-d4``, ``b-3d-phase90``,

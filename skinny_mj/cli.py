@@ -15,6 +15,39 @@ from pathlib import Path
 from skinny_mj.errors import SkinnyInputError
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a usage error in one line with a pointer to ``--help``
+    (exit code 2), instead of the whole usage block before it."""
+
+    def error(self, message: str):  # noqa: ANN201 (argparse's signature; never returns)
+        self.exit(2, f"{self.prog}: error: {_one_line(message)} "
+                     f"(see `{self.prog} --help`)\n")
+
+
+class _ExperimentHelp(argparse.Action):
+    """``skinny experiment NAME --help``: that study's description, rows, groups, runs,
+    options and cost; without a NAME (or with ``list``), the command's own help."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs):  # noqa: ANN001
+        super().__init__(option_strings, dest=dest, default=argparse.SUPPRESS, nargs=0,
+                         **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):  # noqa: ANN001
+        name = getattr(namespace, "name", None)
+        if name in (None, "list"):
+            parser.print_help()
+            parser.exit()
+        os.environ.setdefault("MUJOCO_GL", "disabled")  # before a study imports mujoco
+        from skinny_mj.study_help import study_help
+
+        try:
+            text = study_help(name)
+        except SkinnyInputError as err:
+            parser.exit(2, f"{parser.prog}: error: {_one_line(err)}\n")
+        print(text, end="")
+        parser.exit()
+
+
 def _positive_int(text: str) -> int:
     value = int(text)
     if value < 1:
@@ -73,7 +106,7 @@ def given_options(argv: Sequence[str]) -> set[str]:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="skinny",
         description="Skinny-MJ: echo state networks learn to make a MuJoCo torso imitate YMCA.",
     )
@@ -96,7 +129,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=("original", "new", "true-target"), default="new")
     p.add_argument("--actuation", choices=("velocity", "torque"), default="velocity",
                    help="velocity servo (the thesis's) or the torque body with mass and "
-                   "gravity (ESN inverse dynamics, PD teacher; issue 14)")
+                   "gravity (ESN inverse dynamics, PD teacher)")
     p.add_argument("--gravity-feedforward", action="store_true",
                    help="torque: add the gravity (bias) torque to the command, not learned")
     p.add_argument("--beta", type=float, default=0.1, help="β of the new method, in (0, 1]")
@@ -119,7 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "TrainConfig JSON); flags given as well override its fields")
     p.add_argument("--preset", choices=("general",), help="a named configuration; flags "
                    "given as well override its fields. general: the inverse model for unseen "
-                   "movements (issue 13): 2D, joint-angle signals, 15 s of motor babbling "
+                   "movements: 2D, joint-angle signals, 15 s of motor babbling "
                    "(random minimum-jerk moves over every joint's whole range, 1-8 rad/s), "
                    "full scale 4x its fastest speed, paper E exp. 5 schedule; of 12 training "
                    "sets in `skinny experiment generalization` it had the lowest error on "
@@ -150,8 +183,12 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--reps", type=_positive_int, default=1)
     e.add_argument("--out", type=Path, required=True, help="FILE.npz or FILE.csv")
 
-    p = sub.add_parser("experiment", help="reproduce a paper's table and figures (a sweep)")
-    p.add_argument("name", help="experiment name, or `list`")
+    p = sub.add_parser("experiment", help="reproduce a paper's table and figures (a sweep)",
+                       add_help=False)
+    p.add_argument("-h", "--help", action=_ExperimentHelp, help="this help; after a NAME: "
+                   "that study's rows, groups, runs, options and cost")
+    p.add_argument("name", help="experiment name (`skinny experiment list` shows them), "
+                   "or `list`")
     p.add_argument("--runs", type=_positive_int, help="runs per row (default: the paper's)")
     p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
     p.add_argument("--out", type=Path, help="output folder (default: results/<name>/<time>)")

@@ -348,8 +348,9 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     from skinny_mj.io import atomic_write_text
 
     if args.name == "list":
-        for name in registry.names():
-            print(f"{name:10} {registry.describe(name)}")
+        from skinny_mj.study_help import list_text
+
+        print(list_text())
         return 0
     module = registry.get(args.name)
     rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None

@@ -45,6 +45,7 @@ def get(name: str) -> ModuleType:
 
 
 def describe(name: str) -> str:
-    """The first line of the experiment module's docstring ("" if it has none)."""
+    """The first paragraph of the experiment module's docstring, whole, on one line (""
+    if it has none)."""
     doc = (get(name).__doc__ or "").strip()
-    return doc.splitlines()[0] if doc else ""
+    return " ".join(doc.split("\n\n")[0].split())

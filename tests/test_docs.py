@@ -68,3 +68,77 @@ def test_site_builds_strict(tmp_path):
     paper_e = (site / "papers/paper-e/index.html").read_text()
     assert "<table>" in paper_e  # the RESULTS.md section was pulled in
     assert (site / "model/skinny/skinny_2d.png").is_file()
+
+
+# -- the docs match the code: commands parse, named files exist ---------------------------
+_TOP = ("skinny_mj/", "experiments/", "controllers/", "tests/", "benchmarks/", "docs/",
+        "models/", ".ci/")
+
+
+def shell_commands(text: str) -> list[str]:
+    """The ``skinny ...`` command lines of a Markdown text's code blocks (fenced or
+    indented): continuation lines joined, comments and ``[optional]`` brackets dropped,
+    ``a | b`` alternatives cut to the first."""
+    fenced = r"(?ms)^```(?:bash|sh|console)?\n(.*?)^```"
+    blocks = re.findall(fenced, text)
+    blocks += re.findall(r"(?m)((?:^    \S.*\n)+)", re.sub(r"(?ms)^```.*?^```", "", text))
+    out = []
+    for block in blocks:
+        for line in block.replace("\\\n", "").splitlines():  # as the shell joins them
+            line = re.sub(r"^\s*(?:[A-Z_]+=\S+\s+)*(?:nice -n \d+\s+)?", "", line)
+            line = re.split(r"\s+#|\s+\|\s+", line)[0].strip()
+            if line.startswith("skinny "):
+                out.append(re.sub(r"\[([^\]]*)\]", r"\1", line))
+    return out
+
+
+def test_command_finder_reads_blocks_as_a_shell_would():
+    text = ("```bash\nskinny demo --seed 1   # note\nMUJOCO_GL=egl skinny render \\\n"
+            "    --out x.png\nskinny bench [--quick]\nskinny experiment paper-a | paper-b\n"
+            "```\n\n    skinny view run.rrd\n")
+    assert shell_commands(text) == ["skinny demo --seed 1", "skinny render     --out x.png",
+                                    "skinny bench --quick", "skinny experiment paper-a",
+                                    "skinny view run.rrd"]
+
+
+@pytest.mark.parametrize("path", DOCS, ids=lambda p: str(p.relative_to(ROOT)))
+def test_documented_commands_parse_and_name_real_studies(path, capsys):
+    import shlex
+
+    from skinny_mj import registry
+    from skinny_mj.cli import build_parser
+
+    for cmd in shell_commands(path.read_text()):
+        try:
+            args = build_parser().parse_args(shlex.split(cmd)[1:])
+        except SystemExit:
+            pytest.fail(f"{path.relative_to(ROOT)}: `{cmd}`: {capsys.readouterr().err}")
+        if args.command == "experiment":
+            assert args.name in [*registry.names(), "list"], (path.name, cmd)
+
+
+@pytest.mark.parametrize("path", DOCS, ids=lambda p: str(p.relative_to(ROOT)))
+def test_documented_repository_paths_exist(path):
+    named = re.findall(r"`((?:%s)[\w./-]+)`" % "|".join(map(re.escape, _TOP)), path.read_text())
+    missing = [p for p in named if not (ROOT / p.rstrip("/")).exists()
+               and not (ROOT / f"{p.rsplit('.', 1)[0]}.py").exists()]  # module.attribute
+    assert missing == [], f"{path.relative_to(ROOT)} names files that do not exist"
+
+
+def test_every_built_in_movement_is_named_in_the_docs():
+    from skinny_mj.trajectories import library
+
+    listed = (ROOT / "docs/adding-a-movement.md").read_text()
+    missing = [n for n in library.names()
+               if f"`{n}`" not in listed and not (n.startswith("bimanual-")
+                                                  and "`bimanual-*`" in listed)]
+    assert missing == []
+
+
+def test_every_extra_is_named_in_getting_started():
+    import tomllib
+
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"][
+        "optional-dependencies"]
+    text = (ROOT / "docs/getting-started.md").read_text()
+    assert [e for e in extras if f"`.[{e}]`" not in text] == []

@@ -1,0 +1,76 @@
+"""What the command line says to a user: a usage error in one line with a ``--help``
+hint, each study's own ``--help``, whole descriptions in ``skinny experiment list``."""
+
+from __future__ import annotations
+
+import pytest
+
+from skinny_mj import registry
+from skinny_mj.cli import main
+
+
+def _exit(argv, capsys) -> tuple[int, str, str]:
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    out = capsys.readouterr()
+    return info.value.code, out.out, out.err
+
+
+@pytest.mark.parametrize("argv", [
+    ["train", "--bogus"], ["train", "--epochs", "0"], ["train", "--dof", "5"],
+    ["experiment", "paper-e", "--runs", "x"], [], ["trajectory"], ["nonsense"]])
+def test_usage_errors_are_one_line_with_a_help_hint_exit_2(argv, capsys):
+    code, out, err = _exit(argv, capsys)
+    assert code == 2 and out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("skinny") and "error:" in lines[0]
+    assert lines[0].endswith("--help`)") and "usage:" not in err
+
+
+def test_experiment_help_describes_that_study(capsys):
+    code, paper_e, _ = _exit(["experiment", "paper-e", "--help"], capsys)
+    assert code == 0
+    exp = registry.get("paper-e").build()
+    assert paper_e.startswith("skinny experiment paper-e\n")
+    assert registry.describe("paper-e").split(",")[0] in paper_e
+    for label in ("Rows (35", "Groups (--rows GROUP): table = 1, 2, 3, 4, 5, 6",
+                  "Runs per row:", "Options: --movement: taken", "Cost: the full sweep is"):
+        assert label in paper_e, label
+    assert f"is {sum(r.runs or exp.runs for r in exp.rows)} runs" in paper_e
+    code, bimanual, _ = _exit(["experiment", "bimanual-delay", "--help"], capsys)
+    assert code == 0 and bimanual != paper_e
+    assert "--movement: refused" in bimanual and "refuses cartesian" in bimanual
+
+
+def test_experiment_help_of_an_unknown_study_is_one_line_exit_2(capsys):
+    code, out, err = _exit(["experiment", "no-such-study", "--help"], capsys)
+    assert code == 2 and out == ""
+    assert len(err.splitlines()) == 1 and "known: " in err and "paper-e" in err
+
+
+def test_experiment_help_without_a_name_is_the_command_help(capsys):
+    code, out, _ = _exit(["experiment", "--help"], capsys)
+    assert code == 0 and out.startswith("usage: skinny experiment")
+
+
+def test_experiment_list_shows_whole_descriptions(capsys):
+    assert main(["experiment", "list"]) == 0
+    listed = " ".join(capsys.readouterr().out.split())
+    for name in registry.names():
+        assert f"{name} {registry.describe(name)}" in listed, name
+        assert registry.describe(name).endswith((".", "?", ")")), name  # a whole sentence
+
+
+def test_measured_time_per_run_comes_from_earlier_sweeps(tmp_path):
+    import json
+
+    from skinny_mj.study_help import measured_here
+
+    assert measured_here("paper-e", tmp_path) is None
+    for stamp, rows in (("a", [(2.0, 10), (4.0, 10)]), ("b", [(3.0, 20)])):
+        (tmp_path / "paper-e" / stamp).mkdir(parents=True)
+        (tmp_path / "paper-e" / stamp / "results.json").write_text(json.dumps({"rows": [
+            {"n": n, "n_error": 0, "wall_s": {"mean": w, "total": w * n}} for w, n in rows]}))
+    said = measured_here("paper-e", tmp_path)
+    assert said.startswith("3.0 s of one worker per run, mean of 40 runs in 2 earlier")

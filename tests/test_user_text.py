@@ -1,0 +1,80 @@
+"""Text a user reads speaks to users: no tracker numbers or work-diary words in the README,
+the docs, the model card, the CLI's help or the studies' descriptions; and every Markdown
+list renders as a list (Python-Markdown, which MkDocs uses, reads a list that follows a
+paragraph line with no blank line between as more of that paragraph, and a nested block
+indented by less than four spaces as text)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from skinny_mj import registry
+from skinny_mj.cli import build_parser
+
+ROOT = Path(__file__).resolve().parents[1]
+MARKDOWN = [ROOT / "README.md", ROOT / "models/skinny/README.md",
+            *sorted((ROOT / "docs").rglob("*.md"))]
+#: Words of a work diary or a tracker, not of a user's manual.
+DIARY = re.compile(r"\bissues?\b|\bsessions?\b|\bengineers?\b|\bthe team\b|\bwe tried\b",
+                   re.IGNORECASE)
+_ITEM = re.compile(r"\s*(?:[-*+]|\d+[.)])\s+\S")
+#: The Markdown extensions of mkdocs.yml that change how blocks are read.
+_EXTENSIONS = ["admonition", "tables", "toc", "pymdownx.superfences", "pymdownx.highlight"]
+
+
+def diary_words(text: str) -> list[str]:
+    """Each line of ``text`` holding a diary word, with its line number."""
+    return [f"{i}: {line.strip()[:120]}" for i, line in enumerate(text.splitlines(), 1)
+            if DIARY.search(line)]
+
+
+def glued_lists(text: str) -> list[str]:
+    """List items that render as text of a paragraph or an item above them: ``text`` is
+    rendered as the site renders it (Python-Markdown: a list needs a blank line after a
+    paragraph, and nested blocks four spaces of indent) and every ``<p>`` or ``<li>``
+    line that reads like a list item is one."""
+    markdown = pytest.importorskip("markdown")
+    html = markdown.markdown(text, extensions=_EXTENSIONS)
+    return [line.strip()[:80] for m in re.finditer(r"<(p|li)>(.*?)</\1>", html, re.S)
+            for line in m.group(2).split("\n")[1:] if _ITEM.match(line)]
+
+
+def test_the_checks_find_what_they_should():
+    assert diary_words("Fine.\nAs issue 13 asks,\nthis session ran\nfour engineers\n") == [
+        "2: As issue 13 asks,", "3: this session ran", "4: four engineers"]
+    assert glued_lists("Text:\n- a\n- b\n\nText:\n\n- c\n\n```\nx\n- d\n```\n\n- e\n  more\n"
+                       "- f\n\n# H\n- g\n\n- h\n\n  para\n  - i\n") == ["- a", "- b", "- i"]
+
+
+@pytest.mark.parametrize("path", MARKDOWN, ids=lambda p: str(p.relative_to(ROOT)))
+def test_markdown_speaks_to_users(path):
+    assert diary_words(path.read_text()) == [], path.relative_to(ROOT)
+
+
+@pytest.mark.parametrize("path", MARKDOWN, ids=lambda p: str(p.relative_to(ROOT)))
+def test_markdown_lists_have_a_blank_line_before_them(path):
+    assert glued_lists(path.read_text()) == [], (
+        f"{path.relative_to(ROOT)}: list items glued to the paragraph above")
+
+
+def _help_texts(parser) -> dict[str, str]:
+    out = {parser.prog: parser.format_help()}
+    for action in parser._actions:  # argparse keeps sub-parsers on their action only
+        if isinstance(action.choices, dict):
+            for sub in action.choices.values():
+                out.update(_help_texts(sub))
+    return out
+
+
+def test_cli_help_speaks_to_users():
+    found = {prog: diary_words(text) for prog, text in _help_texts(build_parser()).items()}
+    assert len(found) > 10  # every command and sub-command was seen
+    assert {prog: hits for prog, hits in found.items() if hits} == {}
+
+
+@pytest.mark.parametrize("name", registry.names())
+def test_study_descriptions_speak_to_users(name):
+    assert diary_words(registry.get(name).__doc__ or "") == []
