@@ -339,3 +339,15 @@ def check_export(dof: int, out: Any) -> Any:
         check(Estimate({"movement": steps * dof * _F8 * 4 + steps * dof * 25},
                        {"movement": cause}), "the export", hint="use fewer --reps")
     return run
+
+
+def check_bench(workers: int | None, quick: bool) -> None:
+    """``skinny bench``: its fixed workloads are small but for the whole paper-E table
+    (not with ``--quick``), a sweep on ``workers`` processes: checked as a sweep is."""
+    if quick:
+        return
+    from skinny_mj import registry
+
+    module = registry.get("paper-e")
+    rows = list(getattr(module, "TABLE_1", ())) or None
+    check_sweep(module, module.build(), rows, None, workers, None)

@@ -87,9 +87,10 @@ def test_wrong_kinds_are_refused():
 @pytest.mark.parametrize("argv,flag", [
     (["train", "--seed", "-1"], "--seed"), (["track", "--seed", "-1"], "--seed"),
     (["test", "--model", "m.npz", "--seed", "-3"], "--seed"), (["demo", "--seed", "-1"], "--seed"),
-    (["train", "--speed", "nan"], "--speed"), (["track", "--sensor-noise", "inf"], "--sensor-noise"),
-    (["train", "--reservoir", "0"], "--reservoir"), (["train", "--spectral-radius", "-1"],
-                                                     "--spectral-radius"),
+    (["train", "--speed", "nan"], "--speed"),
+    (["track", "--sensor-noise", "inf"], "--sensor-noise"),
+    (["train", "--reservoir", "0"], "--reservoir"),
+    (["train", "--spectral-radius", "-1"], "--spectral-radius"),
     (["train", "--noise", "-0.1"], "--noise"), (["train", "--beta", "1.5"], "--beta"),
     (["render", "--out", "x.png", "--frame", "-1"], "--frame"),
 ])
@@ -99,6 +100,23 @@ def test_cli_refuses_a_flag_out_of_range_in_one_line(argv, flag, capsys, tmp_pat
     err = _one_line_exit_2(argv, capsys)
     assert flag in err
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+@settings(max_examples=60, deadline=None, database=None)
+@given(command=st.sampled_from(["train", "track", "demo", "test"]),
+       seed=st.integers(max_value=-1))
+def test_cli_refuses_every_negative_seed_before_any_work(command, seed, tmp_path_factory):
+    import contextlib
+    import io
+
+    out = tmp_path_factory.mktemp("neg") / "o"
+    model = ["--model", "m.npz"] if command == "test" else []
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        code = main([command, *model, "--seed", str(seed), "--out", str(out)])
+    line = err.getvalue()
+    assert code == 2 and line.count("\n") == 1 and "--seed must be >= 0" in line
+    assert not out.exists()
 
 
 # -- memory ---------------------------------------------------------------------------------
