@@ -168,7 +168,7 @@ def test_check_names_the_cause_and_what_is_available():
 def test_a_sweeps_largest_row_is_refused(capsys, tmp_path):
     if memory.available_bytes() is None:
         pytest.skip("this system does not say how much memory is free")
-    err = _one_line_exit_2(["experiment", "paper-e", "--movement", "ymca@0.0001",
+    err = _one_line_exit_2(["experiment", "paper-e", "--movement", "ymca@0.002",
                             "--workers", "1", "--out", str(tmp_path / "sw")], capsys)
     assert "largest row" in err and "available" in err
     assert not (tmp_path / "sw").exists()
