@@ -28,10 +28,11 @@ __all__ = ["Estimate", "available_bytes", "check", "train_estimate", "test_estim
 
 _F8 = 8  # bytes per float64
 #: Bytes per step a rerun recording holds while it is written. With it the estimates
-#: were checked against peak RSS (``/usr/bin/time -v``, less the same command's at one
-#: repetition) on YMCA x 100 and x 300, N = 200: ``skinny test`` 3.9 kB/step measured,
-#: 4.0 estimated; ``skinny track`` 2.9 measured, 3.5 estimated; ``skinny train --reps
-#: 300`` +257 MB measured, 395 MB estimated (the estimate errs on the large side).
+#: were checked against peak RSS (``/usr/bin/time -v``, less the same command's on one
+#: repetition of YMCA with N = 200): ``skinny test --reps 100`` 3.9 kB/step measured,
+#: 4.0 estimated; ``skinny track --reps 100`` 2.9 and 3.5; ``skinny train --epochs 1
+#: --cycles 1`` with ``--reps 300`` +257 MB and 378 MB, ``--reservoir 2000`` +102 and
+#: 97 MB, ``--reservoir 3000 --reps 12`` +212 and 253 MB.
 RECORDING_BYTES_PER_STEP = 2048
 #: Bytes per step of ``skinny track``'s Python lists (one small array object per
 #: signal and step: a NumPy array's header is ~112 bytes).
@@ -115,13 +116,15 @@ def check(estimate: Estimate, what: str, *, available: int | None = None,
 
 
 # -- sizes of the arrays a run allocates ---------------------------------------------------
-def _weights(n: int, n_in: int, n_out: int, runs: int) -> int:
-    """One ESN's weights: while drawing (per run: a uniform N x N, a mask, the masked
-    copy; the runs drawn so far kept), the stacked (R, N, N) and its dtype copy."""
+def _weights(n: int, n_in: int, n_out: int, runs: int) -> tuple[int, int]:
+    """One ESN's weights, (kept, while drawing): kept, the (R, N, N) reservoir and the
+    small input, feedback and readout matrices; while drawing, per run a uniform N x N,
+    its mask and the masked copy beside the runs drawn so far, then the drawn, the
+    stacked and the dtype-cast (R, N, N) at once."""
     per_run = n * n * _F8
-    drawing = per_run * 3 + n * n + per_run * runs
-    kept = per_run * 2 * runs + runs * n * (n_in + 2 * n_out + 1) * _F8 * 3
-    return max(drawing, kept)
+    small = runs * n * (n_in + 2 * n_out + 1) * _F8
+    drawing = max(per_run * 3 + n * n + per_run * (runs - 1), per_run * 3 * runs)
+    return per_run * runs + small, drawing + 3 * small
 
 
 def _layout(cfg: Any) -> dict[str, int]:
@@ -166,19 +169,22 @@ def train_estimate(cfg: Any, steps: int, test_steps: int, runs: int = 1,
         fit += (lay["D_fm"] + lay["n_sig"]) * _F8
     if cfg.method == "true-target":  # teacher-forced states of every run, then the fit
         fit += lay["D"] * runs * _F8
-    weights = _weights(n_res, lay["n_in"], lay["n_out"], runs)
+    kept, drawing = _weights(n_res, lay["n_in"], lay["n_out"], runs)
     if cfg.forward is not None:
-        weights += _weights(cfg.forward_reservoir, lay["n_sig"] + lay["n_out"], lay["n_sig"],
-                            runs)
+        fm_kept, fm_drawing = _weights(cfg.forward_reservoir, lay["n_sig"] + lay["n_out"],
+                                       lay["n_sig"], runs)
+        kept, drawing = kept + fm_kept, max(drawing, kept + fm_drawing)
     movement = (lay["n_sig"] + 4 * cfg.dof) * _F8
     cause = steps_cause or f"{steps} steps per cycle"
     if runs > 1:
         cause += f" x {runs} lockstep runs"
+    parts = {"per-step buffers": step * runs * steps + movement * steps,
+             "readout fit": fit * steps,
+             "test": (step * runs + RECORDING_BYTES_PER_STEP) * test_steps}
+    # the weights are drawn before any buffer exists: the peak is the larger of the two
+    parts["reservoir weights"] = max(kept, drawing - sum(parts.values()))
     return Estimate(
-        {"per-step buffers": step * runs * steps + movement * steps,
-         "readout fit": fit * steps,
-         "reservoir weights": weights,
-         "test": (step * runs + RECORDING_BYTES_PER_STEP) * test_steps},
+        parts,
         {"per-step buffers": cause, "readout fit": cause,
          "reservoir weights": f"--reservoir {n_res}"
          + (f" x {runs} lockstep runs" if runs > 1 else ""),
