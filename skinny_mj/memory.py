@@ -34,6 +34,9 @@ _F8 = 8  # bytes per float64
 #: --cycles 1`` with ``--reps 300`` +257 MB and 378 MB, ``--reservoir 2000`` +102 and
 #: 97 MB, ``--reservoir 3000 --reps 12`` +212 and 253 MB.
 RECORDING_BYTES_PER_STEP = 2048
+#: Bytes per epoch and run of a learning curve once it is Python lists and JSON text
+#: (three curves of floats: ~32 bytes per float object and list slot, ~25 per number).
+CURVE_BYTES_PER_EPOCH = 200
 #: Bytes per step of ``skinny track``'s Python lists (one small array object per
 #: signal and step: a NumPy array's header is ~112 bytes).
 TRACK_BYTES_PER_STEP = 1024
@@ -176,19 +179,20 @@ def train_estimate(cfg: Any, steps: int, test_steps: int, runs: int = 1,
         kept, drawing = kept + fm_kept, max(drawing, kept + fm_drawing)
     movement = (lay["n_sig"] + 4 * cfg.dof) * _F8
     cause = steps_cause or f"{steps} steps per cycle"
-    if runs > 1:
-        cause += f" x {runs} lockstep runs"
+    lockstep = f" x {runs} lockstep runs" if runs > 1 else ""
     parts = {"per-step buffers": step * runs * steps + movement * steps,
              "readout fit": fit * steps,
-             "test": (step * runs + RECORDING_BYTES_PER_STEP) * test_steps}
+             "test": (step * runs + RECORDING_BYTES_PER_STEP) * test_steps,
+             # per epoch and run: the curves' arrays, then their JSON lists and text
+             "learning curve": cfg.epochs * (3 * runs * _F8 + runs * CURVE_BYTES_PER_EPOCH)}
     # the weights are drawn before any buffer exists: the peak is the larger of the two
     parts["reservoir weights"] = max(kept, drawing - sum(parts.values()))
     return Estimate(
         parts,
-        {"per-step buffers": cause, "readout fit": cause,
-         "reservoir weights": f"--reservoir {n_res}"
-         + (f" x {runs} lockstep runs" if runs > 1 else ""),
-         "test": f"{test_steps} test steps"})
+        {"per-step buffers": cause + lockstep, "readout fit": cause + lockstep,
+         "reservoir weights": f"--reservoir {n_res}{lockstep}",
+         "test": f"{test_steps} test steps{lockstep}",
+         "learning curve": f"--epochs {cfg.epochs}{lockstep}"})
 
 
 def test_estimate(n_reservoir: int, n_inputs: int, n_outputs: int, dof: int, n_sig: int,
@@ -281,9 +285,6 @@ def worker_count(workers: int | None) -> int:
 
 
 # -- the checks the commands make ------------------------------------------------------------
-_HINT = "use a shorter movement, fewer --reps or a smaller --reservoir"
-
-
 def check_train(cfg: Any, what: str = "the training") -> None:
     """Refuse a training of ``cfg`` the machine cannot hold (loads one repetition of its
     movement to count the steps)."""
@@ -292,7 +293,7 @@ def check_train(cfg: Any, what: str = "the training") -> None:
     traj, _ = load_trajectory(cfg)
     one = len(traj)
     check(train_estimate(cfg, one * cfg.reps, one, 1, steps_cause(traj.name, one, cfg.reps)),
-          what, hint=_HINT)
+          what)
 
 
 def check_test(esn_cfg: Any, dof: int, n_sig: int) -> Any:
@@ -328,7 +329,7 @@ def check_sweep(module: Any, experiment: Any, rows: Any, runs: int | None,
     if found is not None:
         est, row = found
         check(est, f"the sweep's largest row, {row},",
-              hint="use fewer --workers, or leave that row out with --rows")
+              hint="use fewer --workers or --runs, or leave that row out with --rows")
 
 
 def check_export(dof: int, out: Any) -> Any:

@@ -128,6 +128,7 @@ def test_available_memory_is_read():
 @pytest.mark.parametrize("argv,names", [
     (["train", "--reps", "100000000"], "--reps 100000000"),
     (["train", "--reservoir", "10000000"], "--reservoir 10000000"),
+    (["train", "--epochs", "1000000000"], "--epochs 1000000000"),
     (["track", "--reps", "100000000"], "--reps 100000000"),
     (["trajectory", "export", "ymca", "--reps", "100000000", "--out", "x.npz"],
      "--reps 100000000"),
