@@ -252,3 +252,14 @@ def test_vector_env_refuses_non_finite_actions():
     actions[1, 0] = np.nan
     with pytest.raises(ValueError, match=r"action \(1, 0\)"):
         env.step(actions)
+
+
+def test_a_movement_too_long_for_the_memory_is_refused_before_it_is_made():
+    if memory.available_bytes() is None:
+        pytest.skip("this system does not say how much memory is free")
+    traj = Trajectory(ymca(4).angles, name="ymca")
+    with pytest.raises(SkinnyInputError, match=r"speed 1e-09: 313000000000 steps of ymca"):
+        traj.resample(1e-9)
+    with pytest.raises(SkinnyInputError, match=r"10000000000 repetitions of ymca"):
+        traj.repeat(10**10)
+    assert len(traj.resample(0.5)) == 626 and len(traj.repeat(3)) == 939  # ordinary sizes
