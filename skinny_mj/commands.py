@@ -398,6 +398,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
     if args.out is not None:  # before the bench, not after it
         check_writable_file(args.out)
+    from skinny_mj.memory import check_bench
+
+    check_bench(args.workers, args.quick)
     figures = bench.run_with_bar(quick=args.quick, workers=args.workers,
                                  show=_progress_on(args.quiet))
     print(bench.table(figures))

@@ -76,6 +76,10 @@ with ``n = n_ok + n_failed`` (the runs that are data) and metric statistics over
 runs only. ``table.md`` shows ``failed / n`` per row (``1 / 20 (+1 error)``) and says
 under the table that the means exclude failed runs.
 
+While a sweep runs, ``out/sweep.lock`` (its pid, host and start time) keeps a second
+sweep out of the folder (:mod:`skinny_mj.sweep.folder`; a lock whose process died on
+this host is taken over, with a line on stderr).
+
 Output layout::
 
     results/<experiment>/<timestamp>/{config.json, runs/*.json, results.json, table.md}

@@ -28,11 +28,15 @@ __all__ = ["Estimate", "available_bytes", "check", "train_estimate", "test_estim
 
 _F8 = 8  # bytes per float64
 #: Bytes per step a rerun recording holds while it is written. With it the estimates
-#: were checked against peak RSS (``/usr/bin/time -v``, less the same command's at one
-#: repetition) on YMCA x 100 and x 300, N = 200: ``skinny test`` 3.9 kB/step measured,
-#: 4.0 estimated; ``skinny track`` 2.9 measured, 3.5 estimated; ``skinny train --reps
-#: 300`` +257 MB measured, 395 MB estimated (the estimate errs on the large side).
+#: were checked against peak RSS (``/usr/bin/time -v``, less the same command's on one
+#: repetition of YMCA with N = 200): ``skinny test --reps 100`` 3.9 kB/step measured,
+#: 4.0 estimated; ``skinny track --reps 100`` 2.9 and 3.5; ``skinny train --epochs 1
+#: --cycles 1`` with ``--reps 300`` +257 MB and 378 MB, ``--reservoir 2000`` +102 and
+#: 97 MB, ``--reservoir 3000 --reps 12`` +212 and 253 MB.
 RECORDING_BYTES_PER_STEP = 2048
+#: Bytes per epoch and run of a learning curve once it is Python lists and JSON text
+#: (three curves of floats: ~32 bytes per float object and list slot, ~25 per number).
+CURVE_BYTES_PER_EPOCH = 200
 #: Bytes per step of ``skinny track``'s Python lists (one small array object per
 #: signal and step: a NumPy array's header is ~112 bytes).
 TRACK_BYTES_PER_STEP = 1024
@@ -115,13 +119,15 @@ def check(estimate: Estimate, what: str, *, available: int | None = None,
 
 
 # -- sizes of the arrays a run allocates ---------------------------------------------------
-def _weights(n: int, n_in: int, n_out: int, runs: int) -> int:
-    """One ESN's weights: while drawing (per run: a uniform N x N, a mask, the masked
-    copy; the runs drawn so far kept), the stacked (R, N, N) and its dtype copy."""
+def _weights(n: int, n_in: int, n_out: int, runs: int) -> tuple[int, int]:
+    """One ESN's weights, (kept, while drawing): kept, the (R, N, N) reservoir and the
+    small input, feedback and readout matrices; while drawing, per run a uniform N x N,
+    its mask and the masked copy beside the runs drawn so far, then the drawn, the
+    stacked and the dtype-cast (R, N, N) at once."""
     per_run = n * n * _F8
-    drawing = per_run * 3 + n * n + per_run * runs
-    kept = per_run * 2 * runs + runs * n * (n_in + 2 * n_out + 1) * _F8 * 3
-    return max(drawing, kept)
+    small = runs * n * (n_in + 2 * n_out + 1) * _F8
+    drawing = max(per_run * 3 + n * n + per_run * (runs - 1), per_run * 3 * runs)
+    return per_run * runs + small, drawing + 3 * small
 
 
 def _layout(cfg: Any) -> dict[str, int]:
@@ -166,23 +172,27 @@ def train_estimate(cfg: Any, steps: int, test_steps: int, runs: int = 1,
         fit += (lay["D_fm"] + lay["n_sig"]) * _F8
     if cfg.method == "true-target":  # teacher-forced states of every run, then the fit
         fit += lay["D"] * runs * _F8
-    weights = _weights(n_res, lay["n_in"], lay["n_out"], runs)
+    kept, drawing = _weights(n_res, lay["n_in"], lay["n_out"], runs)
     if cfg.forward is not None:
-        weights += _weights(cfg.forward_reservoir, lay["n_sig"] + lay["n_out"], lay["n_sig"],
-                            runs)
+        fm_kept, fm_drawing = _weights(cfg.forward_reservoir, lay["n_sig"] + lay["n_out"],
+                                       lay["n_sig"], runs)
+        kept, drawing = kept + fm_kept, max(drawing, kept + fm_drawing)
     movement = (lay["n_sig"] + 4 * cfg.dof) * _F8
     cause = steps_cause or f"{steps} steps per cycle"
-    if runs > 1:
-        cause += f" x {runs} lockstep runs"
+    lockstep = f" x {runs} lockstep runs" if runs > 1 else ""
+    parts = {"per-step buffers": step * runs * steps + movement * steps,
+             "readout fit": fit * steps,
+             "test": (step * runs + RECORDING_BYTES_PER_STEP) * test_steps,
+             # per epoch and run: the curves' arrays, then their JSON lists and text
+             "learning curve": cfg.epochs * (3 * runs * _F8 + runs * CURVE_BYTES_PER_EPOCH)}
+    # the weights are drawn before any buffer exists: the peak is the larger of the two
+    parts["reservoir weights"] = max(kept, drawing - sum(parts.values()))
     return Estimate(
-        {"per-step buffers": step * runs * steps + movement * steps,
-         "readout fit": fit * steps,
-         "reservoir weights": weights,
-         "test": (step * runs + RECORDING_BYTES_PER_STEP) * test_steps},
-        {"per-step buffers": cause, "readout fit": cause,
-         "reservoir weights": f"--reservoir {n_res}"
-         + (f" x {runs} lockstep runs" if runs > 1 else ""),
-         "test": f"{test_steps} test steps"})
+        parts,
+        {"per-step buffers": cause + lockstep, "readout fit": cause + lockstep,
+         "reservoir weights": f"--reservoir {n_res}{lockstep}",
+         "test": f"{test_steps} test steps{lockstep}",
+         "learning curve": f"--epochs {cfg.epochs}{lockstep}"})
 
 
 def test_estimate(n_reservoir: int, n_inputs: int, n_outputs: int, dof: int, n_sig: int,
@@ -275,9 +285,6 @@ def worker_count(workers: int | None) -> int:
 
 
 # -- the checks the commands make ------------------------------------------------------------
-_HINT = "use a shorter movement, fewer --reps or a smaller --reservoir"
-
-
 def check_train(cfg: Any, what: str = "the training") -> None:
     """Refuse a training of ``cfg`` the machine cannot hold (loads one repetition of its
     movement to count the steps)."""
@@ -286,7 +293,7 @@ def check_train(cfg: Any, what: str = "the training") -> None:
     traj, _ = load_trajectory(cfg)
     one = len(traj)
     check(train_estimate(cfg, one * cfg.reps, one, 1, steps_cause(traj.name, one, cfg.reps)),
-          what, hint=_HINT)
+          what)
 
 
 def check_test(esn_cfg: Any, dof: int, n_sig: int) -> Any:
@@ -322,7 +329,7 @@ def check_sweep(module: Any, experiment: Any, rows: Any, runs: int | None,
     if found is not None:
         est, row = found
         check(est, f"the sweep's largest row, {row},",
-              hint="use fewer --workers, or leave that row out with --rows")
+              hint="use fewer --workers or --runs, or leave that row out with --rows")
 
 
 def check_export(dof: int, out: Any) -> Any:
@@ -339,3 +346,15 @@ def check_export(dof: int, out: Any) -> Any:
         check(Estimate({"movement": steps * dof * _F8 * 4 + steps * dof * 25},
                        {"movement": cause}), "the export", hint="use fewer --reps")
     return run
+
+
+def check_bench(workers: int | None, quick: bool) -> None:
+    """``skinny bench``: its fixed workloads are small but for the whole paper-E table
+    (not with ``--quick``), a sweep on ``workers`` processes: checked as a sweep is."""
+    if quick:
+        return
+    from skinny_mj import registry
+
+    module = registry.get("paper-e")
+    rows = list(getattr(module, "TABLE_1", ())) or None
+    check_sweep(module, module.build(), rows, None, workers, None)

@@ -87,9 +87,10 @@ def test_wrong_kinds_are_refused():
 @pytest.mark.parametrize("argv,flag", [
     (["train", "--seed", "-1"], "--seed"), (["track", "--seed", "-1"], "--seed"),
     (["test", "--model", "m.npz", "--seed", "-3"], "--seed"), (["demo", "--seed", "-1"], "--seed"),
-    (["train", "--speed", "nan"], "--speed"), (["track", "--sensor-noise", "inf"], "--sensor-noise"),
-    (["train", "--reservoir", "0"], "--reservoir"), (["train", "--spectral-radius", "-1"],
-                                                     "--spectral-radius"),
+    (["train", "--speed", "nan"], "--speed"),
+    (["track", "--sensor-noise", "inf"], "--sensor-noise"),
+    (["train", "--reservoir", "0"], "--reservoir"),
+    (["train", "--spectral-radius", "-1"], "--spectral-radius"),
     (["train", "--noise", "-0.1"], "--noise"), (["train", "--beta", "1.5"], "--beta"),
     (["render", "--out", "x.png", "--frame", "-1"], "--frame"),
 ])
@@ -101,6 +102,23 @@ def test_cli_refuses_a_flag_out_of_range_in_one_line(argv, flag, capsys, tmp_pat
     assert list(tmp_path.iterdir()) == []  # nothing written
 
 
+@settings(max_examples=60, deadline=None, database=None)
+@given(command=st.sampled_from(["train", "track", "demo", "test"]),
+       seed=st.integers(max_value=-1))
+def test_cli_refuses_every_negative_seed_before_any_work(command, seed, tmp_path_factory):
+    import contextlib
+    import io
+
+    out = tmp_path_factory.mktemp("neg") / "o"
+    model = ["--model", "m.npz"] if command == "test" else []
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        code = main([command, *model, "--seed", str(seed), "--out", str(out)])
+    line = err.getvalue()
+    assert code == 2 and line.count("\n") == 1 and "--seed must be >= 0" in line
+    assert not out.exists()
+
+
 # -- memory ---------------------------------------------------------------------------------
 def test_available_memory_is_read():
     free = memory.available_bytes()
@@ -110,6 +128,7 @@ def test_available_memory_is_read():
 @pytest.mark.parametrize("argv,names", [
     (["train", "--reps", "100000000"], "--reps 100000000"),
     (["train", "--reservoir", "10000000"], "--reservoir 10000000"),
+    (["train", "--epochs", "1000000000"], "--epochs 1000000000"),
     (["track", "--reps", "100000000"], "--reps 100000000"),
     (["trajectory", "export", "ymca", "--reps", "100000000", "--out", "x.npz"],
      "--reps 100000000"),
@@ -150,7 +169,7 @@ def test_check_names_the_cause_and_what_is_available():
 def test_a_sweeps_largest_row_is_refused(capsys, tmp_path):
     if memory.available_bytes() is None:
         pytest.skip("this system does not say how much memory is free")
-    err = _one_line_exit_2(["experiment", "paper-e", "--movement", "ymca@0.0001",
+    err = _one_line_exit_2(["experiment", "paper-e", "--movement", "ymca@0.002",
                             "--workers", "1", "--out", str(tmp_path / "sw")], capsys)
     assert "largest row" in err and "available" in err
     assert not (tmp_path / "sw").exists()
@@ -233,3 +252,14 @@ def test_vector_env_refuses_non_finite_actions():
     actions[1, 0] = np.nan
     with pytest.raises(ValueError, match=r"action \(1, 0\)"):
         env.step(actions)
+
+
+def test_a_movement_too_long_for_the_memory_is_refused_before_it_is_made():
+    if memory.available_bytes() is None:
+        pytest.skip("this system does not say how much memory is free")
+    traj = Trajectory(ymca(4).angles, name="ymca")
+    with pytest.raises(SkinnyInputError, match=r"speed 1e-09: 313000000000 steps of ymca"):
+        traj.resample(1e-9)
+    with pytest.raises(SkinnyInputError, match=r"10000000000 repetitions of ymca"):
+        traj.repeat(10**10)
+    assert len(traj.resample(0.5)) == 626 and len(traj.repeat(3)) == 939  # ordinary sizes

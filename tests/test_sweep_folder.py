@@ -127,6 +127,9 @@ def test_a_live_lock_stops_a_second_sweep_and_names_its_holder(monkeypatch, caps
         with pytest.raises(SkinnyInputError, match=f"pid {holder.pid}"):
             run_sweep(_fake(), out, workers=1, progress=False)  # the engine checks it too
         assert lock.exists() and sorted(p.name for p in out.iterdir()) == [folder.LOCK_NAME]
+        (out / "config.json").write_text("{}")  # the running sweep's: still the lock's line
+        for extra in ((), ("--resume",), ("--overwrite",)):
+            assert f"pid {holder.pid}" in _refused(monkeypatch, capsys, "--out", str(out), *extra)
     finally:
         holder.kill()
         holder.wait()

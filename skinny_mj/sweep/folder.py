@@ -95,6 +95,8 @@ def choose_out_dir(out: str | Path | None, default: Path, *, resume: bool,
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise SkinnyInputError("--out is a file, not a folder", path=out)
+    if out.is_dir():  # a running sweep is named before anything else is said of its folder
+        check_unlocked(out)
     is_sweep = (out / "config.json").is_file()
     if resume:
         if not is_sweep:
