@@ -142,3 +142,22 @@ def test_every_extra_is_named_in_getting_started():
         "optional-dependencies"]
     text = (ROOT / "docs/getting-started.md").read_text()
     assert [e for e in extras if f"`.[{e}]`" not in text] == []
+
+
+def test_diagrams_are_committed_svg_with_no_network_reference():
+    """The site loads nothing from the network: no mermaid fence (Material would fetch
+    mermaid.js from a CDN); each diagram's source ``docs/diagrams/NAME.mmd`` has its
+    rendered ``NAME.svg`` beside it, and every page that shows one links the SVG."""
+    fences = [p.name for p in DOCS if "```mermaid" in p.read_text()]
+    assert fences == []
+    sources = sorted((ROOT / "docs/diagrams").glob("*.mmd"))
+    assert sources
+    shown = "".join(p.read_text() for p in DOCS)
+    for src in sources:
+        svg = src.with_suffix(".svg")
+        text = svg.read_text()
+        assert text.lstrip().startswith("<svg") and "</svg>" in text, svg.name
+        links = set(re.findall(r"(?:href|src)=\"(https?://[^\"]+)", text))
+        links |= set(re.findall(r"url\((https?://[^)]+)\)|@import", text))
+        assert links == set(), (svg.name, links)
+        assert f"diagrams/{svg.name}" in shown, svg.name
