@@ -119,7 +119,8 @@ def test_documented_commands_parse_and_name_real_studies(path, capsys):
 
 @pytest.mark.parametrize("path", DOCS, ids=lambda p: str(p.relative_to(ROOT)))
 def test_documented_repository_paths_exist(path):
-    named = re.findall(r"`((?:%s)[\w./-]+)`" % "|".join(map(re.escape, _TOP)), path.read_text())
+    tops = "|".join(map(re.escape, _TOP))
+    named = re.findall(rf"`((?:{tops})[\w./-]+)`", path.read_text())
     missing = [p for p in named if not (ROOT / p.rstrip("/")).exists()
                and not (ROOT / f"{p.rsplit('.', 1)[0]}.py").exists()]  # module.attribute
     assert missing == [], f"{path.relative_to(ROOT)} names files that do not exist"
