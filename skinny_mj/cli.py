@@ -23,6 +23,14 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {_one_line(message)} "
                      f"(see `{self.prog} --help`)\n")
 
+    def parse_known_args(self, args=None, namespace=None):  # noqa: ANN001, ANN201
+        """A sub-command (prog "skinny NAME") names its own unknown arguments, so the
+        hint points at its help, not at the top-level one."""
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras and " " in self.prog:
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return namespace, extras
+
 
 class _ExperimentHelp(argparse.Action):
     """``skinny experiment NAME --help``: that study's description, rows, groups, runs,

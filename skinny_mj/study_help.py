@@ -33,7 +33,7 @@ DOCUMENTED_WALL = {
                "(docs/RESULTS.md)",
     "paper-d": "250 runs in 3 min 01 s with --workers 2 on a shared 2-core machine, "
                "2026-12-01 (docs/RESULTS.md)",
-    "dynamic": "its first 34 rows (340 runs) in 28 min 22 s with --workers 1 on a shared "
+    "dynamic": "340 runs (the 34 rows it had then) in 28 min 22 s with --workers 1 on a shared "
                "2-core machine (load 4-8), 2026-12-01 (docs/results/dynamic.md)",
     "generalization": "240 runs (its first 24 rows) in 21.5 min with --workers 1 on a "
                       "shared 2-core machine (docs/results/generalization.md)",
@@ -85,7 +85,7 @@ def option_effects(module: ModuleType, base: Any) -> dict[str, str]:
         if all(how == "same" for how in said.values()):
             taken = ["no effect on this study"]
         elif "same" not in said.values():
-            taken.append("(default: the study's own mix)")
+            taken[-1] += " (default: the study's own mix)"
         refused = [str(v) for v, how in said.items() if how == "refused"]
         out[option] = " | ".join(taken) + (f"; refuses {', '.join(refused)}" if refused
                                            else "")
@@ -96,7 +96,8 @@ def _cover(ids: list[str], groups: dict[str, tuple[str, ...]], skip: str = "") -
     """``ids`` named by whole groups where one fits (largest first), the rest by id."""
     left, names = list(ids), []
     for g, members in sorted(groups.items(), key=lambda gm: -len(gm[1])):
-        if g != skip and len(members) > 1 and set(members) <= set(left):
+        if g != skip and len(members) > 1 and set(members) <= set(left) \
+                and set(members) != set(ids):  # not a group naming the same rows
             names.append(g)
             left = [i for i in left if i not in members]
     return ", ".join([*names, *left])

@@ -28,6 +28,13 @@ def test_usage_errors_are_one_line_with_a_help_hint_exit_2(argv, capsys):
     assert lines[0].endswith("--help`)") and "usage:" not in err
 
 
+def test_an_unknown_option_points_at_its_sub_command_help(capsys):
+    code, _, err = _exit(["train", "--bogus", "1"], capsys)
+    assert code == 2
+    assert err == ("skinny train: error: unrecognized arguments: --bogus 1 "
+                   "(see `skinny train --help`)\n")
+
+
 def test_experiment_help_describes_that_study(capsys):
     code, paper_e, _ = _exit(["experiment", "paper-e", "--help"], capsys)
     assert code == 0

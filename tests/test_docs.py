@@ -119,7 +119,8 @@ def test_documented_commands_parse_and_name_real_studies(path, capsys):
 
 @pytest.mark.parametrize("path", DOCS, ids=lambda p: str(p.relative_to(ROOT)))
 def test_documented_repository_paths_exist(path):
-    named = re.findall(r"`((?:%s)[\w./-]+)`" % "|".join(map(re.escape, _TOP)), path.read_text())
+    tops = "|".join(map(re.escape, _TOP))
+    named = re.findall(rf"`((?:{tops})[\w./-]+)`", path.read_text())
     missing = [p for p in named if not (ROOT / p.rstrip("/")).exists()
                and not (ROOT / f"{p.rsplit('.', 1)[0]}.py").exists()]  # module.attribute
     assert missing == [], f"{path.relative_to(ROOT)} names files that do not exist"
@@ -142,3 +143,22 @@ def test_every_extra_is_named_in_getting_started():
         "optional-dependencies"]
     text = (ROOT / "docs/getting-started.md").read_text()
     assert [e for e in extras if f"`.[{e}]`" not in text] == []
+
+
+def test_diagrams_are_committed_svg_with_no_network_reference():
+    """The site loads nothing from the network: no mermaid fence (Material would fetch
+    mermaid.js from a CDN); each diagram's source ``docs/diagrams/NAME.mmd`` has its
+    rendered ``NAME.svg`` beside it, and every page that shows one links the SVG."""
+    fences = [p.name for p in DOCS if "```mermaid" in p.read_text()]
+    assert fences == []
+    sources = sorted((ROOT / "docs/diagrams").glob("*.mmd"))
+    assert sources
+    shown = "".join(p.read_text() for p in DOCS)
+    for src in sources:
+        svg = src.with_suffix(".svg")
+        text = svg.read_text()
+        assert text.lstrip().startswith("<svg") and "</svg>" in text, svg.name
+        links = set(re.findall(r"(?:href|src)=\"(https?://[^\"]+)", text))
+        links |= set(re.findall(r"url\((https?://[^)]+)\)|@import", text))
+        assert links == set(), (svg.name, links)
+        assert f"diagrams/{svg.name}" in shown, svg.name

@@ -78,3 +78,11 @@ def test_cli_help_speaks_to_users():
 @pytest.mark.parametrize("name", registry.names())
 def test_study_descriptions_speak_to_users(name):
     assert diary_words(registry.get(name).__doc__ or "") == []
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "docs/results").glob("*.md")),
+                         ids=lambda p: p.name)
+def test_results_pages_say_when_and_on_what_machine(path):
+    head = " ".join(path.read_text().split("\n\n")[:3])  # the title and the first paragraphs
+    assert re.search(r"\b20\d\d-\d\d-\d\d\b", head), f"{path.name}: no date near the top"
+    assert re.search(r"\b2-core\b|\b2 cores\b", head), f"{path.name}: no machine near the top"
