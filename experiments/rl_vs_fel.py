@@ -23,8 +23,8 @@ Every run is tested before training and during it (FEL: after every epoch; RL: e
 ``budget / evals`` env steps, deterministic policy) on a fresh plant, K = 0, by the
 position NRMSE :func:`skinny_mj.training.evaluate` computes
 (:mod:`experiments.rl_vs_fel_runs`). Metrics per run: final and best test error, env steps
-used, training wall time (tests excluded), and for 0.05 and 0.02 the env steps and wall
-time of the first test at or below it. Budgets per run: :class:`Config` (default PPO
+used, training wall and CPU time (tests excluded), and for 0.05 and 0.02 the env steps,
+wall and CPU time of the first test at or below it. Budgets per run: :class:`Config` (default PPO
 50 000 env steps, SAC 4 000, FEL 10 epochs = 15 600), chosen for two shared cores; the
 curve of each run stays in its run file. Groups: ``fel``, ``ppo``, ``sac``,
 ``velocity``, ``torque``, ``ymca``, ``md02``.
@@ -118,10 +118,10 @@ def cost(cfg: Config, row: Row) -> float:
 
 
 def table_columns(cfg: Config) -> dict[str, str]:
-    cols = {"position_nrmse": "final test NRMSE", "train_wall_s": "train wall (s)"}
+    cols = {"position_nrmse": "final test NRMSE", "train_cpu_s": "train CPU (s)"}
     for th in cfg.thresholds:
         cols.update({f"steps_to_{th:g}": f"env steps to {th:g}",
-                     f"wall_to_{th:g}": f"wall (s) to {th:g}"})
+                     f"cpu_to_{th:g}": f"CPU (s) to {th:g}"})
     return cols
 
 

@@ -1,11 +1,11 @@
 """Figures and the comparison table of :mod:`experiments.rl_vs_fel`, from its run files.
 
-``curves_steps.png`` / ``curves_wall.png``: one panel per body x movement, the test
-position NRMSE (log) against env steps / training wall time (log), one line per run
+``curves_steps.png`` / ``curves_cpu.png``: one panel per body x movement, the test
+position NRMSE (log) against env steps / training CPU time (log), one line per run
 (thin) and the mean over runs per learner (thick; a learner's runs share their test
 points), the thresholds dashed. ``comparison.md``: per row the budget, the final error
 (mean ± sd over runs), and per threshold how many runs reached it and, over those, the
-mean env steps and wall time of the first test at or below it.
+mean env steps, CPU and wall time of the first test at or below it.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ def _curves(runs: list[dict]) -> dict[str, list[list[dict]]]:
 
 
 def _xy(curve: list[dict], x: str) -> tuple[np.ndarray, np.ndarray]:
-    xs = np.array([max(p[x], 1e-9 if x == "wall_s" else 1) for p in curve], float)
+    xs = np.array([max(p[x], 1e-2 if x == "cpu_s" else 1) for p in curve], float)
     ys = np.array([np.nan if p["position_nrmse"] is None else p["position_nrmse"]
                    for p in curve], float)
     return xs, ys
@@ -62,7 +62,7 @@ def curves_png(path: Path, cfg, rows, curves: dict, x: str) -> Path:
             for th in cfg.thresholds:
                 ax.axhline(th, color="grey", ls="--", lw=0.8)
             ax.set(xscale="log", yscale="log", title=f"{body} body, {mv}",
-                   xlabel="env steps" if x == "steps" else "training wall time (s)")
+                   xlabel="env steps" if x == "steps" else "training CPU time (s)")
             if j == 0:
                 ax.set_ylabel("test position NRMSE (K = 0)")
             ax.grid(alpha=0.3, which="both")
@@ -83,15 +83,16 @@ def _reach(ms: list[dict], th: float) -> str:
     if not hit:
         return f"0/{len(ms)}"
     steps = np.mean([m[f"steps_to_{th:g}"] for m in hit])
+    cpu = np.mean([m[f"cpu_to_{th:g}"] for m in hit])
     wall = np.mean([m[f"wall_to_{th:g}"] for m in hit])
-    return f"{len(hit)}/{len(ms)}: {steps:,.0f} steps, {wall:.1f} s"
+    return f"{len(hit)}/{len(ms)}: {steps:,.0f} steps, {cpu:.1f} CPU s, {wall:.1f} s"
 
 
 def comparison_table(cfg, rows, runs: list[dict]) -> str:
     head = ["learner", "body", "movement", "env steps (budget)", "final test NRMSE",
             "best test NRMSE"]
-    head += [f"reach {th:g}: runs, mean steps, mean wall" for th in cfg.thresholds]
-    head += ["train wall (s) per run", "failed / n"]
+    head += [f"reach {th:g}: runs, mean steps, CPU, wall" for th in cfg.thresholds]
+    head += ["train CPU (s) per run", "train wall (s) per run", "failed / n"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for row in rows:
         recs = [r for r in runs if r["row"] == row.row_id]
@@ -106,12 +107,12 @@ def comparison_table(cfg, rows, runs: list[dict]) -> str:
         cells = [LABELS[p["learner"]], p["actuation"], p["movement"],
                  f"{steps:,}" if ms else "—", _cell(final), _cell(best)]
         cells += [_reach(ms, th) for th in cfg.thresholds]
-        cells += [_cell([m["train_wall_s"] for m in ms]),
+        cells += [_cell([m["train_cpu_s"] for m in ms]), _cell([m["train_wall_s"] for m in ms]),
                   f"{n_failed} / {sum(r['status'] != 'error' for r in recs)}"]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "Final: the test after the last env step of the budget; reach: the first "
-              "test at or below the threshold (mean over the runs that reached it). Wall "
-              "times exclude the tests."]
+              "test at or below the threshold (mean over the runs that reached it). CPU "
+              "(the run's process) and wall times exclude the tests."]
     return "\n".join(lines)
 
 
@@ -120,7 +121,7 @@ def write_report(out_dir: Path, cfg, rows) -> str:
     curves = _curves(runs)
     lines = []
     if curves:
-        for x, name in (("steps", "curves_steps.png"), ("wall_s", "curves_wall.png")):
+        for x, name in (("steps", "curves_steps.png"), ("cpu_s", "curves_cpu.png")):
             lines.append(f"figure: {curves_png(out_dir / name, cfg, rows, curves, x).name}")
     table = comparison_table(cfg, rows, runs)
     atomic_write_text(out_dir / "comparison.md", table + "\n")

@@ -1,9 +1,10 @@
 """The runs of :mod:`experiments.rl_vs_fel`: one learner, one seed, one curve of the
 test position NRMSE against the env steps it has used.
 
-A curve is a list of points ``{"steps", "wall_s", "position_nrmse"}``: env steps taken
-so far, training wall time so far (the tests themselves excluded) and the K = 0 test
-error then (None when the test diverged). Both kinds of learner are tested alike: a
+A curve is a list of points ``{"steps", "wall_s", "cpu_s", "position_nrmse"}``: env
+steps taken so far, training wall time and CPU time of the run's process so far (the
+tests themselves excluded; on a shared machine the CPU time is the fairer clock) and
+the K = 0 test error then (None when the test diverged). Both kinds of learner are tested alike: a
 fresh plant whose sensor noise starts from the run's plant seed
 (:func:`skinny_mj.run_parts.run_streams`), one pass of the movement from its first
 pose, the controller alone, no learning and no exploration, scored by
@@ -48,25 +49,29 @@ def require_rl() -> None:
 
 
 class Clock:
-    """Training wall time with the tests left out (:meth:`paused`)."""
+    """Training wall time and this process's CPU time, the tests left out (:meth:`paused`)."""
 
     def __init__(self) -> None:
-        self.start = time.perf_counter()
-        self.excluded = 0.0
+        self.start = (time.perf_counter(), time.process_time())
+        self.excluded = [0.0, 0.0]
 
-    def elapsed(self) -> float:
-        return time.perf_counter() - self.start - self.excluded
+    def elapsed(self) -> tuple[float, float]:
+        """(wall s, CPU s) of training so far."""
+        return (time.perf_counter() - self.start[0] - self.excluded[0],
+                time.process_time() - self.start[1] - self.excluded[1])
 
     def paused(self, fn: Callable[[], Any]) -> Any:
-        t0 = time.perf_counter()
+        t0 = (time.perf_counter(), time.process_time())
         try:
             return fn()
         finally:
-            self.excluded += time.perf_counter() - t0
+            self.excluded[0] += time.perf_counter() - t0[0]
+            self.excluded[1] += time.process_time() - t0[1]
 
 
-def point(steps: int, wall_s: float, nrmse: float | None) -> dict:
-    return {"steps": int(steps), "wall_s": float(wall_s),
+def point(steps: int, elapsed: tuple[float, float], nrmse: float | None) -> dict:
+    """A test point: env steps, training (wall, CPU) seconds so far, the test error."""
+    return {"steps": int(steps), "wall_s": float(elapsed[0]), "cpu_s": float(elapsed[1]),
             "position_nrmse": None if nrmse is None or not np.isfinite(nrmse) else float(nrmse)}
 
 
@@ -89,7 +94,7 @@ def fel_curve(tc: TrainConfig, seed: int) -> tuple[list[dict], dict]:
     steps_per_epoch = (run.fel_config().learning_cycles + 2) * (len(run.desired) - 1)
     last_cycle = run.fel_config().learning_cycles + 1
     clock = Clock()
-    points = [point(0, 0.0, clock.paused(lambda: _fel_test(run)))]
+    points = [point(0, (0.0, 0.0), clock.paused(lambda: _fel_test(run)))]
 
     def observe(epoch: int, cycle: int, ro, y_used) -> None:
         if cycle == last_cycle:
@@ -247,18 +252,20 @@ def rl_curve(name: str, tc: TrainConfig, seed: int, budget: int, evals: int,
 
 # -- metrics of a curve ---------------------------------------------------------------------
 def curve_metrics(points: list[dict], thresholds: tuple[float, ...]) -> dict:
-    """Final and best test error, and per threshold the env steps and training wall
-    time of the first test at or below it (None if none; ``reached_<th>`` 1 or 0)."""
+    """Final and best test error, and per threshold the env steps, training wall time
+    and CPU time of the first test at or below it (None if none; ``reached_<th>`` 1 or 0)."""
     errs = [p["position_nrmse"] for p in points]
     finite = [e for e in errs if e is not None]
     out: dict[str, Any] = {"position_nrmse": errs[-1],
                            "best_nrmse": min(finite) if finite else None,
                            "env_steps": points[-1]["steps"],
-                           "train_wall_s": points[-1]["wall_s"]}
+                           "train_wall_s": points[-1]["wall_s"],
+                           "train_cpu_s": points[-1]["cpu_s"]}
     for th in thresholds:
         first = next((p for p in points if p["position_nrmse"] is not None
                       and p["position_nrmse"] <= th), None)
         out[f"reached_{th:g}"] = int(first is not None)
         out[f"steps_to_{th:g}"] = None if first is None else first["steps"]
         out[f"wall_to_{th:g}"] = None if first is None else first["wall_s"]
+        out[f"cpu_to_{th:g}"] = None if first is None else first["cpu_s"]
     return out

@@ -63,14 +63,15 @@ def test_fel_curve_ends_at_the_test_of_train():
     assert points[-1]["position_nrmse"] == train(tc, 3).metrics["test"]["position_nrmse"]
     assert points[-1]["position_nrmse"] < points[0]["position_nrmse"]
     assert 0 < points[1]["wall_s"] < points[2]["wall_s"]
+    assert 0 < points[1]["cpu_s"] < points[2]["cpu_s"]
 
 
 def test_curve_metrics_first_test_at_or_below_each_threshold():
-    pts = [runs.point(0, 0.0, 0.5), runs.point(10, 1.0, None), runs.point(20, 2.0, 0.04),
-           runs.point(30, 3.0, 0.06), runs.point(40, 4.0, 0.02)]
+    pts = [runs.point(k * 10, (k * 1.0, k * 0.5), e)
+           for k, e in enumerate([0.5, None, 0.04, 0.06, 0.02])]
     m = runs.curve_metrics(pts, (0.05, 0.02, 0.01))
     assert (m["steps_to_0.05"], m["wall_to_0.05"], m["reached_0.05"]) == (20, 2.0, 1)
-    assert (m["steps_to_0.02"], m["wall_to_0.02"]) == (40, 4.0)
+    assert (m["steps_to_0.02"], m["wall_to_0.02"], m["cpu_to_0.02"]) == (40, 4.0, 2.0)
     assert (m["steps_to_0.01"], m["reached_0.01"]) == (None, 0)
     assert (m["position_nrmse"], m["best_nrmse"], m["env_steps"]) == (0.02, 0.02, 40)
 
