@@ -176,14 +176,44 @@ def build(*, quick: bool = False, movement: str | None = None, asf: str | None =
                       cost=functools.partial(cost, cfg))
 
 
+def feasibility_table(movements: tuple[str, ...], bodies: tuple[str, ...]) -> list[str]:
+    """Markdown rows: what each movement asks of each body's motors (inverse dynamics of
+    the desired motion, :meth:`skinny_mj.dynamics.Dynamics.feasibility`), the DOF with the
+    largest peak named."""
+    from skinny_mj import body
+    from skinny_mj.run_parts import load_trajectory
+    from skinny_mj.torque_training import feasibility
+
+    lines = ["| movement | body | peak \\|τ\\|/limit (DOF) | p99 | steps over a limit | "
+             "mean \\|τ\\| (N m) | peak speed (rad/s) | peak accel (rad/s²) | motor work (J) "
+             "| feasible |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for mv in movements:
+        for bd in bodies:
+            dof = 4 if bd == "2d" else 8
+            traj, _ = load_trajectory(TrainConfig(dof=dof, trajectory=mv, actuation="torque"))
+            f = feasibility(dof, traj)
+            worst = int(f["peak_ratio"].argmax())
+            lines.append(
+                f"| {mv} | {bd} | {f['peak_ratio'][worst]:.2f} "
+                f"({body.dof_names(dof)[worst]}) | {f['p99_ratio'].max():.2f} | "
+                f"{100 * f['over_limit_share'].max():.1f} % | {f['mean_abs_nm'].mean():.2f} | "
+                f"{f['peak_speed_rad_s'].max():.1f} | {f['peak_accel_rad_s2'].max():.0f} | "
+                f"{f['work_j'].sum():.0f} | {'yes' if f['feasible'] else '**no**'} |")
+    return lines
+
+
 def report(results: dict, out_dir: Path) -> str:
-    """The goals, the torque limits and warnings, and the wall-time ratio, from the run
-    files on disk."""
+    """The movements' feasibility, the goals, the torque limits and warnings, and the
+    wall-time ratio, from the run files on disk."""
     from experiments.claims import values
 
     out_dir = Path(out_dir)
     cfg = Config.from_dict(json.loads((out_dir / "config.json").read_text())["config"])
-    lines = []
+    lines = ["what the movements ask of the motors (inverse dynamics of the desired motion):",
+             *feasibility_table((cfg.ymca, cfg.recorded, cfg.clip), cfg.bodies)]
+    lines += [f"NOT FEASIBLE on this body: {ln.split('|')[1].strip()} "
+              f"({ln.split('|')[2].strip()}): no controller within the limits can track it"
+              for ln in lines[3:] if ln.endswith("**no** |")]
     for bd in cfg.bodies:
         for ctl in ("fel-orig", "fel-new", "fel-new-gff", "tt"):
             v = values(out_dir, f"{bd}-ymca-{ctl}", "position_nrmse")

@@ -130,3 +130,53 @@ class Dynamics:
         ts = t[:-1, None] + 0.5 * dt * (1.0 + nodes)  # (T-1, points)
         tau = self.inverse_dynamics_nm(spline(ts), spline(ts, 1), spline(ts, 2))
         return np.einsum("kpn,p->kn", tau, 0.5 * weights)
+
+    # -- feasibility ------------------------------------------------------------------
+    def feasibility(self, angles: np.ndarray, dt: float = 0.02) -> dict[str, np.ndarray]:
+        """What a movement asks of the motors: per DOF, each (n_dof,).
+
+        From the held step torques of :meth:`trajectory_torques_nm` (the inverse dynamics
+        of the movement's clamped cubic spline): ``peak_ratio``, ``p99_ratio`` and
+        ``mean_ratio`` of |tau| / limit, ``mean_abs_nm`` (N m), ``over_limit_share``
+        (share of steps whose torque exceeds the limit); the spline's
+        ``peak_speed_rad_s`` and ``peak_accel_rad_s2`` (at the steps' Gauss nodes);
+        ``work_j``: the motor's positive work, sum over steps of max(tau_k (q_k+1 - q_k),
+        0), J (exact for a torque held over the step). ``feasible`` (a 0-d bool array):
+        no step of any DOF over its limit.
+        """
+        angles = np.asarray(angles, float)
+        tau = self.trajectory_torques_nm(angles, dt)
+        ratio = np.abs(tau) / self.torque_limits_nm()
+        t = dt * np.arange(len(angles))
+        spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
+        nodes, _ = np.polynomial.legendre.leggauss(4)
+        ts = (t[:-1, None] + 0.5 * dt * (1.0 + nodes)).ravel()
+        return {
+            "peak_ratio": ratio.max(axis=0), "p99_ratio": np.percentile(ratio, 99, axis=0),
+            "mean_ratio": ratio.mean(axis=0), "mean_abs_nm": np.abs(tau).mean(axis=0),
+            "over_limit_share": (ratio > 1.0).mean(axis=0),
+            "peak_speed_rad_s": np.abs(spline(ts, 1)).max(axis=0),
+            "peak_accel_rad_s2": np.abs(spline(ts, 2)).max(axis=0),
+            "work_j": np.maximum(tau * np.diff(angles, axis=0), 0.0).sum(axis=0),
+            "feasible": np.asarray(bool((ratio <= 1.0).all())),
+        }
+
+
+def feasibility_lines(figures: dict[str, np.ndarray], names: list[str]) -> list[str]:
+    """:meth:`Dynamics.feasibility` as text: one line per DOF, then the totals."""
+    lines = [f"  {'DOF':24} {'peak':>6} {'p99':>6} {'mean':>6} {'>limit':>7} "
+             f"{'mean|τ|':>8} {'speed':>7} {'accel':>8} {'work':>7}",
+             f"  {'':24} {'|τ|/limit':>20} {'steps':>7} {'N m':>8} {'rad/s':>7} "
+             f"{'rad/s²':>8} {'J':>7}"]
+    for i, name in enumerate(names):
+        f = {k: v[i] for k, v in figures.items() if k != "feasible"}
+        lines.append(f"  {name:24} {f['peak_ratio']:6.2f} {f['p99_ratio']:6.2f} "
+                     f"{f['mean_ratio']:6.2f} {100 * f['over_limit_share']:6.1f}% "
+                     f"{f['mean_abs_nm']:8.2f} {f['peak_speed_rad_s']:7.2f} "
+                     f"{f['peak_accel_rad_s2']:8.1f} {f['work_j']:7.1f}")
+    verdict = "feasible" if bool(figures["feasible"]) else \
+        "NOT feasible: some steps need more torque than the motors have"
+    lines.append(f"  all DOFs: mean |τ| {figures['mean_abs_nm'].mean():.2f} N m, "
+                 f"peak |τ|/limit {figures['peak_ratio'].max():.2f}, "
+                 f"motor work {figures['work_j'].sum():.1f} J -> {verdict}")
+    return lines

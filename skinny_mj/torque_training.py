@@ -158,3 +158,16 @@ def train_warnings(run) -> int | None:
     plant = run.__dict__.get("plant")  # the cached property, if it was ever used
     return None if plant is None or not hasattr(plant, "warning_count") \
         else int(plant.warning_count())
+
+
+def feasibility(dof: int, trajectory) -> dict[str, np.ndarray]:
+    """:meth:`skinny_mj.dynamics.Dynamics.feasibility` of ``trajectory`` on the torque twin."""
+    return _dynamics(dof).feasibility(trajectory.angles, trajectory.dt)
+
+
+def feasibility_report(dof: int, trajectory) -> list[str]:
+    """The feasibility of ``trajectory`` as text lines (``skinny trajectory show
+    --actuation torque``)."""
+    from skinny_mj.dynamics import feasibility_lines
+
+    return feasibility_lines(feasibility(dof, trajectory), list(body.dof_names(dof)))
