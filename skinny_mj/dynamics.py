@@ -162,6 +162,70 @@ class Dynamics:
         }
 
 
+class BatchArmState:
+    """The plant side of :mod:`controllers.torque_arm` for a lockstep
+    :class:`skinny_mj.plant.BatchPlant` of the torque twin: each call returns the
+    :class:`controllers.torque_arm.ArmState` of the current step.
+
+    M(q) is read from the batch's own ``qM`` (``mj_fullM``, each robot's diagonal block);
+    the bias ``qfrc_bias``; the gravity torque (``gravity=True`` only) from a scratch
+    ``MjData`` at the same poses with zero velocity. Sensed angles: the true angles plus
+    the position sensors' noise seen in joint space (joint signals: exactly the noise
+    over the signals' scale; Cartesian signals: the damped pseudo-inverse of the signal
+    Jacobian applied to the noise). Velocities: the plant's noise-free joint velocities.
+    """
+
+    def __init__(self, plant, gravity: bool = False):
+        m = plant.model
+        self.plant, self.n_runs = plant, plant.n_runs
+        self.nv1 = m.nv // plant.n_runs
+        self.adr = np.asarray(plant.layout.dof_adr)
+        self.damping = m.dof_damping[self.adr].copy()
+        self._full = np.zeros((m.nv, m.nv))
+        self._scratch = mujoco.MjData(m) if gravity else None
+        lo, hi = body.joint_ranges(plant.n_dof).T
+        self._per_rad = 2.0 / (hi - lo)
+
+    def sensed_angles(self, sensed: np.ndarray) -> np.ndarray:
+        """(R, n) joint angles as the position sensors see them, rad."""
+        from controllers.feedback import jacobian_error
+
+        plant = self.plant
+        noise = np.asarray(sensed, float) - plant.true_signals()
+        if plant.signals == "joint":
+            noise_rad = noise / self._per_rad
+        else:
+            jac = plant.command_jacobian() / (np.asarray(plant.max_speed_rad_s) * plant.dt)
+            noise_rad = jacobian_error(noise, np.zeros_like(noise), jac)
+        return plant.joint_angles() + noise_rad
+
+    def mass(self) -> np.ndarray:
+        """(R, n, n) each robot's M(q) of the current state, kg m^2."""
+        m, d, r, n1 = self.plant.model, self.plant.data, self.n_runs, self.nv1
+        mujoco.mj_fullM(m, d, self._full)
+        runs = np.arange(r)
+        blocks = self._full.reshape(r, n1, r, n1)[runs, :, runs, :]
+        return blocks[:, self.adr][:, :, self.adr]
+
+    def gravity(self) -> np.ndarray:
+        """(R, n) g(q) of the current poses, N m."""
+        m, sd = self.plant.model, self._scratch
+        sd.qpos[:] = self.plant.data.qpos
+        sd.qvel[:] = 0.0
+        mujoco.mj_fwdPosition(m, sd)
+        mujoco.mj_fwdVelocity(m, sd)
+        return sd.qfrc_bias.reshape(self.n_runs, -1)[:, self.adr].copy()
+
+    def __call__(self, sensed: np.ndarray):
+        from controllers.torque_arm import ArmState
+
+        plant = self.plant
+        return ArmState(q=self.sensed_angles(sensed), qd=plant.joint_velocities(),
+                        mass=self.mass(), bias=plant.bias_torque_nm(),
+                        gravity=None if self._scratch is None else self.gravity(),
+                        damping=self.damping)
+
+
 def feasibility_lines(figures: dict[str, np.ndarray], names: list[str]) -> list[str]:
     """:meth:`Dynamics.feasibility` as text: one line per DOF, then the totals."""
     lines = [f"  {'DOF':24} {'peak':>6} {'p99':>6} {'mean':>6} {'>limit':>7} "

@@ -30,10 +30,18 @@ import mujoco
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from controllers.torque_arm import ArmGains, DesiredMotion
+from controllers.torque_arm_loop import ArmLoop
 from controllers.torque_feedback import TorqueFeedbackController, TorqueGains
 from controllers.torque_fel import TorqueLoop
 from skinny_mj import body
-from skinny_mj.config import TrainConfig
+from skinny_mj.config import ARM_LAWS, TrainConfig
+from skinny_mj.errors import SkinnyInputError
+
+#: Default pole placement omega (rad/s) per law, zeta 1 (critically damped): computed
+#: torque and PD + gravity at 15 rad/s (omega dt = 0.3 at the 20 ms hold), the ID
+#: feed-forward's low-gain PD and FEL's teacher at 5 rad/s.
+ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0}
 
 #: Bodies whose mass and inertia ``test_mass_scale`` scales (both arms), and the hand
 #: that carries ``test_payload_kg`` (a point mass at its centre of mass: the hand's CoM
@@ -98,10 +106,46 @@ def n_extra_inputs(cfg: TrainConfig) -> int:
     return 2 * cfg.dof if cfg.actuation == "torque" and cfg.uses_velocity_inputs else 0
 
 
-def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) -> TorqueLoop | None:
-    """The torque loop of ``trajectory`` (None for the velocity servo)."""
+def desired_motion(dof: int, trajectory, with_id: bool = False) -> DesiredMotion:
+    """The :class:`DesiredMotion` of ``trajectory`` for a held-torque loop: the clamped
+    cubic spline's states, mid-step samples and (``with_id``) held inverse dynamics."""
+    angles, dt = np.asarray(trajectory.angles, float), trajectory.dt
+    t = dt * np.arange(len(angles))
+    spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
+    mid = t[:-1] + 0.5 * dt
+    tau = _dynamics(dof).trajectory_torques_nm(angles, dt) if with_id else None
+    return DesiredMotion.from_samples(angles, spline(t, 1), dt, spline(mid), spline(mid, 1),
+                                      tau)
+
+
+def arm_gains(cfg: TrainConfig) -> ArmGains:
+    """The pole placement of ``cfg.feedback``'s law (:data:`ARM_OMEGA` unless set)."""
+    omega = ARM_OMEGA[cfg.feedback] if cfg.feedback_omega is None else cfg.feedback_omega
+    return ArmGains(omega, cfg.feedback_zeta)
+
+
+def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
+             plant=None) -> TorqueLoop | None:
+    """The torque loop of ``trajectory`` (None for the velocity servo); the laws of
+    :mod:`controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant)."""
     if cfg.actuation != "torque":
         return None
+    if cfg.feedback in ARM_LAWS:
+        from skinny_mj.dynamics import BatchArmState
+
+        law = ARM_LAWS[cfg.feedback]
+        if plant is None or not hasattr(plant, "model"):
+            raise SkinnyInputError(f"feedback {cfg.feedback!r} needs the lockstep plant "
+                                   "(plant='batch')")
+        return ArmLoop(controller(cfg.dof, cfg.signals),
+                       desired_velocities_rad_s(trajectory.angles, trajectory.dt),
+                       np.asarray(max_speed_rad_s, float),
+                       velocity_inputs=cfg.uses_velocity_inputs,
+                       gravity_feedforward=cfg.gravity_feedforward, law=law,
+                       gains=arm_gains(cfg),
+                       motion=desired_motion(cfg.dof, trajectory, law == "id-pd"),
+                       state_of=BatchArmState(plant, gravity=law == "pd-g"),
+                       dt=trajectory.dt)
     ff = true_torques(cfg.dof, trajectory) if cfg.feedback == "computed-torque" else None
     return TorqueLoop(controller(cfg.dof, cfg.signals),
                       desired_velocities_rad_s(trajectory.angles, trajectory.dt),

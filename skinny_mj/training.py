@@ -199,7 +199,7 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
     out.fel = fel.train(run.esn, run.plant, run.desired, fcfg, true_commands=run.true_commands,
                         progress=tick, forward=run.forward, scored=run.scored,
                         feedback=protocol.feedback_of(cfg.u_error_gain),
-                        hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s),
+                        hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s, run.plant),
                         readout_fit=selector, observe=observe)
     if selector is not None:
         out.ridge_lambda = selector.chosen
@@ -239,7 +239,7 @@ def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = N
         plant = make_plant(cfg, trajectory, seeds, run.max_speed_rad_s)
         torque.perturb(plant, cfg.test_payload_kg, cfg.test_mass_scale)  # torque: robustness
     desired = trajectory.position_signals(cfg.signals)
-    hook = torque.hook_for(cfg, trajectory, run.max_speed_rad_s)
+    hook = torque.hook_for(cfg, trajectory, run.max_speed_rad_s, plant)
     commands = true_commands_of(cfg, trajectory, run.max_speed_rad_s)
     ev = fel.evaluate(run.esn, plant, desired, commands, cfg.delay, run.forward,
                       inputs=cfg.inputs, washout_cycles=cfg.test_washout_cycles,

@@ -34,3 +34,35 @@ def test_show_prints_the_torques(capsys):
     assert main(["trajectory", "show", "ymca", "--actuation", "torque"]) == 0
     out = capsys.readouterr().out
     assert "right_shoulder_abduction" in out and "-> feasible" in out
+
+
+def test_arm_state_matches_the_one_robot_dynamics():
+    # the plant side of the textbook laws: each robot's M(q), bias and gravity as the
+    # one-robot Dynamics computes them, in a lockstep batch of two
+    from skinny_mj.dynamics import BatchArmState
+    from skinny_mj.plant import BatchPlant
+
+    traj = get("ymca", 8)
+    plant = BatchPlant(8, "joint", traj, n_runs=2, actuation="torque", sensor_noise=0.0)
+    plant.reset()
+    plant.step(np.full((2, 8), 0.3))
+    state = BatchArmState(plant, gravity=True)(plant.true_signals())
+    dyn = torque_training._dynamics(8)
+    for r in range(2):
+        q, qd = plant.joint_angles()[r], plant.joint_velocities()[r]
+        np.testing.assert_allclose(state.mass[r], dyn.mass_matrix(q), atol=1e-12)
+        np.testing.assert_allclose(state.gravity[r], dyn.gravity_torque_nm(q), atol=1e-9)
+        np.testing.assert_allclose(state.bias[r], dyn.bias_torque_nm(q, qd), atol=1e-9)
+    np.testing.assert_allclose(state.q, plant.joint_angles(), atol=1e-12)
+
+
+def test_computed_torque_tracks_ymca_within_its_need():
+    # the textbook law at 50 Hz tracks the feasible YMCA closely with about the torque
+    # the movement needs, and never at the limit
+    from skinny_mj.training import TrainConfig, train
+
+    o = train(TrainConfig(actuation="torque", method="none", test_gain=1.0, feedback="ct"))
+    tq = o.metrics["test"]["torque"]
+    need = torque_training.feasibility(4, o.test.trajectory)["mean_abs_nm"].mean()
+    assert o.metrics["test"]["position_nrmse"] < 0.02
+    assert tq["mean_abs_torque_nm"] < 1.5 * need and tq["max_commanded_ratio"] < 1.0
