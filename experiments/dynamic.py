@@ -52,6 +52,23 @@ CONTROLLERS = {
     "fel-new-gff": {"method": "new", "beta": 0.1, "gravity_feedforward": True},
     "tt": {"method": "true-target", "beta": 0.1},
 }
+#: The arm's own dynamics (controllers.torque_arm): the textbook controllers alone
+#: (K = 1) and FEL with the inertia-scaled PD teacher (beta = 1, 3 learning cycles per
+#: epoch, 15 epochs of K 1 -> 0; readout on the normal equations with forgetting 0.8,
+#: ridge 1e-2, or on each cycle alone, or by RLS)
+ARM_FEL = {"method": "new", "beta": 1.0, "cycles": 3, "epochs": 15, "feedback": "inertia-pd",
+           "readout_fit": "forgetting"}
+ARM_CONTROLLERS = {
+    "arm-ct": {"method": "none", "test_gain": 1.0, "feedback": "ct"},
+    "arm-idpd": {"method": "none", "test_gain": 1.0, "feedback": "id-pd"},
+    "arm-pdg": {"method": "none", "test_gain": 1.0, "feedback": "pd-gravity"},
+    "arm-pd": {"method": "none", "test_gain": 1.0, "feedback": "inertia-pd"},
+    "fel-arm": ARM_FEL,
+    "fel-arm-cycle": {**ARM_FEL, "readout_fit": "cycle"},
+    "fel-arm-rls": {**ARM_FEL, "readout_fit": "rls"},
+}
+#: reservoir size of the 3D arm's ESN in the arm-dynamics rows (2D: the default 200)
+ARM_RESERVOIR_3D = 500
 #: perturbation id -> test-plant changes
 PERTURBATIONS = {"payload1": {"test_payload_kg": 1.0}, "mass+20": {"test_mass_scale": 1.2},
                  "mass-20": {"test_mass_scale": 0.8}}
@@ -101,6 +118,22 @@ def all_rows(cfg: Config) -> tuple[Row, ...]:
         for ctl in ("pd", "ct", "fel-new", "fel-new-gff"):
             out.append(Row(f"{bd}-rec-{ctl}", {"dof": 4 if bd == "2d" else 8,
                                                "trajectory": cfg.recorded, **CONTROLLERS[ctl]}))
+    for bd in cfg.bodies:  # the arm's own dynamics, appended after every earlier row
+        dof = 4 if bd == "2d" else 8
+        size = {} if dof == 4 else {"reservoir": ARM_RESERVOIR_3D}
+        for mv, traj in (("ymca", cfg.ymca), ("rec", cfg.recorded)):
+            for ctl, changes in ARM_CONTROLLERS.items():
+                if mv == "rec" and ctl in ("fel-arm-cycle", "fel-arm-rls"):
+                    continue
+                out.append(Row(f"{bd}-{mv}-{ctl}", {"dof": dof, "trajectory": traj,
+                                                    **changes, **size}))
+        for pert, changes in PERTURBATIONS.items() if bd == "2d" else ():
+            for ctl, gain in (("fel-arm-k0", 0.0), ("fel-arm-k1", 1.0)):
+                out.append(Row(f"{bd}-ymca-{pert}-{ctl}", {
+                    "dof": dof, "trajectory": cfg.ymca, **ARM_FEL, **size,
+                    "test_gain": gain, **changes}))
+            out.append(Row(f"{bd}-ymca-{pert}-arm-ct", {
+                "dof": dof, "trajectory": cfg.ymca, **ARM_CONTROLLERS["arm-ct"], **changes}))
     return tuple(out)
 
 
@@ -110,7 +143,9 @@ def groups(every: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
     for row in every:
         kind = "kinematic" if row.row_id.endswith("kinematic") else \
             "robust" if any(p in row.row_id for p in PERTURBATIONS) else "table"
-        for g in (kind, f"{kind}-{row.row_id[:2]}"):
+        arm = "arm" in row.row_id.split("-")
+        for g in (kind, f"{kind}-{row.row_id[:2]}",
+                  *((f"arm-{kind}", f"arm-{kind}-{row.row_id[:2]}") if arm else ())):
             out[g] = (*out.get(g, ()), row.row_id)
     return out
 

@@ -51,6 +51,7 @@ METHODS = ("original", "new", "true-target", "none")
 #: three controllers alone, and FEL's teacher "inertia-pd"
 ARM_LAWS = {"ct": "ct", "id-pd": "id-pd", "pd-gravity": "pd-g", "inertia-pd": "fel"}
 FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS)
+READOUT_FITS = ("cycle", "forgetting", "rls")
 INPUTS = ("desired+sensed", "sensed")
 FORWARD_MODES = ("parallel", "serial", "hybrid")
 FORWARD_INPUTS = ("sensed", "chained")
@@ -122,6 +123,8 @@ class TrainConfig:
     velocity_inputs: bool | None = None  # [qd_d(t+1); qd(t)] / v_max inputs; None: torque
     feedback_omega: float | None = None  # ARM_LAWS' poles, rad/s (None: the law's default)
     feedback_zeta: float = 1.0  # ARM_LAWS' damping ratio
+    readout_fit: str = "cycle"  # FEL fits: "cycle" (each cycle alone), "forgetting", "rls"
+    readout_forgetting: float = 0.8  # their memory: old cycles' weight per learning cycle
     test_payload_kg: float = 0.0  # point mass at the right hand's CoM in the test plant
     test_mass_scale: float = 1.0  # every arm link's mass and inertia x this at test
     # the toolbox's protocol (issue 12); defaults are today's behaviour, bit for bit
@@ -204,8 +207,15 @@ class TrainConfig:
             (self.feedback in ("pd", "inertia-pd") or self.method == "none",
              f"the {self.feedback} controller runs alone (method 'none'); FEL's teacher is "
              "'pd' or 'inertia-pd'"),
-            (self.feedback != "inertia-pd" or self.method in ("original", "new"),
-             "the 'inertia-pd' teacher goes with feedback-error learning (original or new)"),
+            (self.feedback != "inertia-pd" or self.method in ("original", "new", "none"),
+             "the 'inertia-pd' teacher goes with feedback-error learning (original or new) "
+             "or runs alone (method 'none')"),
+            (self.readout_fit in READOUT_FITS and (self.readout_fit == "cycle" or (
+                self.actuation == "torque" and self.method in ("original", "new"))),
+             f"readout_fit must be one of {READOUT_FITS} ('forgetting' and 'rls' with FEL "
+             f"on the torque body), got {self.readout_fit!r}"),
+            (_finite_at_least(self.readout_forgetting, 0) and self.readout_forgetting <= 1,
+             f"readout_forgetting must be in [0, 1], got {self.readout_forgetting}"),
             (self.feedback_omega is None or _finite_at_least(self.feedback_omega, 0),
              f"feedback_omega must be >= 0 rad/s, got {self.feedback_omega}"),
             (_finite_at_least(self.feedback_zeta, 0),

@@ -41,6 +41,8 @@ from skinny_mj.errors import SkinnyInputError
 #: Default pole placement omega (rad/s) per law, zeta 1 (critically damped): computed
 #: torque and PD + gravity at 15 rad/s (omega dt = 0.3 at the 20 ms hold), the ID
 #: feed-forward's low-gain PD and FEL's teacher at 5 rad/s.
+#: Ridge of the remembering readout fits when the ESN's readout is not "ridge".
+MEMORY_RIDGE = 1e-2
 ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0}
 
 #: Bodies whose mass and inertia ``test_mass_scale`` scales (both arms), and the hand
@@ -215,3 +217,37 @@ def feasibility_report(dof: int, trajectory) -> list[str]:
     from skinny_mj.dynamics import feasibility_lines
 
     return feasibility_lines(feasibility(dof, trajectory), list(body.dof_names(dof)))
+
+
+def readout_fitter(cfg: TrainConfig, esn, steps: int):
+    """FEL's readout fit for ``cfg.readout_fit`` (None: each cycle alone, ``esn.fit``):
+    the normal equations with forgetting, or RLS, remembering ``cfg.readout_forgetting``
+    of the statistics per learning cycle of ``steps`` samples; ridge ``cfg.ridge`` with a
+    ridge readout, else :data:`MEMORY_RIDGE`."""
+    from controllers.torque_readout import ForgettingReadout, RLSReadout
+
+    ridge = cfg.ridge if cfg.readout == "ridge" else MEMORY_RIDGE
+    if cfg.readout_fit == "forgetting":
+        return ForgettingReadout(esn, cfg.readout_forgetting, ridge)
+    if cfg.readout_fit == "rls":
+        return RLSReadout(esn, steps, cfg.readout_forgetting, ridge)
+    return None
+
+
+class ShareRecorder:
+    """FEL's ``observe`` callback: per epoch, on its evaluation cycle (the ESN with the
+    epoch's K), the feedback share mean |K u_fb| / mean |u| of the command and the
+    teacher's error signal mean |u_fb| / mean |u| (each (R, E))."""
+
+    def __init__(self, gains: np.ndarray, n_runs: int, cycles: int):
+        self.gains, self.eval_cycle = np.asarray(gains, float), cycles + 1
+        self.share = np.full((n_runs, len(gains)), np.nan)
+        self.error_signal = np.full((n_runs, len(gains)), np.nan)
+
+    def __call__(self, epoch: int, cycle: int, ro, y_used) -> None:
+        if cycle != self.eval_cycle:
+            return
+        u = np.abs(ro.commands).mean(axis=(1, 2))
+        fb = np.abs(ro.u_error[:, :-1]).mean(axis=(1, 2))
+        self.error_signal[:, epoch] = fb / np.maximum(u, 1e-12)
+        self.share[:, epoch] = self.gains[epoch] * self.error_signal[:, epoch]
