@@ -74,7 +74,8 @@ PERTURBATIONS = {"payload1": {"test_payload_kg": 1.0}, "mass+20": {"test_mass_sc
                  "mass-20": {"test_mass_scale": 0.8}}
 #: issue 14's goals for the ESN alone on YMCA (position NRMSE), by body
 GOALS = {"2d": 0.03, "3d": 0.06}
-TABLE_COLUMNS = {"position_nrmse": "test position NRMSE", "motor_nrmse": "test motor NRMSE",
+TABLE_COLUMNS = {"position_nrmse": "test position NRMSE", "joint_nrmse": "joint-angle NRMSE",
+                 "motor_nrmse": "test motor NRMSE",
                  "mean_abs_torque_nm": "mean |τ| (N m)", "energy_j": "motor work (J)",
                  "max_torque_ratio": "max |τ|/limit", "warnings": "MuJoCo warnings",
                  "train_wall_s": "wall per run (s)"}
@@ -90,6 +91,7 @@ class Config:
     clip: str = "md_02.amc@start=3,duration=6.26"
     signals: str = "cartesian"
     epochs: int = 10
+    arm_epochs: int = 15  # FEL with the inertia-scaled teacher (ARM_FEL)
     runs: int = 10
 
     @classmethod
@@ -152,6 +154,8 @@ def groups(every: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
 
 def train_config(cfg: Config, row: Row) -> TrainConfig:
     p = dict(row.params)
+    if p.get("feedback") == "inertia-pd" and p.get("method") != "none":
+        p["epochs"] = cfg.arm_epochs
     return TrainConfig(**{"actuation": "torque", "signals": cfg.signals,
                           "epochs": cfg.epochs, **p})
 
@@ -167,7 +171,12 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
             out.append(RunFailed(m.get("fail_reason") or "diverged"))
             continue
         metrics = {"position_nrmse": m["test"]["position_nrmse"],
-                   "motor_nrmse": m["test"]["motor_nrmse"], "train_wall_s": m["wall_s"]}
+                   "motor_nrmse": m["test"]["motor_nrmse"], "train_wall_s": m["wall_s"],
+                   "joint_nrmse": joint_nrmse(o)}
+        train = m.get("train", {})
+        for key in ("position_nrmse", "feedback_share", "error_signal_share"):
+            if key in train:  # learning curves, per epoch (kept in the run file)
+                metrics[f"curve_{key}"] = train[key]
         tq = m["test"].get("torque")
         if tq is not None:
             metrics.update({k: tq[k] for k in ("mean_abs_torque_nm", "energy_j",
@@ -177,6 +186,18 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
             metrics["warnings"] = tq["warnings"] + (m.get("train_warnings") or 0)
         out.append(metrics)
     return out
+
+
+def joint_nrmse(outcome) -> float:
+    """Test joint-angle NRMSE (each angle normalized to [-1, 1] over its range) of a
+    :class:`skinny_mj.training.TrainOutcome` against its movement's angles."""
+    from controllers.metrics import position_nrmse
+    from skinny_mj.body import normalize_angles
+
+    dof = outcome.config.dof
+    angles = outcome.test.rollout.angles[:, :, :dof]
+    return float(position_nrmse(normalize_angles(angles, dof),
+                                normalize_angles(outcome.test.trajectory.angles, dof))[0])
 
 
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
@@ -202,7 +223,7 @@ def build(*, quick: bool = False, movement: str | None = None, asf: str | None =
     if signals is not None:
         changes["signals"] = signals
     if quick:
-        changes.update(epochs=2, runs=2)
+        changes.update(epochs=2, arm_epochs=2, runs=2)
     cfg = Config(**changes)
     every = all_rows(cfg)
     return Experiment(name=NAME, rows=every, groups=groups(every),
