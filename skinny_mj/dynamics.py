@@ -173,11 +173,21 @@ class BatchArmState:
     the position sensors' noise seen in joint space (joint signals: exactly the noise
     over the signals' scale; Cartesian signals: the damped pseudo-inverse of the signal
     Jacobian applied to the noise). Velocities: the plant's noise-free joint velocities.
+
+    ``nominal=True``: M(q), the bias and the gravity come from the nominal twin (a batch
+    model of its own, at the plant's state) instead of the plant's model: what a
+    controller knows of a plant whose masses were changed behind its back (a payload,
+    link masses x 1.2); on an unchanged plant the two are the same numbers.
     """
 
-    def __init__(self, plant, gravity: bool = False):
-        m = plant.model
+    def __init__(self, plant, gravity: bool = False, nominal: bool = False):
+        from skinny_mj.model import load_batch_model
+
         self.plant, self.n_runs = plant, plant.n_runs
+        self.model = load_batch_model(plant.n_dof, plant.n_runs, "torque") if nominal \
+            else plant.model
+        m = self.model
+        self._own = mujoco.MjData(m) if nominal else None
         self.nv1 = m.nv // plant.n_runs
         self.adr = np.asarray(plant.layout.dof_adr)
         self.damping = m.dof_damping[self.adr].copy()
@@ -199,9 +209,20 @@ class BatchArmState:
             noise_rad = jacobian_error(noise, np.zeros_like(noise), jac)
         return plant.joint_angles() + noise_rad
 
-    def mass(self) -> np.ndarray:
+    def _data(self):
+        """The plant's MjData, or the nominal model's at the plant's state."""
+        if self._own is None:
+            return self.plant.data
+        d = self._own
+        d.qpos[:], d.qvel[:] = self.plant.data.qpos, self.plant.data.qvel
+        mujoco.mj_fwdPosition(self.model, d)
+        mujoco.mj_fwdVelocity(self.model, d)
+        return d
+
+    def mass(self, d=None) -> np.ndarray:
         """(R, n, n) each robot's M(q) of the current state, kg m^2."""
-        m, d, r, n1 = self.plant.model, self.plant.data, self.n_runs, self.nv1
+        m, r, n1 = self.model, self.n_runs, self.nv1
+        d = self._data() if d is None else d
         mujoco.mj_fullM(m, d, self._full)
         runs = np.arange(r)
         blocks = self._full.reshape(r, n1, r, n1)[runs, :, runs, :]
@@ -209,7 +230,7 @@ class BatchArmState:
 
     def gravity(self) -> np.ndarray:
         """(R, n) g(q) of the current poses, N m."""
-        m, sd = self.plant.model, self._scratch
+        m, sd = self.model, self._scratch
         sd.qpos[:] = self.plant.data.qpos
         sd.qvel[:] = 0.0
         mujoco.mj_fwdPosition(m, sd)
@@ -219,9 +240,11 @@ class BatchArmState:
     def __call__(self, sensed: np.ndarray):
         from controllers.torque_arm import ArmState
 
-        plant = self.plant
+        plant, d = self.plant, self._data()
+        bias = plant.bias_torque_nm() if self._own is None else \
+            d.qfrc_bias.reshape(self.n_runs, -1)[:, self.adr].copy()
         return ArmState(q=self.sensed_angles(sensed), qd=plant.joint_velocities(),
-                        mass=self.mass(), bias=plant.bias_torque_nm(),
+                        mass=self.mass(d), bias=bias,
                         gravity=None if self._scratch is None else self.gravity(),
                         damping=self.damping)
 

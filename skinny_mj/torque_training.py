@@ -146,7 +146,8 @@ def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
                        gravity_feedforward=cfg.gravity_feedforward, law=law,
                        gains=arm_gains(cfg),
                        motion=desired_motion(cfg.dof, trajectory, law == "id-pd"),
-                       state_of=BatchArmState(plant, gravity=law == "pd-g"),
+                       state_of=BatchArmState(plant, gravity=law == "pd-g",
+                                              nominal=perturbed(cfg)),
                        dt=trajectory.dt)
     ff = true_torques(cfg.dof, trajectory) if cfg.feedback == "computed-torque" else None
     return TorqueLoop(controller(cfg.dof, cfg.signals),
@@ -154,6 +155,11 @@ def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
                       np.asarray(max_speed_rad_s, float),
                       velocity_inputs=cfg.uses_velocity_inputs,
                       gravity_feedforward=cfg.gravity_feedforward, inverse_dynamics=ff)
+
+
+def perturbed(cfg: TrainConfig) -> bool:
+    """Does ``cfg``'s test plant differ from the nominal twin (the controllers' model)?"""
+    return cfg.test_payload_kg != 0 or cfg.test_mass_scale != 1
 
 
 def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0) -> None:

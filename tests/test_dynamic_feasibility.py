@@ -66,3 +66,24 @@ def test_computed_torque_tracks_ymca_within_its_need():
     need = torque_training.feasibility(4, o.test.trajectory)["mean_abs_nm"].mean()
     assert o.metrics["test"]["position_nrmse"] < 0.02
     assert tq["mean_abs_torque_nm"] < 1.5 * need and tq["max_commanded_ratio"] < 1.0
+
+
+def test_a_perturbed_plant_is_controlled_with_the_nominal_model():
+    # robustness rows: the controllers' M(q) and bias come from the nominal twin at the
+    # plant's state; on an unchanged plant that is the plant's own, on a heavier one not
+    from skinny_mj.dynamics import BatchArmState
+    from skinny_mj.plant import BatchPlant
+
+    plant = BatchPlant(4, "joint", get("ymca", 4), n_runs=2, actuation="torque",
+                       sensor_noise=0.0)
+    plant.reset()
+    plant.step(np.full((2, 4), 0.4))
+    own, nominal = BatchArmState(plant)(plant.true_signals()), \
+        BatchArmState(plant, nominal=True)(plant.true_signals())
+    np.testing.assert_allclose(nominal.mass, own.mass, atol=1e-12)
+    np.testing.assert_allclose(nominal.bias, own.bias, atol=1e-9)
+    torque_training.perturb(plant, mass_scale=1.2)
+    plant.step(np.zeros((2, 4)))
+    own, nominal = BatchArmState(plant)(plant.true_signals()), \
+        BatchArmState(plant, nominal=True)(plant.true_signals())
+    np.testing.assert_allclose(own.mass, 1.2 * nominal.mass, rtol=1e-9)
