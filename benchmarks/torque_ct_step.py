@@ -6,8 +6,8 @@ torque twin with its integrator and step replaced, against the twin as it is (RK
     MUJOCO_GL=disabled OMP_NUM_THREADS=1 python benchmarks/torque_ct_step.py
 
 Per body (2D, 3D) and movement (YMCA, the recorded-like YMCA): joint-angle and
-Cartesian position NRMSE of one seed, mean |tau|, and the wall time of the test cycle
-(best of 3). The model's integrator and step are module constants of
+Cartesian position NRMSE of one seed, mean |tau|, and the wall time of the whole run (build,
+test; best of 3). The model's integrator and step are module constants of
 :mod:`skinny_mj.model`, replaced here for the run (nothing is cached).
 """
 
@@ -34,7 +34,8 @@ STEPS = {"RK4 5 ms (the twin)": (RK4, 0.005), "RK4 10 ms": (RK4, 0.01),
 def main() -> None:
     saved = skinny_model.TORQUE_INTEGRATOR, skinny_model.TORQUE_TIMESTEP_S
     print("| step | body | movement | joint NRMSE | position NRMSE | mean \\|τ\\| (N m) | "
-          "max \\|τ\\|/limit | warnings | wall per cycle (s) |\n|---|---|---|---|---|---|---|---|---|")
+          "max \\|τ\\|/limit | warnings | wall per run (s) |")
+    print("|---|---|---|---|---|---|---|---|---|")
     try:
         for label, (integrator, dt) in STEPS.items():
             skinny_model.TORQUE_INTEGRATOR, skinny_model.TORQUE_TIMESTEP_S = integrator, dt
@@ -48,7 +49,8 @@ def main() -> None:
                         o = train(cfg, 0)
                         walls.append(time.perf_counter() - start)
                     tq = o.metrics["test"]["torque"]
-                    print(f"| {label} | {'2D' if dof == 4 else '3D'} | {mv} | {joint_nrmse(o):.4f} | "
+                    body = "2D" if dof == 4 else "3D"
+                    print(f"| {label} | {body} | {mv} | {joint_nrmse(o):.4f} | "
                           f"{o.metrics['test']['position_nrmse']:.4f} | "
                           f"{tq['mean_abs_torque_nm']:.2f} | {tq['max_commanded_ratio']:.3f} | "
                           f"{tq['warnings']} | {min(walls):.2f} |", flush=True)

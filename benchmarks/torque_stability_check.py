@@ -105,6 +105,17 @@ def episode(model: mujoco.MjModel, seed: int, hold: int) -> dict:
     return {"ok": True, "over": over, "vmax": vmax}
 
 
+def episodes(model: mujoco.MjModel, runs: int, hold: int) -> tuple[int, str, str, str]:
+    """``runs`` stress episodes: failed count, first warnings' kinds, and over the ok
+    episodes the worst overshoot past a limit (rad) and the largest |qvel| (rad/s)."""
+    res = [episode(model, 1000 * hold + s, hold) for s in range(runs)]
+    ok = [r for r in res if r["ok"]]
+    kinds = sorted({r["warning"].replace("mjWARN_", "") for r in res if not r["ok"]})
+    over = f"{max(r['over'] for r in ok):.2f}" if ok else "—"
+    vmax = f"{max(r['vmax'] for r in ok):.0f}" if ok else "—"
+    return len(res) - len(ok), ", ".join(kinds) or "—", over, vmax
+
+
 def stress_table(runs: int, holds=(1, 5)) -> str:
     lines = ["| variant | hold (steps) | failed / n | first warnings | past limit (rad) |"
              " max \\|qvel\\| (rad/s) |", "|---|---|---|---|---|---|"]
@@ -112,13 +123,9 @@ def stress_table(runs: int, holds=(1, 5)) -> str:
     for label, spec in VARIANTS.items():
         model = variant(*spec)
         for hold in holds:
-            res = [episode(model, 1000 * hold + s, hold) for s in range(runs)]
-            ok = [r for r in res if r["ok"]]
-            kinds = sorted({r["warning"].replace("mjWARN_", "") for r in res if not r["ok"]})
-            over = f"{max(r['over'] for r in ok):.2f}" if ok else "—"
-            vmax = f"{max(r['vmax'] for r in ok):.0f}" if ok else "—"
-            lines.append(f"| {label} | 1–{hold} | {runs - len(ok)} / {runs} |"
-                         f" {', '.join(kinds) or '—'} | {over} | {vmax} |")
+            failed, kinds, over, vmax = episodes(model, runs, hold)
+            lines.append(f"| {label} | 1–{hold} | {failed} / {runs} |"
+                         f" {kinds} | {over} | {vmax} |")
             print(lines[-1], flush=True)
     return "\n".join(lines)
 
@@ -160,12 +167,9 @@ def limits_table(runs: int, holds=(1, 5)) -> str:
                                                       "(the twin)", None)):
             model = variant(dof, arm, RK4, 0.005, tc)
             for hold in holds:
-                res = [episode(model, 1000 * hold + s, hold) for s in range(runs)]
-                ok = [r for r in res if r["ok"]]
-                over = f"{max(r['over'] for r in ok):.2f}" if ok else "—"
-                vmax = f"{max(r['vmax'] for r in ok):.0f}" if ok else "—"
+                failed, _, over, vmax = episodes(model, runs, hold)
                 lines.append(f"| {'2D' if dof == 4 else '3D'} | {label} | 1–{hold} | "
-                             f"{runs - len(ok)} / {runs} | {over} | {vmax} |")
+                             f"{failed} / {runs} | {over} | {vmax} |")
                 print(lines[-1], flush=True)
     return "\n".join(lines)
 
