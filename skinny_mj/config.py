@@ -20,8 +20,12 @@ grouped as the thesis's papers vary it:
 - schedule: ``method`` (original, new β, true target), ``beta``, ``cycles``,
   ``epochs``, the feedback gain schedule (linear 1 → 0, ×factor per epoch, fixed),
   ``tt_cycles``, and ``test_washout_cycles`` (unscored cycles before the scored test);
-- torque (``actuation="torque"``, issue 14; :mod:`skinny_mj.torque_training`): the
-  ``feedback`` teacher ("pd"; "computed-torque" for the controller alone),
+- torque (``actuation="torque"``; :mod:`skinny_mj.torque_training`): the
+  ``feedback`` teacher ("pd" limit-scaled, "inertia-pd" in the arm's own coordinates;
+  "computed-torque", "ct", "id-pd", "pd-gravity" for a controller alone), the poles
+  ``feedback_omega`` / ``feedback_zeta`` of the arm's laws (:mod:`controllers.torque_arm`),
+  FEL's ``readout_fit`` ("cycle", or remembering earlier cycles: "forgetting", "rls") and
+  its ``readout_forgetting``,
   ``gravity_feedforward`` (bias torque / limit added to the command, not learned),
   ``velocity_inputs`` (None: on for torque) and the test plant's ``test_payload_kg``
   (in the right hand) and ``test_mass_scale`` (every arm link);

@@ -1,4 +1,4 @@
-"""The torque body in the one training path (issue 14): what ``actuation="torque"`` adds.
+"""The torque body in the one training path: what ``actuation="torque"`` adds.
 
 :mod:`skinny_mj.training` calls these when ``cfg.actuation == "torque"``:
 
@@ -10,7 +10,12 @@
 - :func:`teacher_inputs`: the true-target architecture's extra teacher-forced inputs
   [qd_d(t+1); qd_d(t)] / v_max, as the rollout's [qd_d(t+1); qd(t)] / v_max;
 - :func:`perturb`: the robustness test plant (payload, link masses);
-- :func:`controller`: the PD teacher with gains scaled to the limits.
+- :func:`controller`: the PD teacher with gains scaled to the limits;
+- :func:`hook_for` with an arm law (``feedback`` in :data:`skinny_mj.config.ARM_LAWS`):
+  an :class:`controllers.torque_arm_loop.ArmLoop` fed by
+  :class:`skinny_mj.dynamics.BatchArmState`, its gains :func:`arm_gains`, the movement
+  :func:`desired_motion`; :func:`readout_fitter` (FEL fits that remember) and
+  :class:`ShareRecorder` (the feedback share per epoch); :func:`feasibility`.
 
 The feedback teacher (:class:`controllers.torque_feedback.TorqueFeedbackController`):
 gains :meth:`TorqueGains.from_limits` (0.1 rad asks for 50 % of the limit, critically
