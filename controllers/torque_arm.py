@@ -121,7 +121,7 @@ def feedback_torque(state: ArmState, e: np.ndarray, e_dot: np.ndarray,
                     gains: ArmGains) -> np.ndarray:
     """(R, n) M(q) (omega^2 e + 2 zeta omega e_dot), N m."""
     acc = gains.kp * e + gains.kd * e_dot
-    return np.einsum("rij,rj->ri", state.mass, acc)
+    return np.matmul(state.mass, acc[..., None])[..., 0]
 
 
 def arm_torque(law: str, state: ArmState, motion: DesiredMotion, t: int, dt: float,
@@ -133,7 +133,7 @@ def arm_torque(law: str, state: ArmState, motion: DesiredMotion, t: int, dt: flo
     e, e_dot = mid_step_error(state, motion, t, dt)
     fb = feedback_torque(state, e, e_dot, gains)
     if law == "ct":
-        ff = np.einsum("rij,j->ri", state.mass, motion.qdd_step[t]) + state.bias \
+        ff = np.matmul(state.mass, motion.qdd_step[t]) + state.bias \
             + state.damping * state.qd
     elif law == "id-pd":
         if motion.tau_id is None:

@@ -63,7 +63,6 @@ def test_saturated_torques_diverged_without_the_armature_and_stay_clean_with_it(
     shoulder's singular inertia at flexion ~90 deg; with the armature, 1 s is clean."""
     bare = load_model(8, "torque")
     bare.dof_armature[:] = 0.0
-    bare.jnt_solref[:] = (0.02, 1.0)  # and its joint limits as they were
     assert _bang_bang(bare, seed, 1.0) in ("mjWARN_BADQACC", "mjWARN_BADQVEL", "mjWARN_BADQPOS")
     assert _bang_bang(load_model(8, "torque"), seed, 1.0) is None
 
@@ -133,28 +132,14 @@ def test_skinny_test_on_a_torque_model_records_the_torques(tmp_path):
     assert {f"/torques/{n}" for n in names} <= _blueprint_origins(rrd)  # shown by default
 
 
-def _overshoot(model: mujoco.MjModel, seed: int, seconds: float) -> float:
-    """Worst distance (rad) past a joint limit under full random-sign torques."""
-    data = mujoco.MjData(model)
-    rng = np.random.default_rng(seed)
-    lo, hi = model.jnt_range.T
-    data.qpos[:] = rng.uniform(lo + 0.05, hi - 0.05)
-    over = 0.0
-    for _ in range(int(seconds / 0.02)):
-        data.ctrl[:] = rng.choice([-1.0, 1.0], model.nu)
-        mujoco.mj_step(model, data, 4)
-        over = max(over, float(np.max(np.maximum(lo - data.qpos, data.qpos - hi))))
-    return over
-
 
 @pytest.mark.parametrize("dof", [4, 8])
-def test_the_torque_twins_limits_are_stiffer_and_hold_closer(dof):
+def test_the_torque_twin_keeps_the_servos_joint_limits(dof):
+    # a stiffer limit halves the overshoot under bang-bang torques but made FEL learn the
+    # 3D YMCA worse (the model card); the twin keeps MuJoCo's default
     from skinny_mj.model import TORQUE_LIMIT_SOLREF
 
-    twin = load_model(dof, "torque")
+    twin, servo = load_model(dof, "torque"), load_model(dof)
     np.testing.assert_array_equal(twin.jnt_solref, np.tile(TORQUE_LIMIT_SOLREF, (twin.njnt, 1)))
-    servo = load_model(dof)  # the velocity servo keeps MuJoCo's default limits
-    np.testing.assert_array_equal(servo.jnt_solref, np.tile((0.02, 1.0), (servo.njnt, 1)))
-    before = load_model(dof, "torque")
-    before.jnt_solref[:] = (0.02, 1.0)
-    assert _overshoot(twin, 3, 2.0) < 0.75 * _overshoot(before, 3, 2.0)
+    np.testing.assert_array_equal(twin.jnt_solref, servo.jnt_solref)
+    np.testing.assert_array_equal(twin.jnt_solimp, servo.jnt_solimp)
