@@ -183,6 +183,8 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--dof", type=int, choices=(4, 8), default=4)
     w.add_argument("--asf", type=Path)
     w.add_argument("--retarget", choices=("angles", "positions"), default="angles")
+    w.add_argument("--actuation", choices=("velocity", "torque"), default="velocity",
+                   help="torque: also the torques the movement needs on the torque twin")
     e = tsub.add_parser("export", help="write a movement to .npz or .csv")
     e.add_argument("name")
     e.add_argument("--dof", type=int, choices=(4, 8), default=4)

@@ -314,6 +314,12 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
               f"{sorted(traj.desired) if traj.desired else 'none'})")
         for key, value in movement_stats(traj).items():
             print(f"  {key:32} {value:.4g}")
+        if getattr(args, "actuation", "velocity") == "torque":
+            from skinny_mj import torque_training
+
+            print("torque twin: inverse-dynamics torques of the movement against the limits")
+            for line in torque_training.feasibility_report(args.dof, traj):
+                print(line)
         return 0
     ns = argparse.Namespace(trajectory=args.name, asf=args.asf, speed=args.speed, reps=args.reps)
     traj, _ = _load_movement(ns, args.dof, check_export(args.dof, args.out))
