@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skinny_mj import body, trajectories
+from skinny_mj import body, trajectories, viewer
 from skinny_mj.cli import main
 from skinny_mj.recording import ACTUAL_RGB, DESIRED_RGB, write_recording
 
@@ -48,14 +48,29 @@ def test_view_headless_prints_the_command(run_3d, monkeypatch, capsys):
     (folder / ".hidden.rrd.tmp").write_bytes(b"")  # an atomic-write leftover: not a recording
     assert main(["view", str(folder)]) == 0
     out = capsys.readouterr().out
-    assert "no display" in out and f"rerun {run_3d}" in out and ".hidden" not in out
+    assert "no display" in out and f"rerun --bind 127.0.0.1 --port 9876 {run_3d}" in out
+    assert ".hidden" not in out
 
 
-def test_view_web_command_binds_localhost(run_3d, capsys):
-    assert main(["view", str(run_3d), "--web", "--dry-run", "--web-port", "9123"]) == 0
+@pytest.mark.parametrize("web", [[], ["--web"]])
+def test_view_command_binds_localhost(run_3d, capsys, web):
+    assert main(["view", str(run_3d), *web, "--dry-run", "--web-port", "9123",
+                 "--grpc-port", "9124"]) == 0
     cmd = capsys.readouterr().out.split()
     assert cmd[cmd.index("--bind") + 1] == "127.0.0.1" and "0.0.0.0" not in cmd
-    assert cmd[cmd.index("--web-viewer-port") + 1] == "9123" and cmd[-1] == str(run_3d)
+    assert cmd[cmd.index("--port") + 1] == "9124" and cmd[-1] == str(run_3d)
+    assert ("--web-viewer" in cmd) == bool(web)
+    if web:
+        assert cmd[cmd.index("--web-viewer-port") + 1] == "9123"
+
+
+def test_view_bind_elsewhere_only_when_asked(run_3d, capsys):
+    assert main(["view", str(run_3d), "--dry-run", "--bind", "0.0.0.0"]) == 0
+    cmd = capsys.readouterr().out.split()
+    assert cmd[cmd.index("--bind") + 1] == "0.0.0.0"
+    assert main(["view", str(run_3d), "--dry-run", "--bind", "localhost:1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--bind" in err[0] and "localhost:1" in err[0]
 
 
 @pytest.mark.parametrize("make", ["missing", "empty-dir", "not-rrd"])
@@ -88,24 +103,50 @@ def _listening(port: int) -> list[str]:
     return found
 
 
-@pytest.mark.skipif(not Path("/proc/net/tcp").is_file(), reason="needs Linux /proc/net/tcp")
-def test_web_viewer_listens_on_127_0_0_1_only(run_3d):
-    web, grpc = _free_port(), _free_port()
+def _addresses_while_viewing(cmd: list[str], ports: list[int]) -> list[str]:
+    """Start ``cmd`` (``skinny view ...``), wait until every port in ``ports`` listens and
+    return the local addresses listening on them."""
     env = {**os.environ, "BROWSER": "true"}  # never open a browser from a test
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "skinny_mj.cli", "view", str(run_3d), "--web", "--web-port",
-         str(web), "--grpc-port", str(grpc)], stdin=subprocess.DEVNULL,
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, start_new_session=True)
+    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, env=env, start_new_session=True)
     try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and not (_listening(web) and _listening(grpc)):
-            assert proc.poll() is None, "the web viewer exited"
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and not all(_listening(p) for p in ports):
+            assert proc.poll() is None, "the viewer exited"
             time.sleep(0.2)
-        addresses = _listening(web) + _listening(grpc)
+        return [a for p in ports for a in _listening(p)]
     finally:
         os.killpg(proc.pid, signal.SIGTERM)
         proc.wait(timeout=30)
+
+
+NEEDS_PROC_NET = pytest.mark.skipif(not Path("/proc/net/tcp").is_file(),
+                                    reason="needs Linux /proc/net/tcp")
+
+
+@NEEDS_PROC_NET
+def test_web_viewer_listens_on_127_0_0_1_only(run_3d):
+    web, grpc = _free_port(), _free_port()
+    addresses = _addresses_while_viewing(
+        [sys.executable, "-m", "skinny_mj.cli", "view", str(run_3d), "--web", "--web-port",
+         str(web), "--grpc-port", str(grpc)], [web, grpc])
     assert len(addresses) >= 2 and set(addresses) == {"0100007F"}  # 127.0.0.1, nothing else
+
+
+NEEDS_XVFB = pytest.mark.skipif(
+    shutil.which("xvfb-run") is None or shutil.which("rerun") is None,
+    reason="needs Debian packages xvfb and mesa-vulkan-drivers (.ci/run installs them) and "
+    "the rerun viewer")
+
+
+@NEEDS_PROC_NET
+@NEEDS_XVFB
+def test_native_viewer_listens_on_127_0_0_1_only(run_3d):
+    grpc = _free_port()  # the native viewer's own gRPC server (rerun's default: 0.0.0.0)
+    addresses = _addresses_while_viewing(
+        ["xvfb-run", "-a", sys.executable, "-m", "skinny_mj.cli", "view", str(run_3d),
+         "--grpc-port", str(grpc)], [grpc])
+    assert addresses and set(addresses) == {"0100007F"}  # 127.0.0.1, nothing else
 
 
 # -- the screenshot ---------------------------------------------------------------------
@@ -134,8 +175,9 @@ def view_rectangles(img: np.ndarray) -> tuple[tuple[int, int, int, int], tuple[i
     from the borders in a screenshot of the saved blueprint (blueprint panel | 3D view |
     plots | selection panel)."""
     code = img @ np.array([1, 256, 65536])
-    h = img.shape[0]
-    cols = _separator_columns(code, slice(int(0.1 * h), int(0.6 * h)))
+    h, w = img.shape[:2]
+    cols = [c for c in _separator_columns(code, slice(int(0.1 * h), int(0.6 * h)))
+            if 0 < c[0] and c[1] < w]  # the window's own frame is no panel border
     assert len(cols) >= 3, f"expected 3 panel borders, found columns {cols}"
     border = cols[1][0]  # between the 3D view and the plots: it spans the views' height
     line = code[:, border] == code[int(0.3 * h), border]
@@ -143,17 +185,12 @@ def view_rectangles(img: np.ndarray) -> tuple[tuple[int, int, int, int], tuple[i
     return (cols[0][1], cols[1][0], y0, y1), (cols[1][1], cols[2][0])
 
 
-@pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("rerun") is None,
-                    reason="needs Debian packages xvfb and mesa-vulkan-drivers (.ci/run "
-                    "installs them) and the rerun viewer")
+@NEEDS_XVFB
 def test_viewer_screenshot_frames_both_arms_and_plots_have_lines(run_3d, tmp_path):
     from PIL import Image
 
-    shot = tmp_path / "viewer.png"
-    result = subprocess.run(
-        ["xvfb-run", "-a", "rerun", "--screenshot-to", str(shot), "--window-size", "1600x1000",
-         str(run_3d)], capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
-    assert result.returncode == 0 and shot.is_file(), result.stderr[-2000:]
+    # 0.6 s in, the actual arms lag the desired ones by 0.2 s: both colours show
+    shot = viewer.screenshot(run_3d, tmp_path / "viewer.png", at_s=0.6)
     img = np.asarray(Image.open(shot).convert("RGB")).astype(np.int64)
     (x0, x1, y0, y1), (p0, p1) = view_rectangles(img)
     pose = img[y0:y1, x0:x1]
