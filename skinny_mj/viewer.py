@@ -167,8 +167,10 @@ def _until(deadline: float, what: str, proc: subprocess.Popen, probe):
 
 
 def screenshot(recording: str | Path, png: str | Path, *, at_s: float,
-               window: str = "1600x1000", timeout_s: float = 300.0) -> Path:
-    """Save a screenshot of the native viewer showing ``recording`` at ``at_s`` seconds.
+               views: Sequence[str] = (), window: str = "1600x1000",
+               timeout_s: float = 300.0) -> dict[str, Path]:
+    """Save a screenshot of the native viewer showing ``recording`` at ``at_s`` seconds
+    (and one of each view named in ``views``).
 
     ``rerun --screenshot-to`` takes its picture ten frames after start, whatever has
     loaded by then, with the time cursor wherever playback (or following the data still
@@ -176,7 +178,9 @@ def screenshot(recording: str | Path, png: str | Path, *, at_s: float,
     ``xvfb-run`` when there is no display) is driven through rerun's viewer-control API:
     open the file, wait until nothing is loading and the ``time`` timeline is known,
     pause the cursor at ``at_s``, then take screenshots until two in a row are identical
-    (every chunk the views need has arrived and been drawn). Returns ``png``.
+    (every chunk the views need has arrived and been drawn).
+
+    Returns ``{"window": png, view name: png's name + "-<i>" for the i-th of views}``.
     """
     recording, png = Path(recording).resolve(), Path(png)
     port = _free_port()
@@ -213,15 +217,25 @@ def screenshot(recording: str | Path, png: str | Path, *, at_s: float,
             shots.append(_saved_screenshot(client, scratch, deadline, proc))
             return shots[-1] if len(shots) > 1 and shots[-1] == shots[-2] else None
 
-        image = _until(deadline, "waiting for a frame that stops changing", proc, stable)
+        images = {"window": _until(deadline, "waiting for a frame that stops changing",
+                                   proc, stable)}
+        ids = {v.name: v.view_id for v in client.get_state().views}
+        for name in views:
+            if name not in ids:
+                raise SkinnyInputError(f"no view {name!r} (views: {sorted(ids)})")
+            images[name] = _saved_screenshot(client, png.with_name(f".{png.stem}.v.png"),
+                                             deadline, proc, ids[name])
     finally:
         os.killpg(proc.pid, signal.SIGTERM)
         proc.wait(timeout=30)
     png.parent.mkdir(parents=True, exist_ok=True)
-    return atomic_write_bytes(png, image)
+    names = {"window": png} | {v: png.with_name(f"{png.stem}-{i}{png.suffix}")
+                               for i, v in enumerate(views)}
+    return {k: atomic_write_bytes(names[k], image) for k, image in images.items()}
 
 
-def _saved_screenshot(client, path: Path, deadline: float, proc: subprocess.Popen) -> bytes:
+def _saved_screenshot(client, path: Path, deadline: float, proc: subprocess.Popen,
+                      view_id: str | None = None) -> bytes:
     """One screenshot through ``path`` (then removed). On a slow software renderer a frame
     can take longer than the 15 s rerun's control calls wait for; the viewer still saves
     it, so a timed-out request is followed by waiting for the file."""
@@ -229,7 +243,7 @@ def _saved_screenshot(client, path: Path, deadline: float, proc: subprocess.Pope
 
     path.parent.mkdir(parents=True, exist_ok=True)
     try:
-        client.save_screenshot(str(path.resolve()))
+        client.save_screenshot(str(path.resolve()), view_id=view_id)
     except TimeoutError:
         pass
 
