@@ -242,7 +242,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="serve the web viewer on 127.0.0.1 (this machine only)")
     p.add_argument("--web-port", type=_positive_int, default=9090, help="HTTP port for --web")
     p.add_argument("--grpc-port", type=_positive_int, default=9876,
-                   help="port the web viewer reads the data from, for --web")
+                   help="port of the viewer's gRPC server (the web viewer reads its data there)")
+    p.add_argument("--bind", default="127.0.0.1",
+                   help="address the viewer listens on (default 127.0.0.1: this machine only; "
+                   "0.0.0.0: every interface)")
     p.add_argument("--dry-run", action="store_true", help="print the viewer command only")
 
     for name in ("demo", "train", "experiment", "bench"):  # the long commands

@@ -34,21 +34,20 @@ from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path
 from skinny_mj.preflight import check_free_space
+from skinny_mj.recording_layout import (  # noqa: F401 (colours re-exported for tests)
+    ACTUAL_RGB,
+    DESIRED_RGB,
+    ROLE_RGB,
+    SENSED_RGB,
+    TORSO_RGB,
+    blueprint,
+    dof_entity,
+    series_style,
+)
 
-DESIRED_RGB = (40, 120, 230)
-ACTUAL_RGB = (240, 120, 30)
-SENSED_RGB = (150, 150, 150)
-COMMAND_RGB = (90, 170, 90)
-TORSO_RGB = (170, 170, 170)
 PELVIS_HEIGHT_M = 0.95
 HEAD_CENTRE_M = (0.0, 0.0, 1.64)
 HEAD_HALF_SIZES_M = (0.08, 0.095, 0.115)
-#: The 3D view's eye (world m): in front of Skinny, level with his chest, looking at the
-#: middle of what the arms can reach (x within +-0.76 m, z 0.87 .. 1.93 m at the wrists).
-FRONT_EYE_M = (0.0, -3.6, 1.45)
-LOOK_TARGET_M = (0.0, 0.0, 1.35)
-_ROLE_RGB = {"desired": DESIRED_RGB, "actual": ACTUAL_RGB, "sensed": SENSED_RGB,
-             "command": COMMAND_RGB}
 
 
 def _as_2d(name: str, a: np.ndarray, rows: int, cols: int) -> np.ndarray:
@@ -69,11 +68,6 @@ def _recording_id(arrays: Sequence[np.ndarray | None], text: str) -> str:
     return str(uuid.UUID(bytes=h.digest()[:16]))
 
 
-def _dof_entity(name: str) -> str:
-    side, _, joint = name.partition("_")
-    return f"/skinny/{side}/{joint}" if side in body.SIDES and joint else f"/skinny/{name}"
-
-
 def _info_markdown(title: str, dof: int, dof_names: Sequence[str], signal_names: Sequence[str],
                    dt: float, steps: int, metadata: Mapping[str, Any]) -> str:
     lines = [f"# {title or 'Skinny-MJ run'}", "",
@@ -86,40 +80,6 @@ def _info_markdown(title: str, dof: int, dof_names: Sequence[str], signal_names:
     lines += ["", "Signals: " + ", ".join(signal_names), "", "## Metadata", "", "```json",
               json.dumps(dict(metadata), indent=2, sort_keys=True, default=str), "```"]
     return "\n".join(lines)
-
-
-def _blueprint(has_curves: bool, application_id: str,
-               torque_dofs: Sequence[str] | None = None):
-    import rerun.blueprint as rrb
-
-    def named(item, name: str):
-        item.id = uuid.uuid5(uuid.NAMESPACE_URL, f"{application_id}/blueprint/{name}")
-        return item
-
-    right = named(rrb.TimeSeriesView(origin="/skinny/right", name="right arm"), "right")
-    left = named(rrb.TimeSeriesView(origin="/skinny/left", name="left arm"), "left")
-    tabs = [named(rrb.TimeSeriesView(origin="/signals", name="signals"), "signals")]
-    if has_curves:
-        tabs.append(named(rrb.TimeSeriesView(origin="/curves", name="learning curves"),
-                          "curves"))
-    tabs.append(named(rrb.TextDocumentView(origin="/info", name="info"), "info"))
-    # Without an eye the viewer frames the bounding box from above-behind, zoomed onto
-    # the head with the arms off screen; from the front (Skinny faces -y) at a distance
-    # that fits both arms fully stretched up and out in the tall, narrow pose panel.
-    eye = rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=FRONT_EYE_M,
-                            look_target=LOOK_TARGET_M, eye_up=(0.0, 0.0, 1.0))
-    pose = named(rrb.Spatial3DView(origin="/pose", name="pose", eye_controls=eye), "pose")
-    rows, shares = [right, left], None
-    if torque_dofs:  # issue 14: per DOF commanded, applied, gravity torque, limits (N m);
-        views = [named(rrb.TimeSeriesView(  # no legend: it would cover a small view
-            origin=f"/torques/{n}", name="τ " + n.replace("shoulder_", ""),
-            plot_legend=rrb.PlotLegend(visible=False)), f"torque-{n}") for n in torque_dofs]
-        rows.append(named(rrb.Grid(*views, grid_columns=len(views) // 2), "torques"))
-        shares = [2.0, 2.0, 3.0, 2.0]
-    series = named(rrb.Vertical(*rows, named(rrb.Tabs(*tabs), "tabs"), row_shares=shares),
-                   "series")
-    root = named(rrb.Horizontal(pose, series, column_shares=[2, 3]), "root")
-    return rrb.Blueprint(root, collapse_panels=False)
 
 
 def _send_series(rec, entity: str, values: np.ndarray, steps: np.ndarray, dt: float) -> None:
@@ -253,8 +213,9 @@ def write_recording(
         rec = rr.RecordingStream(application_id, recording_id=rec_id, send_properties=False)
         rec.set_log_time_enabled(False)
         rec.set_log_tick_enabled(False)
-        _io(path, rec.save, tmp, default_blueprint=_blueprint(
-            bool(curve_arrays), application_id, dof_names if torques is not None else None))
+        _io(path, rec.save, tmp, default_blueprint=blueprint(
+            bool(curve_arrays), application_id, dof_names, (n_steps - 1) * dt,
+            torques=torques is not None))
         if title:
             rec.send_recording_name(title)
         rec.log("/info", rr.TextDocument(info, media_type=rr.MediaType.MARKDOWN), static=True)
@@ -262,18 +223,18 @@ def write_recording(
         steps = np.arange(n_steps)
         roles = [("desired", desired_angles), ("actual", actual_angles)]
         for i, name in enumerate(dof_names):
-            entity = _dof_entity(name)
+            entity = dof_entity(name)
             for role, angles in roles:
-                _log_style(rec, f"{entity}/{role}", f"{role} (deg)", _ROLE_RGB[role])
+                _log_style(rec, f"{entity}/{role}", *series_style(name, role))
                 _send_series(rec, f"{entity}/{role}", np.degrees(angles[:, i]), steps, dt)
-            _log_style(rec, f"{entity}/command", "command (normalized)", COMMAND_RGB)
+            _log_style(rec, f"{entity}/command", *series_style(name, "command"))
             _send_series(rec, f"{entity}/command", commands[:, i], steps[:-1], dt)
         sig_roles = [("desired", desired_signals), ("actual", actual_signals)]
         if sensed_signals is not None:
             sig_roles.append(("sensed", sensed_signals))
         for j, name in enumerate(signal_names):
             for role, sig in sig_roles:
-                _log_style(rec, f"/signals/{name}/{role}", role, _ROLE_RGB[role])
+                _log_style(rec, f"/signals/{name}/{role}", role, ROLE_RGB[role])
                 _send_series(rec, f"/signals/{name}/{role}", sig[:, j], steps, dt)
         if torques is not None:
             _log_torques(rec, torques, dof_names, steps, dt)
@@ -307,10 +268,11 @@ def _io(path: Path, call: Any, *args: Any, **kwargs: Any) -> None:
         raise SkinnyEnvironmentError(f"cannot write the recording {path}: {exc}") from None
 
 
-def _log_style(rec, entity: str, label: str, rgb) -> None:
+def _log_style(rec, entity: str, label: str, rgb, width: float | None = None) -> None:
     import rerun as rr
 
-    rec.log(entity, rr.SeriesLines(colors=[rgb], names=[label]), static=True)
+    rec.log(entity, rr.SeriesLines(colors=[rgb], names=[label],
+                                   widths=None if width is None else [width]), static=True)
 
 
 def recording_entities(path: str | Path) -> list[str]:
@@ -364,15 +326,15 @@ def _log_torques(rec, torques: Mapping[str, np.ndarray], dof_names: list[str],
                  steps: np.ndarray, dt: float) -> None:
     """The torque series of :func:`write_recording` (``torques``), N m."""
     limit = np.asarray(torques["limit_nm"], float)
-    bound, grey = np.broadcast_to(limit, (len(steps), len(limit))), (128, 128, 128)
-    series = {"commanded": (torques["commanded_nm"], steps[:-1], COMMAND_RGB),
-              "applied": (torques["applied_nm"], steps[:-1], ACTUAL_RGB),
-              "gravity": (torques["gravity_nm"], steps, DESIRED_RGB),
-              "limit_upper": (bound, steps, grey), "limit_lower": (-bound, steps, grey)}
+    bound = np.broadcast_to(limit, (len(steps), len(limit)))
+    series = {"commanded": (torques["commanded_nm"], steps[:-1]),
+              "applied": (torques["applied_nm"], steps[:-1]),
+              "gravity": (torques["gravity_nm"], steps),
+              "limit_upper": (bound, steps), "limit_lower": (-bound, steps)}
     for i, name in enumerate(dof_names):
-        for role, (values, t, rgb) in series.items():
+        for role, (values, t) in series.items():
             entity = f"/torques/{name}/{role}"
-            _log_style(rec, entity, f"{role} torque (N m)", rgb)
+            _log_style(rec, entity, *series_style(name, role))
             _send_series(rec, entity, np.asarray(values, float)[:, i].copy(), t, dt)
 
 

@@ -81,7 +81,8 @@ def test_each_plant_has_its_own_read_only_full_scale():
     assert not default.max_speed_rad_s.flags.writeable
 
 
-def _blueprint_origins(path) -> set[str]:
+def _blueprint_paths(path) -> set[str]:
+    """The views' origins and content queries (``+ /torques/...``) of the blueprint."""
     from rerun.chunk import RrdReader
 
     reader = RrdReader(str(path))
@@ -89,8 +90,9 @@ def _blueprint_origins(path) -> set[str]:
     for chunk in reader.stream(store=reader.blueprints()[0]):
         batch = chunk.to_record_batch()
         for name in batch.schema.names:
-            if "origin" in name.lower():
-                out |= {v for row in batch.column(name).to_pylist() for v in (row or [])}
+            if "origin" in name.lower() or "query" in name.lower():
+                out |= {v.removeprefix("+ ") for row in batch.column(name).to_pylist()
+                        for v in (row or [])}
     return out
 
 
@@ -129,8 +131,8 @@ def test_skinny_test_on_a_torque_model_records_the_torques(tmp_path):
     np.testing.assert_allclose(commanded, command * upper[0], rtol=1e-12)  # command x limit
     np.testing.assert_allclose(applied, commanded, rtol=1e-9, atol=1e-12)  # within limits
     assert len(gravity) == len(command) + 1 and np.ptp(gravity) > 0.1  # the arm swings
-    assert {f"/torques/{n}" for n in names} <= _blueprint_origins(rrd)  # shown by default
-
+    shown = _blueprint_paths(rrd)  # applied torques shown by default
+    assert {f"/torques/{n}/applied" for n in names} <= shown
 
 
 @pytest.mark.parametrize("dof", [4, 8])

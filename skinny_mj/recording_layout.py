@@ -1,0 +1,131 @@
+"""How a recording looks in the rerun viewer: series styles and the default blueprint.
+
+Per arm, one plot per quantity with one colour per joint (the same colour for a joint in
+every plot): the joint angles (deg; thick = actual, thin and lighter = desired), the
+command on its own axis (normalized: +-1 is the full scale, the torque limit on the
+torque body) and, on the torque body, the torques in N m (thick = applied, thin and
+lighter = the bias torque, gravity plus velocity terms). The arms sit side by side; the
+time axis runs 30 % past the movement's end so the legend (top right) covers no data.
+The limits stay in the recording (``/torques/<dof>/limit_*``) but are not drawn in N m:
+they would squash the traces; the command plot shows them as +-1.
+"""
+
+from __future__ import annotations
+
+import uuid
+from collections.abc import Sequence
+
+from skinny_mj import body
+
+DESIRED_RGB = (40, 120, 230)
+ACTUAL_RGB = (240, 120, 30)
+SENSED_RGB = (150, 150, 150)
+COMMAND_RGB = (90, 170, 90)
+TORSO_RGB = (170, 170, 170)
+ROLE_RGB = {"desired": DESIRED_RGB, "actual": ACTUAL_RGB, "sensed": SENSED_RGB,
+            "command": COMMAND_RGB}
+#: One colour per joint (both arms alike), none of them the pose's blue or orange.
+JOINT_RGB = {"shoulder_abduction": (235, 75, 75), "shoulder_flexion": (70, 200, 110),
+             "shoulder_rotation": (175, 110, 245), "elbow_flexion": (240, 205, 40)}
+JOINT_LABEL = {"shoulder_abduction": "abduction", "shoulder_flexion": "flexion",
+               "shoulder_rotation": "rotation", "elbow_flexion": "elbow"}
+THICK, THIN = 2.5, 1.0
+ANGLES_TITLE = "joint angles (deg); thick actual, thin desired"
+TORQUES_TITLE = "torque (N m); thick applied, thin bias"
+#: The time axis ends this far past the last sample, leaving room for the legend.
+AXIS_MARGIN = 1.3
+#: The 3D view's eye (world m): in front of Skinny, level with his chest, looking at the
+#: middle of what the arms can reach (x within +-0.76 m, z 0.87 .. 1.93 m at the wrists).
+FRONT_EYE_M = (0.0, -3.6, 1.45)
+LOOK_TARGET_M = (0.0, 0.0, 1.35)
+
+
+def split_dof(name: str) -> tuple[str, str]:
+    """``right_elbow_flexion`` -> (``right``, ``elbow_flexion``); no side: ("", name)."""
+    side, _, joint = name.partition("_")
+    return (side, joint) if side in body.SIDES and joint else ("", name)
+
+
+def dof_entity(name: str) -> str:
+    """Entity of DOF ``name``'s angle series: ``/skinny/<side>/<joint>``."""
+    side, joint = split_dof(name)
+    return f"/skinny/{side}/{joint}" if side else f"/skinny/{name}"
+
+
+def joint_rgb(name: str, light: bool = False) -> tuple[int, int, int]:
+    """The colour of DOF ``name``'s joint; ``light``: halfway to white (a reference)."""
+    rgb = JOINT_RGB.get(split_dof(name)[1], SENSED_RGB)
+    return tuple(round(c + (255 - c) * 0.5) for c in rgb) if light else rgb
+
+
+def joint_label(name: str) -> str:
+    joint = split_dof(name)[1]
+    return JOINT_LABEL.get(joint, joint)
+
+
+def series_style(dof: str, role: str) -> tuple[str, tuple[int, int, int], float]:
+    """Legend name, colour and width of DOF ``dof``'s series ``role``. The thick and thin
+    series of a joint share its name, so the legend lists each joint once."""
+    thin = role in ("desired", "gravity", "commanded", "limit_upper", "limit_lower")
+    return joint_label(dof), joint_rgb(dof, light=thin), THIN if thin else THICK
+
+
+def blueprint(has_curves: bool, application_id: str, dof_names: Sequence[str],
+              duration_s: float, torques: bool = False):
+    """The default blueprint: the pose (left) and the plots (right)."""
+    import rerun as rr
+    import rerun.blueprint as rrb
+
+    def named(item, name: str):
+        item.id = uuid.uuid5(uuid.NAMESPACE_URL, f"{application_id}/blueprint/{name}")
+        return item
+
+    axis = rrb.archetypes.TimeAxis(view_range=rr.TimeRange(
+        start=rr.TimeRangeBoundary.absolute(seconds=0.0),
+        end=rr.TimeRangeBoundary.absolute(seconds=duration_s * AXIS_MARGIN)))
+    legend = rrb.PlotLegend(corner=rrb.Corner2D.RightTop)
+
+    def plot(key: str, side: str, title: str, entities: list[str], axis_y=None):
+        return named(rrb.TimeSeriesView(
+            origin="/", contents=[f"+ {e}" for e in entities], name=f"{side} arm: {title}",
+            axis_x=axis, axis_y=axis_y, plot_legend=legend), f"{key}-{side}")
+
+    rows = []
+    by_side = {s: [n for n in dof_names if split_dof(n)[0] == s] for s in body.SIDES}
+    sides = [s for s in body.SIDES if by_side[s]]
+
+    rows.append(named(rrb.Horizontal(*[plot(
+        "angles", s, ANGLES_TITLE,
+        [f"{dof_entity(n)}/{r}" for n in by_side[s] for r in ("desired", "actual")])
+        for s in sides]), "angles"))
+    if torques:
+        rows.append(named(rrb.Horizontal(*[plot(
+            "torques", s, TORQUES_TITLE,
+            [f"/torques/{n}/{r}" for n in by_side[s] for r in ("gravity", "applied")])
+            for s in sides]), "torques"))
+    scale = "torque limit" if torques else "full scale"
+    rows.append(named(rrb.Horizontal(*[plot(
+        "command", s, f"command (normalized, ±1 = {scale})",
+        [f"{dof_entity(n)}/command" for n in by_side[s]],
+        axis_y=rrb.archetypes.ScalarAxis(range=(-1.1, 1.1))) for s in sides]), "command"))
+    tabs = [named(rrb.TimeSeriesView(origin="/signals", name="signals", axis_x=axis,
+                                     plot_legend=legend), "signals")]
+    if has_curves:
+        tabs.append(named(rrb.TimeSeriesView(origin="/curves", name="learning curves"),
+                          "curves"))
+    tabs.append(named(rrb.TextDocumentView(origin="/info", name="info"), "info"))
+    rows.append(named(rrb.Tabs(*tabs), "tabs"))
+    shares = [3.0, 3.0, 2.0, 2.5] if torques else [3.0, 2.0, 3.0]
+    # Without an eye the viewer frames the bounding box from above-behind, zoomed onto
+    # the head with the arms off screen; from the front (Skinny faces -y) at a distance
+    # that fits both arms fully stretched up and out in the tall, narrow pose panel.
+    eye = rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=FRONT_EYE_M,
+                            look_target=LOOK_TARGET_M, eye_up=(0.0, 0.0, 1.0))
+    pose = named(rrb.Spatial3DView(origin="/pose", name="pose", eye_controls=eye), "pose")
+    series = named(rrb.Vertical(*rows, row_shares=shares), "series")
+    root = named(rrb.Horizontal(pose, series, column_shares=[2, 5]), "root")
+    # The entity tree and the selection start folded (the toggles at the top right open
+    # them): the plots get the width. The time panel starts on ``time`` (seconds).
+    return rrb.Blueprint(root, rrb.BlueprintPanel(state="collapsed"),
+                         rrb.SelectionPanel(state="collapsed"),
+                         rrb.TimePanel(state="collapsed", timeline="time"))
