@@ -16,6 +16,12 @@ RK4 at 5 ms), smaller RK4 steps with the same 20 ms control step, ``implicitfast
 MuJoCo's lower bound), and armature on the three shoulder hinges (0.5 ... 3.6e-3 kg m^2;
 3.6e-3 = :data:`skinny_mj.model.TORQUE_ARMATURE_3D_SHOULDER`, the chosen one).
 
+``--limits``: the joint limits' hold alone, the worst overshoot past a limit with the
+twin's limits (time constant 20 ms) and with stiffer ones (10 ms), on both arms.
+
+The variants above set their limits' time constant as listed (the default 20 ms unless
+"limits 10 ms").
+
 Fidelity table: each 3D DOF's own inertia (diagonal of M) over 200 random poses with and
 without the armature, and the largest change of the YMCA inverse-dynamics torques it
 makes (share of the limit). Integrator accuracy of the chosen model: run
@@ -42,16 +48,16 @@ RK4, IMPLICITFAST, IMPLICIT = (mujoco.mjtIntegrator.mjINT_RK4,
                                mujoco.mjtIntegrator.mjINT_IMPLICIT)
 #: label: (dof, shoulder armature kg m^2, integrator, timestep s, limit time constant s)
 VARIANTS = {
-    "2D as it is": (4, 0.0, RK4, 0.005, None),
-    "3D, armature 0 (before)": (8, 0.0, RK4, 0.005, None),
-    "3D, armature 0, RK4 2.5 ms": (8, 0.0, RK4, 0.0025, None),
-    "3D, armature 0, RK4 1 ms": (8, 0.0, RK4, 0.001, None),
-    "3D, armature 0, implicitfast 1 ms": (8, 0.0, IMPLICITFAST, 0.001, None),
-    "3D, armature 0, implicit 1 ms": (8, 0.0, IMPLICIT, 0.001, None),
+    "2D as it is": (4, 0.0, RK4, 0.005, 0.02),
+    "3D, armature 0 (before)": (8, 0.0, RK4, 0.005, 0.02),
+    "3D, armature 0, RK4 2.5 ms": (8, 0.0, RK4, 0.0025, 0.02),
+    "3D, armature 0, RK4 1 ms": (8, 0.0, RK4, 0.001, 0.02),
+    "3D, armature 0, implicitfast 1 ms": (8, 0.0, IMPLICITFAST, 0.001, 0.02),
+    "3D, armature 0, implicit 1 ms": (8, 0.0, IMPLICIT, 0.001, 0.02),
     "3D, armature 0, limits 10 ms": (8, 0.0, RK4, 0.005, 0.01),
-    "3D, armature 5e-4": (8, 5e-4, RK4, 0.005, None),
-    "3D, armature 1e-3": (8, 1e-3, RK4, 0.005, None),
-    "3D, armature 3.6e-3 (chosen)": (8, TORQUE_ARMATURE_3D_SHOULDER, RK4, 0.005, None),
+    "3D, armature 5e-4": (8, 5e-4, RK4, 0.005, 0.02),
+    "3D, armature 1e-3": (8, 1e-3, RK4, 0.005, 0.02),
+    "3D, armature 3.6e-3 (chosen)": (8, TORQUE_ARMATURE_3D_SHOULDER, RK4, 0.005, 0.02),
 }
 
 
@@ -99,6 +105,17 @@ def episode(model: mujoco.MjModel, seed: int, hold: int) -> dict:
     return {"ok": True, "over": over, "vmax": vmax}
 
 
+def episodes(model: mujoco.MjModel, runs: int, hold: int) -> tuple[int, str, str, str]:
+    """``runs`` stress episodes: failed count, first warnings' kinds, and over the ok
+    episodes the worst overshoot past a limit (rad) and the largest |qvel| (rad/s)."""
+    res = [episode(model, 1000 * hold + s, hold) for s in range(runs)]
+    ok = [r for r in res if r["ok"]]
+    kinds = sorted({r["warning"].replace("mjWARN_", "") for r in res if not r["ok"]})
+    over = f"{max(r['over'] for r in ok):.2f}" if ok else "—"
+    vmax = f"{max(r['vmax'] for r in ok):.0f}" if ok else "—"
+    return len(res) - len(ok), ", ".join(kinds) or "—", over, vmax
+
+
 def stress_table(runs: int, holds=(1, 5)) -> str:
     lines = ["| variant | hold (steps) | failed / n | first warnings | past limit (rad) |"
              " max \\|qvel\\| (rad/s) |", "|---|---|---|---|---|---|"]
@@ -106,13 +123,9 @@ def stress_table(runs: int, holds=(1, 5)) -> str:
     for label, spec in VARIANTS.items():
         model = variant(*spec)
         for hold in holds:
-            res = [episode(model, 1000 * hold + s, hold) for s in range(runs)]
-            ok = [r for r in res if r["ok"]]
-            kinds = sorted({r["warning"].replace("mjWARN_", "") for r in res if not r["ok"]})
-            over = f"{max(r['over'] for r in ok):.2f}" if ok else "—"
-            vmax = f"{max(r['vmax'] for r in ok):.0f}" if ok else "—"
-            lines.append(f"| {label} | 1–{hold} | {runs - len(ok)} / {runs} |"
-                         f" {', '.join(kinds) or '—'} | {over} | {vmax} |")
+            failed, kinds, over, vmax = episodes(model, runs, hold)
+            lines.append(f"| {label} | 1–{hold} | {failed} / {runs} |"
+                         f" {kinds} | {over} | {vmax} |")
             print(lines[-1], flush=True)
     return "\n".join(lines)
 
@@ -139,10 +152,38 @@ def fidelity_table() -> str:
     return "\n".join(lines)
 
 
+def limits_table(runs: int, holds=(1, 5)) -> str:
+    """The joint limits' hold under the same bang-bang torques: worst overshoot past a
+    limit with the twin's limits (:data:`skinny_mj.model.TORQUE_LIMIT_SOLREF`, MuJoCo's
+    default time constant 20 ms) and with a stiffer 10 ms (two physics steps, MuJoCo's
+    bound), on both arms."""
+    from skinny_mj.model import TORQUE_LIMIT_SOLREF
+
+    lines = ["| arm | limit time constant | hold (steps) | failed / n | past limit (rad) |"
+             " max \\|qvel\\| (rad/s) |", "|---|---|---|---|---|---|"]
+    print("\n".join(lines))
+    for dof in (4, 8):
+        arm = TORQUE_ARMATURE_3D_SHOULDER if dof == 8 else 0.0
+        for label, tc in ((f"{1000 * TORQUE_LIMIT_SOLREF[0]:g} ms (the twin)", None),
+                          ("10 ms (stiffer)", 0.01)):
+            model = variant(dof, arm, RK4, 0.005, tc)
+            for hold in holds:
+                failed, _, over, vmax = episodes(model, runs, hold)
+                lines.append(f"| {'2D' if dof == 4 else '3D'} | {label} | 1–{hold} | "
+                             f"{failed} / {runs} | {over} | {vmax} |")
+                print(lines[-1], flush=True)
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=20, help="episodes per variant and hold")
+    parser.add_argument("--limits", action="store_true",
+                        help="only the joint limits' overshoot, before and after")
     args = parser.parse_args()
+    if args.limits:
+        limits_table(args.runs)
+        return
     print(f"stress: {args.runs} episodes x {SECONDS:g} s of full random-sign torques\n")
     stress_table(args.runs)
     print("\nfidelity of the chosen armature (3D)\n")

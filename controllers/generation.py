@@ -47,14 +47,25 @@ def fit_ordinary(esn: ESN, inputs: np.ndarray, teacher: np.ndarray, washout: int
 
 
 def fit_beta(esn: ESN, inputs: np.ndarray, teacher: np.ndarray, washout: int, beta: float,
-             cycles: int, feedback: str = "teacher", noise: bool = True) -> np.ndarray:
+             cycles: int, feedback: str = "teacher", noise: bool = True,
+             min_improvement: float | None = None) -> np.ndarray:
     """The new β method: ``cycles`` passes (each from a reset) fitting y_used = β d +
-    (1 − β) y_ESN. Returns the NRMSE (R, cycles) of each pass's outputs against d."""
+    (1 − β) y_ESN. Returns the NRMSE (R, cycles) of each pass's outputs against d.
+
+    ``min_improvement``: a convergence criterion instead of the fixed count (``cycles``
+    is then the cap). A run stops, keeping its readout, at the first pass whose output
+    NRMSE is not at least this fraction below the previous pass's (the last refit no
+    longer helped); its later entries in the curve are NaN. With a perfect teacher the
+    error falls by about β per pass until it reaches the noise floor, so the run stops
+    there instead of with (1 − β)^cycles of the readout still missing."""
     if feedback not in FEEDBACKS:
         raise ValueError(f"feedback must be one of {FEEDBACKS}, got {feedback!r}")
     if not 0 < beta <= 1 or cycles < 1:
         raise ValueError(f"need beta in (0, 1] and cycles >= 1, got {beta}, {cycles}")
-    curve = np.empty((esn.n_runs, cycles))
+    if min_improvement is not None and not 0 < min_improvement < 1:
+        raise ValueError(f"min_improvement must be in (0, 1), got {min_improvement}")
+    curve = np.full((esn.n_runs, cycles), np.nan)
+    active = np.ones(esn.n_runs, bool)
     d = teacher[:, washout:]
     for i in range(cycles):
         esn.reset()
@@ -63,8 +74,13 @@ def fit_beta(esn: ESN, inputs: np.ndarray, teacher: np.ndarray, washout: int, be
         else:
             y_esn, states = _run_blended(esn, inputs, teacher, beta, noise)
             y_esn, states = y_esn[:, washout:], states[:, washout:]
-        curve[:, i] = np.sqrt(np.mean((y_esn - d) ** 2, axis=(1, 2)) / d.var(axis=(1, 2)))
-        esn.fit(states, beta * d + (1.0 - beta) * y_esn)
+        err = np.sqrt(np.mean((y_esn - d) ** 2, axis=(1, 2)) / d.var(axis=(1, 2)))
+        if min_improvement is not None and i > 0:
+            active &= err < (1.0 - min_improvement) * curve[:, i - 1]
+        if not active.any():
+            break
+        curve[active, i] = err[active]
+        esn.fit(states, beta * d + (1.0 - beta) * y_esn, runs=active)
     return curve
 
 

@@ -30,6 +30,7 @@ REGISTRY = {
     "fidelity-d": "experiments.fidelity_d",
     "dynamic": "experiments.dynamic",
     "three-d": "experiments.three_d",
+    "rl-vs-fel": "experiments.rl_vs_fel",
 }
 
 

@@ -28,7 +28,7 @@ from skinny_mj.experiment import Experiment, Row
 
 NAME = "mackey-glass"
 HORIZON = 84
-METHODS = ("ordinary", "new", "new-blend", "reservoirpy")
+METHODS = ("ordinary", "new", "new-conv", "new-blend", "reservoirpy")
 COLUMNS = {"log10_nrmse84": "log10 NRMSE_84", **common.COLUMNS}
 
 
@@ -62,14 +62,15 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     method = row.params["method"]
     if method == "reservoirpy":
         return [_reservoirpy(cfg, s) for s in seeds]
-    free, target, wall = common.run_ours(method, esn_config(cfg.reservoir), seeds,
-                                         lambda rng: _series(cfg, rng), cfg.n_fit,
-                                         cfg.washout)
+    free, target, wall, passes = common.run_ours(method, esn_config(cfg.reservoir), seeds,
+                                                 lambda rng: _series(cfg, rng), cfg.n_fit,
+                                                 cfg.washout)
     out = []
     for r, seed in enumerate(seeds):
         scale = float(_series(cfg, common.streams(seed)[0])[cfg.washout:cfg.n_fit].std())
         (m,) = common.metrics(free[r:r + 1], target[r:r + 1], HORIZON, scale)
-        out.append({**_with_nrmse84(m, free[r], target[r], scale), "fit_wall_s": wall})
+        out.append({**_with_nrmse84(m, free[r], target[r], scale), "fit_wall_s": wall,
+                    "passes": int(passes[r])})
     return out
 
 

@@ -151,6 +151,25 @@ def claims(runs: list[dict], dof: int = 4) -> list[str]:
                          "left- and right-mirror networks produce practically the same YMCA",
                          f"NRMSE between their mean outputs {gap:.4f} vs arm-to-arm "
                          f"difference of the target {asym_d:.4f}"))
+    y_err, pure_err = (_mean(runs, r, "ymca__position_nrmse") for r in ("y", "y-pure"))
+    y_rom, pure_rom = (_mean(runs, r, "ymca__elbow_rom_ratio") for r in ("y", "y-pure"))
+    out.append(_line(None if not np.isfinite(y_err + pure_err) else bool(
+        not (y_err <= AS_GOOD_FACTOR * pure_err or y_err - pure_err <= AS_GOOD_ABS)
+        or y_err < pure_err / AS_GOOD_FACTOR),
+        "the inference from Y -> YMCA: the small elbow motion trained in Y is what lets it "
+        "generalize, so Y generalizes clearly better than Y pure (beyond "
+        f"{AS_GOOD_FACTOR}x and +{AS_GOOD_ABS})",
+        f"YMCA position NRMSE {y_err:.4f} (Y) vs {pure_err:.4f} (Y pure); elbow range "
+        f"ratio {y_rom:.3f} vs {pure_rom:.3f}"))
+    lags = timing_lags(runs, dof)
+    if lags:
+        worst = max(lags, key=lambda k: abs(lags[k]))
+        out.append(_line(bool(abs(lags[worst]) <= TIMING_LAG_STEPS),
+                         "timing is not a problem in any experiment (every kept test's "
+                         f"output within {TIMING_LAG_STEPS} steps of its target's timing, "
+                         "cross-correlation lag, mean over runs)",
+                         f"largest |lag| {abs(lags[worst]):.1f} steps ({worst}); "
+                         f"{len(lags)} train -> test pairs"))
     real = _mean(runs, "ymca", f"{REAL_ID}__position_nrmse")
     if np.isfinite(real):
         sat = _mean(runs, "ymca", f"{REAL_ID}__true_command_saturated")
@@ -158,6 +177,41 @@ def claims(runs: list[dict], dof: int = 4) -> list[str]:
                    f"vs {self_err:.4f} on YMCA; {100 * sat:.1f} % of its true commands "
                    "exceed full scale (the plant cannot follow those steps)")
     return out
+
+
+#: "Timing is not a problem": the output's best-aligned lag within this many control steps.
+TIMING_LAG_STEPS = 2
+_MAX_LAG = 25
+
+
+def lag_steps(produced: np.ndarray, desired: np.ndarray) -> float:
+    """The shift (control steps, > 0: the output lags) that best aligns ``produced`` with
+    ``desired`` (T, n_dof) rad: the argmax of the mean cross-product over the joints
+    that move, within ±25 steps."""
+    n = min(len(produced), len(desired))
+    p, d = produced[:n] - produced[:n].mean(0), desired[:n] - desired[:n].mean(0)
+    moving = d.std(axis=0) > 1e-6
+    p, d = p[:, moving], d[:, moving]
+    shifts = range(-_MAX_LAG, _MAX_LAG + 1)
+    score = [np.mean(p[k:] * d[:n - k]) if k >= 0 else np.mean(p[:n + k] * d[-k:])
+             for k in shifts]  # mean, not sum: the overlap shrinks with the shift
+    return float(shifts[int(np.argmax(score))])
+
+
+def timing_lags(runs: list[dict], dof: int) -> dict[str, float]:
+    """Mean lag over runs of every kept train -> test pair (``angles__<col>``)."""
+    out: dict[str, list[float]] = {}
+    targets = {}
+    for r in runs:
+        for key, value in r["metrics"].items():
+            if not key.startswith("angles__"):
+                continue
+            col = key.removeprefix("angles__")
+            if col not in targets:
+                targets[col] = load(Config(dof=dof, real_movement=None), MOVEMENTS[col]).angles
+            out.setdefault(f"{r['row']} -> {col}", []).append(
+                lag_steps(np.asarray(value, float), targets[col]))
+    return {k: float(np.mean(v)) for k, v in out.items()}
 
 
 def sweep_dof(out_dir: Path) -> int:

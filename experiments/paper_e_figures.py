@@ -114,7 +114,42 @@ def fig3_summary(out_dir: Path, cfg: Config) -> str:
             f"{len(c)}), final NRMSE {final.mean():.2e}; paper: "
             + ("—" if paper is None else f"{paper}" + (" (1 cycle)" if beta == 1 else
                                                          f" ({paper // 10} per epoch x 10)")))
+    lines.append(fig3_proportion(runs))
     return "\n".join(lines)
+
+
+#: Counts agree with the paper's proportion when each ratio to β = 0.3's count is within
+#: this fraction of the paper's ratio.
+FIG3_RATIO_TOLERANCE = 0.2
+
+
+def fig3_proportion(runs: Sequence[dict]) -> str:
+    """Whether the mean cycle counts of β < 1 keep the paper's proportion (20 : 30 : 60 =
+    1 : 1.5 : 3). With perfect targets y_used^i − y_true = (1 − β)^i (y_used^0 − y_true),
+    so the cycles to any fixed fraction scale as 1 / |ln(1 − β)| — 1 : 3.4 : 7.0 for
+    β = 0.3 / 0.1 / 0.05 — whatever the tolerance: no tolerance gives all three counts."""
+    means = {}
+    for r in runs:
+        b = float(r["params"]["beta"])
+        if b < 1 and b in PAPER_FIG3_CYCLES:
+            means.setdefault(b, []).append(r["metrics"]["cycles_to_converge"])
+    betas = sorted(means, reverse=True)
+    if len(betas) < 2:
+        return "- [n/a] Fig. 3 proportion: fewer than two β < 1 rows"
+    ref = betas[0]
+    ours = [float(np.mean(means[b])) / float(np.mean(means[ref])) for b in betas]
+    paper = [PAPER_FIG3_CYCLES[b] / PAPER_FIG3_CYCLES[ref] for b in betas]
+    theory = [np.log1p(-ref) / np.log1p(-b) for b in betas]
+    ok = all(abs(o / p - 1) <= FIG3_RATIO_TOLERANCE for o, p in zip(ours, paper, strict=True))
+
+    def ratio(v):
+        return " : ".join(f"{x:.2g}" for x in v)
+
+    return (f"- [{'holds' if ok else 'does NOT hold'}] Fig. 3: cycle counts for β = "
+            f"{' / '.join(f'{b:g}' for b in betas)} in the paper's proportion {ratio(paper)} "
+            f"(each within {FIG3_RATIO_TOLERANCE:.0%}): ours {ratio(ours)}; perfect targets "
+            f"converge as (1 − β)^i, so the counts scale as 1/|ln(1 − β)| = {ratio(theory)} "
+            "for any tolerance")
 
 
 def fig4(out_dir: Path, cfg: Config) -> Path | None:
@@ -173,13 +208,29 @@ def fig6(out_dir: Path) -> list[Path]:
     return written
 
 
-def _best_level(out_dir: Path, ids: dict[str, float]) -> str:
+def _best(out_dir: Path, ids: dict[str, float]) -> tuple[float, float] | None:
+    """(level, its mean test position NRMSE) of the lowest mean, or None without runs."""
     means = {x: float(np.mean(v)) for row, x in ids.items()
              if (v := values(out_dir, row, "position_nrmse"))}
     if not means:
-        return "no runs"
+        return None
     best = min(means, key=means.get)
-    return f"{best:g} (mean test position NRMSE {means[best]:.4f})"
+    return best, means[best]
+
+
+def _best_level(out_dir: Path, ids: dict[str, float]) -> str:
+    best = _best(out_dir, ids)
+    return "no runs" if best is None else f"{best[0]:g} (mean test position NRMSE {best[1]:.4f})"
+
+
+def _more_noise_line(out_dir: Path, ids: dict[str, dict[str, float]]) -> str:
+    """The paper's "the new method requires more noise than the original" (Fig. 5)."""
+    orig, new = _best(out_dir, ids["fig5a"]), _best(out_dir, ids["fig5b"])
+    if orig is None or new is None:
+        return "- [n/a] paper: the new method needs more reservoir noise (Fig. 5): no runs"
+    mark = "holds" if new[0] > orig[0] else "does NOT hold"
+    return (f"- [{mark}] paper: the new method needs more reservoir noise than the original "
+            f"(Fig. 5, best mean position): {new[0]:g} > {orig[0]:g}")
 
 
 def claims(out_dir: Path) -> str:
@@ -196,6 +247,17 @@ def claims(out_dir: Path) -> str:
         ("median: exp 2 < exp 1 (motor)", "median", "2", "motor_nrmse", "<", "median", "1"),
         ("exp 5 trains in less wall time than exp 2 (mean)",
          "mean", "5", "train_wall_s", "<", "mean", "2"),
+        # Table 2's further statements (the paper gives means).
+        ("paper: 10 repetitions are no better than 5 (mean position)",
+         "mean", "3", "position_nrmse", ">=", "mean", "2"),
+        ("paper: among the β rows β = 0.1 is best on position (mean, vs β = 0.3)",
+         "mean", "5", "position_nrmse", "<", "mean", "4"),
+        ("paper: among the β rows β = 0.1 is best on position (mean, vs β = 0.05)",
+         "mean", "5", "position_nrmse", "<", "mean", "6"),
+        ("paper: among the β rows β = 0.05 is best on motor (mean, vs β = 0.1)",
+         "mean", "6", "motor_nrmse", "<", "mean", "5"),
+        ("paper: among the β rows β = 0.05 is best on motor (mean, vs β = 0.3)",
+         "mean", "6", "motor_nrmse", "<", "mean", "4"),
     ])
     runs = load_runs(out_dir)
     ids = {g: {r["row"]: float(r["params"].get("reservoir" if g == "fig4" else "noise", 0))
@@ -208,7 +270,22 @@ def claims(out_dir: Path) -> str:
         "the paper chose 0.03",
         f"- [info] Fig. 5b: best noise, new β {_best_level(out_dir, ids['fig5b'])}; "
         "the paper chose 0.2",
+        _more_noise_line(out_dir, ids),
+        _size_line(out_dir, ids["fig4"]),
     ])
+
+
+#: Paper E, Fig. 4: the reservoir size it found best for the original method.
+PAPER_BEST_SIZE = 200
+
+
+def _size_line(out_dir: Path, ids: dict[str, float]) -> str:
+    best = _best(out_dir, ids)
+    if best is None:
+        return "- [n/a] paper: N = 200 is the best reservoir size (Fig. 4): no runs"
+    mark = "holds" if int(best[0]) == PAPER_BEST_SIZE else "does NOT hold"
+    return (f"- [{mark}] paper: N = {PAPER_BEST_SIZE} is the best reservoir size for the "
+            f"original method (Fig. 4, lowest mean position): ours {best[0]:g}")
 
 
 def median_recordings(out_dir: Path, cfg: Config, table_rows: Sequence[Row]) -> list[str]:

@@ -183,6 +183,8 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--dof", type=int, choices=(4, 8), default=4)
     w.add_argument("--asf", type=Path)
     w.add_argument("--retarget", choices=("angles", "positions"), default="angles")
+    w.add_argument("--actuation", choices=("velocity", "torque"), default="velocity",
+                   help="torque: also the torques the movement needs on the torque twin")
     e = tsub.add_parser("export", help="write a movement to .npz or .csv")
     e.add_argument("name")
     e.add_argument("--dof", type=int, choices=(4, 8), default=4)
@@ -202,6 +204,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="output folder (default: results/<name>/<time>)")
     p.add_argument("--resume", action="store_true", help="continue the sweep in --out: skip "
                    "its ok and failed runs, rerun errored ones (rows may differ)")
+    p.add_argument("--overwrite", action="store_true", help="replace the sweep already in "
+                   "--out (without it, a non-empty --out is refused)")
     p.add_argument("--quick", action="store_true", help="a smoke test: few runs, few epochs")
     p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
     p.add_argument("--movement", help="train/test every row on another movement (name or "
@@ -266,9 +270,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler = getattr(commands, f"cmd_{args.command}")
     try:
         from skinny_mj.preflight import check_gl
+        from skinny_mj.threads import one_blas_thread
 
         check_gl()  # a MUJOCO_GL mujoco refuses would fail at its import, as a traceback
-        return int(handler(args) or 0)
+        from skinny_mj.flags import check_args
+
+        check_args(args)  # every numeric flag in its range (seed >= 0, ...), before any work
+        with one_blas_thread():  # same bits whatever the machine's BLAS threads
+            return int(handler(args) or 0)
     except SkinnyInputError as err:
         print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
         return 2

@@ -17,6 +17,10 @@ import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
+from skinny_mj.memory import check_export, check_train
+from skinny_mj.preflight import check_writable, check_writable_file, cleaned_on_failure
+from skinny_mj.progress import Progress as _Progress
+from skinny_mj.progress import progress_on as _progress_on
 from skinny_mj.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
 
 DEFAULT_RESULTS = Path("results")
@@ -31,16 +35,22 @@ def _timestamped(kind: str) -> Path:
 def _out_dir(args: argparse.Namespace, kind: str) -> Path:
     """``--out`` (default ``results/<kind>/<time>``), checked writable before the work
     (a read-only, full or file-blocked folder is an environment error, exit 1)."""
-    from skinny_mj.preflight import check_writable
-
     return check_writable(Path(args.out) if args.out is not None else _timestamped(kind))
 
 
-def _load_movement(args: argparse.Namespace, dof: int):
+def _load_movement(args: argparse.Namespace, dof: int, check=None):
+    """The movement of ``args``; ``check(steps, cause)`` first sees its length x --reps
+    (one repetition loaded), so a run too big for the memory is refused before it is."""
+    from skinny_mj.memory import steps_cause
     from skinny_mj.trajectories import load_movement
 
-    return load_movement(args.trajectory, dof, asf=args.asf, speed=args.speed, reps=args.reps,
-                         retarget=getattr(args, "retarget", "angles"))
+    kw = {"asf": args.asf, "speed": args.speed, "retarget": getattr(args, "retarget", "angles")}
+    if check is not None:
+        one, report = load_movement(args.trajectory, dof, reps=1, **kw)
+        check(len(one) * args.reps, steps_cause(one.name, len(one), args.reps))
+        if args.reps == 1:
+            return one, report
+    return load_movement(args.trajectory, dof, reps=args.reps, **kw)
 
 
 def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_angles, commands,
@@ -59,39 +69,16 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
     )
 
 
-def _progress_on(quiet: bool) -> bool:
-    """Progress bars only for a person watching: not with --quiet, not into a log."""
-    return not quiet and sys.stderr.isatty()
-
-
-class _Progress:
-    """A tqdm bar on a terminal; silent otherwise (logs stay clean)."""
-
-    def __init__(self, desc: str, quiet: bool = False):
-        self.bar = None
-        self.desc = desc
-        self.quiet = quiet
-
-    def __call__(self, done: int, total: int) -> None:
-        if self.bar is None:
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=total, desc=self.desc, unit="cycle", file=sys.stderr,
-                            disable=not _progress_on(self.quiet), leave=False)
-        self.bar.update(done - self.bar.n)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
 # -- track ------------------------------------------------------------------------------
 def cmd_track(args: argparse.Namespace) -> int:
     from controllers.metrics import position_nrmse
+    from skinny_mj import body, memory
     from skinny_mj.ideal import IdealController
     from skinny_mj.task import load
 
-    traj, report = _load_movement(args, args.dof)
+    out = _out_dir(args, "track")
+    traj, report = _load_movement(
+        args, args.dof, memory.check_track(args.dof, body.n_signals(args.dof, args.signals)))
     env = load(args.dof, args.signals, traj, sensor_noise=args.sensor_noise, seed=args.seed)
     ctrl = IdealController(traj.angles, env.task.max_speed_rad_s, traj.dt)
     ts = env.reset()
@@ -114,12 +101,13 @@ def cmd_track(args: argparse.Namespace) -> int:
         "max_speed_rad_s": [float(v) for v in env.task.max_speed_rad_s],
         "clipped_samples": int(report.clipped_samples), "retarget": report.to_dict(),
     }
-    out = _out_dir(args, "track")
-    _recording(out / "run.rrd", dof=args.dof, signals=args.signals, desired_angles=traj.angles,
-               actual_angles=np.array(angles), commands=np.array(commands),
-               desired_signals=desired, actual_signals=true_sig, sensed_signals=np.array(sensed),
-               title=f"ideal controller on {traj.name}", metadata=metrics)
-    atomic_write_json(out / "metrics.json", metrics)
+    with cleaned_on_failure(out):
+        _recording(out / "run.rrd", dof=args.dof, signals=args.signals,
+                   desired_angles=traj.angles, actual_angles=np.array(angles),
+                   commands=np.array(commands), desired_signals=desired,
+                   actual_signals=true_sig, sensed_signals=np.array(sensed),
+                   title=f"ideal controller on {traj.name}", metadata=metrics)
+        atomic_write_json(out / "metrics.json", metrics)
     print(f"track {traj.name}: {args.dof} DOF, {len(traj)} steps, position NRMSE {nrmse:.2e}, "
           f"clipped samples {report.clipped_samples} -> {out}")
     return 0
@@ -177,7 +165,8 @@ def _train_and_write(cfg, seed: int, out: Path, title: str, quiet: bool = False,
         outcome = train(cfg, seed, progress=bar)
     finally:
         bar.close()
-    _write_run(out, outcome, title, preset)
+    with cleaned_on_failure(out):
+        _write_run(out, outcome, title, preset)
     return outcome
 
 
@@ -190,6 +179,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     cfg, seed = train_config(args)
     out = _out_dir(args, "train")
+    check_train(cfg)
     outcome = _train_and_write(cfg, seed, out, f"{cfg.method} on {cfg.trajectory}",
                                quiet=args.quiet, preset=getattr(args, "preset", None))
     m = outcome.metrics
@@ -208,6 +198,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     cfg = TrainConfig()  # paper E, experiment 5
     out = _out_dir(args, "demo")
+    check_train(cfg, "the demo")
     print("Training an ESN inverse model (N = 200) to make 2D Skinny dance YMCA:")
     print("paper E experiment 5 - new method, beta = 0.1, 3 learning cycles x 10 epochs, "
           "feedback gain K 1 -> 0, then a test with the feedback controller off.")
@@ -250,7 +241,11 @@ def cmd_test(args: argparse.Namespace) -> int:
     if not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
         raise SkinnyInputError("model has no Skinny metadata (dof, signals, max speed)", path=path)
     dof, signals = int(meta["dof"]), str(meta["signals"])
-    traj, report = _load_movement(args, dof)
+    from skinny_mj import body, memory
+
+    out = _out_dir(args, "test")
+    traj, report = _load_movement(args, dof, memory.check_test(esn.cfg, dof,
+                                                               body.n_signals(dof, signals)))
     saved = meta.get("config") if isinstance(meta.get("config"), dict) else {}
     try:
         cfg = TrainConfig.from_dict({**saved, "dof": dof, "signals": signals,
@@ -276,14 +271,15 @@ def cmd_test(args: argparse.Namespace) -> int:
         # beside "test" (which stays the train command's own test dict, key for key)
         metrics["imitation"] = {**imitation_metrics(test, dof),
                                 "saturated": saturation(traj.angles, traj.dt, run.max_speed_rad_s)}
-    out = _out_dir(args, "test")
     ro = test.rollout
-    _recording(out / "run.rrd", dof=dof, signals=signals, desired_angles=traj.angles,
-               actual_angles=ro.angles[0], commands=ro.commands[0], desired_signals=test.desired,
-               actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0],
-               title=f"test on {traj.name}", metadata=metrics,
-               torques=None if test.torque is None else test.torque["series"])
-    atomic_write_json(out / "metrics.json", metrics)
+    with cleaned_on_failure(out):
+        _recording(out / "run.rrd", dof=dof, signals=signals, desired_angles=traj.angles,
+                   actual_angles=ro.angles[0], commands=ro.commands[0],
+                   desired_signals=test.desired, actual_signals=ro.true_signals[0],
+                   sensed_signals=ro.sensed[0], title=f"test on {traj.name}",
+                   metadata=metrics,
+                   torques=None if test.torque is None else test.torque["series"])
+        atomic_write_json(out / "metrics.json", metrics)
     if test.failed:
         print(f"skinny test: the network diverged: {test.fail_reason}", file=sys.stderr)
         return 1
@@ -318,12 +314,16 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
               f"{sorted(traj.desired) if traj.desired else 'none'})")
         for key, value in movement_stats(traj).items():
             print(f"  {key:32} {value:.4g}")
+        if getattr(args, "actuation", "velocity") == "torque":
+            from skinny_mj import torque_training
+
+            print("torque twin: inverse-dynamics torques of the movement against the limits")
+            for line in torque_training.feasibility_report(args.dof, traj):
+                print(line)
         return 0
     ns = argparse.Namespace(trajectory=args.name, asf=args.asf, speed=args.speed, reps=args.reps)
-    traj, _ = _load_movement(ns, args.dof)
+    traj, _ = _load_movement(ns, args.dof, check_export(args.dof, args.out))
     out = Path(args.out)
-    if out.suffix.lower() not in (".npz", ".csv"):
-        raise SkinnyInputError("export writes .npz or .csv", path=out)
     traj.save(out)
     print(f"wrote {traj.name}: {len(traj)} steps, {args.dof} DOF -> {out}")
     return 0
@@ -332,6 +332,7 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
 def cmd_render(args: argparse.Namespace) -> int:
     from skinny_mj.render import render_png
 
+    check_writable_file(args.out)
     angles = None
     if args.trajectory is not None:
         ns = argparse.Namespace(trajectory=args.trajectory, asf=None, speed=1.0, reps=1)
@@ -367,20 +368,28 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     options, rows, runs, invocation = cf.apply_sweep_config(args, options, rows)
     exp = module.build(**options)
     cf.check_experiment(invocation, exp)
-    out = Path(args.out) if args.out is not None else default_out_dir(exp.name)
-    from skinny_mj.preflight import check_writable
+    from skinny_mj.memory import check_sweep
+    from skinny_mj.sweep import folder
 
+    overwrite = bool(getattr(args, "overwrite", False))
+    out = folder.choose_out_dir(args.out, default_out_dir(exp.name), resume=args.resume,
+                                overwrite=overwrite)  # nothing lost in silence
     check_writable(out)  # before the sweep, not after its first run
+    folder.check_unlocked(out)
+    check_sweep(module, exp, rows, runs, args.workers, args.scheduler)
     start = time.perf_counter()
-    results = run_sweep(exp, out, rows=rows, runs=runs, workers=args.workers,
-                        resume=args.resume, scheduler=args.scheduler,
-                        progress=_progress_on(args.quiet), options=options)
-    cf.warn_if_rebuilt_differs(invocation, out)
-    wall = time.perf_counter() - start
-    claims = module.report(results, out)
-    table = (out / "table.md").read_text()
-    summary = f"{table}\n## Claims\n{claims}\n\nwall time {wall:.1f} s\n"
-    atomic_write_text(out / "claims.md", f"## Claims\n{claims}\n")
+    with folder.sweep_lock(out):  # held until the report is written
+        if overwrite:
+            folder.clear_sweep(out)
+        results = run_sweep(exp, out, rows=rows, runs=runs, workers=args.workers,
+                            resume=args.resume, scheduler=args.scheduler,
+                            progress=_progress_on(args.quiet), options=options)
+        cf.warn_if_rebuilt_differs(invocation, out)
+        wall = time.perf_counter() - start
+        claims = module.report(results, out)
+        table = (out / "table.md").read_text()
+        summary = f"{table}\n## Claims\n{claims}\n\nwall time {wall:.1f} s\n"
+        atomic_write_text(out / "claims.md", f"## Claims\n{claims}\n")
     print(summary)
     n_error = int(results.get("n_error", 0))
     if n_error:
@@ -392,8 +401,12 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 # -- bench ------------------------------------------------------------------------------
 def cmd_bench(args: argparse.Namespace) -> int:
     from skinny_mj import bench
-    from skinny_mj.io import atomic_write_json
 
+    if args.out is not None:  # before the bench, not after it
+        check_writable_file(args.out)
+    from skinny_mj.memory import check_bench
+
+    check_bench(args.workers, args.quick)
     figures = bench.run_with_bar(quick=args.quick, workers=args.workers,
                                  show=_progress_on(args.quiet))
     print(bench.table(figures))

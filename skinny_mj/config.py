@@ -20,8 +20,12 @@ grouped as the thesis's papers vary it:
 - schedule: ``method`` (original, new β, true target), ``beta``, ``cycles``,
   ``epochs``, the feedback gain schedule (linear 1 → 0, ×factor per epoch, fixed),
   ``tt_cycles``, and ``test_washout_cycles`` (unscored cycles before the scored test);
-- torque (``actuation="torque"``, issue 14; :mod:`skinny_mj.torque_training`): the
-  ``feedback`` teacher ("pd"; "computed-torque" for the controller alone),
+- torque (``actuation="torque"``; :mod:`skinny_mj.torque_training`): the
+  ``feedback`` teacher ("pd" limit-scaled, "inertia-pd" in the arm's own coordinates;
+  "computed-torque", "ct", "id-pd", "pd-gravity" for a controller alone), the poles
+  ``feedback_omega`` / ``feedback_zeta`` of the arm's laws (:mod:`controllers.torque_arm`),
+  FEL's ``readout_fit`` ("cycle", or remembering earlier cycles: "forgetting", "rls") and
+  its ``readout_forgetting``,
   ``gravity_feedforward`` (bias torque / limit added to the command, not learned),
   ``velocity_inputs`` (None: on for torque) and the test plant's ``test_payload_kg``
   (in the right hand) and ``test_mass_scale`` (every arm link);
@@ -47,7 +51,11 @@ __all__ = ["TrainConfig", "relative_cost", "with_overrides", "check_dof", "check
            "PAPER_CYCLES_FOR_BETA"]
 
 METHODS = ("original", "new", "true-target", "none")
-FEEDBACKS = ("pd", "computed-torque")
+#: Laws of controllers.torque_arm (inertia-scaled pole placement), by feedback name:
+#: three controllers alone, and FEL's teacher "inertia-pd"
+ARM_LAWS = {"ct": "ct", "id-pd": "id-pd", "pd-gravity": "pd-g", "inertia-pd": "fel"}
+FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS)
+READOUT_FITS = ("cycle", "forgetting", "rls")
 INPUTS = ("desired+sensed", "sensed")
 FORWARD_MODES = ("parallel", "serial", "hybrid")
 FORWARD_INPUTS = ("sensed", "chained")
@@ -117,6 +125,10 @@ class TrainConfig:
     feedback: str = "pd"  # FEL's teacher; "computed-torque" (PD + ID): the controller alone
     gravity_feedforward: bool = False  # add qfrc_bias / limit to the command (not learned)
     velocity_inputs: bool | None = None  # [qd_d(t+1); qd(t)] / v_max inputs; None: torque
+    feedback_omega: float | None = None  # ARM_LAWS' poles, rad/s (None: the law's default)
+    feedback_zeta: float = 1.0  # ARM_LAWS' damping ratio
+    readout_fit: str = "cycle"  # FEL fits: "cycle" (each cycle alone), "forgetting", "rls"
+    readout_forgetting: float = 0.8  # their memory: old cycles' weight per learning cycle
     test_payload_kg: float = 0.0  # point mass at the right hand's CoM in the test plant
     test_mass_scale: float = 1.0  # every arm link's mass and inertia x this at test
     # the toolbox's protocol (issue 12); defaults are today's behaviour, bit for bit
@@ -196,10 +208,25 @@ class TrainConfig:
              "method 'none' tests the feedback controller alone: it needs test_gain > 0"),
             (self.feedback in FEEDBACKS,
              f"feedback must be one of {FEEDBACKS}, got {self.feedback!r}"),
-            (self.feedback == "pd" or self.method == "none", "the computed-torque controller "
-             "runs alone (method 'none'); FEL's teacher is the PD part"),
+            (self.feedback in ("pd", "inertia-pd") or self.method == "none",
+             f"the {self.feedback} controller runs alone (method 'none'); FEL's teacher is "
+             "'pd' or 'inertia-pd'"),
+            (self.feedback != "inertia-pd" or self.method in ("original", "new", "none"),
+             "the 'inertia-pd' teacher goes with feedback-error learning (original or new) "
+             "or runs alone (method 'none')"),
+            (self.readout_fit in READOUT_FITS and (self.readout_fit == "cycle" or (
+                self.actuation == "torque" and self.method in ("original", "new"))),
+             f"readout_fit must be one of {READOUT_FITS} ('forgetting' and 'rls' with FEL "
+             f"on the torque body), got {self.readout_fit!r}"),
+            (_finite_at_least(self.readout_forgetting, 0) and self.readout_forgetting <= 1,
+             f"readout_forgetting must be in [0, 1], got {self.readout_forgetting}"),
+            (self.feedback_omega is None or _finite_at_least(self.feedback_omega, 0),
+             f"feedback_omega must be >= 0 rad/s, got {self.feedback_omega}"),
+            (_finite_at_least(self.feedback_zeta, 0),
+             f"feedback_zeta must be >= 0, got {self.feedback_zeta}"),
             (self.actuation == "torque" or (
                 self.feedback == "pd" and not self.gravity_feedforward
+                and self.feedback_omega is None and self.feedback_zeta == 1.0
                 and not self.velocity_inputs and self.test_payload_kg == 0
                 and self.test_mass_scale == 1),
              "feedback, gravity_feedforward, velocity_inputs, test_payload_kg and "

@@ -53,8 +53,9 @@ def read_train_file(path: str | Path) -> tuple[dict[str, Any], int | None]:
                                f"experiment {data['experiment']} --config {path}`", path=path)
     if isinstance(data.get("config"), dict):
         seed = data.get("seed")
-        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
-            raise SkinnyInputError(f"seed must be a whole number, got {seed!r}", path=path)
+        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)
+                                 or seed < 0):
+            raise SkinnyInputError(f"seed must be a whole number >= 0, got {seed!r}", path=path)
         return dict(data["config"]), seed
     return data, None
 

@@ -76,6 +76,10 @@ with ``n = n_ok + n_failed`` (the runs that are data) and metric statistics over
 runs only. ``table.md`` shows ``failed / n`` per row (``1 / 20 (+1 error)``) and says
 under the table that the means exclude failed runs.
 
+While a sweep runs, ``out/sweep.lock`` (its pid, host and start time) keeps a second
+sweep out of the folder (:mod:`skinny_mj.sweep.folder`; a lock whose process died on
+this host is taken over, with a line on stderr).
+
 Output layout::
 
     results/<experiment>/<timestamp>/{config.json, runs/*.json, results.json, table.md}
@@ -83,10 +87,8 @@ Output layout::
 
 from __future__ import annotations
 
-import dataclasses
 import datetime as _dt
 import functools
-import json
 import os
 import re
 import sys
@@ -100,7 +102,8 @@ import numpy as np
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
 from skinny_mj.sweep import RunFailed, execute_batch, execute_run, iter_dask, iter_joblib
-from skinny_mj.sweep.stats import aggregate, load_run, markdown_table, to_jsonable
+from skinny_mj.sweep.folder import prepare_out_dir, sweep_lock
+from skinny_mj.sweep.stats import aggregate, load_run, markdown_table
 
 __all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "select_rows",
            "run_sweep", "aggregate", "markdown_table", "execute_run", "execute_batch",
@@ -220,22 +223,6 @@ def select_rows(experiment: Experiment, rows: Sequence[str] | str | None = None
     return tuple(r for r in experiment.rows if r.row_id in chosen)
 
 
-def _config_dict(experiment: Experiment, runs: int) -> dict[str, Any]:
-    cfg = experiment.config
-    if dataclasses.is_dataclass(cfg) and not isinstance(cfg, type):
-        cfg = dataclasses.asdict(cfg)
-    return to_jsonable({
-        "experiment": experiment.name,
-        "config": cfg,
-        "rows": [{"row": r.row_id, "params": dict(r.params), "paper": dict(r.paper),
-                  **{k: getattr(r, k) for k in ("runs", "seeds_of") if getattr(r, k) is not None}}
-                 for r in experiment.rows],
-        "groups": {g: list(m) for g, m in experiment.groups.items()},
-        "runs": runs,
-        "base_seed": experiment.base_seed,
-    })
-
-
 def default_batch_size(n_rows: int, runs: int, workers: int) -> int:
     """Seeds per lockstep batch: as many as possible (a step's Python overhead is
     shared by the whole batch: ~55 us + ~5 us per run at N = 200), cutting each row
@@ -268,29 +255,6 @@ def _run_specs(experiment: Experiment, runs: int, selected: Sequence[Row]) -> li
     return [RunSpec(row, i, k, run_seed(experiment.base_seed, pos[row.seeds_of or row.row_id], k))
             for k in range(runs) for i, row in enumerate(experiment.rows)
             if row.row_id in chosen and (row.runs is None or k < row.runs)]
-
-
-def _prepare_out_dir(experiment: Experiment, out_dir: Path, runs: int, resume: bool,
-                     invocation: dict[str, Any]) -> None:
-    config = _config_dict(experiment, runs)
-    config_path = out_dir / "config.json"
-    now = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-    if resume and config_path.is_file():
-        try:
-            old = json.loads(config_path.read_text())
-            same = {k: old.get(k) for k in ("experiment", "config", "rows", "base_seed")}
-        except (ValueError, AttributeError) as exc:
-            raise SkinnyInputError(f"not a sweep's config.json ({exc})",
-                                   path=config_path) from exc
-        if same != {k: config[k] for k in same}:
-            raise SkinnyInputError("holds a different sweep (experiment, config, rows or "
-                                   "seed differ); use a new --out", path=config_path)
-        old["resumes"] = [*old.get("resumes", []), {"at": now, **invocation}]
-        atomic_write_json(config_path, to_jsonable(old))
-        return
-    config.update(invocation, started_at=now, python=sys.version.split()[0],
-                  numpy=np.__version__, resumes=[])
-    atomic_write_json(config_path, to_jsonable(config))
 
 
 def _report(bar: Any, records: list[dict[str, Any]]) -> None:
@@ -336,8 +300,6 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     The results dict also written to ``out_dir/results.json`` (see :func:`aggregate`;
     ``n_error`` counts errored runs on disk); ``table.md`` is written beside it.
     """
-    from tqdm import tqdm
-
     selected = select_rows(experiment, rows)
     runs = experiment.runs if runs is None else int(runs)
     if runs < 1:
@@ -352,12 +314,22 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
             raise SkinnyInputError("--resume needs the --out folder of the sweep to resume")
         out_dir = default_out_dir(experiment.name)
     out_dir = Path(out_dir)
-    runs_dir = out_dir / "runs"
-    runs_dir.mkdir(parents=True, exist_ok=True)
     invocation = {"runs": runs, "options": dict(options or {}), "selection": {
         "requested": None if rows is None else _entries(rows),
         "rows": [r.row_id for r in selected]}}
-    _prepare_out_dir(experiment, out_dir, runs, resume, invocation)
+    with sweep_lock(out_dir):  # one sweep at a time in a folder
+        prepare_out_dir(experiment, out_dir, runs, resume, invocation)
+        return _sweep(experiment, out_dir, selected, runs, workers, resume, scheduler,
+                      progress, batch_size)
+
+
+def _sweep(experiment: Experiment, out_dir: Path, selected: Sequence[Row], runs: int,
+           workers: int, resume: bool, scheduler: str | None, progress: bool,
+           batch_size: int | None) -> dict[str, Any]:
+    from tqdm import tqdm
+
+    runs_dir = out_dir / "runs"
+    runs_dir.mkdir(parents=True, exist_ok=True)
 
     specs = _run_specs(experiment, runs, selected)
     if resume:  # an errored run (a bug) runs again; ok and failed runs are data

@@ -66,6 +66,14 @@ TORQUE_ARMATURE = 0.0
 # G1's 5020 (25 N m), rotor J (0.139, 0.017, 0.169)e-4 kg m^2 through a 16:1 two-stage
 # planetary gear, J1 (N1 N2)^2 + J2 N2^2 + J3 = 0.00361 kg m^2.
 TORQUE_ARMATURE_3D_SHOULDER = 0.0036
+# Joint limits of the torque twin (solref: time constant s, damping ratio): MuJoCo's
+# default 20 ms, as the velocity servos. A stiffer 10 ms (two physics steps, MuJoCo's
+# bound) halves the overshoot under full bang-bang torques (0.93 -> 0.51 rad in 2D,
+# 1.13 -> 0.52 rad in 3D; benchmarks/torque_stability_check.py --limits) but does not
+# hold the limits (the arm reaches 100-150 rad/s), and it made FEL learn the 3D YMCA
+# worse (position NRMSE 0.0107 / 0.0073 -> 0.0292 / 0.0155, seeds 0 and 1: the movement
+# passes 0.06-0.14 rad from the limits, and a learning arm touches them): not adopted.
+TORQUE_LIMIT_SOLREF = (0.02, 1.0)
 BODY_MASS_KG = 70.0  # the stated body whose arm the twin is (ICRP reference man)
 # de Leva (1996, J Biomech 29:1223, Table 4), males: mass / body mass, CoM distance from
 # the proximal end / segment length, radii of gyration / length about the sagittal
@@ -197,6 +205,7 @@ def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
         joint.damping[0] = TORQUE_JOINT_DAMPING
         joint.armature = TORQUE_ARMATURE_3D_SHOULDER if dof == 8 and "shoulder" in name \
             else TORQUE_ARMATURE
+        joint.solref_limit = list(TORQUE_LIMIT_SOLREF)
         joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
         joint.actfrcrange = [-limit, limit]
         act = spec.actuator(name)

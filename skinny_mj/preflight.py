@@ -7,13 +7,17 @@ Nothing here imports mujoco: :func:`check_gl` must run before the first import.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
+import shutil
+from collections.abc import Iterator
 from pathlib import Path
 
 from skinny_mj.errors import SkinnyEnvironmentError
 
-__all__ = ["GL_BACKENDS", "MIN_FREE_BYTES", "check_gl", "check_writable", "check_free_space"]
+__all__ = ["GL_BACKENDS", "MIN_FREE_BYTES", "check_gl", "check_writable", "check_writable_file",
+           "check_free_space", "cleaned_on_failure"]
 
 #: MUJOCO_GL values mujoco accepts on Linux (mujoco/rendering/classic/gl_context.py);
 #: any other value makes ``import mujoco`` itself raise.
@@ -71,12 +75,44 @@ def check_writable(folder: str | Path) -> Path:
     return folder
 
 
+def check_writable_file(path: str | Path, option: str = "--out") -> Path:
+    """Check that the file ``path`` can be written (its folder as :func:`check_writable`
+    checks one, and ``path`` itself not a folder), before the work that makes it."""
+    path = Path(path)
+    if path.is_dir():
+        raise SkinnyEnvironmentError(f"{option} {path} is a folder; give a file name")
+    check_writable(path.parent if str(path.parent) else Path("."))
+    return path
+
+
+@contextlib.contextmanager
+def cleaned_on_failure(folder: str | Path) -> Iterator[Path]:
+    """Write a command's files into ``folder`` inside this block: if the block raises,
+    every file and folder it added to ``folder`` is removed again (and ``folder`` itself
+    if the block created it), so a failed command leaves no half-written output. What
+    was there before is kept."""
+    folder = Path(folder)
+    existed = folder.is_dir()
+    before = {p.name for p in folder.iterdir()} if existed else set()
+    try:
+        yield folder
+    except BaseException:
+        if not existed:
+            shutil.rmtree(folder, ignore_errors=True)
+        elif folder.is_dir():
+            for entry in folder.iterdir():
+                if entry.name not in before:
+                    if entry.is_dir() and not entry.is_symlink():
+                        shutil.rmtree(entry, ignore_errors=True)
+                    else:
+                        entry.unlink(missing_ok=True)
+        raise
+
+
 def check_free_space(folder: str | Path, need_bytes: int) -> None:
     """Refuse to start a write of about ``need_bytes`` into ``folder`` (an existing
     directory) when the disk has less free: rerun's file writer can hang forever on a
     full disk (rerun 0.41: ``save`` never returns), so a recording looks first."""
-    import shutil
-
     free = shutil.disk_usage(folder).free
     if free < need_bytes:
         raise SkinnyEnvironmentError(

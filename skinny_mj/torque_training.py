@@ -1,4 +1,4 @@
-"""The torque body in the one training path (issue 14): what ``actuation="torque"`` adds.
+"""The torque body in the one training path: what ``actuation="torque"`` adds.
 
 :mod:`skinny_mj.training` calls these when ``cfg.actuation == "torque"``:
 
@@ -10,7 +10,12 @@
 - :func:`teacher_inputs`: the true-target architecture's extra teacher-forced inputs
   [qd_d(t+1); qd_d(t)] / v_max, as the rollout's [qd_d(t+1); qd(t)] / v_max;
 - :func:`perturb`: the robustness test plant (payload, link masses);
-- :func:`controller`: the PD teacher with gains scaled to the limits.
+- :func:`controller`: the PD teacher with gains scaled to the limits;
+- :func:`hook_for` with an arm law (``feedback`` in :data:`skinny_mj.config.ARM_LAWS`):
+  an :class:`controllers.torque_arm_loop.ArmLoop` fed by
+  :class:`skinny_mj.dynamics.BatchArmState`, its gains :func:`arm_gains`, the movement
+  :func:`desired_motion`; :func:`readout_fitter` (FEL fits that remember) and
+  :class:`ShareRecorder` (the feedback share per epoch); :func:`feasibility`.
 
 The feedback teacher (:class:`controllers.torque_feedback.TorqueFeedbackController`):
 gains :meth:`TorqueGains.from_limits` (0.1 rad asks for 50 % of the limit, critically
@@ -30,10 +35,20 @@ import mujoco
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from controllers.torque_arm import ArmGains, DesiredMotion
+from controllers.torque_arm_loop import ArmLoop
 from controllers.torque_feedback import TorqueFeedbackController, TorqueGains
 from controllers.torque_fel import TorqueLoop
 from skinny_mj import body
-from skinny_mj.config import TrainConfig
+from skinny_mj.config import ARM_LAWS, TrainConfig
+from skinny_mj.errors import SkinnyInputError
+
+#: Default pole placement omega (rad/s) per law, zeta 1 (critically damped): computed
+#: torque and PD + gravity at 15 rad/s (omega dt = 0.3 at the 20 ms hold), the ID
+#: feed-forward's low-gain PD and FEL's teacher at 5 rad/s.
+#: Ridge of the remembering readout fits when the ESN's readout is not "ridge".
+MEMORY_RIDGE = 1e-2
+ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0}
 
 #: Bodies whose mass and inertia ``test_mass_scale`` scales (both arms), and the hand
 #: that carries ``test_payload_kg`` (a point mass at its centre of mass: the hand's CoM
@@ -98,16 +113,58 @@ def n_extra_inputs(cfg: TrainConfig) -> int:
     return 2 * cfg.dof if cfg.actuation == "torque" and cfg.uses_velocity_inputs else 0
 
 
-def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) -> TorqueLoop | None:
-    """The torque loop of ``trajectory`` (None for the velocity servo)."""
+def desired_motion(dof: int, trajectory, with_id: bool = False) -> DesiredMotion:
+    """The :class:`DesiredMotion` of ``trajectory`` for a held-torque loop: the clamped
+    cubic spline's states, mid-step samples and (``with_id``) held inverse dynamics."""
+    angles, dt = np.asarray(trajectory.angles, float), trajectory.dt
+    t = dt * np.arange(len(angles))
+    spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
+    mid = t[:-1] + 0.5 * dt
+    tau = _dynamics(dof).trajectory_torques_nm(angles, dt) if with_id else None
+    return DesiredMotion.from_samples(angles, spline(t, 1), dt, spline(mid), spline(mid, 1),
+                                      tau)
+
+
+def arm_gains(cfg: TrainConfig) -> ArmGains:
+    """The pole placement of ``cfg.feedback``'s law (:data:`ARM_OMEGA` unless set)."""
+    omega = ARM_OMEGA[cfg.feedback] if cfg.feedback_omega is None else cfg.feedback_omega
+    return ArmGains(omega, cfg.feedback_zeta)
+
+
+def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
+             plant=None) -> TorqueLoop | None:
+    """The torque loop of ``trajectory`` (None for the velocity servo); the laws of
+    :mod:`controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant)."""
     if cfg.actuation != "torque":
         return None
+    if cfg.feedback in ARM_LAWS:
+        from skinny_mj.dynamics import BatchArmState
+
+        law = ARM_LAWS[cfg.feedback]
+        if plant is None or not hasattr(plant, "model"):
+            raise SkinnyInputError(f"feedback {cfg.feedback!r} needs the lockstep plant "
+                                   "(plant='batch')")
+        return ArmLoop(controller(cfg.dof, cfg.signals),
+                       desired_velocities_rad_s(trajectory.angles, trajectory.dt),
+                       np.asarray(max_speed_rad_s, float),
+                       velocity_inputs=cfg.uses_velocity_inputs,
+                       gravity_feedforward=cfg.gravity_feedforward, law=law,
+                       gains=arm_gains(cfg),
+                       motion=desired_motion(cfg.dof, trajectory, law == "id-pd"),
+                       state_of=BatchArmState(plant, gravity=law == "pd-g",
+                                              nominal=perturbed(cfg)),
+                       dt=trajectory.dt)
     ff = true_torques(cfg.dof, trajectory) if cfg.feedback == "computed-torque" else None
     return TorqueLoop(controller(cfg.dof, cfg.signals),
                       desired_velocities_rad_s(trajectory.angles, trajectory.dt),
                       np.asarray(max_speed_rad_s, float),
                       velocity_inputs=cfg.uses_velocity_inputs,
                       gravity_feedforward=cfg.gravity_feedforward, inverse_dynamics=ff)
+
+
+def perturbed(cfg: TrainConfig) -> bool:
+    """Does ``cfg``'s test plant differ from the nominal twin (the controllers' model)?"""
+    return cfg.test_payload_kg != 0 or cfg.test_mass_scale != 1
 
 
 def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0) -> None:
@@ -158,3 +215,50 @@ def train_warnings(run) -> int | None:
     plant = run.__dict__.get("plant")  # the cached property, if it was ever used
     return None if plant is None or not hasattr(plant, "warning_count") \
         else int(plant.warning_count())
+
+
+def feasibility(dof: int, trajectory) -> dict[str, np.ndarray]:
+    """:meth:`skinny_mj.dynamics.Dynamics.feasibility` of ``trajectory`` on the torque twin."""
+    return _dynamics(dof).feasibility(trajectory.angles, trajectory.dt)
+
+
+def feasibility_report(dof: int, trajectory) -> list[str]:
+    """The feasibility of ``trajectory`` as text lines (``skinny trajectory show
+    --actuation torque``)."""
+    from skinny_mj.dynamics import feasibility_lines
+
+    return feasibility_lines(feasibility(dof, trajectory), list(body.dof_names(dof)))
+
+
+def readout_fitter(cfg: TrainConfig, esn, steps: int):
+    """FEL's readout fit for ``cfg.readout_fit`` (None: each cycle alone, ``esn.fit``):
+    the normal equations with forgetting, or RLS, remembering ``cfg.readout_forgetting``
+    of the statistics per learning cycle of ``steps`` samples; ridge ``cfg.ridge`` with a
+    ridge readout, else :data:`MEMORY_RIDGE`."""
+    from controllers.torque_readout import ForgettingReadout, RLSReadout
+
+    ridge = cfg.ridge if cfg.readout == "ridge" else MEMORY_RIDGE
+    if cfg.readout_fit == "forgetting":
+        return ForgettingReadout(esn, cfg.readout_forgetting, ridge)
+    if cfg.readout_fit == "rls":
+        return RLSReadout(esn, steps, cfg.readout_forgetting, ridge)
+    return None
+
+
+class ShareRecorder:
+    """FEL's ``observe`` callback: per epoch, on its evaluation cycle (the ESN with the
+    epoch's K), the feedback share mean |K u_fb| / mean |u| of the command and the
+    teacher's error signal mean |u_fb| / mean |u| (each (R, E))."""
+
+    def __init__(self, gains: np.ndarray, n_runs: int, cycles: int):
+        self.gains, self.eval_cycle = np.asarray(gains, float), cycles + 1
+        self.share = np.full((n_runs, len(gains)), np.nan)
+        self.error_signal = np.full((n_runs, len(gains)), np.nan)
+
+    def __call__(self, epoch: int, cycle: int, ro, y_used) -> None:
+        if cycle != self.eval_cycle:
+            return
+        u = np.abs(ro.commands).mean(axis=(1, 2))
+        fb = np.abs(ro.u_error[:, :-1]).mean(axis=(1, 2))
+        self.error_signal[:, epoch] = fb / np.maximum(u, 1e-12)
+        self.share[:, epoch] = self.gains[epoch] * self.error_signal[:, epoch]

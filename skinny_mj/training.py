@@ -55,6 +55,7 @@ from skinny_mj.run_parts import (  # noqa: F401  (re-exported)
     run_streams,
     true_commands_of,
 )
+from skinny_mj.threads import single_threaded
 
 
 @dataclass
@@ -103,6 +104,7 @@ class Run:
                              inputs=cfg.inputs)
 
 
+@single_threaded
 def build_run(cfg: TrainConfig, seeds: Sequence[int]) -> Run:
     """The parts of ``len(seeds)`` runs of ``cfg`` in lockstep (see :class:`Run`)."""
     from skinny_mj import body
@@ -156,8 +158,10 @@ class Training:
     true_target: Any = None
     pretrain_prediction_nrmse: np.ndarray | None = None
     ridge_lambda: np.ndarray | None = None  # (R, E) lambda chosen per epoch (ridge_select)
+    feedback_share: Any = None  # torque body: torque_training.ShareRecorder
 
 
+@single_threaded
 def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
               observe: Callable[..., None] | None = None) -> Training:
     """Train ``run``'s networks in place. ``progress(done, total)`` after every cycle;
@@ -196,12 +200,17 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
         from controllers.ridge_select import RidgeSelector
 
         selector = RidgeSelector(run.esn, cfg.epochs)
+    if cfg.actuation == "torque":  # the torque body: readouts that remember, shares
+        selector = torque.readout_fitter(cfg, run.esn, len(run.desired) - 1)
+        out.feedback_share = torque.ShareRecorder(fcfg.gains(), run.esn.n_runs,
+                                                  fcfg.learning_cycles)
+        observe = out.feedback_share if observe is None else _both(observe, out.feedback_share)
     out.fel = fel.train(run.esn, run.plant, run.desired, fcfg, true_commands=run.true_commands,
                         progress=tick, forward=run.forward, scored=run.scored,
                         feedback=protocol.feedback_of(cfg.u_error_gain),
-                        hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s),
+                        hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s, run.plant),
                         readout_fit=selector, observe=observe)
-    if selector is not None:
+    if cfg.ridge_select:
         out.ridge_lambda = selector.chosen
     return out
 
@@ -222,6 +231,7 @@ class TestOutcome:
     torque: dict | None = field(default=None, repr=False)
 
 
+@single_threaded
 def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = None,
              plant=None) -> list[TestOutcome]:
     """Test the R trained networks of ``run`` (K = 0, no learning, reservoir noise
@@ -239,7 +249,7 @@ def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = N
         plant = make_plant(cfg, trajectory, seeds, run.max_speed_rad_s)
         torque.perturb(plant, cfg.test_payload_kg, cfg.test_mass_scale)  # torque: robustness
     desired = trajectory.position_signals(cfg.signals)
-    hook = torque.hook_for(cfg, trajectory, run.max_speed_rad_s)
+    hook = torque.hook_for(cfg, trajectory, run.max_speed_rad_s, plant)
     commands = true_commands_of(cfg, trajectory, run.max_speed_rad_s)
     ev = fel.evaluate(run.esn, plant, desired, commands, cfg.delay, run.forward,
                       inputs=cfg.inputs, washout_cycles=cfg.test_washout_cycles,
@@ -279,6 +289,7 @@ def train(cfg: TrainConfig, seed: int = 0,
     return train_batch(cfg, [seed], progress)[0]
 
 
+@single_threaded
 def train_batch(cfg: TrainConfig, seeds: Sequence[int],
                 progress: Callable[[int, int], None] | None = None) -> list[TrainOutcome]:
     """Train R = len(seeds) runs of ``cfg`` in lockstep; run r equals ``train(cfg, seeds[r])``.
@@ -320,6 +331,11 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
         curve = result.to_dict()
         metrics["train"] = {"gains": curve["gains"], "position_nrmse": curve["position_nrmse"][r],
                             "motor_nrmse": curve["motor_nrmse"][r]}
+        if trained.feedback_share is not None:
+            metrics["train"]["feedback_share"] = [float(v) for v in
+                                                  trained.feedback_share.share[r]]
+            metrics["train"]["error_signal_share"] = [
+                float(v) for v in trained.feedback_share.error_signal[r]]
         if trained.ridge_lambda is not None:
             metrics["train"]["ridge_lambda"] = [None if not np.isfinite(v) else float(v)
                                                 for v in trained.ridge_lambda[r]]
@@ -370,6 +386,13 @@ class PhysicsBatchError(RuntimeError):
 def esn_run(esn: ESN, r: int) -> ESN:
     """Run ``r`` of a lockstep ESN as a one-run ESN (weights, state, noise stream)."""
     return esn if esn.n_runs == 1 else esn.select([r])
+
+
+def _both(first: Callable[..., None], second: Callable[..., None]) -> Callable[..., None]:
+    def both(*args) -> None:
+        first(*args)
+        second(*args)
+    return both
 
 
 def _report(progress: Callable[[int, int], None] | None, done: int, total: int) -> None:

@@ -208,3 +208,24 @@ def test_horizon_counts_steps_before_the_threshold():
     free[1, 7] = np.nan
     assert generation.horizon(free, target, 0.1).tolist() == [4, 7]
     assert generation.horizon(target, target, 0.1).tolist() == [10, 10]
+
+
+def test_beta_method_to_convergence_stops_per_run_when_the_error_stops_falling():
+    cfg = ESNConfig(n_inputs=1, n_outputs=2, n_reservoir=30, spectral_radius=0.8,
+                    output_feedback=True, readout_activation="identity", noise_level=1e-3)
+    teacher = np.repeat(generation.figure_eight(400, 50)[None], 2, axis=0)
+    inputs = np.zeros((2, 400, 1))
+    both = ESN(cfg, n_runs=2, rngs=[np.random.default_rng(s) for s in (1, 2)])
+    curve = generation.fit_beta(both, inputs, teacher, 100, 0.2, 300, min_improvement=0.01)
+    used = np.isfinite(curve).sum(axis=1)
+    assert np.all(used < 300)  # stopped before the cap
+    for r in range(2):  # each run's curve falls by >= 1 % per pass until it stops
+        c = curve[r, :used[r]]
+        assert np.all(c[1:] < 0.99 * c[:-1]) and np.all(np.isnan(curve[r, used[r]:]))
+    alone = ESN(cfg, n_runs=1, rngs=[np.random.default_rng(2)])
+    one = generation.fit_beta(alone, inputs[1:], teacher[1:], 100, 0.2, 300,
+                              min_improvement=0.01)
+    assert np.array_equal(one[0], curve[1], equal_nan=True)
+    assert np.array_equal(alone.W_out[0], both.W_out[1])  # lockstep = alone, bit for bit
+    with pytest.raises(ValueError):
+        generation.fit_beta(alone, inputs[1:], teacher[1:], 100, 0.2, 5, min_improvement=1.5)

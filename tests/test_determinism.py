@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -66,3 +67,31 @@ def test_paper_e_run_files_identical_across_processes_workers_dask_and_lockstep(
     assert len(ref) == 2
     for other in ("single", "joblib2", "dask2", "cli"):
         assert _files(tmp_path / other) == ref, other
+
+
+_THREADS_PROBE = """
+import hashlib
+from dataclasses import replace
+from threadpoolctl import threadpool_info
+from skinny_mj.config import TrainConfig
+from skinny_mj.training import train
+out = train(replace(TrainConfig(), epochs=3), 3)
+blas = max(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
+print(blas, out.metrics["test"]["position_nrmse"].hex(),
+      hashlib.sha256(out.esn.W_out.tobytes()).hexdigest())
+"""
+
+
+def test_training_gives_the_same_bits_with_one_or_two_blas_threads():
+    """The process's BLAS thread count (here 1 or 2, set as a user's shell would) must not
+    reach a run: OpenBLAS's threaded kernels sum in another order (metrics ~1e-14 apart
+    before the run pinned its BLAS to one thread)."""
+    results = {}
+    for n in ("1", "2"):
+        env = {**os.environ, "MUJOCO_GL": "disabled", "OMP_NUM_THREADS": n,
+               "OPENBLAS_NUM_THREADS": n, "MKL_NUM_THREADS": n}
+        out = subprocess.run([sys.executable, "-c", _THREADS_PROBE], env=env, check=True,
+                             capture_output=True, text=True).stdout.split()
+        assert int(out[0]) == int(n)  # the pool the process had outside the run
+        results[n] = out[1:]
+    assert results["1"] == results["2"]

@@ -130,3 +130,16 @@ def test_skinny_test_on_a_torque_model_records_the_torques(tmp_path):
     np.testing.assert_allclose(applied, commanded, rtol=1e-9, atol=1e-12)  # within limits
     assert len(gravity) == len(command) + 1 and np.ptp(gravity) > 0.1  # the arm swings
     assert {f"/torques/{n}" for n in names} <= _blueprint_origins(rrd)  # shown by default
+
+
+
+@pytest.mark.parametrize("dof", [4, 8])
+def test_the_torque_twin_keeps_the_servos_joint_limits(dof):
+    # a stiffer limit halves the overshoot under bang-bang torques but made FEL learn the
+    # 3D YMCA worse (the model card); the twin keeps MuJoCo's default
+    from skinny_mj.model import TORQUE_LIMIT_SOLREF
+
+    twin, servo = load_model(dof, "torque"), load_model(dof)
+    np.testing.assert_array_equal(twin.jnt_solref, np.tile(TORQUE_LIMIT_SOLREF, (twin.njnt, 1)))
+    np.testing.assert_array_equal(twin.jnt_solref, servo.jnt_solref)
+    np.testing.assert_array_equal(twin.jnt_solimp, servo.jnt_solimp)

@@ -102,7 +102,7 @@ def test_claims_hold_and_fail_on_synthetic_runs(tmp_path):
     for row in paper_a.rows((0, 4)):
         arch, d = row.params["architecture"], row.params["delay"]
         err, share = good[arch] if d else (0.01, 0.3)
-        metrics[row.row_id] = [{"performance_nrmse": err + k * 0.001, "feedback_share": share,
+        metrics[row.row_id] = [{"performance_nrmse": err + k * 0.001, "correction_ratio": share,
                                 "pretrain_prediction_nrmse": 0.08} for k in range(3)]
     exp = Experiment("fake-a", paper_a.rows((0, 4)), _fake(metrics), runs=3)
     run_sweep(exp, tmp_path / "good", workers=1, progress=False)
@@ -111,11 +111,35 @@ def test_claims_hold_and_fail_on_synthetic_runs(tmp_path):
     assert sum("[holds]" in line for line in lines) == 7  # delay 10 was not run
     assert "[n/a]" in lines[-1]
 
-    metrics["serial-d4"] = [{"performance_nrmse": 0.3, "feedback_share": 0.9,
+    metrics["serial-d4"] = [{"performance_nrmse": 0.3, "correction_ratio": 0.9,
                              "pretrain_prediction_nrmse": 0.01}]
     run_sweep(exp, tmp_path / "bad", workers=1, progress=False)
     bad = paper_a.claims(tmp_path / "bad")
     assert sum("does NOT hold" in line for line in bad) == 4  # lower x2, serial best, worst<best
+
+
+def test_serial_best_counts_a_tie_within_the_spread_and_not_a_clear_loss(tmp_path):
+    rows = paper_a.rows((4,))
+    spread = (0.0, 0.01, -0.01)
+
+    def sweep(name, serial_offset):
+        metrics = {r.row_id: [{"performance_nrmse": 0.08 + s + (serial_offset if
+                                r.params["architecture"] == "serial" else 0.0),
+                               "correction_ratio": 0.5} for s in spread] for r in rows}
+        calls: dict[str, int] = {}
+
+        def run_one(row, seed):  # the k-th run of a row gets spread[k], whatever its seed
+            calls[row.row_id] = calls.get(row.row_id, -1) + 1
+            return metrics[row.row_id][calls[row.row_id]]
+
+        run_sweep(Experiment(name, rows, run_one, runs=3), tmp_path / name,
+                  workers=1, progress=False)
+        return next(x for x in paper_a.claims(tmp_path / name) if "serial has the" in x)
+
+    tied = sweep("tie", 0.001)  # 0.001 behind, spread 0.01: Welch p ~0.9
+    assert "[holds]" in tied and "tied: d4" in tied
+    behind = sweep("behind", 0.05)  # 0.05 behind, spread 0.01: p < 0.05
+    assert "does NOT hold" in behind and "behind: d4" in behind
 
 
 def test_quick_sweep_end_to_end(tmp_path):

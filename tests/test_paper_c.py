@@ -139,3 +139,14 @@ def test_lockstep_batch_equals_runs_one_at_a_time():
             if key not in ("wall_s", "train_wall_s", "peak_rss_mb"):
                 np.testing.assert_array_equal(np.asarray(got[key]), np.asarray(value),
                                               err_msg=key)
+
+
+def test_lag_steps_finds_a_shift_of_the_output():
+    from experiments.paper_c_report import lag_steps
+
+    t = np.linspace(0, 4 * np.pi, 300)
+    desired = np.stack([np.sin(t), np.cos(t), np.zeros_like(t)], axis=1)
+    assert lag_steps(desired, desired) == 0
+    late = np.roll(desired, 4, axis=0)  # the output 4 steps behind
+    assert lag_steps(late, desired) == 4
+    assert lag_steps(np.roll(desired, -3, axis=0), desired) == -3

@@ -8,8 +8,9 @@ Observation, (3 n_signals,) float64, normalized units::
 ``sensed`` is the task's noisy position signals (unbounded: Gaussian sensor noise),
 ``desired`` / ``desired_next`` the movement's signals now and one step ahead (bounded by
 the movement's range, at least [-1, 1]). Action, (n_dof,) float64 in [-1, 1]: a
-normalized joint velocity (``actuation="velocity"``) or torque (``"torque"``); values
-outside are clipped by the task. Reward: the task's, ``-mean |desired(t) - true(t)|``
+normalized joint velocity (``actuation="velocity"``) or torque (``"torque"``); finite
+values outside are clipped by the task; a NaN or infinite action raises ``ValueError``
+(it never reaches MuJoCo). Reward: the task's, ``-mean |desired(t) - true(t)|``
 after the step. An episode is the movement, T - 1 steps; it ends with
 ``truncated=True`` (the task has a time limit and no failure state, so never
 ``terminated``), as dm_control marks it (``discount`` 1 on the last step). A diverging
@@ -55,6 +56,21 @@ def observation_space(setup: Setup) -> spaces.Box:
     low = np.concatenate([np.full(n, -np.inf), np.full(2 * n, lo)])
     high = np.concatenate([np.full(n, np.inf), np.full(2 * n, hi)])
     return spaces.Box(low, high, dtype=np.float64)
+
+
+def finite_actions(action: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """``action`` as a float array of ``shape``; a NaN or infinite entry is refused
+    (``ValueError`` naming where): clipping cannot say what such a command meant."""
+    try:
+        out = np.asarray(action, dtype=float).reshape(shape)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"action must be {shape} numbers, got {np.shape(action)}: {exc}") \
+            from None
+    if not np.all(np.isfinite(out)):
+        where = tuple(int(i) for i in np.argwhere(~np.isfinite(out))[0])
+        raise ValueError(f"action {where} is {out[where]}: actions must be finite "
+                         "(finite values outside [-1, 1] are clipped)")
+    return out
 
 
 def action_space(dof: int) -> spaces.Box:
@@ -124,7 +140,7 @@ class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
     ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if not self._running:
             raise RuntimeError("SkinnyEnv: episode over (or not started); call reset()")
-        action = np.asarray(action, dtype=float).reshape(self.setup.dof)
+        action = finite_actions(action, (self.setup.dof,))
         try:
             ts = self.dm_control_env.step(action)
         except PhysicsError:  # diverged (the torque twin can): the episode is over

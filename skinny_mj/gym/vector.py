@@ -10,6 +10,9 @@ with seed r; ``tests/test_gym.py`` checks the whole vector env against Gymnasium
 joint-limit constraints as N islands but one robot's as one piece: equal up to rounding
 (~1e-16 per step, growing as chaotic dynamics do), not bitwise.
 
+Actions as a single env's: finite values outside [-1, 1] are clipped, a NaN or infinite
+one raises ``ValueError`` before the step.
+
 Autoreset: ``AutoresetMode.NEXT_STEP``, Gymnasium 1.x's default. Every sub-environment
 follows the same movement and none can fail, so all of them end on the same step; the
 next ``step`` ignores its actions, resets all of them (each noise stream continues, as
@@ -39,7 +42,12 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from skinny_mj.gym.env import action_space, observation_space, resolve_trajectory
+from skinny_mj.gym.env import (
+    action_space,
+    finite_actions,
+    observation_space,
+    resolve_trajectory,
+)
 from skinny_mj.plant import BatchPlant
 
 
@@ -132,7 +140,7 @@ class SkinnyVectorEnv(VectorEnv):
             return (self._reset_all(), np.zeros(n), np.zeros(n, bool), np.zeros(n, bool),
                     {})
         warnings_before = self.plant.data.warning.number.copy()
-        sensed = self.plant.step(np.asarray(actions, dtype=float).reshape(n, -1))
+        sensed = self.plant.step(finite_actions(actions, (n, self.single_action_space.shape[0])))
         self._raise_on_new_warnings(warnings_before)
         self._t += 1
         # the task's reward, -mean |desired(t) - true(t)|, row by row: np.mean is this

@@ -21,6 +21,7 @@ import numpy as np
 
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.sweep.stats import to_jsonable
+from skinny_mj.threads import single_threaded
 
 if TYPE_CHECKING:
     from skinny_mj.experiment import Row, RunSpec
@@ -93,6 +94,7 @@ def _stamp(record: dict[str, Any], wall_s: float) -> dict[str, Any]:
     return record
 
 
+@single_threaded
 def execute_run(run_one: Callable[[Row, int], Mapping[str, Any]], spec: RunSpec,
                 experiment_name: str) -> dict[str, Any]:
     """Run one (row, seed) and return its JSON-able record: ``"ok"``, ``"failed"`` (a
@@ -107,6 +109,7 @@ def execute_run(run_one: Callable[[Row, int], Mapping[str, Any]], spec: RunSpec,
     return _stamp(record, time.perf_counter() - start)
 
 
+@single_threaded
 def execute_batch(run_batch: Callable[[Row, list[int]], list[Any]],
                   run_one: Callable[[Row, int], Mapping[str, Any]], specs: list[RunSpec],
                   experiment_name: str) -> list[dict[str, Any]]:

@@ -33,6 +33,9 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path, atomic_write_text
 
 DEFAULT_DT_S = body.CONTROL_DT_S  # movements are sampled at the control rate
+#: Largest |angle| a movement may hold, rad (joint ranges are within +-pi; a larger
+#: finite value is clipped, but one near the float limit overflows in speeds and degrees).
+MAX_ABS_ANGLE_RAD = 1000.0
 MIN_SPEED, MAX_SPEED = 0.0, 10.0  # resample(speed) accepts MIN_SPEED < speed <= MAX_SPEED
 _FORMAT_VERSION = 1
 
@@ -72,6 +75,12 @@ class Trajectory:
             t, j = np.argwhere(~np.isfinite(a))[0]
             raise SkinnyInputError(
                 f"trajectory {self.name!r}: non-finite angle at step {t}, DOF {j}"
+            )
+        if np.any(np.abs(a) > MAX_ABS_ANGLE_RAD):  # finite, but its speeds and degrees
+            t, j = np.argwhere(np.abs(a) > MAX_ABS_ANGLE_RAD)[0]  # would overflow to inf
+            raise SkinnyInputError(
+                f"trajectory {self.name!r}: angle {a[t, j]:g} rad at step {t}, DOF {j} is not "
+                f"a joint angle (|angle| <= {MAX_ABS_ANGLE_RAD:g} rad)"
             )
         dt = float(self.dt)
         if not (math.isfinite(dt) and dt > 0):
@@ -145,6 +154,7 @@ class Trajectory:
         from scipy.interpolate import PchipInterpolator
 
         n = max(2, int(round(len(self) / speed)))
+        _check_size(n, self.dof, f"speed {speed:g}: {n} steps of {self.name}")
         src = np.arange(len(self), dtype=float)
         dst = np.linspace(0.0, len(self) - 1.0, n)
         angles = PchipInterpolator(src, self.angles, axis=0)(dst)
@@ -157,6 +167,7 @@ class Trajectory:
             raise SkinnyInputError(f"repetitions must be an integer >= 1, got {n!r}")
         if n == 1:
             return self
+        _check_size(int(n) * len(self), self.dof, f"{n} repetitions of {self.name}")
         return self._map(np.tile(self.angles, (int(n), 1)), f"{self.name}x{n}",
                          lambda v: np.tile(v, (int(n), 1)))
 
@@ -359,6 +370,15 @@ def excerpt(traj: Trajectory, start_s: float, duration_s: float | None) -> Traje
                      lambda v: v[start : start + n])
 
 
+def _check_size(steps: int, dof: int, cause: str) -> None:
+    """Refuse (one line) a movement of ``steps`` steps the memory cannot hold: its angles,
+    the interpolation's or tiling's copies, explicit desired signals (about 6 arrays)."""
+    from skinny_mj.memory import Estimate, check
+
+    check(Estimate({"movement": steps * (dof + 1) * 8 * 6}, {"movement": cause}),
+          "the movement")
+
+
 def _check_desired(desired: dict | None, angles: np.ndarray, name: str) -> dict | None:
     """Explicit desired signals as read-only float arrays, or a SkinnyInputError."""
     if not desired:
@@ -369,9 +389,11 @@ def _check_desired(desired: dict | None, angles: np.ndarray, name: str) -> dict 
             raise SkinnyInputError(f"trajectory {name!r}: unknown desired signals {key!r}")
         v = np.array(value, dtype=float)
         shape = (angles.shape[0], body.n_signals(angles.shape[1], key))
-        if v.shape != shape or not np.all(np.isfinite(v)):
+        if v.shape != shape or not np.all(np.isfinite(v)) \
+                or np.any(np.abs(v) > MAX_ABS_ANGLE_RAD):
             raise SkinnyInputError(f"trajectory {name!r}: desired {key!r} signals must be "
-                                   f"finite, shape {shape}, got {v.shape}")
+                                   f"finite, at most {MAX_ABS_ANGLE_RAD:g} in magnitude, "
+                                   f"shape {shape}; got shape {v.shape}")
         v.setflags(write=False)
         out[key] = v
     return out

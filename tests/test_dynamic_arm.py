@@ -1,0 +1,110 @@
+"""The arm's own dynamics: the textbook laws of ``controllers.torque_arm``, the readout
+fits that remember (``controllers.torque_readout``) and their settings."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from controllers.esn import ESN
+from controllers.readout import ridge_solve
+from controllers.reservoir import ESNConfig
+from controllers.torque_arm import ArmGains, ArmState, DesiredMotion, arm_torque
+from controllers.torque_readout import ForgettingReadout, RLSReadout
+from skinny_mj import torque_training
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.training import TrainConfig
+
+
+def _esn(n_runs=2) -> ESN:
+    cfg = ESNConfig(n_inputs=3, n_outputs=2, n_reservoir=20, readout_activation="identity")
+    return ESN(cfg, n_runs=n_runs, rngs=[np.random.default_rng(s) for s in range(n_runs)])
+
+
+def _cycles(esn: ESN, n: int = 3, steps: int = 40):
+    rng = np.random.default_rng(7)
+    d = esn.cfg.n_extended
+    return [(rng.standard_normal((esn.n_runs, steps, d)),
+             rng.standard_normal((esn.n_runs, steps, 2))) for _ in range(n)]
+
+
+def test_forgetting_readout_spans_one_cycle_to_all_cycles():
+    for g in (0.0, 1.0):
+        esn = _esn()
+        fit = ForgettingReadout(esn, forgetting=g, ridge=0.1)
+        cycles = _cycles(esn)
+        for m, s in cycles:
+            fit.fit(esn, m, s, np.ones(2, bool), 0)
+        used = cycles[-1:] if g == 0 else cycles
+        for r in range(2):
+            m = np.concatenate([c[0][r] for c in used])
+            s = np.concatenate([c[1][r] for c in used])
+            np.testing.assert_allclose(esn.W_out[r], ridge_solve(m, s, 0.1).T, atol=1e-10)
+
+
+def test_rls_readout_without_forgetting_is_ridge_on_every_sample():
+    esn = _esn()
+    fit = RLSReadout(esn, steps=40, forgetting=1.0, ridge=0.1)
+    cycles = _cycles(esn)
+    for m, s in cycles:
+        fit.fit(esn, m, s, np.ones(2, bool), 0)
+    m = np.concatenate([c[0][1] for c in cycles])
+    s = np.concatenate([c[1][1] for c in cycles])
+    np.testing.assert_allclose(esn.W_out[1], ridge_solve(m, s, 0.1).T, atol=1e-8)
+
+
+def test_a_readout_fit_leaves_runs_that_do_not_learn():
+    esn = _esn()
+    before = esn.W_out[1].copy()
+    m, s = _cycles(esn, 1)[0]
+    ForgettingReadout(esn).fit(esn, m, s, np.array([True, False]), 0)
+    np.testing.assert_array_equal(esn.W_out[1], before)
+    assert np.any(esn.W_out[0] != 0)
+
+
+def test_computed_torque_on_the_desired_state_is_the_inverse_dynamics():
+    # e = 0 at the middle of the step: the law's torque is M qdd + c + b qd, which is
+    # mj_inverse at that state (joint damping included), and its feedback part is 0
+    dyn = torque_training._dynamics(8)
+    rng = np.random.default_rng(3)
+    q, qd, qdd = rng.uniform(-0.5, 0.5, 8), rng.normal(0, 1, 8), rng.normal(0, 5, 8)
+    dt = 0.02
+    state = ArmState(q=q[None], qd=qd[None], mass=dyn.mass_matrix(q)[None],
+                     bias=dyn.bias_torque_nm(q, qd)[None], gravity=None,
+                     damping=dyn.model.dof_damping[dyn.layout.dof_adr])
+    motion = DesiredMotion(q_mid=(q + 0.5 * dt * qd)[None], qd_mid=qd[None],
+                           qdd_step=qdd[None])
+    total, fb = arm_torque("ct", state, motion, 0, dt, ArmGains(15.0))
+    np.testing.assert_allclose(total[0], dyn.inverse_dynamics_nm(q, qd, qdd), atol=1e-9)
+    np.testing.assert_allclose(fb, 0.0, atol=1e-12)
+    # an error: the feedback is M(q) (omega^2 e + 2 zeta omega e_dot), in the arm's own
+    # coordinates
+    e = np.full(8, 0.01)
+    shifted = DesiredMotion(q_mid=motion.q_mid + e, qd_mid=motion.qd_mid, qdd_step=qdd[None])
+    _, fb = arm_torque("fel", state, shifted, 0, dt, ArmGains(5.0, 0.7))
+    np.testing.assert_allclose(fb[0], state.mass[0] @ (25.0 * e), atol=1e-12)
+
+
+@pytest.mark.parametrize("changes", [
+    {"actuation": "torque", "feedback": "ct"},  # a controller alone: method "none"
+    {"actuation": "torque", "feedback": "inertia-pd", "method": "true-target"},
+    {"readout_fit": "forgetting"},  # remembering fits are for FEL on the torque body
+    {"actuation": "torque", "readout_fit": "sometimes"},
+    {"actuation": "torque", "readout_forgetting": 1.5},
+    {"actuation": "torque", "feedback": "inertia-pd", "feedback_omega": -1.0},
+    {"feedback_omega": 5.0},  # a torque setting
+])
+def test_arm_settings_are_validated(changes):
+    with pytest.raises(SkinnyInputError):
+        TrainConfig(**changes)
+
+
+def test_feedback_share_is_the_gain_times_the_error_signal():
+    cfg = TrainConfig(actuation="torque", trajectory="y", method="new", beta=1.0, cycles=1,
+                      epochs=2, feedback="inertia-pd", readout_fit="forgetting")
+    from skinny_mj.training import train
+
+    m = train(cfg, 0).metrics["train"]
+    np.testing.assert_allclose(m["feedback_share"],
+                               np.asarray(m["gains"]) * m["error_signal_share"])
+    assert m["error_signal_share"][0] > 0 and m["feedback_share"][-1] == 0.0

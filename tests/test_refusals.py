@@ -1,0 +1,265 @@
+"""Refused up front, in one line: numeric flags out of range, runs too big for the
+memory, unwritable outputs, movements whose values overflow, non-finite gym actions;
+and nothing written (or left half-written) by a refused or failed command."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("hypothesis")
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from skinny_mj import memory  # noqa: E402
+from skinny_mj.cli import build_parser, main  # noqa: E402
+from skinny_mj.config import TrainConfig  # noqa: E402
+from skinny_mj.errors import SkinnyInputError  # noqa: E402
+from skinny_mj.flags import RULES, check_args, check_value  # noqa: E402
+from skinny_mj.preflight import cleaned_on_failure  # noqa: E402
+from skinny_mj.trajectories import Trajectory, ymca  # noqa: E402
+
+FLAGS = settings(max_examples=200, deadline=None, database=None)
+
+
+def _one_line_exit_2(argv, capsys) -> str:
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "Traceback" not in err, err
+    return err
+
+
+# -- numeric flags --------------------------------------------------------------------------
+def _in_range(dest: str, value: float) -> bool:
+    kind, ok, _ = RULES[dest]
+    return math.isfinite(value) and (kind is float or float(value).is_integer()) and ok(value)
+
+
+@FLAGS
+@given(dest=st.sampled_from(sorted(d for d, r in RULES.items() if r[0] is int)),
+       value=st.integers(min_value=-(2**70), max_value=2**70))
+def test_whole_number_flags_accept_exactly_their_range(dest, value):
+    import argparse
+
+    ns = argparse.Namespace(**{dest: value})
+    if _in_range(dest, value):
+        check_args(ns)
+    else:
+        with pytest.raises(SkinnyInputError, match="--" + dest.replace("_", "-")):
+            check_args(ns)
+
+
+@FLAGS
+@given(dest=st.sampled_from(sorted(d for d, r in RULES.items() if r[0] is float)),
+       value=st.floats(allow_nan=True, allow_infinity=True))
+def test_real_flags_accept_exactly_their_finite_range(dest, value):
+    import argparse
+
+    ns = argparse.Namespace(**{dest: value})
+    if _in_range(dest, value):
+        check_args(ns)
+    else:
+        with pytest.raises(SkinnyInputError, match="--" + dest.replace("_", "-")):
+            check_args(ns)
+
+
+def test_every_rule_is_a_flag_of_some_command():
+    parser = build_parser()
+    dests = {a.dest for sub in parser.subcommands.values() for a in sub._actions}
+    for sub in parser.subcommands.values():  # nested: skinny trajectory export
+        for action in sub._actions:
+            choices = getattr(action, "choices", None)
+            for inner in (choices.values() if isinstance(choices, dict) else ()):
+                if hasattr(inner, "_actions"):
+                    dests |= {a.dest for a in inner._actions}
+    assert set(RULES) <= dests, set(RULES) - dests
+
+
+def test_wrong_kinds_are_refused():
+    for dest, value in (("seed", 1.5), ("seed", True), ("speed", "1")):
+        with pytest.raises(SkinnyInputError):
+            check_value(dest, value)
+
+
+@pytest.mark.parametrize("argv,flag", [
+    (["train", "--seed", "-1"], "--seed"), (["track", "--seed", "-1"], "--seed"),
+    (["test", "--model", "m.npz", "--seed", "-3"], "--seed"), (["demo", "--seed", "-1"], "--seed"),
+    (["train", "--speed", "nan"], "--speed"),
+    (["track", "--sensor-noise", "inf"], "--sensor-noise"),
+    (["train", "--reservoir", "0"], "--reservoir"),
+    (["train", "--spectral-radius", "-1"], "--spectral-radius"),
+    (["train", "--noise", "-0.1"], "--noise"), (["train", "--beta", "1.5"], "--beta"),
+    (["render", "--out", "x.png", "--frame", "-1"], "--frame"),
+])
+def test_cli_refuses_a_flag_out_of_range_in_one_line(argv, flag, capsys, tmp_path,
+                                                     monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    err = _one_line_exit_2(argv, capsys)
+    assert flag in err
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+@settings(max_examples=60, deadline=None, database=None)
+@given(command=st.sampled_from(["train", "track", "demo", "test"]),
+       seed=st.integers(max_value=-1))
+def test_cli_refuses_every_negative_seed_before_any_work(command, seed, tmp_path_factory):
+    import contextlib
+    import io
+
+    out = tmp_path_factory.mktemp("neg") / "o"
+    model = ["--model", "m.npz"] if command == "test" else []
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        code = main([command, *model, "--seed", str(seed), "--out", str(out)])
+    line = err.getvalue()
+    assert code == 2 and line.count("\n") == 1 and "--seed must be >= 0" in line
+    assert not out.exists()
+
+
+# -- memory ---------------------------------------------------------------------------------
+def test_available_memory_is_read():
+    free = memory.available_bytes()
+    assert free is None or free > 0
+
+
+@pytest.mark.parametrize("argv,names", [
+    (["train", "--reps", "100000000"], "--reps 100000000"),
+    (["train", "--reservoir", "10000000"], "--reservoir 10000000"),
+    (["train", "--epochs", "1000000000"], "--epochs 1000000000"),
+    (["track", "--reps", "100000000"], "--reps 100000000"),
+    (["trajectory", "export", "ymca", "--reps", "100000000", "--out", "x.npz"],
+     "--reps 100000000"),
+])
+def test_too_big_for_memory_is_refused_before_any_work(argv, names, capsys, tmp_path,
+                                                       monkeypatch):
+    if memory.available_bytes() is None:
+        pytest.skip("this system does not say how much memory is free")
+    monkeypatch.chdir(tmp_path)
+    err = _one_line_exit_2([*argv[:1], *argv[1:], *(["--out", "o"] if "--out" not in argv
+                                                     else [])], capsys)
+    assert names in err and "available" in err and "memory" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_estimate_grows_with_steps_runs_and_reservoir():
+    cfg = TrainConfig()
+    base = memory.train_estimate(cfg, 313, 313)
+    longer = memory.train_estimate(cfg, 3130, 313)
+    for part in ("per-step buffers", "readout fit"):  # in proportion to the steps
+        assert longer.parts[part] == 10 * base.parts[part]
+    assert longer.parts["reservoir weights"] == base.parts["reservoir weights"]
+    lockstep = memory.train_estimate(cfg, 313, 313, runs=10)
+    assert lockstep.parts["per-step buffers"] > 9 * base.parts["per-step buffers"]
+    big = memory.train_estimate(TrainConfig(reservoir=2000), 313, 313)
+    # the reservoir weights: at least the N x N float64 matrix itself
+    assert big.parts["reservoir weights"] >= 2000**2 * 8
+    assert big.parts["reservoir weights"] > 50 * base.parts["reservoir weights"]
+
+
+def test_check_names_the_cause_and_what_is_available():
+    est = memory.Estimate({"a": 10, "b": 1000}, {"a": "x", "b": "--reps 7"})
+    memory.check(est, "the run", available=2000)
+    with pytest.raises(SkinnyInputError, match=r"the run needs about 1010 B .*--reps 7.*1000 B"):
+        memory.check(est, "the run", available=1000)
+
+
+def test_a_sweeps_largest_row_is_refused(capsys, tmp_path):
+    if memory.available_bytes() is None:
+        pytest.skip("this system does not say how much memory is free")
+    err = _one_line_exit_2(["experiment", "paper-e", "--movement", "ymca@0.002",
+                            "--workers", "1", "--out", str(tmp_path / "sw")], capsys)
+    assert "largest row" in err and "available" in err
+    assert not (tmp_path / "sw").exists()
+
+
+# -- outputs ----------------------------------------------------------------------------------
+def test_bench_out_unwritable_is_refused_before_the_bench(capsys, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert main(["bench", "--quick", "--out", str(blocker / "b.json")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and str(blocker) in err and ".skinny-write-probe" not in err
+
+
+def test_a_failed_write_removes_what_it_started(tmp_path):
+    out = tmp_path / "new"
+    with pytest.raises(RuntimeError), cleaned_on_failure(out):
+        out.mkdir()
+        (out / "run.rrd").write_text("half")
+        raise RuntimeError("JSON writer died")
+    assert not out.exists()
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "keep.txt").write_text("mine")
+    with pytest.raises(RuntimeError), cleaned_on_failure(old):
+        (old / "run.rrd").write_text("half")
+        (old / "sub").mkdir()
+        raise RuntimeError
+    assert sorted(p.name for p in old.iterdir()) == ["keep.txt"]
+
+
+def _huge_csv(path: Path) -> Path:
+    Trajectory(ymca(4).angles[:30], name="huge").save(path)
+    lines = path.read_text().splitlines()
+    row = lines[3].split(",")
+    lines[3] = ",".join(["1e308", *row[1:]])
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_a_movement_whose_values_overflow_is_refused_when_read(tmp_path, capsys):
+    path = _huge_csv(tmp_path / "huge.csv")
+    with pytest.raises(SkinnyInputError, match="not a joint angle"):
+        Trajectory.load(path)
+    err = _one_line_exit_2(["track", "--trajectory", str(path), "--out",
+                            str(tmp_path / "o")], capsys)
+    assert "1e+308" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_angles_at_the_bound_still_load():
+    angles = np.full((3, 4), 999.0)
+    assert Trajectory(angles).angles.max() == 999.0
+
+
+# -- gymnasium --------------------------------------------------------------------------------
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_gym_refuses_non_finite_actions_and_clips_finite_ones(bad):
+    pytest.importorskip("gymnasium")
+    from skinny_mj.gym.env import SkinnyEnv
+
+    env = SkinnyEnv(trajectory="ymca")
+    env.reset(seed=0)
+    env.step(np.full(4, 5.0))  # finite, outside [-1, 1]: clipped by the task
+    action = np.zeros(4)
+    action[2] = bad
+    with pytest.raises(ValueError, match=r"action \(2,\).*finite"):
+        env.step(action)
+    obs, *_ = env.step(np.zeros(4))  # the refused action did not end or break the episode
+    assert np.all(np.isfinite(obs))
+
+
+def test_vector_env_refuses_non_finite_actions():
+    pytest.importorskip("gymnasium")
+    from skinny_mj.gym.vector import SkinnyVectorEnv
+
+    env = SkinnyVectorEnv(num_envs=2, trajectory="ymca")
+    env.reset(seed=0)
+    actions = np.zeros((2, 4))
+    actions[1, 0] = np.nan
+    with pytest.raises(ValueError, match=r"action \(1, 0\)"):
+        env.step(actions)
+
+
+def test_a_movement_too_long_for_the_memory_is_refused_before_it_is_made():
+    if memory.available_bytes() is None:
+        pytest.skip("this system does not say how much memory is free")
+    traj = Trajectory(ymca(4).angles, name="ymca")
+    with pytest.raises(SkinnyInputError, match=r"speed 1e-09: 313000000000 steps of ymca"):
+        traj.resample(1e-9)
+    with pytest.raises(SkinnyInputError, match=r"10000000000 repetitions of ymca"):
+        traj.repeat(10**10)
+    assert len(traj.resample(0.5)) == 626 and len(traj.repeat(3)) == 939  # ordinary sizes
