@@ -25,6 +25,8 @@ from skinny_mj.errors import SkinnyInputError
 WIDTH = 88
 #: Whole sweeps timed in the docs (runs, wall time, workers, machine, date, page).
 DOCUMENTED_WALL = {
+    "paper-e": "410 runs in 44 min 11 s with --workers 2 on a shared 2-core machine under "
+               "load 21-34 (612 s of CPU time), 2026-12-02 (docs/RESULTS.md)",
     "paper-a": "440 runs in 10 min 28 s with --workers 2 on a shared 2-core machine, "
                "2026-12-01 (docs/RESULTS.md)",
     "paper-b": "80 runs in 3 min 35 s with --workers 2 on a shared 2-core machine, "

@@ -60,6 +60,32 @@ def test_markdown_lists_have_a_blank_line_before_them(path):
         f"{path.relative_to(ROOT)}: list items glued to the paragraph above")
 
 
+_SHELL = re.compile(r"^    (?:#|\$ |skinny |python|MUJOCO_GL=|OMP_|pip |xvfb|git |rerun |mkdocs "
+                    r"|pytest|nohup |/usr/bin/time)")
+
+
+def indented_commands(text: str) -> list[int]:
+    """Lines starting an indented (4-space) block of shell commands, outside fences: after
+    a list such a block is read as more of the list's last item, so commands go in
+    fenced blocks."""
+    lines, fenced, out = text.split("\n"), False, []
+    for i, line in enumerate(lines):
+        if re.match(r"^\s*(```|~~~)", line):
+            fenced = not fenced
+        elif not fenced and _SHELL.match(line) and (i == 0 or not lines[i - 1].strip()):
+            out.append(i + 1)
+    return out
+
+
+@pytest.mark.parametrize("path", MARKDOWN, ids=lambda p: str(p.relative_to(ROOT)))
+def test_commands_are_in_fenced_blocks(path):
+    assert indented_commands(path.read_text()) == [], path.relative_to(ROOT)
+
+
+def test_indented_command_finder():
+    assert indented_commands("- a\n\n    skinny demo\n\n```\n\n    skinny x\n```\n") == [3]
+
+
 def _help_texts(parser) -> dict[str, str]:
     out = {parser.prog: parser.format_help()}
     for action in parser._actions:  # argparse keeps sub-parsers on their action only
