@@ -150,6 +150,10 @@ def all_rows(cfg: Config) -> tuple[Row, ...]:
                     "test_gain": gain, **changes}))
             out.append(Row(f"{bd}-ymca-{pert}-arm-ct", {
                 "dof": dof, "trajectory": cfg.ymca, **ARM_CONTROLLERS["arm-ct"], **changes}))
+    if "3d" in cfg.bodies:  # the 3D ESN still learning at its last epoch: twice as many
+        out.append(Row("3d-ymca-fel-arm-long", {"dof": 8, "trajectory": cfg.ymca, **ARM_FEL,
+                                                "reservoir": ARM_RESERVOIR_3D,
+                                                "epoch_factor": 2}))
     return tuple(out)
 
 
@@ -168,8 +172,9 @@ def groups(every: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
 
 def train_config(cfg: Config, row: Row) -> TrainConfig:
     p = dict(row.params)
+    factor = p.pop("epoch_factor", 1)
     if p.get("feedback") == "inertia-pd" and p.get("method") != "none":
-        p["epochs"] = cfg.arm_epochs
+        p["epochs"] = cfg.arm_epochs * factor
     return TrainConfig(**{"actuation": "torque", "signals": cfg.signals,
                           "epochs": cfg.epochs, **p})
 
