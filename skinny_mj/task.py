@@ -28,6 +28,21 @@ CONTROL_DT_S = body.CONTROL_DT_S
 SIGNALS = body.SIGNALS
 
 
+def finite_actions(action: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """``action`` as a float array of ``shape``; a NaN or infinite entry is refused
+    (``ValueError`` naming where): clipping cannot say what such a command meant."""
+    try:
+        out = np.asarray(action, dtype=float).reshape(shape)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"action must be {shape} numbers, got {np.shape(action)}: {exc}") \
+            from None
+    if not np.all(np.isfinite(out)):
+        where = tuple(int(i) for i in np.argwhere(~np.isfinite(out))[0])
+        raise ValueError(f"action {where} is {out[where]}: actions must be finite "
+                         "(finite values outside [-1, 1] are clipped)")
+    return out
+
+
 @dataclass(frozen=True)
 class Setup:
     """What a movement asks of the plant (validated; shared by the task and BatchPlant).
@@ -163,7 +178,7 @@ class Imitation(base.Task):
 
     def before_step(self, action: np.ndarray, physics: SkinnyPhysics) -> None:
         layout = physics.layout
-        action = np.asarray(action, dtype=float)
+        action = finite_actions(action, (self.setup.dof,))
         if self.setup.actuation == "torque":
             ctrl = np.clip(action, -1.0, 1.0)
         else:

@@ -199,3 +199,15 @@ def test_bad_arguments_raise_input_error(kwargs, match):
     args = {"dof": 4, "trajectory": stand_in(4)} | kwargs
     with pytest.raises(SkinnyInputError, match=match):
         load(**args)
+
+
+@pytest.mark.parametrize("actuation", ["velocity", "torque"])
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_a_non_finite_action_is_refused_before_mujoco(actuation, bad):
+    env = load(4, trajectory=stand_in(4), seed=0, actuation=actuation)
+    env.reset()
+    before = env.physics.data.qpos.copy()
+    with pytest.raises(ValueError, match=r"action \(2,\) is .*must be finite"):
+        env.step([0.1, 0.0, bad, 0.0])
+    np.testing.assert_array_equal(env.physics.data.qpos, before)  # nothing stepped
+    env.step([2.0, -2.0, 0.0, 0.0])  # a finite value outside [-1, 1] is clipped, no error

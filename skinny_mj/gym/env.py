@@ -32,7 +32,7 @@ from dm_control.rl.control import PhysicsError
 from gymnasium import spaces
 from gymnasium.utils import seeding
 
-from skinny_mj.task import Setup, load
+from skinny_mj.task import Setup, finite_actions, load
 
 RENDER_CAMERA = "front"
 
@@ -56,21 +56,6 @@ def observation_space(setup: Setup) -> spaces.Box:
     low = np.concatenate([np.full(n, -np.inf), np.full(2 * n, lo)])
     high = np.concatenate([np.full(n, np.inf), np.full(2 * n, hi)])
     return spaces.Box(low, high, dtype=np.float64)
-
-
-def finite_actions(action: Any, shape: tuple[int, ...]) -> np.ndarray:
-    """``action`` as a float array of ``shape``; a NaN or infinite entry is refused
-    (``ValueError`` naming where): clipping cannot say what such a command meant."""
-    try:
-        out = np.asarray(action, dtype=float).reshape(shape)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"action must be {shape} numbers, got {np.shape(action)}: {exc}") \
-            from None
-    if not np.all(np.isfinite(out)):
-        where = tuple(int(i) for i in np.argwhere(~np.isfinite(out))[0])
-        raise ValueError(f"action {where} is {out[where]}: actions must be finite "
-                         "(finite values outside [-1, 1] are clipped)")
-    return out
 
 
 def action_space(dof: int) -> spaces.Box:

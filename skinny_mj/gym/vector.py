@@ -44,11 +44,11 @@ from gymnasium.vector.utils import batch_space
 
 from skinny_mj.gym.env import (
     action_space,
-    finite_actions,
     observation_space,
     resolve_trajectory,
 )
 from skinny_mj.plant import BatchPlant
+from skinny_mj.task import finite_actions
 
 
 class SkinnyVectorEnv(VectorEnv):
