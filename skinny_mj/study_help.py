@@ -49,10 +49,16 @@ def list_text(width: int = WIDTH) -> str:
     pad = max(map(len, names), default=0) + 2
     blocks = []
     for name in names:
-        blocks.append(textwrap.fill(registry.describe(name) or "(no description)",
+        text = _plain(registry.describe(name)) or "(no description)"
+        blocks.append(textwrap.fill(text,
                                     width, initial_indent=name.ljust(pad),
                                     subsequent_indent=" " * pad))
     return "\n".join(blocks)
+
+
+def _plain(text: str) -> str:
+    """reStructuredText's ``literal`` as Markdown's `literal`, for a terminal."""
+    return re.sub(r"``([^`]*)``", r"`\1`", text)
 
 
 def _config(exp: Any) -> Any:
@@ -150,9 +156,13 @@ def study_help(name: str) -> str:
     """``skinny experiment NAME --help``: the study's description, rows, groups, runs,
     the options it takes and its cost. An unknown name is a SkinnyInputError."""
     module = registry.get(name)
-    exp = module.build()
+    doc = _plain((module.__doc__ or "").strip())
+    try:
+        exp = module.build()
+    except SkinnyInputError as err:  # e.g. an optional extra missing: the text still helps
+        return (f"skinny experiment {name}\n\n{textwrap.dedent(doc)}\n\n"
+                + _wrap("Rows", f"not listed here: {err}") + "\n")
     quick = module.build(quick=True)
-    doc = re.sub(r"``([^`]*)``", r"`\1`", (module.__doc__ or "").strip())
     total = sum(r.runs or exp.runs for r in exp.rows)
     n_quick = sum(r.runs or quick.runs for r in quick.rows)
     parts = [f"skinny experiment {name}", "", textwrap.dedent(doc), "",

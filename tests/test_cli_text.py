@@ -50,6 +50,19 @@ def test_experiment_help_describes_that_study(capsys):
     assert "--movement: refused" in bimanual and "refuses cartesian" in bimanual
 
 
+def test_experiment_help_of_a_study_that_cannot_build_still_describes_it(capsys, monkeypatch):
+    from skinny_mj.errors import SkinnyInputError
+
+    module = registry.get("figure-eight")
+
+    def refuse(**_):
+        raise SkinnyInputError("figure-eight needs an extra: pip install x")
+    monkeypatch.setattr(module, "build", refuse)
+    code, out, _ = _exit(["experiment", "figure-eight", "--help"], capsys)
+    assert code == 0 and registry.describe("figure-eight")[:40] in " ".join(out.split())
+    assert "Rows: not listed here: figure-eight needs an extra: pip install x" in out
+
+
 def test_experiment_help_of_an_unknown_study_is_one_line_exit_2(capsys):
     code, out, err = _exit(["experiment", "no-such-study", "--help"], capsys)
     assert code == 2 and out == ""
@@ -65,7 +78,8 @@ def test_experiment_list_shows_whole_descriptions(capsys):
     assert main(["experiment", "list"]) == 0
     listed = " ".join(capsys.readouterr().out.split())
     for name in registry.names():
-        assert f"{name} {registry.describe(name)}" in listed, name
+        shown = registry.describe(name).replace("``", "`")  # RST literals as Markdown's
+        assert f"{name} {shown}" in listed, name
         assert registry.describe(name).endswith((".", "?", ")")), name  # a whole sentence
 
 
