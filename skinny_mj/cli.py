@@ -284,6 +284,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SkinnyInputError as err:
         print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # the reader stopped reading (`skinny experiment list | head`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit
+        return 0
     except OSError as err:  # the machine, not the input: unwritable or full disk, no GL,
         # no model folder, an unreachable scheduler, a worker killed (SkinnyEnvironmentError)
         print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)

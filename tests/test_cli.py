@@ -164,3 +164,13 @@ def test_train_true_target_architecture_3d(tmp_path):
     assert metrics["config"]["method"] == "true-target"
     assert (out / "run.rrd").is_file() and (out / "model.npz").is_file()
     assert not (out / "learning_curve.png").exists()  # no epochs, no curve
+
+
+def test_a_reader_that_stops_early_is_no_error():
+    """``skinny experiment list | head -1``: the closed pipe ends the command quietly."""
+    env = {**os.environ, "MUJOCO_GL": "disabled", "OMP_NUM_THREADS": "1"}
+    proc = subprocess.Popen([sys.executable, "-m", "skinny_mj.cli", "experiment", "list"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    proc.stdout.close()  # the reader is gone before the first line is written
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 0 and err == ""
