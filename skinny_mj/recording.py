@@ -43,6 +43,7 @@ from skinny_mj.recording_layout import (  # noqa: F401 (colours re-exported for 
     blueprint,
     dof_entity,
     series_style,
+    torque_spans,
 )
 
 PELVIS_HEIGHT_M = 0.95
@@ -215,7 +216,7 @@ def write_recording(
         rec.set_log_tick_enabled(False)
         _io(path, rec.save, tmp, default_blueprint=blueprint(
             bool(curve_arrays), application_id, dof_names, (n_steps - 1) * dt,
-            torques=torques is not None))
+            None if torques is None else torque_spans(dof_names, torques)))
         if title:
             rec.send_recording_name(title)
         rec.log("/info", rr.TextDocument(info, media_type=rr.MediaType.MARKDOWN), static=True)

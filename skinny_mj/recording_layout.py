@@ -4,7 +4,8 @@ Per arm, one plot per quantity with one colour per joint (the same colour for a 
 every plot): the joint angles (deg; thick = actual, thin and lighter = desired), the
 command on its own axis (normalized: +-1 is the full scale, the torque limit on the
 torque body) and, on the torque body, the torques in N m (thick = applied, thin and
-lighter = the bias torque, gravity plus velocity terms). The arms sit side by side; the
+lighter = the bias torque, gravity plus velocity terms; the axis fits the applied torque
+and 95 % of the bias samples). The arms sit side by side; the
 time axis runs 30 % past the movement's end so the legend (top right) covers no data.
 The limits stay in the recording (``/torques/<dof>/limit_*``) but are not drawn in N m:
 they would squash the traces; the command plot shows them as +-1.
@@ -13,7 +14,9 @@ they would squash the traces; the command plot shows them as +-1.
 from __future__ import annotations
 
 import uuid
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+
+import numpy as np
 
 from skinny_mj import body
 
@@ -70,9 +73,26 @@ def series_style(dof: str, role: str) -> tuple[str, tuple[int, int, int], float]
     return joint_label(dof), joint_rgb(dof, light=thin), THIN if thin else THICK
 
 
+def torque_spans(dof_names: Sequence[str], torques: Mapping[str, np.ndarray]
+                 ) -> dict[str, float]:
+    """Per arm, the half-height of its torque plot (N m): 1.15 x the larger of the largest
+    applied torque and the 95th percentile of the bias torque, whose spikes (the
+    velocity terms of fast moves) would otherwise squash the applied traces."""
+    applied = np.abs(np.asarray(torques["applied_nm"], float))
+    bias = np.abs(np.asarray(torques["gravity_nm"], float))
+    spans = {}
+    for side in body.SIDES:
+        idx = [i for i, n in enumerate(dof_names) if split_dof(n)[0] == side]
+        if idx:
+            top = max(applied[:, idx].max(), np.percentile(bias[:, idx], 95))
+            spans[side] = 1.15 * float(top) if top > 0 else 1.0
+    return spans
+
+
 def blueprint(has_curves: bool, application_id: str, dof_names: Sequence[str],
-              duration_s: float, torques: bool = False):
-    """The default blueprint: the pose (left) and the plots (right)."""
+              duration_s: float, torque_span: Mapping[str, float] | None = None):
+    """The default blueprint: the pose (left) and the plots (right); ``torque_span``
+    (see :func:`torque_spans`) adds the torque plots of the torque body."""
     import rerun as rr
     import rerun.blueprint as rrb
 
@@ -98,10 +118,12 @@ def blueprint(has_curves: bool, application_id: str, dof_names: Sequence[str],
         "angles", s, ANGLES_TITLE,
         [f"{dof_entity(n)}/{r}" for n in by_side[s] for r in ("desired", "actual")])
         for s in sides]), "angles"))
+    torques = torque_span is not None
     if torques:
         rows.append(named(rrb.Horizontal(*[plot(
             "torques", s, TORQUES_TITLE,
-            [f"/torques/{n}/{r}" for n in by_side[s] for r in ("gravity", "applied")])
+            [f"/torques/{n}/{r}" for n in by_side[s] for r in ("gravity", "applied")],
+            axis_y=rrb.archetypes.ScalarAxis(range=(-torque_span[s], torque_span[s])))
             for s in sides]), "torques"))
     scale = "torque limit" if torques else "full scale"
     rows.append(named(rrb.Horizontal(*[plot(
