@@ -28,7 +28,7 @@ from skinny_mj.experiment import Experiment, Row
 
 NAME = "mackey-glass"
 HORIZON = 84
-METHODS = ("ordinary", "new", "new-conv", "new-blend", "reservoirpy")
+METHODS = ("ordinary", "new", "new-blend", "reservoirpy", "new-conv")  # new rows last
 COLUMNS = {"log10_nrmse84": "log10 NRMSE_84", **common.COLUMNS}
 
 
