@@ -1,4 +1,4 @@
-"""The experiment engine under load: a sweep of many trivial runs (issue 15).
+"""The experiment engine under load: a sweep of many trivial runs.
 
 Each measurement runs in a fresh subprocess (so ``ru_maxrss`` is that sweep's alone)
 and prints one line: runs, workers, the parent's peak RSS and its growth over the
@@ -9,7 +9,7 @@ write, the progress bar and the final aggregate).
     MUJOCO_GL=disabled OMP_NUM_THREADS=1 python benchmarks/bench_engine_load.py \
         [--runs 10000] [--workers 1 2] [--out /tmp/load]
 
-Goal (issue 15): the parent's peak RSS <= 300 MB at 10 000 runs, flat in the run count.
+Goal: the parent's peak RSS <= 300 MB at 10 000 runs, flat in the run count.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Does the torque twin survive saturated torques? A stress test per model variant, and
-what the chosen armature costs in fidelity. Prints two tables (issue 14).
+what the chosen armature costs in fidelity. Prints two tables.
 
     MUJOCO_GL=disabled OMP_NUM_THREADS=1 python benchmarks/torque_stability_check.py [--runs 20]
 

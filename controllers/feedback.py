@@ -85,7 +85,7 @@ class FeedbackController:
     mode: str = "jacobian"
     damping: float = 1e-4
     signal_per_rad: tuple[float, ...] | None = None
-    #: scalar on u_error (issue 12: the thesis leaves its scale unstated); 1 = the
+    #: scalar on u_error (the thesis leaves its scale unstated); 1 = the
     #: one-step correction itself, and then no multiplication at all (bit for bit)
     gain: float = 1.0
 

@@ -259,7 +259,7 @@ def evaluate(
     "initialization cycle"), then one scored cycle; no noise, no learning, feedback
     gain ``gain`` (K = 0: the inverse model alone; > 0: the feedback left on); ``hook``
     as in :func:`rollout`; ``noise=True``: reservoir noise on, as the thesis's toolbox
-    ran its tests (issue 12)."""
+    ran its tests."""
     if washout_cycles < 0:
         raise ValueError(f"washout cycles must be >= 0, got {washout_cycles}")
     esn.reset()

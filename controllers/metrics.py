@@ -40,7 +40,7 @@ def motor_nrmse(commands: np.ndarray, true_commands: np.ndarray) -> np.ndarray:
     return nrmse(commands, true_commands)
 
 
-# -- motion-imitation metrics beside NRMSE (issue 13) -----------------------------------
+# -- motion-imitation metrics beside NRMSE -----------------------------------
 def fraction_within(actual: np.ndarray, target: np.ndarray, tolerance: float) -> np.ndarray:
     """Per signal, the fraction of steps with |actual - target| <= ``tolerance``.
 

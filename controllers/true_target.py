@@ -30,7 +30,7 @@ class TrueTargetConfig:
     cycles: int = 50
     noise: bool = True
     #: SD of Gaussian noise added to the teacher-forced inputs (not the targets) in
-    #: every training cycle, normalized signal units (issue 12; 0 = none, bit for bit)
+    #: every training cycle, normalized signal units (0 = none, bit for bit)
     input_noise: float = 0.0
 
     def __post_init__(self) -> None:

@@ -63,7 +63,7 @@ TRAIN_SETS: dict[str, tuple[str, dict]] = {
     "babble15-N400": ("babble:seed=0,duration=15", {"reservoir": 400}),
     "babble15-scale4": ("babble:seed=0,duration=15", {"full_scale_factor": 4.0}),
 }
-#: Rows added after the first full sweep (issue 12's recorded-like YMCA), last in the
+#: Rows added after the first full sweep (the recorded-like YMCA), last in the
 #: experiment so every earlier row keeps its place and seeds: (representation, set id).
 EXTRA_ROWS = (("j2", "ymca-recorded"), ("c2", "ymca-recorded"))
 TRAIN_SETS_EXTRA = {"ymca-recorded": ("ymca-recorded", {})}

@@ -2,7 +2,7 @@
 
 Every figure times both of its sides in the same process, interleaved (A, B, A, B, ...,
 best of each), so a machine shared with other work shifts both sides alike; the load
-average at the start and end is recorded with the figures. Goals (issue 7):
+average at the start and end is recorded with the figures. Goals:
 
 | figure | goal |
 |---|---|

@@ -143,7 +143,7 @@ def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> Non
 
 
 def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
-    """What a model was trained on (issue 13): the movement, its pieces (a ``set:``),
+    """What a model was trained on: the movement, its pieces (a ``set:``),
     steps and seconds per cycle, repetitions, the seed and the preset."""
     from skinny_mj.trajectories.library import SET_PREFIX, set_pieces
 
@@ -265,7 +265,7 @@ def cmd_test(args: argparse.Namespace) -> int:
     }
     if test.torque is not None:  # torque body: limits, |torque|, work, MuJoCo warnings
         metrics["test"]["torque"] = test.torque["metrics"]
-    if not test.failed and cfg.actuation == "velocity":  # issue 13: DTW, within 5°, lag
+    if not test.failed and cfg.actuation == "velocity":  # DTW, within 5°, lag
         from skinny_mj.imitation import imitation_metrics, saturation
 
         # beside "test" (which stays the train command's own test dict, key for key)

@@ -82,7 +82,7 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     flags = {k: str(v) if isinstance(v, Path) else v for k, v in vars(args).items()
              if k in names}
     preset = getattr(args, "preset", None)
-    if preset is not None:  # issue 13: the preset's fields, then the flags given
+    if preset is not None:  # the preset's fields, then the flags given
         if getattr(args, "config", None) is not None:
             raise SkinnyInputError("give --preset or --config, not both")
         from skinny_mj.presets import preset_fields

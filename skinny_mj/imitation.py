@@ -1,4 +1,4 @@
-"""Motion-imitation metrics of one test beside the position NRMSE (issue 13), shared by
+"""Motion-imitation metrics of one test beside the position NRMSE, shared by
 ``skinny test`` and ``skinny experiment generalization``.
 
 DTW NRMSE (:mod:`skinny_mj.dtw`, needs dtaidistance), the fraction of steps within 5° of

@@ -1,4 +1,4 @@
-"""A lasting change of the plant during performance (issue 16, item 4).
+"""A lasting change of the plant during performance.
 
 :class:`PerturbedPlant` wraps any :class:`controllers.plant.Plant` (e.g. a
 :class:`skinny_mj.plant.BatchPlant`) and changes what a command does, per DOF:

@@ -1,6 +1,6 @@
 """Named training configurations for ``skinny train --preset NAME``.
 
-``general`` (issue 13) is the inverse model the generalization matrix
+``general`` is the inverse model the generalization matrix
 (``skinny experiment generalization``, docs/results/generalization.md) found best on
 movements it never saw: 2D Skinny with joint-angle signals, trained on motor babbling
 (:mod:`skinny_mj.trajectories.babble`) with paper E's experiment-5 schedule. Test it on

@@ -1,4 +1,4 @@
-"""The thesis toolbox's protocol options (issue 12), as the training path applies them.
+"""The thesis toolbox's protocol options, as the training path applies them.
 
 Each is a :class:`skinny_mj.config.TrainConfig` field whose default is today's behaviour
 bit for bit: ``test_noise`` (reservoir noise during the K = 0 test), ``u_error_gain``

@@ -162,7 +162,7 @@ def write_recording(
     curves : name -> (E,) per-epoch values, or (R, E) for R runs; logged on timeline
         ``epoch`` under ``/curves/<name>`` (``/curves/<name>/run_<r>`` for 2-D).
     application_id : rerun application id.
-    torques : torque body (issue 14), optional: ``commanded_nm`` and ``applied_nm``
+    torques : torque body, optional: ``commanded_nm`` and ``applied_nm``
         (T-1, n_dof) N m (command x limit; the motors' ``qfrc_actuator``),
         ``gravity_nm`` (T, n_dof) the bias torque of each state, ``limit_nm`` (n_dof,);
         logged under ``/torques/<dof>/{commanded,applied,gravity,limit_upper,limit_lower}``.

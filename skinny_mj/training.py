@@ -123,7 +123,7 @@ def build_run(cfg: TrainConfig, seeds: Sequence[int]) -> Run:
         + (n_sig if cfg.forward is not None else 0) + torque.n_extra_inputs(cfg)
     esn = ESN(esn_config(cfg, n_in, n_out), n_runs=len(seeds), rngs=[s.esn for s in streams])
     forward = None
-    if cfg.forward_sharing is not None:  # issue 16: one forward model per arm (paper B)
+    if cfg.forward_sharing is not None:  # one forward model per arm (paper B)
         forward = arm_forward_models(cfg, [s.forward for s in streams])
     elif cfg.forward is not None:
         fm_cfg = esn_config(cfg, n_sig + n_out, n_sig, cfg.forward_reservoir)
@@ -196,7 +196,7 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
         _report(progress, epoch * per_epoch + cycle + 1, total)
 
     selector = None
-    if cfg.ridge_select:  # issue 16: lambda per run and fit, on a validation cycle
+    if cfg.ridge_select:  # lambda per run and fit, on a validation cycle
         from controllers.ridge_select import RidgeSelector
 
         selector = RidgeSelector(run.esn, cfg.epochs)

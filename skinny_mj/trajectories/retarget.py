@@ -292,7 +292,7 @@ def retarget(
 ) -> tuple[Trajectory, RetargetReport]:
     """Joint-angle retargeting of a capture onto Skinny (see the module docstring).
 
-    ``targets="positions"`` (issue 12): the subject's own unit segment vectors (low-passed
+    ``targets="positions"``: the subject's own unit segment vectors (low-passed
     and resampled the same way, renormalized; 2D: their frontal projection) become the
     explicit desired Cartesian signals, reachable or not, and the angles their inverse
     kinematics (:func:`skinny_mj.trajectories.ik.refine` from the clipped angles).

@@ -4,7 +4,7 @@ A trajectory is what Skinny is asked to imitate: ``angles`` (T, n_dof) in radian
 fixed step ``dt`` (0.02 s = 50 Hz), columns in :func:`skinny_mj.body.dof_names` order.
 It is immutable; every operation returns a new one.
 
-Optional explicit desired signals (issue 12): ``desired = {"cartesian": (T, n_sig)}``,
+Optional explicit desired signals: ``desired = {"cartesian": (T, n_sig)}``,
 a recorded position signal that is NOT Skinny's own kinematics of ``angles`` (a human's
 normalized segment vectors, reachable or not); ``angles`` are then its inverse
 kinematics (the true commands). :meth:`Trajectory.position_signals` returns them when
