@@ -151,9 +151,10 @@ def all_rows(cfg: Config) -> tuple[Row, ...]:
             out.append(Row(f"{bd}-ymca-{pert}-arm-ct", {
                 "dof": dof, "trajectory": cfg.ymca, **ARM_CONTROLLERS["arm-ct"], **changes}))
     if "3d" in cfg.bodies:  # the 3D ESN still learning at its last epoch: twice as many
-        out.append(Row("3d-ymca-fel-arm-long", {"dof": 8, "trajectory": cfg.ymca, **ARM_FEL,
-                                                "reservoir": ARM_RESERVOIR_3D,
-                                                "epoch_factor": 2}))
+        for mv, traj in (("ymca", cfg.ymca), ("rec", cfg.recorded)):
+            out.append(Row(f"3d-{mv}-fel-arm-long", {"dof": 8, "trajectory": traj, **ARM_FEL,
+                                                     "reservoir": ARM_RESERVOIR_3D,
+                                                     "epoch_factor": 2}))
     return tuple(out)
 
 
