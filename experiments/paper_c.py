@@ -41,7 +41,7 @@ the trained Y-pure networks (2 seeds, 150 epochs; the input -> output Jacobian a
 test): each elbow's command has a gain of -4.6 to -5.9 on its own SENSED elbow angle (the
 dead-beat inverse model's is -7.5) — learned from the feedback controller's corrections
 whenever the elbow is pushed off its still target, by noise or by the readout's own errors
-— and +1.8 on its own DESIRED elbow angle, +0.5 to +1.2 on the other arm's. The desired
+— and +1.5 to +1.8 on its own DESIRED elbow angle, +0.5 to +1.2 on the other arm's. The desired
 elbow angles are constant in Y pure, so the fit cannot tell them from the bias input and
 they carry part of the elbows' set point. On YM they move, the set point moves with them,
 and the learned elbow feedback loop follows it at about (sum of desired gains) / (sensed
