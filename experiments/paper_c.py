@@ -243,10 +243,6 @@ def rows(train: tuple[str, ...] = tuple(MOVEMENTS), real: str | None = None
     return tuple(out)
 
 
-#: The FEL target on the 3D body: paper D (same thesis, 3D Skinny, the feedback-controller
-#: architecture) had to use β = 0.1 "to make the network learn the training sequence";
-#: with paper C's original target (β = 1) the 3D network does not learn YMCA itself.
-BETA_3D = 0.1
 QUICK_TRAIN = ("ymca", "y-pure", "mirror-left")
 QUICK_TESTS = ("ymca", "y", "ym", "mirror-left")
 
@@ -258,8 +254,6 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     ``dof``/``signals``: another body (None: the paper's 2D joint angles).
     ``quick``: N = 100, 3 epochs, 2 runs, 3 training x 4 test movements (a smoke test)."""
     changes: dict = {k: v for k, v in (("dof", dof), ("signals", signals)) if v is not None}
-    if changes.get("dof") == 8:
-        changes["beta"] = BETA_3D
     if quick:
         changes.update(reservoir=100, epochs=3, runs=2, tests=QUICK_TESTS)
     if movement is not None:
