@@ -41,7 +41,7 @@ the trained Y-pure networks (2 seeds, 150 epochs; the input -> output Jacobian a
 test): each elbow's command has a gain of -4.6 to -5.9 on its own SENSED elbow angle (the
 dead-beat inverse model's is -7.5) — learned from the feedback controller's corrections
 whenever the elbow is pushed off its still target, by noise or by the readout's own errors
-— and +1.8 on its own DESIRED elbow angle, +0.5 to +1.2 on the other arm's. The desired
+— and +1.5 to +1.8 on its own DESIRED elbow angle, +0.5 to +1.2 on the other arm's. The desired
 elbow angles are constant in Y pure, so the fit cannot tell them from the bias input and
 they carry part of the elbows' set point. On YM they move, the set point moves with them,
 and the learned elbow feedback loop follows it at about (sum of desired gains) / (sensed
@@ -138,7 +138,8 @@ def load(cfg: Config, movement):
     return load_movement(movement, cfg.dof, asf=asf)[0]
 
 
-def _elbows(dof: int) -> list[int]:
+def elbow_dofs(dof: int) -> list[int]:
+    """Indices of the elbow DOFs of the body with ``dof`` DOFs."""
     return [i for i, n in enumerate(body.dof_names(dof)) if n.endswith("elbow_flexion")]
 
 
@@ -168,7 +169,7 @@ def arm_metrics(produced: np.ndarray, desired: np.ndarray, dof: int) -> dict[str
 
 def elbow_range(angles: np.ndarray, dof: int) -> float:
     """Mean over the elbows of their range of motion (max − min), rad."""
-    e = np.asarray(angles)[:, _elbows(dof)]
+    e = np.asarray(angles)[:, elbow_dofs(dof)]
     return float(np.mean(e.max(axis=0) - e.min(axis=0)))
 
 
@@ -243,10 +244,6 @@ def rows(train: tuple[str, ...] = tuple(MOVEMENTS), real: str | None = None
     return tuple(out)
 
 
-#: The FEL target on the 3D body: paper D (same thesis, 3D Skinny, the feedback-controller
-#: architecture) had to use β = 0.1 "to make the network learn the training sequence";
-#: with paper C's original target (β = 1) the 3D network does not learn YMCA itself.
-BETA_3D = 0.1
 QUICK_TRAIN = ("ymca", "y-pure", "mirror-left")
 QUICK_TESTS = ("ymca", "y", "ym", "mirror-left")
 
@@ -258,8 +255,6 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     ``dof``/``signals``: another body (None: the paper's 2D joint angles).
     ``quick``: N = 100, 3 epochs, 2 runs, 3 training x 4 test movements (a smoke test)."""
     changes: dict = {k: v for k, v in (("dof", dof), ("signals", signals)) if v is not None}
-    if changes.get("dof") == 8:
-        changes["beta"] = BETA_3D
     if quick:
         changes.update(reservoir=100, epochs=3, runs=2, tests=QUICK_TESTS)
     if movement is not None:

@@ -4,7 +4,8 @@ Trains paper C's Y-pure network (its recipe, :func:`experiments.paper_c.train_co
 tests it on YM and measures, per elbow, the network's input -> command Jacobian along the
 test (one step from the previous reservoir state, tanh readout) and two closed-loop
 counterfactual tests: YM with both elbow targets held at Y pure's angle, and with the left
-one held. ``--quiet`` sets sensor and reservoir noise to 0. Prints one JSON line::
+one held; and the timing (cross-correlation lag, steps) of its YM and YMCA tests.
+``--quiet`` sets sensor and reservoir noise to 0. Prints one JSON line::
 
     MUJOCO_GL=disabled OMP_NUM_THREADS=1 python -m experiments.paper_c_elbows --seeds 0 1
 """
@@ -48,7 +49,7 @@ def analyse(run, dof: int = 4) -> list[dict]:
     produced elbow ranges (deg) with YM's elbow targets held (both, left only)."""
     from skinny_mj.training import evaluate
 
-    names, elbows = body.dof_names(dof), paper_c._elbows(dof)
+    names, elbows = body.dof_names(dof), paper_c.elbow_dofs(dof)
     cfg = paper_c.Config(dof=dof)
     ym, pure = paper_c.load(cfg, "ym"), paper_c.load(cfg, "y-pure")
     held, left_held = ym.angles.copy(), ym.angles.copy()
@@ -56,6 +57,10 @@ def analyse(run, dof: int = 4) -> list[dict]:
     left_held[:, elbows[1]] = pure.angles[0, elbows[1]]
     counter = {name: evaluate(run, dataclasses.replace(ym, angles=a, name=name))
                for name, a in (("elbow targets held", held), ("left target held", left_held))}
+    from experiments.paper_c_report import lag_steps
+
+    ymca = paper_c.load(cfg, "ymca")
+    ymca_lags = [lag_steps(t.rollout.angles[0], ymca.angles) for t in evaluate(run, ymca)]
     out = []
     for r, test in enumerate(evaluate(run, ym)):
         ro, produced = test.rollout, test.rollout.angles[0]
@@ -70,6 +75,7 @@ def analyse(run, dof: int = 4) -> list[dict]:
             "jacobian": {names[e]: dict(zip(inputs, np.round(jac[e], 3).tolist(), strict=True))
                          for e in elbows},
             "dead_beat_gain": dead_beat_gain(run, elbows[0], dof, ym.dt),
+            "lag_steps": {"ym": lag_steps(produced, ym.angles), "ymca": ymca_lags[r]},
             **{f"{k}: elbow range (deg)": np.round(np.degrees(np.ptp(
                 v[r].rollout.angles[0][:, elbows], axis=0)), 1).tolist()
                for k, v in counter.items()},
