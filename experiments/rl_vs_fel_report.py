@@ -1,7 +1,8 @@
 """Figures and the comparison table of :mod:`experiments.rl_vs_fel`, from its run files.
 
 ``curves_steps.png`` / ``curves_cpu.png``: one panel per body x movement, the test
-position NRMSE (log) against env steps / training CPU time (log), one line per run
+position NRMSE (log) against env steps / training CPU time (log; without the test before
+training), one line per run
 (thin) and the mean over runs per learner (thick; a learner's runs share their test
 points), the thresholds dashed. ``comparison.md``: per row the budget, the final error
 (mean ± sd over runs), and per threshold how many runs reached it and, over those, the
@@ -30,7 +31,9 @@ def _curves(runs: list[dict]) -> dict[str, list[list[dict]]]:
 
 
 def _xy(curve: list[dict], x: str) -> tuple[np.ndarray, np.ndarray]:
-    xs = np.array([max(p[x], 1e-2 if x == "cpu_s" else 1) for p in curve], float)
+    if x == "cpu_s":  # log axis: the test before training (0 s) is left out
+        curve = curve[1:]
+    xs = np.array([p[x] for p in curve], float)
     ys = np.array([np.nan if p["position_nrmse"] is None else p["position_nrmse"]
                    for p in curve], float)
     return xs, ys
@@ -58,10 +61,11 @@ def curves_png(path: Path, cfg, rows, curves: dict, x: str) -> Path:
                 xs = np.mean([_xy(c[:n], x)[0] for c in runs], axis=0)
                 ys = np.nanmean([_xy(c[:n], x)[1] for c in runs], axis=0)
                 ax.plot(xs, ys, color=colour, lw=2, marker="o", ms=3,
-                        label=f"{LABELS[p['learner']]} ({len(runs)} runs)")
+                        label=f"{LABELS[p['learner']]} ({len(runs)} run{'s' * (len(runs) > 1)})")
             for th in cfg.thresholds:
                 ax.axhline(th, color="grey", ls="--", lw=0.8)
-            ax.set(xscale="log", yscale="log", title=f"{body} body, {mv}",
+            ax.set(xscale="linear" if x == "steps" else "log", yscale="log",
+                   title=f"{body} body, {mv}",
                    xlabel="env steps" if x == "steps" else "training CPU time (s)")
             if j == 0:
                 ax.set_ylabel("test position NRMSE (K = 0)")
@@ -69,6 +73,15 @@ def curves_png(path: Path, cfg, rows, curves: dict, x: str) -> Path:
             if ax.get_legend_handles_labels()[0]:
                 ax.legend(fontsize=8, loc="lower left")
     return save_figure(fig, path)
+
+
+def overlay_png(path: Path, cfg, rows, sources: list[tuple[Path, str]],
+                x: str = "steps") -> Path:
+    """:func:`curves_png` of ``rows`` with each row's runs taken from its own sweep
+    folder, ``sources`` = [(folder, row id)] (e.g. a longer PPO budget run apart)."""
+    curves = {row_id: _curves(load_runs(d)).get(row_id, []) for d, row_id in sources}
+    shown = [r for r in rows if curves.get(r.row_id)]
+    return curves_png(path, cfg, shown, {k: v for k, v in curves.items() if v}, x)
 
 
 def _cell(values: list[float]) -> str:
