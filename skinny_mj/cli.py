@@ -140,6 +140,15 @@ def build_parser() -> argparse.ArgumentParser:
                    "gravity (ESN inverse dynamics, PD teacher)")
     p.add_argument("--gravity-feedforward", action="store_true",
                    help="torque: add the gravity (bias) torque to the command, not learned")
+    p.add_argument("--feedback", choices=("pd", "inertia-pd"), default="pd",
+                   help="torque: FEL's teacher, the PD scaled by the torque limits ('pd') or "
+                   "placed in the arm's own inertia-scaled coordinates ('inertia-pd')")
+    p.add_argument("--readout-fit", choices=("cycle", "forgetting", "rls"), default="cycle",
+                   help="torque FEL: fit the readout on each cycle alone, on the statistics "
+                   "of all cycles with forgetting, or by RLS")
+    p.add_argument("--readout-forgetting", type=float, default=0.8,
+                   help="weight of earlier cycles per learning cycle, in [0, 1] "
+                   "(--readout-fit forgetting or rls)")
     p.add_argument("--beta", type=float, default=0.1, help="β of the new method, in (0, 1]")
     p.add_argument("--cycles", type=_positive_int, help="learning cycles per epoch")
     p.add_argument("--epochs", type=_positive_int, default=10)

@@ -54,6 +54,7 @@ RULES: dict[str, tuple[type, Callable[[float], bool], str]] = {
     "beta": (float, _within(0.0, 1.0, open_low=True), "in (0, 1]"),
     "ridge": (float, _at_least(0.0), ">= 0"),
     "u_error_gain": (float, _above(0.0), "> 0"),
+    "readout_forgetting": (float, _within(0.0, 1.0), "in [0, 1]"),
 }
 
 

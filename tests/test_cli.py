@@ -174,3 +174,13 @@ def test_a_reader_that_stops_early_is_no_error():
     proc.stdout.close()  # the reader is gone before the first line is written
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=120) == 0 and err == ""
+
+
+def test_train_takes_the_torque_teacher_and_readout_fit_flags(tmp_path):
+    out = tmp_path / "tq"
+    assert main(["train", "--actuation", "torque", "--feedback", "inertia-pd", "--readout-fit",
+                 "forgetting", "--readout-forgetting", "0.7", "--beta", "1", "--cycles", "1",
+                 "--epochs", "1", "--reservoir", "30", "--out", str(out)]) == 0
+    cfg = json.loads((out / "metrics.json").read_text())["config"]
+    assert (cfg["feedback"], cfg["readout_fit"], cfg["readout_forgetting"]) == \
+        ("inertia-pd", "forgetting", 0.7)
