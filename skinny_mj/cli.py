@@ -289,7 +289,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         check_args(args)  # every numeric flag in its range (seed >= 0, ...), before any work
         with one_blas_thread():  # same bits whatever the machine's BLAS threads
-            return int(handler(args) or 0)
+            code = int(handler(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, not as exit 120 at shutdown
+        return code
     except SkinnyInputError as err:
         print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
         return 2
