@@ -99,6 +99,31 @@ def train_config(cfg: Config, row: Row) -> TrainConfig:
                        trajectory=trajectory, asf=asf, epochs=cfg.epochs)
 
 
+#: stable-baselines3's defaults: PPO's rollout steps (``quick``: 128), SAC's replay buffer.
+PPO_N_STEPS, SAC_BUFFER = 2048, 1_000_000
+
+
+def estimate_bytes(cfg: Config, row: Row, runs: int):
+    """The memory a PPO or SAC run of ``row`` needs beyond the process's own (torch and
+    stable-baselines3 are imported when the sweep is built): the rollout buffer (PPO) or
+    the part of the replay buffer the budget fills (SAC: its zeros are not touched
+    before), float64 observations, actions and five scalars per step. ESN + FEL rows:
+    None (their :func:`train_config` says)."""
+    from skinny_mj import body
+    from skinny_mj.memory import Estimate
+
+    learner = row.params["learner"]
+    if learner == "fel":
+        return None
+    n_obs = 3 * body.n_signals(cfg.dof, cfg.signals) \
+        + (2 * cfg.dof if row.params["actuation"] == "torque" else 0)
+    steps = (128 if cfg.quick else PPO_N_STEPS) if learner == "ppo" \
+        else min(cfg.budget(learner), SAC_BUFFER)
+    per_step = (2 * n_obs + cfg.dof + 5) * 8
+    return Estimate({"buffer": steps * per_step},
+                    {"buffer": f"{learner} buffer of {steps} steps"})
+
+
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
     tc = train_config(cfg, row)
     learner = row.params["learner"]
