@@ -24,8 +24,8 @@ from typing import Any
 from skinny_mj.errors import SkinnyInputError
 
 __all__ = ["Estimate", "available_bytes", "check", "train_estimate", "test_estimate",
-           "track_estimate", "generation_estimate", "row_configs", "sweep_estimate",
-           "fmt_bytes"]
+           "track_estimate", "generation_estimate", "row_configs", "row_estimate",
+           "sweep_estimate", "fmt_bytes"]
 
 _F8 = 8  # bytes per float64
 #: Bytes per step a rerun recording holds while it is written. With it the estimates
@@ -280,26 +280,34 @@ def _steps(cfg: Any, cache: dict) -> tuple[int, str]:
     return cache[key], steps_cause(str(cfg.trajectory), cache[key], cfg.reps, flag="")
 
 
+def row_estimate(module: Any, experiment: Any, row: Any, runs: int = 1,
+                 cache: dict | None = None) -> Estimate | None:
+    """Bytes one batch of ``runs`` lockstep runs of ``row`` needs: the module's own
+    ``estimate_bytes(config, row, runs)`` (an :class:`Estimate`; None: not this row),
+    else the largest of its TrainConfigs' (see :func:`row_configs`); None when the
+    module says nothing of the row."""
+    cache = {} if cache is None else cache
+    own = getattr(module, "estimate_bytes", None)
+    found = None if own is None else own(experiment.config, row, runs)
+    if found is not None:
+        return found
+    ests = [train_estimate(cfg, one * cfg.reps, one, runs, cause)
+            for cfg in row_configs(module, experiment, row)
+            for one, cause in [_steps(cfg, cache)]]
+    return max(ests, key=lambda e: e.total, default=None)
+
+
 def sweep_estimate(module: Any, experiment: Any, rows: Sequence[Any], runs: int,
                    workers: int, batch: int) -> tuple[Estimate, str] | None:
-    """The largest row's estimate x the workers that run at once, and that row's id;
-    None when the module says nothing of its rows' sizes: a row's estimate is the
-    module's own ``estimate_bytes(config, row, runs)`` (an :class:`Estimate` of one
-    batch of ``runs`` lockstep runs; None: not this row), else its TrainConfigs' (see
-    :func:`row_configs`)."""
+    """The largest row's estimate (:func:`row_estimate`) x the workers that run at once,
+    and that row's id; None when the module says nothing of its rows."""
     cache: dict = {}
     best: tuple[Estimate, str] | None = None
     lockstep = max(1, min(batch, runs)) if experiment.run_batch is not None else 1
-    own = getattr(module, "estimate_bytes", None)
     for row in rows:
-        ests = [] if own is None else [own(experiment.config, row, lockstep)]
-        if not any(ests):
-            ests = [train_estimate(cfg, one * cfg.reps, one, lockstep, cause)
-                    for cfg in row_configs(module, experiment, row)
-                    for one, cause in [_steps(cfg, cache)]]
-        for est in ests:
-            if est is not None and (best is None or est.total > best[0].total):
-                best = (est, row.row_id)
+        est = row_estimate(module, experiment, row, lockstep, cache)
+        if est is not None and (best is None or est.total > best[0].total):
+            best = (est, row.row_id)
     if best is None:
         return None
     jobs = max(1, min(workers, len(rows) * runs))
