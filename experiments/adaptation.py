@@ -112,6 +112,12 @@ def train_config(cfg: Config, change: str) -> TrainConfig:
     return TrainConfig(epochs=cfg.epochs)
 
 
+def train_configs(cfg: Config, row: Row) -> dict[str, TrainConfig]:
+    """The training of ``row`` (its change's :func:`train_config`), for the sweep's memory
+    estimate."""
+    return {"train": train_config(cfg, row.params["change"])}
+
+
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     from controllers import fel
     from controllers.metrics import position_nrmse

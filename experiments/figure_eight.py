@@ -97,6 +97,13 @@ def _reservoirpy(cfg: Config, series: np.ndarray, washout: int, scale: float,
     return {**m, "fit_wall_s": wall}
 
 
+def estimate_bytes(cfg: Config, row: Row, runs: int):
+    """The memory a batch of ``runs`` seeds of ``row`` needs (the sweep's check)."""
+    n_fit = cfg.period * row.params.get("train_periods", cfg.train_periods)
+    return common.estimate(row.params["method"], esn_config(cfg), n_fit,
+                           cfg.period * cfg.free_periods, runs)
+
+
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
     return run_batch(cfg, row, [seed])[0]
 

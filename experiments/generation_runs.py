@@ -96,6 +96,18 @@ def run_ours(method: str, cfg: ESNConfig, seeds: list[int],
     return free, target, wall, passes
 
 
+def estimate(method: str, cfg: ESNConfig, n_fit: int, n_free: int, runs: int):
+    """The memory one batch of ``runs`` seeds of row ``method`` needs
+    (:func:`skinny_mj.memory.generation_estimate`; reservoirpy's rows run one seed at a
+    time, counted as ours)."""
+    from skinny_mj.memory import generation_estimate
+
+    cycles = {"new": CYCLES, "new-blend": CYCLES, "new-conv": MAX_CYCLES}.get(method, 1)
+    return generation_estimate(cfg.n_reservoir, cfg.n_inputs, cfg.n_outputs, n_fit, n_free,
+                               1 if method == "reservoirpy" else runs,
+                               rls=method == "force", cycles=cycles)
+
+
 def metrics(free: np.ndarray, target: np.ndarray, period: int, scale: float) -> list[dict]:
     """Per run: NRMSE over the first ``period`` free steps, horizon before the error
     exceeds 0.1 x ``scale`` (the teacher's std), last-period amplitude ratio, stable

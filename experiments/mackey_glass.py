@@ -91,6 +91,14 @@ def _reservoirpy(cfg: Config, seed: int) -> dict:
     return {**_with_nrmse84(m, free, target, scale), "fit_wall_s": wall}
 
 
+def estimate_bytes(cfg: Config, row: Row, runs: int):
+    """The memory a batch of ``runs`` seeds of ``row`` needs (the sweep's check)."""
+    from skinny_mj.bench_mackey_glass import esn_config
+
+    return common.estimate(row.params["method"], esn_config(cfg.reservoir), cfg.n_fit,
+                           cfg.free, runs)
+
+
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
     return run_batch(cfg, row, [seed])[0]
 

@@ -122,6 +122,12 @@ def train_config(cfg: Config, movement: str):
         test_washout_cycles=1)
 
 
+def train_configs(cfg: Config, row: Row) -> dict:
+    """The training of ``row`` (its movement's :func:`train_config`), for the sweep's
+    memory estimate."""
+    return {"train": train_config(cfg, row.params["train"])}
+
+
 def columns(cfg: Config) -> dict[str, object]:
     """Column id -> movement (a library name or the real movement's path)."""
     cols: dict[str, object] = {c: MOVEMENTS[c] for c in cfg.tests}

@@ -108,8 +108,11 @@ class Config:
 
 
 def train_config(cfg: Config, row: Row) -> TrainConfig:
-    """The training of a FEL row (Table rows, Figs. 4 and 5)."""
+    """The training of a FEL row (Table rows, Figs. 4 and 5); a Fig. 3 row: its network
+    (:func:`convergence_config`)."""
     p = row.params
+    if p.get("kind") == "convergence":
+        return convergence_config(cfg, row)
     default_noise = cfg.noise_new if p["method"] == "new" else cfg.noise_original
     return TrainConfig(
         dof=cfg.dof, signals=cfg.signals, trajectory=cfg.trajectory, asf=cfg.asf,

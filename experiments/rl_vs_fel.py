@@ -99,6 +99,46 @@ def train_config(cfg: Config, row: Row) -> TrainConfig:
                        trajectory=trajectory, asf=asf, epochs=cfg.epochs)
 
 
+#: stable-baselines3's defaults: PPO's rollout steps (``quick``: 128), SAC's replay buffer,
+#: the hidden layers of their MlpPolicy (PPO: policy and value net; SAC: the actor, two
+#: critics and their target copies).
+PPO_N_STEPS, SAC_BUFFER, PPO_HIDDEN, SAC_HIDDEN = 2048, 1_000_000, (64, 64), (256, 256)
+
+
+def _mlp(n_in: int, n_out: int, hidden: tuple[int, ...]) -> int:
+    """Parameters of a fully connected net."""
+    sizes = (n_in, *hidden, n_out)
+    return sum((a + 1) * b for a, b in zip(sizes[:-1], sizes[1:], strict=True))
+
+
+def estimate_bytes(cfg: Config, row: Row, runs: int):
+    """The memory a PPO or SAC run of ``row`` needs beyond the process's own (torch and
+    stable-baselines3 are imported when the sweep is built): the rollout buffer (PPO) or
+    the part of the replay buffer the budget fills (SAC: its zeros are not touched
+    before), float64 observations, actions and five scalars per step; the networks'
+    float32 weights, gradients and Adam's two moments (a target copy: weights only).
+    ESN + FEL rows: None (their :func:`train_config` says)."""
+    from skinny_mj import body
+    from skinny_mj.memory import Estimate
+
+    learner = row.params["learner"]
+    if learner == "fel":
+        return None
+    n_obs = 3 * body.n_signals(cfg.dof, cfg.signals) \
+        + (2 * cfg.dof if row.params["actuation"] == "torque" else 0)
+    if learner == "ppo":
+        steps = 128 if cfg.quick else PPO_N_STEPS
+        trained, targets = _mlp(n_obs, cfg.dof, PPO_HIDDEN) + _mlp(n_obs, 1, PPO_HIDDEN), 0
+    else:
+        steps = min(cfg.budget(learner), SAC_BUFFER)
+        critic = _mlp(n_obs + cfg.dof, 1, SAC_HIDDEN)
+        trained, targets = _mlp(n_obs, 2 * cfg.dof, SAC_HIDDEN) + 2 * critic, 2 * critic
+    return Estimate({"buffer": steps * (2 * n_obs + cfg.dof + 5) * 8,
+                     "networks": (4 * trained + targets) * 4},
+                    {"buffer": f"{learner} buffer of {steps} steps",
+                     "networks": f"{learner}'s networks"})
+
+
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
     tc = train_config(cfg, row)
     learner = row.params["learner"]

@@ -105,6 +105,15 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     return exp.run_batch(paper_row, seeds)
 
 
+def train_configs(cfg: Config, row: Row) -> dict:
+    """The TrainConfigs the paper's own row trains (its module's ``train_config(s)``), for
+    the sweep's memory estimate."""
+    from skinny_mj.memory import row_configs
+
+    exp, paper_row = _paper_of(cfg, row)
+    return dict(enumerate(row_configs(module(row.params["paper"]), exp, paper_row)))
+
+
 def run_one(cfg: Config, row: Row, seed: int) -> dict:
     exp, paper_row = _paper_of(cfg, row)
     return dict(exp.run_one(paper_row, seed))

@@ -24,7 +24,8 @@ from typing import Any
 from skinny_mj.errors import SkinnyInputError
 
 __all__ = ["Estimate", "available_bytes", "check", "train_estimate", "test_estimate",
-           "track_estimate", "row_configs", "sweep_estimate", "fmt_bytes"]
+           "track_estimate", "generation_estimate", "row_configs", "row_estimate",
+           "sweep_estimate", "fmt_bytes"]
 
 _F8 = 8  # bytes per float64
 #: Bytes per step a rerun recording holds while it is written. With it the estimates
@@ -213,6 +214,31 @@ def track_estimate(dof: int, n_sig: int, steps: int, steps_cause: str) -> Estima
     return Estimate({"per-step buffers": step * steps}, {"per-step buffers": steps_cause})
 
 
+def generation_estimate(n_res: int, n_in: int, n_out: int, steps: int, free_steps: int,
+                        runs: int = 1, rls: bool = False, cycles: int = 1) -> Estimate:
+    """Bytes one lockstep batch of ``runs`` ESNs with output feedback and no plant needs
+    (:mod:`controllers.generation`): the weights, the series and inputs of ``steps``
+    teacher steps + ``free_steps`` free ones, a teacher-forced pass's outputs and extended
+    states (two at once when ``cycles`` > 1: a pass's are made before the last one's are
+    freed), the readout's float64 copy and one run's QR of them; ``rls``: FORCE's
+    inverse correlation matrix per run and its update's temporaries instead of the fit."""
+    d = n_res + n_in + n_out + 1
+    kept, drawing = _weights(n_res, n_in, n_out, runs)
+    passes = 2 if cycles > 1 else 1
+    series = runs * ((steps + free_steps) * n_out + steps * n_in) * _F8
+    parts = {"per-step buffers": series + passes * runs * steps * (d + 2 * n_out) * _F8,
+             "readout fit": 0 if rls else (runs + 1) * steps * d * _F8,
+             "noise": 256 * runs * n_res * _F8,
+             "rls": 3 * runs * d * d * _F8 if rls else 0}
+    parts["reservoir weights"] = max(kept, drawing - sum(parts.values()))
+    lockstep = f" x {runs} lockstep runs" if runs > 1 else ""
+    cause = f"{steps} teacher steps{lockstep}"
+    return Estimate(parts, {"per-step buffers": cause, "readout fit": cause,
+                            "noise": f"reservoir {n_res}{lockstep}",
+                            "rls": f"reservoir {n_res}{lockstep} (RLS)",
+                            "reservoir weights": f"reservoir {n_res}{lockstep}"})
+
+
 def steps_cause(movement: str, one_rep: int, reps: int, flag: str = "--reps ") -> str:
     """``--reps 400 x 313 steps of ymca`` (or the movement's steps alone)."""
     if reps > 1:
@@ -254,19 +280,34 @@ def _steps(cfg: Any, cache: dict) -> tuple[int, str]:
     return cache[key], steps_cause(str(cfg.trajectory), cache[key], cfg.reps, flag="")
 
 
+def row_estimate(module: Any, experiment: Any, row: Any, runs: int = 1,
+                 cache: dict | None = None) -> Estimate | None:
+    """Bytes one batch of ``runs`` lockstep runs of ``row`` needs: the module's own
+    ``estimate_bytes(config, row, runs)`` (an :class:`Estimate`; None: not this row),
+    else the largest of its TrainConfigs' (see :func:`row_configs`); None when the
+    module says nothing of the row."""
+    cache = {} if cache is None else cache
+    own = getattr(module, "estimate_bytes", None)
+    found = None if own is None else own(experiment.config, row, runs)
+    if found is not None:
+        return found
+    ests = [train_estimate(cfg, one * cfg.reps, one, runs, cause)
+            for cfg in row_configs(module, experiment, row)
+            for one, cause in [_steps(cfg, cache)]]
+    return max(ests, key=lambda e: e.total, default=None)
+
+
 def sweep_estimate(module: Any, experiment: Any, rows: Sequence[Any], runs: int,
                    workers: int, batch: int) -> tuple[Estimate, str] | None:
-    """The largest row's estimate x the workers that run at once, and that row's id;
-    None when the module does not say what its rows train (see :func:`row_configs`)."""
+    """The largest row's estimate (:func:`row_estimate`) x the workers that run at once,
+    and that row's id; None when the module says nothing of its rows."""
     cache: dict = {}
     best: tuple[Estimate, str] | None = None
     lockstep = max(1, min(batch, runs)) if experiment.run_batch is not None else 1
     for row in rows:
-        for cfg in row_configs(module, experiment, row):
-            one, cause = _steps(cfg, cache)
-            est = train_estimate(cfg, one * cfg.reps, one, lockstep, cause)
-            if best is None or est.total > best[0].total:
-                best = (est, row.row_id)
+        est = row_estimate(module, experiment, row, lockstep, cache)
+        if est is not None and (best is None or est.total > best[0].total):
+            best = (est, row.row_id)
     if best is None:
         return None
     jobs = max(1, min(workers, len(rows) * runs))

@@ -172,6 +172,57 @@ def test_a_sweeps_largest_row_is_refused(capsys, tmp_path):
     assert not (tmp_path / "sw").exists()
 
 
+def _every_study(monkeypatch) -> list[str]:
+    """Every registered study's name; rl-vs-fel's build does not need its extra here."""
+    from experiments import rl_vs_fel_runs
+    from skinny_mj import registry
+
+    monkeypatch.setattr(rl_vs_fel_runs, "require_rl", lambda: None)
+    return registry.names()
+
+
+def test_every_study_estimates_every_row_quick_and_full(monkeypatch):
+    from experiments import REGISTRY
+    from skinny_mj import registry
+
+    names = _every_study(monkeypatch)
+    assert set(REGISTRY) <= set(names)
+    cache: dict = {}  # movements' lengths, shared by the studies
+    for name in names:
+        module = registry.get(name)
+        for quick in (True, False):
+            exp = module.build(quick=quick, movement=None, asf=None, dof=None, signals=None)
+            ests = {r.row_id: memory.row_estimate(module, exp, r, exp.runs, cache)
+                    for r in exp.rows}
+            missing = [rid for rid, est in ests.items() if est is None]
+            assert not missing, f"{name} says nothing of these rows' memory: {missing}"
+            assert all(v >= 0 for est in ests.values() for v in est.parts.values()), name
+            assert min(est.total for est in ests.values()) > 0, name
+
+
+@pytest.mark.parametrize("name", ["adaptation", "figure-eight", "mackey-glass", "paper-c",
+                                  "three-d", "rl-vs-fel"])
+def test_a_study_too_big_for_the_memory_left_is_refused(name, monkeypatch, capsys, tmp_path):
+    _every_study(monkeypatch)
+    monkeypatch.setattr(memory, "available_bytes", lambda: 1024**2)
+    err = _one_line_exit_2(["experiment", name, "--quick", "--workers", "1", "--out",
+                            str(tmp_path / "sw")], capsys)
+    assert "largest row" in err and "more than the 1.0 MiB available" in err
+    assert not (tmp_path / "sw").exists()
+
+
+def test_the_generation_estimate_grows_with_steps_runs_and_rls():
+    base = memory.generation_estimate(200, 1, 2, 1200, 2000)
+    assert base.parts["reservoir weights"] >= 200**2 * 8
+    longer = memory.generation_estimate(200, 1, 2, 12000, 2000)
+    assert longer.parts["readout fit"] == 10 * base.parts["readout fit"]
+    lockstep = memory.generation_estimate(200, 1, 2, 1200, 2000, runs=20)
+    assert lockstep.parts["per-step buffers"] == 20 * base.parts["per-step buffers"]
+    assert lockstep.parts["reservoir weights"] >= 20 * 200**2 * 8
+    force = memory.generation_estimate(200, 1, 2, 1200, 2000, rls=True)
+    assert force.parts["rls"] >= 3 * 204**2 * 8 and force.parts["readout fit"] == 0
+
+
 # -- outputs ----------------------------------------------------------------------------------
 def test_bench_out_unwritable_is_refused_before_the_bench(capsys, tmp_path):
     blocker = tmp_path / "file"
