@@ -119,7 +119,8 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
             runs=cfg.runs) for m in SHORT_METHODS)
     return Experiment(name=NAME, rows=every, run_one=functools.partial(run_one, cfg),
                       config=cfg, runs=cfg.runs, table_columns=common.COLUMNS,
-                      run_batch=functools.partial(run_batch, cfg))
+                      run_batch=functools.partial(run_batch, cfg),
+                      unavailable=common.unavailable_rows())
 
 
 def report(results: dict, out_dir: Path) -> str:

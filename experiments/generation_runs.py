@@ -165,3 +165,12 @@ def report(results: dict, out_dir: Path, kind: str, extra: list[str] | None = No
             lines.append(f"figure: {png.name}")
     lines.append(claim_lines(out_dir, claims_for(kind)))
     return "\n".join(lines + (extra or []))
+
+
+def unavailable_rows() -> dict[str, str]:
+    """The ``reservoirpy`` row needs the optional package (the ``bench`` extra)."""
+    import importlib.util
+
+    if importlib.util.find_spec("reservoirpy") is not None:
+        return {}
+    return {"reservoirpy": "needs reservoirpy: pip install -e '.[bench]'"}

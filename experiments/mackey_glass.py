@@ -112,7 +112,8 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     every = common.rows(METHODS, cfg.runs)
     return Experiment(name=NAME, rows=every, run_one=functools.partial(run_one, cfg),
                       config=cfg, runs=cfg.runs, table_columns=COLUMNS,
-                      run_batch=functools.partial(run_batch, cfg))
+                      run_batch=functools.partial(run_batch, cfg),
+                      unavailable=common.unavailable_rows())
 
 
 def report(results: dict, out_dir: Path) -> str:

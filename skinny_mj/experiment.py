@@ -158,6 +158,9 @@ class Experiment:
     #: time first), so a long row does not start last and keep the other workers idle.
     cost: Callable[[Row], float] | None = None
     groups: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    #: rows that cannot run on this machine -> why (an optional package missing): left out
+    #: of a sweep of every row (with a line saying so), refused when named in ``rows``
+    unavailable: Mapping[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not _SAFE_NAME.match(self.name):
@@ -210,7 +213,7 @@ def select_rows(experiment: Experiment, rows: Sequence[str] | str | None = None
     """The rows named by ``rows`` (row ids and group names; a string is split at commas),
     in experiment order; None selects every row."""
     if rows is None:
-        return experiment.rows
+        return tuple(r for r in experiment.rows if r.row_id not in experiment.unavailable)
     entries = _entries(rows)
     ids = [r.row_id for r in experiment.rows]
     unknown = [e for e in entries if e not in ids and e not in experiment.groups]
@@ -220,6 +223,10 @@ def select_rows(experiment: Experiment, rows: Sequence[str] | str | None = None
             f"experiment {experiment.name!r} has {what}; groups: "
             f"{', '.join(experiment.groups) or '(none)'}; row ids: {', '.join(ids)}")
     chosen = {m for e in entries for m in experiment.groups.get(e, (e,))}
+    missing = sorted(chosen & set(experiment.unavailable))
+    if missing:
+        raise SkinnyInputError(f"experiment {experiment.name!r}: row {missing[0]!r} "
+                               f"{experiment.unavailable[missing[0]]}")
     return tuple(r for r in experiment.rows if r.row_id in chosen)
 
 
@@ -301,6 +308,9 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     ``n_error`` counts errored runs on disk); ``table.md`` is written beside it.
     """
     selected = select_rows(experiment, rows)
+    if rows is None and experiment.unavailable:
+        for row_id, why in experiment.unavailable.items():
+            print(f"{experiment.name}: row {row_id} left out: it {why}", file=sys.stderr)
     runs = experiment.runs if runs is None else int(runs)
     if runs < 1:
         raise SkinnyInputError(f"runs must be >= 1, got {runs}")

@@ -171,3 +171,20 @@ def test_summarize_and_markdown_table():
     table = markdown_table(results, {"m": "position NRMSE"})
     assert "position NRMSE (ours: mean (var))" in table and "position NRMSE (paper)" in table
     assert "| r1 | 0 / 3 | 2.0000 (1.0000) | 0.5000 |" in table
+
+
+def test_an_unavailable_row_is_left_out_of_a_full_sweep_and_refused_by_name(tmp_path, capsys):
+    import dataclasses
+
+    full = make_experiment()
+    exp = dataclasses.replace(full, unavailable={"exp1": "needs a package"})
+    run_sweep(exp, tmp_path / "s", workers=1, progress=False)
+    assert "row exp1 left out: it needs a package" in capsys.readouterr().err
+    runs = load_runs(tmp_path / "s")
+    assert {r["row"] for r in runs} == {"exp2"}
+    # the other rows keep the seeds of the full experiment
+    run_sweep(full, tmp_path / "all", workers=1, progress=False)
+    seeds = {r["seed"] for r in load_runs(tmp_path / "all") if r["row"] == "exp2"}
+    assert {r["seed"] for r in runs} == seeds
+    with pytest.raises(SkinnyInputError, match="row 'exp1' needs a package"):
+        run_sweep(exp, tmp_path / "named", rows="exp1", workers=1, progress=False)
