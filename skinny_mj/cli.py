@@ -174,7 +174,10 @@ def build_parser() -> argparse.ArgumentParser:
                    "full scale 4x its fastest speed, paper E exp. 5 schedule; of 12 training "
                    "sets in `skinny experiment generalization` it had the lowest error on "
                    "real dance it never saw (position NRMSE 0.009 on CMU md_02, 10 seeds). "
-                   "Then: skinny test --model M --trajectory CLIP.amc --asf SKELETON.asf")
+                   "Then: skinny test --model M --trajectory CLIP.amc --asf SKELETON.asf. "
+                   "With --actuation torque: the torque twin's general, 15 s of babbling at "
+                   "0.5-4 rad/s (within the torque limits), the inertia-scaled PD teacher "
+                   "and the forgetting readout")
 
     p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
     p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny train`")

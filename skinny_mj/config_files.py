@@ -87,7 +87,7 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
             raise SkinnyInputError("give --preset or --config, not both")
         from skinny_mj.presets import preset_fields
 
-        fields = preset_fields(preset)
+        fields = preset_fields(preset, str(flags.get("actuation", "velocity")))
         given = getattr(args, "given", set())
         fields.update({k: v for k, v in flags.items() if k in given})
         return _make(fields, None), int(args.seed)

@@ -6,6 +6,12 @@ movements it never saw: 2D Skinny with joint-angle signals, trained on motor bab
 (:mod:`skinny_mj.trajectories.babble`) with paper E's experiment-5 schedule. Test it on
 any CMU clip with ``skinny test --model .../model.npz --trajectory CLIP.amc --asf
 SKELETON.asf``.
+
+With ``--actuation torque`` the same name picks the torque twin's ``general``
+(:data:`TORQUE_PRESETS`): babbling slow enough for the motors' torque limits, learned by
+FEL with the inertia-scaled PD teacher and the forgetting readout. The shipped clips
+need more torque than the motors have at full speed; test it on them slowed down,
+``skinny test --model .../model.npz --trajectory md_02.amc --speed 0.18``.
 """
 
 from __future__ import annotations
@@ -14,7 +20,7 @@ from typing import Any
 
 from skinny_mj.errors import SkinnyInputError
 
-__all__ = ["PRESETS", "preset_fields", "describe"]
+__all__ = ["PRESETS", "TORQUE_PRESETS", "preset_fields", "describe"]
 
 #: Preset name -> (one-line reason, TrainConfig fields the preset sets).
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -29,13 +35,32 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     ),
 }
 
+#: The same names for ``--actuation torque``.
+TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
+    "general": (
+        "torque twin, 2D, joint-angle signals, trained on 15 s of motor babbling with "
+        "peak speeds 0.5-4 rad/s (every step within the torque limits, peak "
+        "|tau|/limit 0.43), FEL with the inertia-scaled PD teacher, beta = 1, 3 cycles "
+        "x 15 epochs, readout on the normal equations with forgetting",
+        {"dof": 4, "signals": "joint", "actuation": "torque",
+         "trajectory": "babble:seed=0,duration=15,vmin=0.5,vmax=4",
+         "feedback": "inertia-pd", "readout_fit": "forgetting", "beta": 1.0,
+         "cycles": 3, "epochs": 15},
+    ),
+}
 
-def preset_fields(name: str) -> dict[str, Any]:
-    """A copy of the TrainConfig fields preset ``name`` sets."""
-    if name not in PRESETS:
-        raise SkinnyInputError(f"unknown preset {name!r}; known: {', '.join(PRESETS)}")
-    return dict(PRESETS[name][1])
+
+def _table(actuation: str) -> dict[str, tuple[str, dict[str, Any]]]:
+    return TORQUE_PRESETS if actuation == "torque" else PRESETS
 
 
-def describe(name: str) -> str:
-    return PRESETS[name][0]
+def preset_fields(name: str, actuation: str = "velocity") -> dict[str, Any]:
+    """A copy of the TrainConfig fields preset ``name`` sets for ``actuation``."""
+    table = _table(actuation)
+    if name not in table:
+        raise SkinnyInputError(f"unknown preset {name!r}; known: {', '.join(table)}")
+    return dict(table[name][1])
+
+
+def describe(name: str, actuation: str = "velocity") -> str:
+    return _table(actuation)[name][0]

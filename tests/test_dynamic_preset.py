@@ -1,0 +1,64 @@
+"""``skinny train --preset general --actuation torque``: the torque twin's general preset."""
+
+from __future__ import annotations
+
+import pytest
+
+from skinny_mj.errors import SkinnyInputError
+
+
+def _config(argv):
+    from skinny_mj.cli import build_parser, given_options
+    from skinny_mj.config_files import train_config
+
+    args = build_parser().parse_args(argv)
+    args.given = given_options(argv)
+    return train_config(args)
+
+
+def test_torque_general_sets_its_fields_and_the_velocity_preset_is_untouched():
+    from skinny_mj.config import TrainConfig
+    from skinny_mj.presets import preset_fields
+
+    cfg, seed = _config(["train", "--preset", "general", "--actuation", "torque",
+                         "--epochs", "2", "--seed", "3"])
+    want = preset_fields("general", "torque")
+    assert seed == 3 and cfg.epochs == 2  # a flag given overrides the preset
+    assert {k: getattr(cfg, k) for k in want if k != "epochs"} == \
+        {k: v for k, v in want.items() if k != "epochs"}
+    assert (cfg.actuation, cfg.feedback, cfg.readout_fit) == ("torque", "inertia-pd",
+                                                             "forgetting")
+    velocity, _ = _config(["train", "--preset", "general"])
+    assert velocity == TrainConfig.from_dict(preset_fields("general"))  # as before
+    assert velocity.actuation == "velocity" and "vmax" not in velocity.trajectory
+    with pytest.raises(SkinnyInputError):
+        preset_fields("nope", "torque")
+
+
+def test_torque_general_babbling_is_within_the_torque_limits():
+    from skinny_mj.presets import preset_fields
+    from skinny_mj.torque_training import feasibility
+    from skinny_mj.trajectories.library import load_movement
+
+    fields = preset_fields("general", "torque")
+    traj, _ = load_movement(fields["trajectory"], fields["dof"])
+    assert bool(feasibility(fields["dof"], traj)["feasible"])
+    full_speed, _ = load_movement("md_02.amc", 4)  # the shipped clip is not, at full speed
+    assert not bool(feasibility(4, full_speed)["feasible"])
+
+
+@pytest.mark.slow  # the CLI end to end (imports matplotlib and rerun)
+def test_train_torque_general_records_the_preset(tmp_path):
+    from controllers.esn import read_metadata
+    from skinny_mj.cli import main
+
+    out = tmp_path / "train"
+    assert main(["train", "--preset", "general", "--actuation", "torque", "--epochs", "1",
+                 "--cycles", "1", "--reservoir", "20", "--trajectory",
+                 "babble:seed=0,duration=1,vmin=0.5,vmax=4", "--out", str(out),
+                 "--quiet"]) == 0
+    meta = read_metadata(out / "model.npz")
+    assert meta["training"]["preset"] == "general"
+    assert meta["config"]["actuation"] == "torque"
+    assert meta["config"]["feedback"] == "inertia-pd"
+    assert meta["config"]["readout_fit"] == "forgetting"
