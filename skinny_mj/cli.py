@@ -251,7 +251,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "viewer; headless, print the command")
     p.add_argument("path", type=Path, help="a .rrd file or a folder holding some")
     p.add_argument("--web", action="store_true",
-                   help="serve the web viewer on 127.0.0.1 (this machine only)")
+                   help="serve the web viewer (on --bind: 127.0.0.1, this machine only)")
     p.add_argument("--web-port", type=_positive_int, default=9090, help="HTTP port for --web")
     p.add_argument("--grpc-port", type=_positive_int, default=9876,
                    help="port of the viewer's gRPC server (the web viewer reads its data there)")

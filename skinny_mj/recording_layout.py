@@ -85,8 +85,18 @@ def torque_spans(dof_names: Sequence[str], torques: Mapping[str, np.ndarray]
         idx = [i for i, n in enumerate(dof_names) if split_dof(n)[0] == side]
         if idx:
             top = max(applied[:, idx].max(), np.percentile(bias[:, idx], 95))
-            spans[side] = 1.15 * float(top) if top > 0 else 1.0
+            spans[side] = _labelled_span(1.15 * float(top) if top > 0 else 1.0)
     return spans
+
+
+def _labelled_span(span: float) -> float:
+    """``span`` widened where the plot would label no tick but 0: the viewer labels a
+    power of ten only when a few of them fit (a half-range of 6-10 units of 10^k gets
+    its labels at 10^(k+1), outside; 1-1.2 units puts them on the edge)."""
+    unit = 10.0 ** np.floor(np.log10(span))
+    if span / unit > 6.0:
+        return 11.0 * unit
+    return max(span, 1.2 * unit)
 
 
 def blueprint(has_curves: bool, application_id: str, dof_names: Sequence[str],
