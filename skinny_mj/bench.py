@@ -223,16 +223,14 @@ def paper_e_full_s(workers: int | None = None, quick: bool = False,
     process and of the largest worker. ``quick`` runs ``build(quick=True)`` instead (a
     smoke test of this figure, not the figure)."""
     from skinny_mj import registry
-    from skinny_mj.experiment import run_sweep
+    from skinny_mj.experiment import default_workers, run_sweep
 
     module = registry.get("paper-e")
     if only is None:
         only = tuple(getattr(module, "TABLE_1", {"1": 0, "2": 0, "3": 0, "4": 0, "5": 0,
                                                  "6": 0}))
 
-    if workers is None:
-        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
-            else (os.cpu_count() or 1)
+    workers = default_workers(workers)
     exp = module.build(quick=quick)
     with tempfile.TemporaryDirectory(prefix="skinny-bench-") as tmp:
         out = Path(out_dir or tmp)

@@ -107,7 +107,7 @@ from skinny_mj.sweep.stats import aggregate, load_run, markdown_table
 
 __all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "select_rows",
            "run_sweep", "aggregate", "markdown_table", "execute_run", "execute_batch",
-           "default_out_dir"]
+           "default_out_dir", "default_workers", "default_batch_size"]
 
 _SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+=-]*$")  # no "..", no hidden file
 
@@ -230,6 +230,15 @@ def select_rows(experiment: Experiment, rows: Sequence[str] | str | None = None
     return tuple(r for r in experiment.rows if r.row_id in chosen)
 
 
+def default_workers(workers: int | None = None) -> int:
+    """``workers``, or by default every core this process may use."""
+    if workers is not None:
+        return workers
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
 def default_batch_size(n_rows: int, runs: int, workers: int) -> int:
     """Seeds per lockstep batch: as many as possible (a step's Python overhead is
     shared by the whole batch: ~55 us + ~5 us per run at N = 200), cutting each row
@@ -314,9 +323,7 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     runs = experiment.runs if runs is None else int(runs)
     if runs < 1:
         raise SkinnyInputError(f"runs must be >= 1, got {runs}")
-    if workers is None:
-        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
-            else (os.cpu_count() or 1)
+    workers = default_workers(workers)
     if workers < 1:
         raise SkinnyInputError(f"workers must be >= 1, got {workers}")
     if out_dir is None:

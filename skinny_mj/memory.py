@@ -15,7 +15,6 @@ read.
 from __future__ import annotations
 
 import inspect
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -261,10 +260,7 @@ def row_configs(module: Any, experiment: Any, row: Any) -> list[Any]:
         params = list(inspect.signature(fn).parameters)
         if len(params) != 2 or params[1] != "row":
             continue
-        try:
-            out = fn(experiment.config, row)
-        except Exception:  # a row this function does not describe (e.g. a figure's)
-            return []
+        out = fn(experiment.config, row)
         got = list(out.values()) if isinstance(out, dict) else [out]
         return [c for c in got if isinstance(c, TrainConfig)]
     return []
@@ -315,16 +311,6 @@ def sweep_estimate(module: Any, experiment: Any, rows: Sequence[Any], runs: int,
     return est, best[1]
 
 
-def worker_count(workers: int | None) -> int:
-    """The workers a sweep starts by default: every core this process may use."""
-    if workers is not None:
-        return workers
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1
-
-
-
 # -- the checks the commands make ------------------------------------------------------------
 def check_train(cfg: Any, what: str = "the training") -> None:
     """Refuse a training of ``cfg`` the machine cannot hold (loads one repetition of its
@@ -358,13 +344,13 @@ def check_sweep(module: Any, experiment: Any, rows: Any, runs: int | None,
                 workers: int | None, scheduler: str | None) -> None:
     """Refuse a sweep whose largest row, times the workers running at once, does not
     fit; on a remote Dask cluster the memory is the cluster's (no check here)."""
-    from skinny_mj.experiment import default_batch_size, select_rows
+    from skinny_mj.experiment import default_batch_size, default_workers, select_rows
 
     if scheduler is not None and scheduler != "local":
         return
     selected = select_rows(experiment, rows)
     runs = experiment.runs if runs is None else int(runs)
-    workers = worker_count(workers)
+    workers = default_workers(workers)
     found = sweep_estimate(module, experiment, selected, runs, workers,
                            default_batch_size(len(selected), runs, workers))
     if found is not None:
