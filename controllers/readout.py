@@ -161,6 +161,15 @@ def ridge_solve(m: np.ndarray, s: np.ndarray, ridge_lambda: float) -> np.ndarray
         return np.linalg.lstsq(aug_m, aug_s, rcond=None)[0]
 
 
+def linear_targets(cfg: ESNConfig, targets: np.ndarray) -> np.ndarray:
+    """``targets`` as float64 in the readout's linear domain: through atanh, clipped to
+    +-``cfg.target_clip``, for a tanh readout; as they are otherwise."""
+    s = np.asarray(targets, np.float64)
+    if cfg.readout_activation == "tanh":
+        s = np.arctanh(np.clip(s, -cfg.target_clip, cfg.target_clip))
+    return s
+
+
 def solve_readout(cfg: ESNConfig, states: np.ndarray, targets: np.ndarray, runs: np.ndarray,
                   factors: PinvFactors | None = None) -> np.ndarray:
     """(W_out)^T (r, D, n_out) of the runs ``runs`` (r indices into R), fitted as ``cfg``
@@ -169,10 +178,7 @@ def solve_readout(cfg: ESNConfig, states: np.ndarray, targets: np.ndarray, runs:
     +-``target_clip``) for a tanh readout. ``factors``: :class:`PinvFactors` of these same
     states (pinv readout only)."""
     m = np.asarray(states, np.float64)
-    s = np.asarray(targets, np.float64)
-    if cfg.readout_activation == "tanh":
-        clip = cfg.target_clip
-        s = np.arctanh(np.clip(s, -clip, clip))
+    s = linear_targets(cfg, targets)
     if factors is not None:
         if cfg.readout != "pinv" or factors.shape != m.shape:
             raise ValueError("factors must be PinvFactors of the same states, for a "

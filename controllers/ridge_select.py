@@ -16,18 +16,10 @@ from __future__ import annotations
 import numpy as np
 
 from controllers.esn import ESN
+from controllers.readout import linear_targets
 
 #: The default grid: 10^-8 ... 10^1 (10 values; the thesis's pinv is lambda -> 0).
 RIDGE_GRID: tuple[float, ...] = tuple(float(10.0 ** k) for k in range(-8, 2))
-
-
-def linear_targets(esn: ESN, targets: np.ndarray) -> np.ndarray:
-    """Targets in the readout's linear domain: through atanh (clipped) for tanh."""
-    s = np.asarray(targets, np.float64)
-    if esn.cfg.readout_activation == "tanh":
-        clip = esn.cfg.target_clip
-        s = np.arctanh(np.clip(s, -clip, clip))
-    return s
 
 
 def ridge_path(m: np.ndarray, s: np.ndarray, lambdas: np.ndarray) -> np.ndarray:
@@ -71,7 +63,7 @@ class RidgeSelector:
     def observe(self, states: np.ndarray, targets: np.ndarray, runs: np.ndarray) -> None:
         """Keep a cycle's statistics as the next validation cycle of the ``runs``
         (R,) bool; states (R, T, D), targets (R, T, n) in the output domain."""
-        s = linear_targets(self.esn, targets)
+        s = linear_targets(self.esn.cfg, targets)
         for r in np.flatnonzero(runs):
             m = np.asarray(states[r], np.float64)
             self._val[r] = (m.T @ m, m.T @ s[r], float(np.sum(s[r] ** 2)))
@@ -81,7 +73,7 @@ class RidgeSelector:
         """Fit the readout of the ``runs`` (R,) bool on this cycle, lambda chosen on
         the last observed cycle (the grid's middle if none was), then keep this cycle
         as the next validation cycle."""
-        s = linear_targets(esn, targets)
+        s = linear_targets(esn.cfg, targets)
         for r in np.flatnonzero(runs):
             m = np.asarray(states[r], np.float64)
             w = ridge_path(m, s[r], self.grid)

@@ -18,15 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from controllers.esn import ESN
-from controllers.readout import RLS
-
-
-def _targets(esn: ESN, targets: np.ndarray) -> np.ndarray:
-    s = np.asarray(targets, np.float64)
-    cfg = esn.cfg
-    if cfg.readout_activation == "tanh":
-        s = np.arctanh(np.clip(s, -cfg.target_clip, cfg.target_clip))
-    return s
+from controllers.readout import RLS, linear_targets
 
 
 class ForgettingReadout:
@@ -47,7 +39,7 @@ class ForgettingReadout:
 
     def fit(self, esn: ESN, states: np.ndarray, targets: np.ndarray, runs: np.ndarray,
             epoch: int) -> None:
-        m, s = np.asarray(states, np.float64), _targets(esn, targets)
+        m, s = np.asarray(states, np.float64), linear_targets(esn.cfg, targets)
         eye = self.ridge * np.eye(m.shape[-1])
         for r in np.flatnonzero(np.asarray(runs, bool)):
             self.gram[r] = self.forgetting * self.gram[r] + m[r].T @ m[r]
@@ -71,7 +63,7 @@ class RLSReadout:
 
     def fit(self, esn: ESN, states: np.ndarray, targets: np.ndarray, runs: np.ndarray,
             epoch: int) -> None:
-        m, s = np.asarray(states, np.float64), _targets(esn, targets)
+        m, s = np.asarray(states, np.float64), linear_targets(esn.cfg, targets)
         runs = np.asarray(runs, bool)
         for t in range(m.shape[1]):
             self.rls.update(m[:, t], s[:, t], runs)
