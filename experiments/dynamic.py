@@ -322,8 +322,8 @@ def report(results: dict, out_dir: Path) -> str:
 
 def floor(dof: int, name: str) -> float:
     """The position NRMSE of the best reachable pose of a movement (no controller beats it)."""
+    from skinny_mj.imitation import movement_stats
     from skinny_mj.run_parts import load_trajectory
-    from skinny_mj.trajectories.human import movement_stats
 
     traj, _ = load_trajectory(TrainConfig(dof=dof, trajectory=name, actuation="torque"))
     return movement_stats(traj)["reachable_floor_position_nrmse"]

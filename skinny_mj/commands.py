@@ -305,7 +305,7 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
         print("speed variants: NAME@0.5, NAME@1.5 (or --speed); repetitions: --reps N")
         return 0
     if args.action == "show":
-        from skinny_mj.trajectories.human import movement_stats
+        from skinny_mj.imitation import movement_stats
 
         ns = argparse.Namespace(trajectory=args.name, asf=args.asf, speed=1.0, reps=1,
                                 retarget=args.retarget)

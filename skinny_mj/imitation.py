@@ -1,5 +1,6 @@
 """Motion-imitation metrics of one test beside the position NRMSE, shared by
-``skinny test`` and ``skinny experiment generalization``.
+``skinny test`` and ``skinny experiment generalization``, and a movement's statistics as
+a target to imitate (``skinny trajectory show``: what is reachable, the NRMSE floor).
 
 DTW NRMSE (:mod:`skinny_mj.dtw`, needs dtaidistance), the fraction of steps within 5° of
 the target per joint, RMS error per joint (deg), the timing lag (cross-correlation
@@ -12,10 +13,17 @@ from typing import Any
 
 import numpy as np
 
-from controllers.metrics import fraction_within, nrmse, rmse_per_signal, timing_lag
+from controllers.metrics import (
+    fraction_within,
+    nrmse,
+    position_nrmse,
+    rmse_per_signal,
+    timing_lag,
+)
 from skinny_mj import body
+from skinny_mj.trajectories import Trajectory, ik
 
-__all__ = ["WITHIN_DEG", "imitation_metrics", "saturation"]
+__all__ = ["WITHIN_DEG", "imitation_metrics", "movement_stats", "saturation"]
 
 #: Tolerance of the "within" fraction, degrees.
 WITHIN_DEG = 5.0
@@ -58,3 +66,27 @@ def imitation_metrics(outcome, dof: int, *, dtw: bool = True) -> dict[str, Any]:
         out["dtw_nrmse"] = dtw_nrmse(outcome.rollout.true_signals[0][1:],
                                      outcome.desired[1:]) if available() else None
     return out
+
+
+def movement_stats(traj: Trajectory) -> dict[str, float]:
+    """Statistics of a movement (``skinny trajectory show``): steps, still steps (every
+    joint slower than 0.05 rad/s; and exactly still), peak joint speed (rad/s), the
+    fraction of steps whose Cartesian target Skinny cannot reach (IK residual >
+    ``ik.UNREACHABLE_TOL``) and the residual's mean, the position NRMSE of the best
+    reachable pose (a floor no controller beats), and the 8-12 Hz band RMS of the
+    Cartesian targets (tremor + marker noise), normalized units."""
+    from scipy.signal import butter, sosfiltfilt
+
+    target = traj.position_signals("cartesian")
+    speed = np.abs(np.diff(traj.angles, axis=0)).max(axis=1) / traj.dt
+    res = ik.residual(traj.angles, target, traj.dof)
+    reached = body.cartesian_signals(traj.angles, traj.dof)
+    sos = butter(4, [8.0, 12.0], btype="band", fs=1.0 / traj.dt, output="sos")
+    band = sosfiltfilt(sos, target, axis=0) if len(target) > 30 else np.zeros_like(target)
+    return {"steps": len(traj), "still_steps": int((speed < 0.05).sum()),
+            "exactly_still_steps": int((speed == 0).sum()),
+            "peak_joint_speed_rad_s": float(speed.max()),
+            "unreachable_fraction": float((res > ik.UNREACHABLE_TOL).mean()),
+            "mean_ik_residual": float(res.mean()),
+            "reachable_floor_position_nrmse": float(position_nrmse(reached[None], target)[0]),
+            "tremor_band_rms": float(np.sqrt(np.mean(band**2)))}

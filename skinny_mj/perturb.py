@@ -21,7 +21,7 @@ one):
   capsule's far end move out along the forearm);
 - ``payload_kg``, ``mass_scale`` (the torque twin): a point mass at the right hand's
   centre of mass, every arm link's mass and inertia x ``mass_scale``, as
-  :func:`skinny_mj.torque_training.perturb` makes the robustness test plant.
+  :func:`perturb` makes the robustness test plant.
 
 The feedback controller is not told: :meth:`command_jacobian` stays the nominal
 plant's (the controller's model of the arm is what it was), as for a real change. With
@@ -46,6 +46,12 @@ from skinny_mj import body
 
 #: the side whose forearm :func:`lengthen_forearm` lengthens by default
 FOREARM_SIDE = "right"
+#: Bodies whose mass and inertia ``test_mass_scale`` scales (both arms), and the hand
+#: that carries ``test_payload_kg`` (a point mass at its centre of mass: the hand's CoM
+#: and its inertia about the CoM are unchanged, only its mass grows).
+ARM_BODIES = tuple(f"{side}_{seg}" for side in body.SIDES
+                   for seg in ("upper_arm", "forearm", "hand"))
+PAYLOAD_BODY = "right_hand"
 
 
 def lengthen_forearm(spec: mujoco.MjSpec, factor: float, side: str = FOREARM_SIDE) -> None:
@@ -103,6 +109,26 @@ class ModelChange:
             setattr(self.live.stat, name, values[which])
 
 
+def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0) -> None:
+    """Change the test plant's model fields in place (every copy of a batch): each arm
+    link's ``body_mass`` and ``body_inertia`` x ``mass_scale`` (centres of mass kept),
+    then ``payload_kg`` added to the right hand's mass at its centre of mass; the derived
+    constants are recomputed (``mj_setConst``). The controllers are not told."""
+    if payload_kg == 0 and mass_scale == 1:
+        return
+    model, data = (plant.model, plant.data) if hasattr(plant, "model") else \
+        (plant.physics.model.ptr, plant.physics.data.ptr)
+    for i in range(model.nbody):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, i) or ""
+        base = name.rsplit("/", 1)[-1]
+        if base in ARM_BODIES:
+            model.body_mass[i] *= mass_scale
+            model.body_inertia[i] *= mass_scale
+        if base == PAYLOAD_BODY:
+            model.body_mass[i] += payload_kg
+    mujoco.mj_setConst(model, data)
+
+
 def forearm_change(plant: Any, factor: float) -> ModelChange:
     """The :class:`ModelChange` that lengthens ``plant``'s right forearms (every copy of
     a :class:`~skinny_mj.plant.BatchPlant`) ``factor`` x."""
@@ -114,13 +140,11 @@ def forearm_change(plant: Any, factor: float) -> ModelChange:
 
 
 def mass_change(plant: Any, payload_kg: float, mass_scale: float) -> ModelChange:
-    """The :class:`ModelChange` of :func:`skinny_mj.torque_training.perturb` on
+    """The :class:`ModelChange` of :func:`perturb` on
     ``plant``'s model (its present values are the nominal ones)."""
-    from skinny_mj import torque_training
-
     variant = copy.copy(plant.model)  # a deep copy
-    torque_training.perturb(types.SimpleNamespace(model=variant, data=mujoco.MjData(variant)),
-                            payload_kg, mass_scale)
+    perturb(types.SimpleNamespace(model=variant, data=mujoco.MjData(variant)), payload_kg,
+            mass_scale)
     return ModelChange(plant.model, plant.model, variant)
 
 

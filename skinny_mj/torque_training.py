@@ -9,7 +9,8 @@
   trajectory_torques_nm`), normalized by the limits (T-1, n_dof);
 - :func:`teacher_inputs`: the true-target architecture's extra teacher-forced inputs
   [qd_d(t+1); qd_d(t)] / v_max, as the rollout's [qd_d(t+1); qd(t)] / v_max;
-- :func:`perturb`: the robustness test plant (payload, link masses);
+- :func:`perturb` (:func:`skinny_mj.perturb.perturb`): the robustness test plant
+  (payload, link masses);
 - :func:`controller`: the PD teacher with gains scaled to the limits;
 - :func:`hook_for` with an arm law (``feedback`` in :data:`skinny_mj.config.ARM_LAWS`):
   an :class:`controllers.torque_arm_loop.ArmLoop` fed by
@@ -31,7 +32,6 @@ from __future__ import annotations
 
 import functools
 
-import mujoco
 import numpy as np
 from scipy.interpolate import CubicSpline
 
@@ -42,6 +42,7 @@ from controllers.torque_fel import TorqueLoop
 from skinny_mj import body
 from skinny_mj.config import ARM_LAWS, TrainConfig
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.perturb import perturb  # noqa: F401  (re-exported: the robustness test plant)
 
 #: Default pole placement omega (rad/s) per law, zeta 1 (critically damped): computed
 #: torque and PD + gravity at 15 rad/s (omega dt = 0.3 at the 20 ms hold), the ID
@@ -49,14 +50,6 @@ from skinny_mj.errors import SkinnyInputError
 #: Ridge of the remembering readout fits when the ESN's readout is not "ridge".
 MEMORY_RIDGE = 1e-2
 ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0}
-
-#: Bodies whose mass and inertia ``test_mass_scale`` scales (both arms), and the hand
-#: that carries ``test_payload_kg`` (a point mass at its centre of mass: the hand's CoM
-#: and its inertia about the CoM are unchanged, only its mass grows).
-ARM_BODIES = tuple(f"{side}_{seg}" for side in body.SIDES
-                   for seg in ("upper_arm", "forearm", "hand"))
-PAYLOAD_BODY = "right_hand"
-
 
 @functools.lru_cache(maxsize=4)
 def _dynamics(dof: int):
@@ -165,26 +158,6 @@ def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
 def perturbed(cfg: TrainConfig) -> bool:
     """Does ``cfg``'s test plant differ from the nominal twin (the controllers' model)?"""
     return cfg.test_payload_kg != 0 or cfg.test_mass_scale != 1
-
-
-def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0) -> None:
-    """Change the test plant's model fields in place (every copy of a batch): each arm
-    link's ``body_mass`` and ``body_inertia`` x ``mass_scale`` (centres of mass kept),
-    then ``payload_kg`` added to the right hand's mass at its centre of mass; the derived
-    constants are recomputed (``mj_setConst``). The controllers are not told."""
-    if payload_kg == 0 and mass_scale == 1:
-        return
-    model, data = (plant.model, plant.data) if hasattr(plant, "model") else \
-        (plant.physics.model.ptr, plant.physics.data.ptr)
-    for i in range(model.nbody):
-        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, i) or ""
-        base = name.rsplit("/", 1)[-1]
-        if base in ARM_BODIES:
-            model.body_mass[i] *= mass_scale
-            model.body_inertia[i] *= mass_scale
-        if base == PAYLOAD_BODY:
-            model.body_mass[i] += payload_kg
-    mujoco.mj_setConst(model, data)
 
 
 def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:

@@ -52,8 +52,8 @@ def test_controller_alone_stays_within_limits_without_warnings():
 
 
 def test_perturbed_test_plant_changes_every_copy():
+    from skinny_mj.perturb import perturb
     from skinny_mj.plant import BatchPlant
-    from skinny_mj.torque_training import perturb
 
     plant = BatchPlant(4, "cartesian", None, n_runs=2, actuation="torque")
     names = [mujoco.mj_id2name(plant.model, mujoco.mjtObj.mjOBJ_BODY, i)

@@ -12,8 +12,10 @@ from controllers.true_target import TrueTargetConfig, train_true_target
 from skinny_mj import body
 from skinny_mj.config import TrainConfig
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.imitation import movement_stats
 from skinny_mj.trajectories import Trajectory, excerpt, ik, load_movement, sample_clip, ymca
-from skinny_mj.trajectories.human import markers, movement_stats, ymca_recorded
+from skinny_mj.trajectories.human import markers, ymca_recorded
+from skinny_mj.trajectories.retarget import solve_ik
 
 LIMITS = np.tile([0.0, np.pi], (4, 1))
 
@@ -108,7 +110,7 @@ def test_ik_recovers_skinnys_own_angles():
         q = ymca(dof).angles
         seg = body.segment_vectors(q, dof)
         unit = seg / np.linalg.norm(seg, axis=-1, keepdims=True)
-        angles, target = ik.solve(unit[:, :, 0], unit[:, :, 1], dof)
+        angles, target = solve_ik(unit[:, :, 0], unit[:, :, 1], dof)
         np.testing.assert_allclose(target, body.cartesian_signals(q, dof), atol=1e-12)
         assert ik.residual(angles, target, dof).max() < 1e-6
 

@@ -2,7 +2,9 @@
 
 controllers/ (the learning) never imports the plant, the package ``skinny_mj`` never
 imports ``experiments`` (it finds them through the ``skinny_mj.experiments`` entry
-points), no module reads another module's private attributes, and the wheel carries
+points), the parts of ``skinny_mj`` import each other one way only (:data:`RULES`, read
+from every import statement, those inside functions included), no two modules import
+each other, no module reads another module's private attributes, and the wheel carries
 every package folder, the MJCF and the CMU sample clips.
 """
 
@@ -24,6 +26,41 @@ LAYERS = ("skinny_mj", "controllers", "experiments")
 PUBLIC_UNDERSCORE = {"_replace", "_fields", "_asdict", "_make", "_field_defaults"}
 # Cross-module private reads allowed (none: each got a public accessor).
 KNOWN_PRIVATE_READS: set[str] = set()
+
+# -- the parts of skinny_mj, as module-name prefixes ------------------------------------
+# The body and its MuJoCo model, the dm_control task, the plant adapters and the Gymnasium
+# envs over them, the analytic ideal controller, changes of the body, pictures.
+PLANT = ("skinny_mj.body", "skinny_mj.model", "skinny_mj.physics", "skinny_mj.task",
+         "skinny_mj.plant", "skinny_mj.dynamics", "skinny_mj.perturb", "skinny_mj.bimanual",
+         "skinny_mj.ideal", "skinny_mj.render", "skinny_mj.headless", "skinny_mj.gym")
+# What Skinny imitates (pure NumPy/SciPy: no mujoco, no dm_control).
+MOVEMENTS = ("skinny_mj.trajectories",)
+# One run: its configuration (and presets, config files), its parts, the training path,
+# the torque additions, the toolbox's protocol options, the imitation metrics.
+TRAINING = ("skinny_mj.config", "skinny_mj.config_files", "skinny_mj.presets",
+            "skinny_mj.run_parts", "skinny_mj.training", "skinny_mj.torque_training",
+            "skinny_mj.protocol", "skinny_mj.imitation")
+# Many runs: the experiment engine, its sweep helpers, the registry of studies.
+ENGINE = ("skinny_mj.experiment", "skinny_mj.sweep", "skinny_mj.registry")
+# The `skinny` command: parser, handlers, flags, help texts, bench, viewer.
+COMMAND_LINE = ("skinny_mj.cli", "skinny_mj.commands", "skinny_mj.flags",
+                "skinny_mj.study_help", "skinny_mj.bench", "skinny_mj.bench_mackey_glass",
+                "skinny_mj.viewer")
+# Not listed, shared by every part: errors, io, threads, progress, preflight, memory
+# (its generic check; its run and sweep estimates import training and the engine inside
+# functions), dtw, plots, recording, recording_layout.
+HEAVY = ("mujoco", "dm_control", "rerun")
+# (who, what it must not import, why): module-name prefixes.
+RULES = (
+    (("controllers",), ("skinny_mj", "experiments", *HEAVY),
+     "the learning is pure NumPy/SciPy, testable without the plant"),
+    (("skinny_mj",), ("experiments",), "studies are found through entry points"),
+    (MOVEMENTS, ("controllers", *HEAVY, *TRAINING, *ENGINE, *COMMAND_LINE),
+     "a movement is data, usable without a controller or a simulator"),
+    (PLANT, (*TRAINING, *ENGINE, *COMMAND_LINE), "the plant knows nothing of training"),
+    (TRAINING, (*ENGINE, *COMMAND_LINE), "one run knows nothing of sweeps or the CLI"),
+    (ENGINE, COMMAND_LINE, "the engine runs without the command line"),
+)
 
 
 def _imported_in_subprocess(code: str, tmp_path: Path) -> set[str]:
@@ -63,6 +100,123 @@ def test_no_skinny_mj_module_imports_experiments(tmp_path):
             "assert 'paper-e' in registry.names()\n")
     loaded = _imported_in_subprocess(code, tmp_path)
     assert "skinny_mj" in loaded and "experiments" not in loaded
+
+
+def _module_name(path: Path, root: Path) -> str:
+    parts = path.relative_to(root).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def imported_names(path: Path, root: Path = ROOT) -> set[str]:
+    """Every module name ``path`` imports, module level and inside functions: ``import a.b``
+    gives ``a.b``; ``from a import b`` gives ``a`` and ``a.b`` (b may be a module);
+    relative imports are resolved against the file's package."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    name = _module_name(path, root)
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")[:len(package.split(".")) - node.level + 1]
+                base = ".".join(parts + ([node.module] if node.module else []))
+            found |= {base} | {f"{base}.{alias.name}" for alias in node.names}
+    return found
+
+
+def _under(name: str, prefixes) -> bool:
+    return any(name == p or name.startswith(p + ".") for p in prefixes)
+
+
+def layer_violations(root: Path = ROOT) -> set[str]:
+    """``path imports name (why)`` for every import that breaks one of :data:`RULES`."""
+    found: set[str] = set()
+    for layer in LAYERS:
+        for path in sorted((root / layer).rglob("*.py")):
+            module, names = _module_name(path, root), imported_names(path, root)
+            for who, banned, why in RULES:
+                if _under(module, who):
+                    found |= {f"{path.relative_to(root).as_posix()} imports {n} ({why})"
+                              for n in names if _under(n, banned) and not _under(n, who)}
+    return found
+
+
+def import_circles(layer: str, root: Path = ROOT) -> list[tuple[str, str]]:
+    """Pairs of modules of ``layer`` that import each other (any level, inside functions
+    too). ``from a import b`` counts as importing the module ``a.b`` when it is one, else
+    ``a``; a module importing its own package is no circle (the package comes first)."""
+    paths = sorted((root / layer).rglob("*.py"))
+    modules = {_module_name(p, root): p for p in paths}
+    edges: dict[str, set[str]] = {}
+    for module, path in modules.items():
+        names = imported_names(path, root) & set(modules)
+        # a package named only as the base of "from package import submodule" is no edge
+        names -= {n for n in names if any(m.startswith(n + ".") for m in names)}
+        edges[module] = {n for n in names if n != module and not module.startswith(n + ".")}
+    return sorted((a, b) for a in edges for b in edges[a] if a < b and a in edges.get(b, ()))
+
+
+def test_the_import_scan_reads_every_import_and_finds_a_planted_violation(tmp_path):
+    (tmp_path / "skinny_mj" / "trajectories").mkdir(parents=True)
+    (tmp_path / "controllers").mkdir()
+    (tmp_path / "experiments").mkdir()
+    (tmp_path / "skinny_mj" / "trajectories" / "__init__.py").write_text("")
+    (tmp_path / "skinny_mj" / "trajectories" / "a.py").write_text(
+        "import numpy as np\nfrom . import b\n"
+        "def f():\n    from ..training import train\n    import controllers.metrics\n")
+    (tmp_path / "skinny_mj" / "trajectories" / "b.py").write_text(
+        "def g():\n    from skinny_mj.trajectories import a\n")
+    (tmp_path / "skinny_mj" / "perturb.py").write_text(
+        "class P:\n    def m(self):\n        from skinny_mj import torque_training\n")
+    (tmp_path / "controllers" / "esn.py").write_text("def f():\n    import mujoco\n")
+    assert imported_names(tmp_path / "skinny_mj" / "trajectories" / "a.py", tmp_path) == {
+        "numpy", "skinny_mj.trajectories", "skinny_mj.trajectories.b", "skinny_mj.training",
+        "skinny_mj.training.train", "controllers.metrics"}
+    assert {v.split(" (")[0] for v in layer_violations(tmp_path)} == {
+        "skinny_mj/trajectories/a.py imports skinny_mj.training",
+        "skinny_mj/trajectories/a.py imports skinny_mj.training.train",
+        "skinny_mj/trajectories/a.py imports controllers.metrics",
+        "skinny_mj/perturb.py imports skinny_mj.torque_training",
+        "controllers/esn.py imports mujoco"}
+    assert import_circles("skinny_mj", tmp_path) == [
+        ("skinny_mj.trajectories.a", "skinny_mj.trajectories.b")]
+
+
+def test_every_import_keeps_the_layering_rules():
+    assert layer_violations() == set()
+
+
+def test_every_module_is_placed_in_a_part_or_is_shared():
+    """A new module of skinny_mj must be placed in :data:`RULES`' parts or named shared."""
+    shared = {f"skinny_mj.{n}" for n in ("errors", "io", "threads", "progress", "preflight",
+                                         "memory", "dtw", "plots", "recording",
+                                         "recording_layout")}
+    parts = (*PLANT, *MOVEMENTS, *TRAINING, *ENGINE, *COMMAND_LINE)
+    modules = {_module_name(p, ROOT) for p in (ROOT / "skinny_mj").rglob("*.py")} - {"skinny_mj"}
+    assert {m for m in modules if not _under(m, parts) and m not in shared} == set()
+
+
+@pytest.mark.parametrize("layer", ["skinny_mj", "controllers"])
+def test_no_two_modules_import_each_other(layer):
+    assert import_circles(layer) == []
+
+
+# Study/report pairs of experiments/ that import each other, counted when this test was
+# written; the count may only fall (the xfail below flips when it reaches 0).
+EXPERIMENT_CIRCLES = 9
+
+
+def test_experiment_import_circles_do_not_grow():
+    assert len(import_circles("experiments")) <= EXPERIMENT_CIRCLES
+
+
+@pytest.mark.xfail(strict=True, reason="experiments/ has 9 study/report import circles "
+                   "(a study and its report import each other)")
+def test_no_two_experiment_modules_import_each_other():
+    assert import_circles("experiments") == []
 
 
 def _private(name: str) -> bool:

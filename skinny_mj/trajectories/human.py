@@ -47,7 +47,7 @@ import functools
 import numpy as np
 
 from skinny_mj import body
-from skinny_mj.trajectories import ik
+from skinny_mj.trajectories.retarget import solve_ik
 from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory
 from skinny_mj.trajectories.ymca import (
     SCHEDULE,
@@ -154,30 +154,4 @@ def _solved(dof: int, seed: int, unit_2d: bool) -> tuple[np.ndarray, np.ndarray]
     if unit_2d and dof == 4:
         seg[..., 1] = 0.0  # the frontal projection, then normalized below
     seg = seg / np.linalg.norm(seg, axis=-1, keepdims=True)
-    return ik.solve(seg[:, :, 0], seg[:, :, 1], dof)
-
-
-def movement_stats(traj: Trajectory) -> dict[str, float]:
-    """Statistics of a movement (``skinny trajectory show``): steps, still steps (every
-    joint slower than 0.05 rad/s; and exactly still), peak joint speed (rad/s), the
-    fraction of steps whose Cartesian target Skinny cannot reach (IK residual >
-    ``ik.UNREACHABLE_TOL``) and the residual's mean, the position NRMSE of the best
-    reachable pose (a floor no controller beats), and the 8-12 Hz band RMS of the
-    Cartesian targets (tremor + marker noise), normalized units."""
-    from scipy.signal import butter, sosfiltfilt
-
-    from controllers.metrics import position_nrmse
-
-    target = traj.position_signals("cartesian")
-    speed = np.abs(np.diff(traj.angles, axis=0)).max(axis=1) / traj.dt
-    res = ik.residual(traj.angles, target, traj.dof)
-    reached = body.cartesian_signals(traj.angles, traj.dof)
-    sos = butter(4, [8.0, 12.0], btype="band", fs=1.0 / traj.dt, output="sos")
-    band = sosfiltfilt(sos, target, axis=0) if len(target) > 30 else np.zeros_like(target)
-    return {"steps": len(traj), "still_steps": int((speed < 0.05).sum()),
-            "exactly_still_steps": int((speed == 0).sum()),
-            "peak_joint_speed_rad_s": float(speed.max()),
-            "unreachable_fraction": float((res > ik.UNREACHABLE_TOL).mean()),
-            "mean_ik_residual": float(res.mean()),
-            "reachable_floor_position_nrmse": float(position_nrmse(reached[None], target)[0]),
-            "tremor_band_rms": float(np.sqrt(np.mean(band**2)))}
+    return solve_ik(seg[:, :, 0], seg[:, :, 1], dof)

@@ -1,14 +1,14 @@
 """Inverse kinematics of desired segment directions onto Skinny's joint angles.
 
 The thesis's true commands came from an inverse kinematics of the recorded positions
-(Tolani & Badler's for 3D, thesis §3.1.3). Here: the analytic solution of
-:func:`skinny_mj.trajectories.retarget.solve_angles` (the frontal-plane angles in 2D, the
-closed form of the 3D shoulder and elbow), made continuous and clipped into the joint
-ranges (:func:`~skinny_mj.trajectories.retarget.clip_continuous`), then refined by
-damped least squares on ``skinny_mj.body``'s Cartesian signals with the joint limits
-enforced by projection. Where the target is reachable the analytic solution is already
-exact and the refinement leaves it; where it is not (a segment out of the frontal plane
-in 2D, a pose beyond a joint limit in 3D) it moves to the nearest reachable signals.
+(Tolani & Badler's for 3D, thesis §3.1.3). Here (:func:`skinny_mj.trajectories.retarget.
+solve_ik`): the analytic solution of :func:`~skinny_mj.trajectories.retarget.solve_angles`
+(the frontal-plane angles in 2D, the closed form of the 3D shoulder and elbow), made
+continuous and clipped into the joint ranges, then refined by :func:`refine`: damped least
+squares on ``skinny_mj.body``'s Cartesian signals with the joint limits enforced by
+projection. Where the target is reachable the analytic solution is already exact and the
+refinement leaves it; where it is not (a segment out of the frontal plane in 2D, a pose
+beyond a joint limit in 3D) it moves to the nearest reachable signals.
 """
 
 from __future__ import annotations
@@ -62,13 +62,3 @@ def residual(angles: np.ndarray, target: np.ndarray, dof: int) -> np.ndarray:
     nc = 2 if dof == 4 else 3
     return np.linalg.norm(diff.reshape(diff.shape[0], -1, nc), axis=-1).max(axis=1)
 
-
-def solve(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndarray, np.ndarray]:
-    """Joint angles (T, n_dof) rad and desired Cartesian signals (T, n_sig) for unit
-    segment directions (T, 2, 3) (analytic, continuous, clipped, refined; see module)."""
-    from skinny_mj.trajectories.retarget import clip_continuous, solve_angles
-
-    target = target_signals(upper, fore, dof)
-    analytic, _ = solve_angles(upper, fore, dof)
-    clipped, _ = clip_continuous(analytic, dof)
-    return refine(clipped, target, dof), target

@@ -40,6 +40,7 @@ import numpy as np
 
 from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.trajectories import ik
 from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory
 
 _MIRROR_X = np.array([-1.0, 1.0, 1.0])
@@ -259,6 +260,16 @@ def solve_angles(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndar
     return out, filled
 
 
+def solve_ik(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndarray, np.ndarray]:
+    """Joint angles (T, n_dof) rad and desired Cartesian signals (T, n_sig) for unit
+    segment directions (T, 2, 3): :func:`solve_angles`, :func:`clip_continuous`, then
+    :func:`skinny_mj.trajectories.ik.refine` (see :mod:`skinny_mj.trajectories.ik`)."""
+    target = ik.target_signals(upper, fore, dof)
+    analytic, _ = solve_angles(upper, fore, dof)
+    clipped, _ = clip_continuous(analytic, dof)
+    return ik.refine(clipped, target, dof), target
+
+
 def lowpass(x: np.ndarray, fps: float, cutoff_hz: float) -> np.ndarray:
     """Zero-phase 4th-order Butterworth low-pass of ``x`` (T, n) sampled at ``fps`` Hz."""
     from scipy.signal import butter, sosfiltfilt
@@ -338,8 +349,6 @@ def _position_targets(traj: Trajectory, upper: np.ndarray, fore: np.ndarray, fps
                       cutoff_hz: float, window_s) -> Trajectory:
     """``traj`` (clipped angles at 50 Hz) with the capture's unit segment vectors as its
     explicit desired Cartesian signals and its angles refined onto them."""
-    from skinny_mj.trajectories import ik
-
     dirs = np.concatenate([upper, fore], axis=1).reshape(len(upper), -1)  # (T, 12)
     dirs = resample_to(lowpass(dirs, fps, cutoff_hz), fps, traj.dt)
     if window_s is not None:
