@@ -96,7 +96,7 @@ def test_no_skinny_mj_module_imports_experiments(tmp_path):
             " onerror=fail)] + ['skinny_mj.models']\n"
             "assert len(names) > 20, names\n"
             "for name in names:\n    importlib.import_module(name)\n"
-            "from skinny_mj import registry\n"
+            "import skinny_mj.registry as registry\n"
             "assert 'paper-e' in registry.names()\n")
     loaded = _imported_in_subprocess(code, tmp_path)
     assert "skinny_mj" in loaded and "experiments" not in loaded
