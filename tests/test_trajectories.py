@@ -326,6 +326,12 @@ def test_bad_npz_files(tmp_path):
     (tmp_path / "junk.npz").write_bytes(b"not a zip")
     with pytest.raises(SkinnyInputError):
         Trajectory.load(tmp_path / "junk.npz")
+    # a zip entry needing a newer zip version than zipfile reads (NotImplementedError)
+    data = bytearray(ymca(4).save(tmp_path / "v.npz").read_bytes())
+    data[data.find(b"PK\x01\x02") + 6] = 64  # central directory: version needed, 6.4
+    (tmp_path / "v.npz").write_bytes(bytes(data))
+    with pytest.raises(SkinnyInputError, match="not a readable trajectory npz"):
+        Trajectory.load(tmp_path / "v.npz")
 
 
 def test_dof_mismatch_and_missing_file(tmp_path):

@@ -262,8 +262,9 @@ def _load_npz(path: Path) -> Trajectory:
                        for k in data.files if k.startswith("desired_")} or None
     except SkinnyInputError:
         raise
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:  # zip errors,
-        # pickled objects, bad JSON (BadZipFile: a zip header with no zip after it)
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, NotImplementedError) as exc:
+        # zip errors, pickled objects, bad JSON (BadZipFile: a zip header with no zip after
+        # it; NotImplementedError: a zip version or compression zipfile cannot read)
         raise SkinnyInputError(f"not a readable trajectory npz ({exc})", path=path) from None
     if not isinstance(meta, dict):
         raise SkinnyInputError("'meta' must be a JSON object", path=path)
