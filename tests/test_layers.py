@@ -41,7 +41,8 @@ TRAINING = ("skinny_mj.config", "skinny_mj.config_files", "skinny_mj.presets",
             "skinny_mj.run_parts", "skinny_mj.training", "skinny_mj.torque_training",
             "skinny_mj.protocol", "skinny_mj.imitation")
 # Many runs: the experiment engine, its sweep helpers, the registry of studies.
-ENGINE = ("skinny_mj.experiment", "skinny_mj.sweep", "skinny_mj.registry")
+ENGINE = ("skinny_mj.experiment", "skinny_mj.sweep", "skinny_mj.sweep.folder",
+          "skinny_mj.sweep.options", "skinny_mj.sweep.stats", "skinny_mj.registry")
 # The `skinny` command: parser, handlers, flags, help texts, bench, viewer.
 COMMAND_LINE = ("skinny_mj.cli", "skinny_mj.commands", "skinny_mj.flags",
                 "skinny_mj.study_help", "skinny_mj.bench", "skinny_mj.bench_mackey_glass",
@@ -108,24 +109,43 @@ def _module_name(path: Path, root: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def imported_names(path: Path, root: Path = ROOT) -> set[str]:
-    """Every module name ``path`` imports, module level and inside functions: ``import a.b``
-    gives ``a.b``; ``from a import b`` gives ``a`` and ``a.b`` (b may be a module);
+def _statements(nodes, runtime: bool):
+    """Every import statement in ``nodes`` and under them (inside functions too); with
+    ``runtime``, not those under ``if TYPE_CHECKING:`` (they never run)."""
+    for node in nodes:
+        if runtime and isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            yield from _statements(node.orelse, runtime)
+            continue
+        if isinstance(node, ast.Import | ast.ImportFrom):
+            yield node
+        yield from _statements(ast.iter_child_nodes(node), runtime)
+
+
+def imports(path: Path, root: Path = ROOT, runtime: bool = False) -> list[tuple[str, list[str]]]:
+    """``(module, names)`` of every import in ``path``, module level and inside functions:
+    ``import a.b`` gives ``("a.b", [])``, ``from a import b, c`` gives ``("a", ["b", "c"])``;
     relative imports are resolved against the file's package."""
     tree = ast.parse(path.read_text(), filename=str(path))
     name = _module_name(path, root)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    found: set[str] = set()
-    for node in ast.walk(tree):
+    found = []
+    for node in _statements([tree], runtime):
         if isinstance(node, ast.Import):
-            found |= {alias.name for alias in node.names}
-        elif isinstance(node, ast.ImportFrom):
+            found += [(alias.name, []) for alias in node.names]
+        else:
             base = node.module or ""
             if node.level:
                 parts = package.split(".")[:len(package.split(".")) - node.level + 1]
                 base = ".".join(parts + ([node.module] if node.module else []))
-            found |= {base} | {f"{base}.{alias.name}" for alias in node.names}
+            found.append((base, [alias.name for alias in node.names]))
     return found
+
+
+def imported_names(path: Path, root: Path = ROOT) -> set[str]:
+    """Every module name ``path`` imports (:func:`imports`): ``from a import b`` gives
+    ``a`` and ``a.b`` (b may be a module)."""
+    return {n for base, names in imports(path, root) for n in [base, *(
+        f"{base}.{name}" for name in names)]}
 
 
 def _under(name: str, prefixes) -> bool:
@@ -146,17 +166,20 @@ def layer_violations(root: Path = ROOT) -> set[str]:
 
 
 def import_circles(layer: str, root: Path = ROOT) -> list[tuple[str, str]]:
-    """Pairs of modules of ``layer`` that import each other (any level, inside functions
-    too). ``from a import b`` counts as importing the module ``a.b`` when it is one, else
-    ``a``; a module importing its own package is no circle (the package comes first)."""
+    """Pairs of modules of ``layer`` that import each other at run time (any level, inside
+    functions too; not under ``if TYPE_CHECKING:``). ``from a import b`` imports the module
+    ``a.b`` when it is one, else ``a``; a module importing its own package is no circle
+    (the package comes first)."""
     paths = sorted((root / layer).rglob("*.py"))
     modules = {_module_name(p, root): p for p in paths}
     edges: dict[str, set[str]] = {}
     for module, path in modules.items():
-        names = imported_names(path, root) & set(modules)
-        # a package named only as the base of "from package import submodule" is no edge
-        names -= {n for n in names if any(m.startswith(n + ".") for m in names)}
-        edges[module] = {n for n in names if n != module and not module.startswith(n + ".")}
+        names = set()
+        for base, aliases in imports(path, root, runtime=True):
+            subs = {f"{base}.{a}" for a in aliases} & set(modules)
+            names |= subs | ({base} if len(subs) < len(aliases) or not aliases else set())
+        edges[module] = {n for n in names & set(modules)
+                         if n != module and not module.startswith(n + ".")}
     return sorted((a, b) for a in edges for b in edges[a] if a < b and a in edges.get(b, ()))
 
 
@@ -188,6 +211,15 @@ def test_the_import_scan_reads_every_import_and_finds_a_planted_violation(tmp_pa
     assert import_circles("skinny_mj", tmp_path) == [(movement, sibling)]
 
 
+def test_a_type_only_import_is_no_circle_but_a_function_level_one_is(tmp_path):
+    _plant(tmp_path, "skinny_mj.x", "import skinny_mj.y\n")
+    _plant(tmp_path, "skinny_mj.y", "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+           "    from skinny_mj.x import X\nelse:\n    import skinny_mj.z\n")
+    _plant(tmp_path, "skinny_mj.z", "def f():\n    from skinny_mj import y\n")
+    assert import_circles("skinny_mj", tmp_path) == [("skinny_mj.y", "skinny_mj.z")]
+    assert "skinny_mj.x.X" in imported_names(tmp_path / "skinny_mj" / "y.py", tmp_path)
+
+
 def test_every_import_keeps_the_layering_rules():
     assert layer_violations() == set()
 
@@ -199,7 +231,8 @@ def test_every_module_is_placed_in_a_part_or_is_shared():
               "skinny_mj.preflight", "skinny_mj.memory", "skinny_mj.dtw", "skinny_mj.plots",
               "skinny_mj.recording", "skinny_mj.recording_layout")
     parts = (*PLANT, *MOVEMENTS, *TRAINING, *ENGINE, *COMMAND_LINE, *shared)
-    modules = {_module_name(p, ROOT) for p in (ROOT / "skinny_mj").rglob("*.py")}
+    modules = {_module_name(p, ROOT) for p in (ROOT / "skinny_mj").rglob("*.py")
+               if p.name != "__main__.py"}  # a package's program, placed with its package
     inside = {m: [n for n in modules if n.startswith(m + ".")] for m in modules}
     assert {m for m in modules if not _under(m, parts)
             and not (inside[m] and all(_under(n, parts) for n in inside[m]))} == set()
