@@ -209,7 +209,7 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
                         progress=tick, forward=run.forward, scored=run.scored,
                         feedback=protocol.feedback_of(cfg.u_error_gain),
                         hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s, run.plant),
-                        readout_fit=selector, observe=observe)
+                        rule=selector, observe=observe)
     if cfg.ridge_select:
         out.ridge_lambda = selector.chosen
     return out
