@@ -175,7 +175,8 @@ def train(
         (states, y_used, y_est, y_ESN, the runs alive, the epoch) through
         ``rule.washout(esn, cycle)`` after each washout cycle and ``rule.fit(esn,
         cycle)`` after each learning cycle; an online rule (``rule.online``) is also the
-        learning cycles' per-step ``online`` learner (:func:`rollout`). Others:
+        learning cycles' per-step ``online`` learner (:func:`rollout`; its per-step
+        target is blended with its own beta). Others:
         :class:`controllers.ridge_select.RidgeSelector` (lambda per run on a validation
         cycle), :class:`controllers.torque_readout.ForgettingReadout` and
         :class:`~controllers.torque_readout.RLSReadout` (fits that remember earlier
