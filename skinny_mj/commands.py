@@ -85,8 +85,8 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
 def cmd_track(args: argparse.Namespace) -> int:
     from controllers.metrics import position_nrmse
     from skinny_mj import body, memory
-    from skinny_mj.ideal import IdealController
     from skinny_mj.config_flags import TRACK_FLAGS
+    from skinny_mj.ideal import IdealController
     from skinny_mj.task import load
 
     cfg = _flag_config(args, TRACK_FLAGS)

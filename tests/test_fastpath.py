@@ -24,7 +24,8 @@ from skinny_mj.plant import BatchPlant, EnvPlant
 from skinny_mj.task import load
 from skinny_mj.training import TrainConfig, train, train_batch
 
-TINY = TrainConfig().override(rule__epochs=2, rule__cycles=1)  # new method, 2 epochs of 4 cycles, 313 steps
+# new method, 2 epochs of 4 cycles, 313 steps
+TINY = TrainConfig().override(rule__epochs=2, rule__cycles=1)
 
 
 def _same_outcome(a, b, atol: float = 0.0) -> None:
