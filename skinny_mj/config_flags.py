@@ -188,7 +188,8 @@ def changes(base: TrainConfig, texts: Mapping[str, Any],
     with the type its field has once those types are chosen, and checked by its part.
     A refusal names the key's flag from ``names`` (key -> flag), or the key."""
     choices = {k: v for k, v in texts.items() if _is_choice(base, k)}
-    chosen = _refusing(lambda: base.override(choices), names, next(iter(choices), ""))
+    chosen = _refusing(lambda: base.override(choices, check=False), names,
+                       next(iter(choices), ""))
     out = {}
     for key, value in texts.items():
         def typed(key=key, value=value):

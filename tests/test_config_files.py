@@ -86,6 +86,22 @@ def test_train_refuses_a_bad_key_or_value_in_one_line(tmp_path, capsys, argv, wo
     assert not (tmp_path / "no").exists()
 
 
+def test_key_values_and_flags_apply_together_before_the_config_checks():
+    from skinny_mj.cli import build_parser
+    from skinny_mj.config import NoLearning
+    from skinny_mj.config_files import train_config
+
+    def config(*argv):
+        return train_config(build_parser().parse_args(["train", *argv]))[0]
+
+    # rule=none needs test.gain > 0: either alone is refused, together they are one config
+    cfg = config("rule=none", "test.gain=1", "--actuation", "torque", "--feedback", "ct")
+    assert isinstance(cfg.rule, NoLearning) and cfg.test.gain == 1.0
+    assert cfg.torque.feedback == "ct"
+    assert config("--reservoir", "40", "esn.n_reservoir=50").esn.n_reservoir == 50
+    assert config("--method", "original", "--epochs", "4").rule.epochs == 4
+
+
 _LEGACY = Path(__file__).parent / "data" / "legacy_n5"  # `skinny train --reservoir 5
 # --epochs 1` of the code before the composed config (its flat metrics.json and model.npz)
 
