@@ -70,6 +70,9 @@ class ESN:
     ) -> None:
         if n_runs < 1:
             raise ValueError(f"n_runs must be >= 1, got {n_runs}")
+        if None in (cfg.n_inputs, cfg.n_outputs, cfg.noise_level):
+            raise ValueError("a network needs n_inputs, n_outputs and noise_level set, got "
+                             f"{cfg.n_inputs}, {cfg.n_outputs}, {cfg.noise_level}")
         if rngs is None:
             rngs = run_generators(seed, n_runs)
         if len(rngs) != n_runs:

@@ -9,8 +9,9 @@ Testing: reset, one cycle with K = 0, no noise, no learning.
 
 Step t (t = 0 .. T-2): sense s(t); ESN input [d(t+1); s_in(t)] (+ the forward model's
 prediction p(t)); u_error(t) from (d(t), s(t)); command = clip(y_ESN + K u_error, -1, 1);
-step the plant. After the cycle: y_est(t) = command(t) + u_error(t+1), and the readout
-is fitted to y_used = beta y_est + (1 - beta) y_ESN (beta = 1: the original method).
+step the plant. After the cycle: y_est(t) = command(t) + u_error(t+1), and the learning
+rule (:mod:`controllers.learning`; default the thesis's fit of each cycle alone) fits the
+readout to y_used = beta y_est + (1 - beta) y_ESN (beta = 1: the original method).
 ``s_in`` is the sensed signal delayed by ``delay_steps`` (paper A); the feedback
 controller always sees the undelayed s(t). With ``inputs="sensed"`` (paper B) the
 desired position is left out of the ESN's input: [s_in(t)] (+ p(t)).
@@ -34,12 +35,13 @@ from controllers.feedback import (
     linear_gain,
     multiplicative_gain,
 )
+from controllers.learning import Cycle, CycleFit, LearningRule, beta_target
 from controllers.metrics import motor_nrmse, position_nrmse
 from controllers.plant import Plant
 from controllers.rollout import INPUTS, Rollout, rollout, run_mean
 
 __all__ = ["FELConfig", "INPUTS", "Rollout", "rollout", "run_mean", "health", "train",
-           "TrainResult", "evaluate", "EvalResult"]
+           "TrainResult", "evaluate", "EvalResult", "beta_target"]
 
 _METHODS = ("original", "new")
 _SCHEDULES = ("linear", "multiplicative", "fixed")
@@ -151,7 +153,7 @@ def train(
     forward=None,
     scored: np.ndarray | None = None,
     hook=None,
-    readout_fit=None,
+    rule: LearningRule | None = None,
     observe: Callable[[int, int, Rollout, np.ndarray | None], None] | None = None,
 ) -> TrainResult:
     """Train the inverse model ``esn`` (R runs) by FEL on ``plant``.
@@ -167,10 +169,18 @@ def train(
     scored : indices of the signals the position curve scores (default all; paper B
         scores the lagging arm's only).
     hook : optional rollout hook (:func:`rollout`), e.g. the torque loop.
-    readout_fit : optional fitter replacing ``esn.fit`` (e.g.
-        :class:`controllers.ridge_select.RidgeSelector`, lambda per run on a validation
-        cycle): ``observe(states, targets, runs)`` after each washout cycle and
-        ``fit(esn, states, targets, runs, epoch)`` on each learning cycle.
+    rule : the learning rule (:class:`controllers.learning.LearningRule`; default
+        :class:`~controllers.learning.CycleFit`, each learning cycle's fit alone by
+        ``esn.fit``, the thesis's). It gets a :class:`~controllers.learning.Cycle`
+        (states, y_used, y_est, y_ESN, the runs alive, the epoch) through
+        ``rule.washout(esn, cycle)`` after each washout cycle and ``rule.fit(esn,
+        cycle)`` after each learning cycle; an online rule (``rule.online``) is also the
+        learning cycles' per-step ``online`` learner (:func:`rollout`; its per-step
+        target is blended with its own beta). Others:
+        :class:`controllers.ridge_select.RidgeSelector` (lambda per run on a validation
+        cycle), :class:`controllers.torque_readout.ForgettingReadout` and
+        :class:`~controllers.torque_readout.RLSReadout` (fits that remember earlier
+        cycles), :class:`controllers.online.OnlineRLS` (RLS at every step).
     observe : optional diagnostics callback (paper E §5.1), called after every cycle as
         ``observe(epoch, cycle, ro, y_used)`` (cycle numbered as for ``progress``);
         ``y_used`` (R, T-1, n_dof) is the target the readout was fitted to on a learning
@@ -185,36 +195,37 @@ def train(
         gains=gains, failed=np.zeros(n_runs, bool),
         fail_reason=[None] * n_runs, fail_epoch=[None] * n_runs,
     )
-    beta = cfg.effective_beta
+    beta, rule = cfg.effective_beta, CycleFit() if rule is None else rule
     # one set of rollout arrays for the whole training: each rollout is used (fit,
     # metrics) before the next overwrites it, and the last one is the last evaluation
     kw = {"feedback": feedback, "delay_steps": cfg.delay_steps, "forward": forward,
           "buffers": {}, "inputs": cfg.inputs, "hook": hook}
+    online = rule if rule.online else None
+
+    def handed(ro: Rollout, epoch: int) -> Cycle:  # what the cycle hands the rule
+        y_est = ro.y_est
+        return Cycle(ro.states, beta_target(y_est, ro.y_esn, beta), ~result.failed, epoch,
+                     y_est, ro.y_esn)
+
     for epoch, gain in enumerate(gains):
         esn.reset()
         if forward is not None:
             forward.esn.reset()
         ro = rollout(esn, plant, desired, gain, noise=True, **kw)
         _mark_failures(esn, ro, result, epoch)
-        if readout_fit is not None:
-            readout_fit.observe(ro.states, beta * ro.y_est + (1.0 - beta) * ro.y_esn,
-                                ~result.failed)
+        rule.washout(esn, handed(ro, epoch))
         if observe is not None:
             observe(epoch, 0, ro, None)
         _tick(progress, epoch, 0)
         for cycle in range(1, cfg.learning_cycles + 1):
-            ro = rollout(esn, plant, desired, gain, noise=True, **kw)
+            ro = rollout(esn, plant, desired, gain, noise=True, online=online, **kw)
             _mark_failures(esn, ro, result, epoch)
-            alive = ~result.failed
-            if readout_fit is None:
-                esn.fit(ro.states, beta * ro.y_est + (1.0 - beta) * ro.y_esn, runs=alive)
-            else:
-                readout_fit.fit(esn, ro.states, beta * ro.y_est + (1.0 - beta) * ro.y_esn,
-                                alive, epoch)
+            learned = handed(ro, epoch)
+            rule.fit(esn, learned)
             if forward is not None and forward.mode != "serial":
-                forward.fit_rollout(ro, runs=alive)
+                forward.fit_rollout(ro, runs=learned.runs)
             if observe is not None:
-                observe(epoch, cycle, ro, beta * ro.y_est + (1.0 - beta) * ro.y_esn)
+                observe(epoch, cycle, ro, learned.target)
             _tick(progress, epoch, cycle)
         ro = rollout(esn, plant, desired, gain, noise=False, **kw)
         _mark_failures(esn, ro, result, epoch)

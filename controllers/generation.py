@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from controllers.esn import ESN
+from controllers.learning import beta_target
 from controllers.readout import RLS
 
 FEEDBACKS = ("teacher", "blend")
@@ -80,7 +81,7 @@ def fit_beta(esn: ESN, inputs: np.ndarray, teacher: np.ndarray, washout: int, be
         if not active.any():
             break
         curve[active, i] = err[active]
-        esn.fit(states, beta * d + (1.0 - beta) * y_esn, runs=active)
+        esn.fit(states, beta_target(d, y_esn, beta), runs=active)
     return curve
 
 
@@ -91,7 +92,7 @@ def _run_blended(esn: ESN, inputs: np.ndarray, teacher: np.ndarray, beta: float,
     ys = np.empty((esn.n_runs, n_steps, esn.cfg.n_outputs))
     xs = np.empty((esn.n_runs, n_steps, esn.cfg.n_extended))
     for t in range(n_steps):
-        fb = None if t == 0 else beta * teacher[:, t - 1] + (1.0 - beta) * ys[:, t - 1]
+        fb = None if t == 0 else beta_target(teacher[:, t - 1], ys[:, t - 1], beta)
         ys[:, t] = esn.step(inputs[:, t], noise=noise, feedback=fb)
         xs[:, t] = esn.extended
     return ys, xs

@@ -1,12 +1,15 @@
 """Online learning inside the closed loop: an RLS (FORCE-style) readout update per
-control step, for :func:`controllers.fel.rollout`'s ``online`` hook.
+control step, an online learning rule (:class:`controllers.learning.LearningRule`) for
+:func:`controllers.fel.train`'s ``rule`` or :func:`controllers.fel.rollout`'s ``online``.
 
 At step t the rollout knows u_error(t), so FEL's estimated target of the step before,
 y_est(t-1) = command(t-1) + u_error(t), is available one step late; :class:`OnlineRLS`
 then updates every run's readout with (extended state(t-1), beta y_est(t-1) +
 (1 - beta) y_ESN(t-1)), the new method's blend (beta = 1: FEL's plain target), through
 atanh for a tanh readout as the batch fit does. The next step's output already uses the
-updated readout. R runs update in lockstep (:class:`controllers.readout.RLS`).
+updated readout. R runs update in lockstep (:class:`controllers.readout.RLS`). In
+:func:`controllers.fel.train` it learns at every step of the learning cycles, the runs
+that learn following the training's healthy runs, and fits nothing between cycles.
 """
 
 from __future__ import annotations
@@ -14,10 +17,11 @@ from __future__ import annotations
 import numpy as np
 
 from controllers.esn import ESN
-from controllers.readout import RLS
+from controllers.learning import Cycle, LearningRule, beta_target
+from controllers.readout import RLS, linear_targets
 
 
-class OnlineRLS:
+class OnlineRLS(LearningRule):
     """Per-step RLS on an ESN's readout (``esn.W_out`` is updated in place).
 
     Parameters
@@ -28,9 +32,13 @@ class OnlineRLS:
     states : optional (R, T, D) extended states of the last batch fit: P_0 = (M^T M +
         lambda I)^-1, so the online updates continue that fit instead of starting from a
         prior that trusts the trained readout as much as lambda says.
-    beta : blend of the target with the network's own output (1: y_est alone).
-    runs : (R,) bool, the runs that learn (default all; e.g. the healthy ones).
+    beta : blend of the target with the network's own output (1: y_est alone), the
+        per-step target's (:func:`controllers.learning.beta_target`).
+    runs : (R,) bool, the runs that learn (default all; e.g. the healthy ones); in
+        :func:`controllers.fel.train`, each cycle's healthy runs.
     """
+
+    online = True
 
     def __init__(self, esn: ESN, forgetting: float = 0.999, ridge_lambda: float = 1e-2,
                  states: np.ndarray | None = None, beta: float = 1.0,
@@ -45,12 +53,18 @@ class OnlineRLS:
             RLS.from_states(esn.W_out, states, ridge_lambda, forgetting)
         self.updates = 0
 
+    def washout(self, esn: ESN, cycle: Cycle) -> None:
+        """The runs that learn from now on: the cycle's healthy ones."""
+        self.runs = np.asarray(cycle.runs, bool)
+
+    def fit(self, esn: ESN, cycle: Cycle) -> None:
+        """Nothing to fit after a cycle (it learned at every step); the runs that learn
+        from now on: the cycle's healthy ones."""
+        self.runs = np.asarray(cycle.runs, bool)
+
     def update(self, state: np.ndarray, y_esn: np.ndarray, y_est: np.ndarray) -> None:
         """One step: state (R, D), y_esn and y_est (R, n_out) of the step before."""
-        target = y_est if self.beta == 1.0 else self.beta * y_est + (1.0 - self.beta) * y_esn
-        cfg = self.esn.cfg
-        if cfg.readout_activation == "tanh":
-            target = np.arctanh(np.clip(target, -cfg.target_clip, cfg.target_clip))
+        target = linear_targets(self.esn.cfg, beta_target(y_est, y_esn, self.beta))
         if self.rls.W is not self.esn.W_out:  # the ESN's readout was replaced (a batch fit)
             self.rls.W = self.esn.W_out
         self.rls.update(state, target, self.runs)

@@ -25,14 +25,16 @@ class ESNConfig:
 
     Attributes
     ----------
-    n_inputs, n_outputs : sizes of u and y.
+    n_inputs, n_outputs : sizes of u and y (None: not yet known, e.g. in a training
+        config whose plant sets them; a network needs them).
     n_reservoir : N, number of tanh units.
     spectral_radius : largest |eigenvalue| of W after rescaling (>= 0).
     connectivity : fraction of nonzero reservoir weights; None means min(1, 10/N).
     input_scaling : W_in ~ U[-s, s] (dense; the bias input column included).
     bias : value of the constant bias input.
     leak_rate : a in (0, 1]; 1 is the standard (non-leaky) ESN.
-    noise_level : nu >= 0, reservoir state noise added after tanh.
+    noise_level : nu >= 0, reservoir state noise added after tanh (None: chosen by the
+        config's user, e.g. by the learning rule; a network needs a number).
     noise_kind : "uniform" (U[-nu/2, nu/2]) or "gaussian" (std nu).
     output_feedback : add W_back y(t-1) ~ U[-s, s] with s = feedback_scaling.
     readout_activation : "tanh" (targets through atanh, clipped to +-target_clip)
@@ -41,15 +43,15 @@ class ESNConfig:
     dtype : "float64" or "float32".
     """
 
-    n_inputs: int
-    n_outputs: int
+    n_inputs: int | None = None
+    n_outputs: int | None = None
     n_reservoir: int = 200
     spectral_radius: float = 0.5
     connectivity: float | None = None
     input_scaling: float = 1.0
     bias: float = 1.0
     leak_rate: float = 1.0
-    noise_level: float = 0.0
+    noise_level: float | None = 0.0
     noise_kind: str = "uniform"
     output_feedback: bool = False
     feedback_scaling: float = 1.0
@@ -61,8 +63,10 @@ class ESNConfig:
 
     def __post_init__(self) -> None:
         checks = [
-            (self.n_inputs >= 1, f"n_inputs must be >= 1, got {self.n_inputs}"),
-            (self.n_outputs >= 1, f"n_outputs must be >= 1, got {self.n_outputs}"),
+            (self.n_inputs is None or self.n_inputs >= 1,
+             f"n_inputs must be >= 1, got {self.n_inputs}"),
+            (self.n_outputs is None or self.n_outputs >= 1,
+             f"n_outputs must be >= 1, got {self.n_outputs}"),
             (self.n_reservoir >= 1, f"reservoir size N must be >= 1, got {self.n_reservoir}"),
             (
                 np.isfinite(self.spectral_radius) and self.spectral_radius >= 0,
@@ -75,7 +79,8 @@ class ESNConfig:
             (self.input_scaling >= 0, f"input scaling must be >= 0, got {self.input_scaling}"),
             (0 < self.leak_rate <= 1, f"leak rate must be in (0, 1], got {self.leak_rate}"),
             (
-                np.isfinite(self.noise_level) and self.noise_level >= 0,
+                self.noise_level is None or (np.isfinite(self.noise_level)
+                                             and self.noise_level >= 0),
                 f"noise level must be >= 0, got {self.noise_level}",
             ),
             (self.noise_kind in _NOISE_KINDS, f"noise kind must be one of {_NOISE_KINDS}, "

@@ -1,6 +1,7 @@
 """Ridge readout with lambda chosen per run and per fit on a validation cycle.
 
-For FEL (:func:`controllers.fel.train`'s ``readout_fit``): every learning cycle's fit
+A learning rule (:class:`controllers.learning.LearningRule`) for FEL
+(:func:`controllers.fel.train`'s ``rule``): every learning cycle's fit
 takes, per run, the lambda of a log grid whose readout, fitted on this cycle's
 (states, targets), best predicts the targets of the cycle before it (the epoch's
 washout cycle, or the previous learning cycle): the same controller, another draw of
@@ -16,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from controllers.esn import ESN
+from controllers.learning import Cycle, LearningRule
 from controllers.readout import linear_targets
 
 #: The default grid: 10^-8 ... 10^1 (10 values; the thesis's pinv is lambda -> 0).
@@ -38,7 +40,7 @@ def validation_errors(w: np.ndarray, gram: np.ndarray, cross: np.ndarray,
     return quad - 2.0 * np.einsum("ldn,dn->l", w, cross) + energy
 
 
-class RidgeSelector:
+class RidgeSelector(LearningRule):
     """Per run and fit: the grid's lambda with the least validation error.
 
     Parameters
@@ -60,26 +62,28 @@ class RidgeSelector:
         self.chosen = np.full((esn.n_runs, n_epochs), np.nan)
         self._val: list[tuple[np.ndarray, np.ndarray, float] | None] = [None] * esn.n_runs
 
-    def observe(self, states: np.ndarray, targets: np.ndarray, runs: np.ndarray) -> None:
-        """Keep a cycle's statistics as the next validation cycle of the ``runs``
-        (R,) bool; states (R, T, D), targets (R, T, n) in the output domain."""
-        s = linear_targets(self.esn.cfg, targets)
-        for r in np.flatnonzero(runs):
-            m = np.asarray(states[r], np.float64)
-            self._val[r] = (m.T @ m, m.T @ s[r], float(np.sum(s[r] ** 2)))
+    def washout(self, esn: ESN, cycle: Cycle) -> None:
+        """Keep the cycle as the next validation cycle of its runs."""
+        self._keep(cycle)
 
-    def fit(self, esn: ESN, states: np.ndarray, targets: np.ndarray, runs: np.ndarray,
-            epoch: int) -> None:
-        """Fit the readout of the ``runs`` (R,) bool on this cycle, lambda chosen on
-        the last observed cycle (the grid's middle if none was), then keep this cycle
-        as the next validation cycle."""
-        s = linear_targets(esn.cfg, targets)
-        for r in np.flatnonzero(runs):
-            m = np.asarray(states[r], np.float64)
+    def fit(self, esn: ESN, cycle: Cycle) -> None:
+        """Fit the readout of the ``cycle.runs`` on this cycle, lambda chosen on the
+        last kept cycle (the grid's middle if none was), then keep this cycle as the
+        next validation cycle."""
+        s = linear_targets(esn.cfg, cycle.target)
+        for r in np.flatnonzero(cycle.runs):
+            m = np.asarray(cycle.states[r], np.float64)
             w = ridge_path(m, s[r], self.grid)
             val = self._val[r]
             best = len(self.grid) // 2 if val is None else int(np.argmin(
                 validation_errors(w, *val)))
             esn.W_out[r] = w[best].T.astype(esn.dtype)
-            self.chosen[r, epoch] = self.grid[best]
-        self.observe(states, targets, runs)
+            self.chosen[r, cycle.epoch] = self.grid[best]
+        self._keep(cycle)
+
+    def _keep(self, cycle: Cycle) -> None:
+        """The cycle's statistics as the next validation cycle of its runs."""
+        s = linear_targets(self.esn.cfg, cycle.target)
+        for r in np.flatnonzero(cycle.runs):
+            m = np.asarray(cycle.states[r], np.float64)
+            self._val[r] = (m.T @ m, m.T @ s[r], float(np.sum(s[r] ** 2)))

@@ -112,9 +112,10 @@ def rollout(
     hook : optional :class:`controllers.torque_fel.RolloutHook` (the torque loop): extra
         ESN inputs after all others, the motor error instead of ``feedback``'s, a
         feed-forward added before the clip, a call after each step. None: the plain loop.
-    online : optional learner updated inside the loop (e.g.
-        :class:`controllers.online.OnlineRLS`): at step t >= 1, once u_error(t) is known,
-        ``online.update(state(t-1), y_ESN(t-1), y_est(t-1))``. None: no online learning.
+    online : optional online learning rule (:class:`controllers.learning.LearningRule`,
+        e.g. :class:`controllers.online.OnlineRLS`) updated inside the loop: at step
+        t >= 1, once u_error(t) is known, ``online.update(state(t-1), y_ESN(t-1),
+        y_est(t-1))``. None: no online learning.
     """
     feedback = feedback or FeedbackController()
 

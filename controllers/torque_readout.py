@@ -1,6 +1,5 @@
-"""Readout fits that remember earlier cycles, for :func:`controllers.fel.train`'s
-``readout_fit`` (an object with ``observe(states, targets, runs)`` after each washout
-cycle and ``fit(esn, states, targets, runs, epoch)`` after each learning cycle).
+"""Readout fits that remember earlier cycles: learning rules
+(:class:`controllers.learning.LearningRule`) for :func:`controllers.fel.train`'s ``rule``.
 
 - :class:`ForgettingReadout`: the normal equations accumulated over the learning
   cycles, each cycle's old statistics weighted by a forgetting factor g per cycle,
@@ -18,10 +17,11 @@ from __future__ import annotations
 import numpy as np
 
 from controllers.esn import ESN
+from controllers.learning import Cycle, LearningRule
 from controllers.readout import RLS, linear_targets
 
 
-class ForgettingReadout:
+class ForgettingReadout(LearningRule):
     """Normal equations with forgetting (module docstring). forgetting : g in [0, 1]
     per learning cycle; ridge : lambda > 0 on the accumulated Gram matrix."""
 
@@ -34,21 +34,19 @@ class ForgettingReadout:
         self.gram = np.zeros((esn.n_runs, d, d))
         self.cross = np.zeros((esn.n_runs, d, n_out))
 
-    def observe(self, states: np.ndarray, targets: np.ndarray, runs: np.ndarray) -> None:
-        """Washout cycles add nothing (they are not learning cycles)."""
-
-    def fit(self, esn: ESN, states: np.ndarray, targets: np.ndarray, runs: np.ndarray,
-            epoch: int) -> None:
-        m, s = np.asarray(states, np.float64), linear_targets(esn.cfg, targets)
+    def fit(self, esn: ESN, cycle: Cycle) -> None:
+        """Add the cycle to the forgetting statistics and solve (washout cycles add
+        nothing: they are not learning cycles)."""
+        m, s = np.asarray(cycle.states, np.float64), linear_targets(esn.cfg, cycle.target)
         eye = self.ridge * np.eye(m.shape[-1])
-        for r in np.flatnonzero(np.asarray(runs, bool)):
+        for r in np.flatnonzero(np.asarray(cycle.runs, bool)):
             self.gram[r] = self.forgetting * self.gram[r] + m[r].T @ m[r]
             self.cross[r] = self.forgetting * self.cross[r] + m[r].T @ s[r]
             w_t = np.linalg.solve(self.gram[r] + eye, self.cross[r])
             esn.W_out[r] = w_t.T.astype(esn.dtype)
 
 
-class RLSReadout:
+class RLSReadout(LearningRule):
     """RLS through each learning cycle's samples (module docstring). forgetting : g per
     cycle of ``steps`` samples; ridge : P_0 = I / ridge."""
 
@@ -58,13 +56,10 @@ class RLSReadout:
                              f"{steps}")
         self.rls = RLS(np.array(esn.W_out, np.float64), ridge, forgetting ** (1.0 / steps))
 
-    def observe(self, states: np.ndarray, targets: np.ndarray, runs: np.ndarray) -> None:
-        """Washout cycles add nothing."""
-
-    def fit(self, esn: ESN, states: np.ndarray, targets: np.ndarray, runs: np.ndarray,
-            epoch: int) -> None:
-        m, s = np.asarray(states, np.float64), linear_targets(esn.cfg, targets)
-        runs = np.asarray(runs, bool)
+    def fit(self, esn: ESN, cycle: Cycle) -> None:
+        """RLS through the cycle's samples in time order (washout cycles add nothing)."""
+        m, s = np.asarray(cycle.states, np.float64), linear_targets(esn.cfg, cycle.target)
+        runs = np.asarray(cycle.runs, bool)
         for t in range(m.shape[1]):
             self.rls.update(m[:, t], s[:, t], runs)
         esn.W_out[runs] = self.rls.W[runs].astype(esn.dtype)

@@ -5,8 +5,9 @@ passed in as an array). Teacher forcing: the inverse model's "current position"
 input is the desired position d(t), so the plant is not needed for training; it is
 used only in testing (closed loop, K = 0: :func:`controllers.fel.evaluate`).
 Original method: one fitted cycle. New method: ``cycles`` cycles, each fitting
-y_used = beta y_true + (1 - beta) y_ESN. Every run starts with a reset and one
-washout cycle; the state carries over between cycles.
+y_used = beta y_true + (1 - beta) y_ESN (:func:`controllers.learning.beta_target`) by a
+learning rule (default the pinv or ridge fit of each cycle alone). Every run starts
+with a reset and one washout cycle; the state carries over between cycles.
 """
 
 from __future__ import annotations
@@ -17,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from controllers.esn import ESN
+from controllers.learning import Cycle, CycleFit, LearningRule, beta_target
 from controllers.metrics import nrmse
-from controllers.readout import PinvFactors
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,7 @@ def train_true_target(
     one_step: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
     input_rngs: list[np.random.Generator] | None = None,
     extra_inputs: np.ndarray | None = None,
+    rule: LearningRule | None = None,
 ) -> TrueTargetResult:
     """Fit ``esn`` (R runs) to the true commands with teacher forcing.
 
@@ -81,6 +83,11 @@ def train_true_target(
     extra_inputs : optional (T-1, n_extra) teacher-forced inputs appended after
         [d(t+1); d(t)], as a rollout hook appends its own (the torque loop's desired
         velocities, :mod:`controllers.torque_fel`).
+    rule : the learning rule (:class:`controllers.learning.LearningRule`): ``washout``
+        after the washout cycle, ``fit`` after each cycle, with the blended true target
+        (``y_est`` of its :class:`~controllers.learning.Cycle`: the true commands).
+        Default: :class:`~controllers.learning.CycleFit` reusing the pinv factorization
+        while the teacher-forced states repeat.
     """
     forced = teacher_forced_inputs(desired)
     if extra_inputs is not None:
@@ -99,12 +106,17 @@ def train_true_target(
         return clean + np.stack([g.normal(0.0, cfg.input_noise, clean.shape[1:])
                                  for g in input_rngs])
 
+    rule = CycleFit(reuse_factors=True) if rule is None else rule
+    runs = np.ones(esn.n_runs, bool)
+
+    def handed(run: tuple[np.ndarray, np.ndarray]) -> Cycle:  # what a cycle hands the rule
+        y_esn, states = run
+        return Cycle(states, beta_target(y_true, y_esn, beta), runs, 0, y_true, y_esn)
+
     esn.reset()
-    esn.run(noisy(), noise=cfg.noise)
-    reuse = _SameStates(esn)
+    rule.washout(esn, handed(esn.run(noisy(), noise=cfg.noise)))
     for _ in range(cycles):
-        y_esn, states = esn.run(noisy(), noise=cfg.noise)
-        esn.fit(states, beta * y_true + (1.0 - beta) * y_esn, factors=reuse(states))
+        rule.fit(esn, handed(esn.run(noisy(), noise=cfg.noise)))
     esn.reset()
     esn.run(inputs, noise=False)
     outputs, _ = esn.run(inputs, noise=False)
@@ -125,31 +137,13 @@ def convergence_curve(
     curve = np.empty((esn.n_runs, cycles))
     esn.reset()
     esn.run(inputs, noise=False)
-    reuse = _SameStates(esn)
+    fit, runs = CycleFit(reuse_factors=True), np.ones(esn.n_runs, bool)
     for i in range(cycles):
         y_esn, states = esn.run(inputs, noise=False)
-        y_used = beta * y_true + (1.0 - beta) * y_esn
+        y_used = beta_target(y_true, y_esn, beta)
         curve[:, i] = nrmse(y_used, true_commands)
-        esn.fit(states, y_used, factors=reuse(states))
+        fit.fit(esn, Cycle(states, y_used, runs, 0, y_true, y_esn))
     return curve
-
-
-class _SameStates:
-    """The pinv factorization of the last states, reused while the states repeat bit
-    for bit (teacher forcing without noise: from the second cycle on, the initial
-    state's trace has decayed below rounding), refactored when they change."""
-
-    def __init__(self, esn: ESN):
-        self.active = esn.cfg.readout == "pinv"
-        self.states: np.ndarray | None = None
-        self.factors: PinvFactors | None = None
-
-    def __call__(self, states: np.ndarray) -> PinvFactors | None:
-        if not self.active:
-            return None
-        if self.states is None or not np.array_equal(states, self.states):
-            self.states, self.factors = states, PinvFactors(states)
-        return self.factors
 
 
 def cycles_to_converge(curve: np.ndarray, tolerance: float) -> np.ndarray:

@@ -156,7 +156,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
         angles = body.normalize_angles(ro.angles, tc.dof)
         angle_curve[alive, c] = position_nrmse(angles, desired_angles)[alive]
         if learner in ("fel", "fel-noise") and alive.any():
-            esn.fit(ro.states, cfg.beta * ro.y_est + (1 - cfg.beta) * ro.y_esn, runs=alive)
+            esn.fit(ro.states, fel.beta_target(ro.y_est, ro.y_esn, cfg.beta), runs=alive)
     warnings = torque.train_warnings(run) or 0  # the torque twin's, training and performance
     if warnings and len(seeds) > 1:  # one shared MjData: run the seeds alone
         raise PhysicsBatchError(f"MuJoCo warnings in a lockstep batch of {len(seeds)} runs")

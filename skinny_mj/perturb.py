@@ -46,9 +46,9 @@ from skinny_mj import body
 
 #: the side whose forearm :func:`lengthen_forearm` lengthens by default
 FOREARM_SIDE = "right"
-#: Bodies whose mass and inertia ``test_mass_scale`` scales (both arms), and the hand
-#: that carries ``test_payload_kg`` (a point mass at its centre of mass: the hand's CoM
-#: and its inertia about the CoM are unchanged, only its mass grows).
+#: Bodies whose mass and inertia ``actuation.test_mass_scale`` scales (both arms), and
+#: the hand that carries ``actuation.test_payload_kg`` (a point mass at its centre of
+#: mass: the hand's CoM and its inertia about the CoM are unchanged, only its mass grows).
 ARM_BODIES = tuple(f"{side}_{seg}" for side in body.SIDES
                    for seg in ("upper_arm", "forearm", "hand"))
 PAYLOAD_BODY = "right_hand"

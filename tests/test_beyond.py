@@ -8,6 +8,7 @@ import pytest
 
 from controllers import fel, generation
 from controllers.esn import ESN, ESNConfig
+from controllers.learning import Cycle
 from controllers.online import OnlineRLS
 from controllers.plant import ToyPlant
 from controllers.readout import RLS, ridge_solve, rls_solve
@@ -94,8 +95,8 @@ def test_ridge_selector_picks_a_large_lambda_for_pure_noise_targets():
         return np.stack([noise[0], states[1] @ w_true + 0.01 * noise[1]])
 
     sel = RidgeSelector(esn, n_epochs=1, grid=(1e-6, 1e-2, 1e2, 1e4))
-    sel.observe(val_states, targets(val_states), np.ones(2, bool))
-    sel.fit(esn, fit_states, targets(fit_states), np.ones(2, bool), 0)
+    sel.washout(esn, Cycle(val_states, targets(val_states), np.ones(2, bool)))
+    sel.fit(esn, Cycle(fit_states, targets(fit_states), np.ones(2, bool)))
     assert sel.chosen[0, 0] == 1e4 and sel.chosen[1, 0] <= 1e-2
 
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from controllers.esn import ESN
+from controllers.learning import Cycle
 from controllers.readout import ridge_solve
 from controllers.reservoir import ESNConfig
 from controllers.torque_arm import ArmGains, ArmState, DesiredMotion, arm_torque
@@ -34,7 +35,7 @@ def test_forgetting_readout_spans_one_cycle_to_all_cycles():
         fit = ForgettingReadout(esn, forgetting=g, ridge=0.1)
         cycles = _cycles(esn)
         for m, s in cycles:
-            fit.fit(esn, m, s, np.ones(2, bool), 0)
+            fit.fit(esn, Cycle(m, s, np.ones(2, bool)))
         used = cycles[-1:] if g == 0 else cycles
         for r in range(2):
             m = np.concatenate([c[0][r] for c in used])
@@ -47,7 +48,7 @@ def test_rls_readout_without_forgetting_is_ridge_on_every_sample():
     fit = RLSReadout(esn, steps=40, forgetting=1.0, ridge=0.1)
     cycles = _cycles(esn)
     for m, s in cycles:
-        fit.fit(esn, m, s, np.ones(2, bool), 0)
+        fit.fit(esn, Cycle(m, s, np.ones(2, bool)))
     m = np.concatenate([c[0][1] for c in cycles])
     s = np.concatenate([c[1][1] for c in cycles])
     np.testing.assert_allclose(esn.W_out[1], ridge_solve(m, s, 0.1).T, atol=1e-8)
@@ -57,7 +58,7 @@ def test_a_readout_fit_leaves_runs_that_do_not_learn():
     esn = _esn()
     before = esn.W_out[1].copy()
     m, s = _cycles(esn, 1)[0]
-    ForgettingReadout(esn).fit(esn, m, s, np.array([True, False]), 0)
+    ForgettingReadout(esn).fit(esn, Cycle(m, s, np.array([True, False])))
     np.testing.assert_array_equal(esn.W_out[1], before)
     assert np.any(esn.W_out[0] != 0)
 
@@ -86,22 +87,24 @@ def test_computed_torque_on_the_desired_state_is_the_inverse_dynamics():
 
 
 @pytest.mark.parametrize("changes", [
-    {"actuation": "torque", "feedback": "ct"},  # a controller alone: method "none"
-    {"actuation": "torque", "feedback": "inertia-pd", "method": "true-target"},
-    {"readout_fit": "forgetting"},  # remembering fits are for FEL on the torque body
-    {"actuation": "torque", "readout_fit": "sometimes"},
-    {"actuation": "torque", "readout_forgetting": 1.5},
-    {"actuation": "torque", "feedback": "inertia-pd", "feedback_omega": -1.0},
-    {"feedback_omega": 5.0},  # a torque setting
+    {"actuation": "torque", "actuation.feedback": "ct"},  # a controller alone: rule=none
+    {"actuation": "torque", "actuation.feedback": "inertia-pd", "rule": "true-target"},
+    {"rule.fit": "forgetting"},  # remembering fits are for FEL on the torque body
+    {"actuation": "torque", "rule.fit": "sometimes"},
+    {"actuation": "torque", "rule.forgetting": 1.5},
+    {"actuation": "torque", "actuation.feedback": "inertia-pd", "actuation.omega": -1.0},
+    {"actuation.omega": 5.0},  # a torque setting
 ])
 def test_arm_settings_are_validated(changes):
     with pytest.raises(SkinnyInputError):
-        TrainConfig(**changes)
+        TrainConfig().override(changes)
 
 
 def test_feedback_share_is_the_gain_times_the_error_signal():
-    cfg = TrainConfig(actuation="torque", trajectory="y", method="new", beta=1.0, cycles=1,
-                      epochs=2, feedback="inertia-pd", readout_fit="forgetting")
+    cfg = TrainConfig().override({
+        "actuation": "torque", "movement.trajectory": "y", "rule": "new", "rule.beta": 1.0,
+        "rule.cycles": 1, "rule.epochs": 2, "actuation.feedback": "inertia-pd",
+        "rule.fit": "forgetting"})
     from skinny_mj.training import train
 
     m = train(cfg, 0).metrics["train"]

@@ -35,18 +35,20 @@ PLANT = ("skinny_mj.body", "skinny_mj.model", "skinny_mj.physics", "skinny_mj.ta
          "skinny_mj.ideal", "skinny_mj.render", "skinny_mj.headless", "skinny_mj.gym")
 # What Skinny imitates (pure NumPy/SciPy: no mujoco, no dm_control).
 MOVEMENTS = ("skinny_mj.trajectories",)
-# One run: its configuration (and presets, config files), its parts, the training path,
-# the torque additions, the toolbox's protocol options, the imitation metrics.
-TRAINING = ("skinny_mj.config", "skinny_mj.config_files", "skinny_mj.presets",
-            "skinny_mj.run_parts", "skinny_mj.training", "skinny_mj.torque_training",
-            "skinny_mj.protocol", "skinny_mj.imitation")
+# One run: its configuration (dotted overrides, earlier versions' flat configs, presets),
+# its parts, the training path, the torque additions, the toolbox's protocol options, the
+# imitation metrics.
+TRAINING = ("skinny_mj.config", "skinny_mj.overrides", "skinny_mj.config_legacy",
+            "skinny_mj.presets", "skinny_mj.run_parts", "skinny_mj.training",
+            "skinny_mj.torque_training", "skinny_mj.protocol", "skinny_mj.imitation")
 # Many runs: the experiment engine, its sweep helpers, the registry of studies.
 ENGINE = ("skinny_mj.experiment", "skinny_mj.sweep", "skinny_mj.sweep.folder",
           "skinny_mj.sweep.options", "skinny_mj.sweep.stats", "skinny_mj.registry")
-# The `skinny` command: parser, handlers, flags, help texts, bench, viewer.
+# The `skinny` command: parser, handlers, flags (the configuration's flags; a run repeated
+# from its files with --config), help texts, bench, viewer.
 COMMAND_LINE = ("skinny_mj.cli", "skinny_mj.commands", "skinny_mj.flags",
-                "skinny_mj.study_help", "skinny_mj.bench", "skinny_mj.bench_mackey_glass",
-                "skinny_mj.viewer")
+                "skinny_mj.config_flags", "skinny_mj.config_files", "skinny_mj.study_help",
+                "skinny_mj.bench", "skinny_mj.bench_mackey_glass", "skinny_mj.viewer")
 # Not listed, shared by every part: errors, io, threads, progress, preflight, memory
 # (its generic check; its run and sweep estimates import training and the engine inside
 # functions), dtw, plots, recording, recording_layout.

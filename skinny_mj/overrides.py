@@ -1,0 +1,256 @@
+"""Dotted-key overrides of a nested frozen-dataclass configuration.
+
+A configuration is a frozen dataclass whose fields are scalars or other frozen
+dataclasses (its components). A component field may be a *choice of types* (a union,
+e.g. ``Velocity | Torque``): each member has a ``kind`` field naming it, and setting
+the field to a kind switches the type (``actuation=torque``), keeping the values of
+the settings the old and the new type inherit from a common base (and starting an
+unrelated type from its defaults). One mechanism then serves the command
+line, config files and studies::
+
+    override(cfg, {"esn.spectral_radius": 0.9, "rule": "original", "rule.epochs": 2})
+    flatten(cfg)  # {"plant.dof": 4, ..., "rule": "new", "rule.beta": 0.1, ...}
+    parse_value(cfg, "esn.n_reservoir", "400")  # 400 (the field's type)
+
+A key naming a type's field applies after the key that chooses the type, whatever the
+order given. An unknown key, a field the chosen type does not have, or a value of the
+wrong type is a :class:`SkinnyInputError` naming the key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import functools
+import math
+import types
+import typing
+from collections.abc import Mapping
+from typing import Any
+
+from skinny_mj.errors import SkinnyInputError
+
+__all__ = ["override", "flatten", "parse_value", "keys", "field_type", "KIND"]
+
+#: The field that names a union member's type.
+KIND = "kind"
+
+
+@functools.cache
+def _hints(cls: type) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
+def _members(annotation: Any) -> tuple[type, ...]:
+    """The dataclass members of a (union) annotation; () for a scalar."""
+    args = typing.get_args(annotation) if isinstance(annotation, types.UnionType) \
+        or typing.get_origin(annotation) is typing.Union else (annotation,)
+    return tuple(a for a in args if dataclasses.is_dataclass(a))
+
+
+def _kinds(cls: type) -> tuple[str, ...]:
+    """The kind names a union member answers to: its ``KINDS`` or its ``kind`` default."""
+    return tuple(getattr(cls, "KINDS", ())) or (
+        next(f.default for f in dataclasses.fields(cls) if f.name == KIND),)
+
+
+def _member_of(annotation: Any, kind: str, key: str) -> type:
+    members = _members(annotation)
+    for cls in members:
+        if kind in _kinds(cls):
+            return cls
+    known = [k for cls in members for k in _kinds(cls)]
+    raise SkinnyInputError(f"{key} must be one of {known}, got {kind!r}")
+
+
+def _is_union(annotation: Any) -> bool:
+    members = _members(annotation)
+    return bool(members) and all(_has(m, KIND) for m in members) \
+        and (len(members) > 1 or hasattr(members[0], "KINDS"))
+
+
+def _fields(obj: Any) -> list[str]:
+    """The settings of a config object or class (its kind and class constants aside)."""
+    return [f.name for f in dataclasses.fields(obj) if f.name != KIND]
+
+
+def _has(obj: Any, name: str) -> bool:
+    return dataclasses.is_dataclass(obj) and name in {f.name for f in dataclasses.fields(obj)}
+
+
+def flatten(cfg: Any, prefix: str = "") -> dict[str, Any]:
+    """Every leaf as ``{"a.b": value}``; a union field as its kind (``"rule": "new"``)
+    followed by the chosen type's fields. JSON-ready (tuples become lists)."""
+    out: dict[str, Any] = {}
+    for f in dataclasses.fields(cfg):
+        value, key = getattr(cfg, f.name), prefix + f.name
+        if f.name == KIND:
+            continue
+        if dataclasses.is_dataclass(value):
+            if _has(value, KIND) and _is_union(_hints(type(cfg))[f.name]):
+                out[key] = getattr(value, KIND)
+            out.update(flatten(value, key + "."))
+        else:
+            out[key] = list(value) if isinstance(value, tuple) else value
+    return out
+
+
+def keys(cfg: Any) -> list[str]:
+    """Every key :func:`override` takes on ``cfg`` as it is (the chosen types' fields)."""
+    return list(flatten(cfg))
+
+
+def _switch(old: Any, cls: type, kind: str) -> Any:
+    """A ``cls`` of ``kind`` keeping the values of the settings ``old``'s type and ``cls``
+    have from a common base (FEL's two methods share their schedule; a forward model
+    switching its kind keeps its size); unrelated types start from their defaults."""
+    common = [b for b in type(old).__mro__ if b is not object and dataclasses.is_dataclass(b)
+              and issubclass(cls, b)]
+    shared = {n: getattr(old, n) for n in _fields(common[0]) if n != KIND} if common else {}
+    return cls(**shared, kind=kind)
+
+
+def _unknown(key: str, owner: Any, root: Any) -> SkinnyInputError:
+    """The error of ``key``, not a setting of ``owner`` (the config object holding it,
+    or None when the key's path leaves the config)."""
+    known = keys(root)
+    close = difflib.get_close_matches(key, known, n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    path = key.rpartition(".")[0]
+    if owner is not None and _has(owner, KIND) and path:
+        return SkinnyInputError(
+            f"{key!r} is not a setting of {path}={getattr(owner, KIND)} (its settings: "
+            f"{', '.join(_fields(owner)) or 'none'})")
+    return SkinnyInputError(f"unknown config key {key!r}{hint}")
+
+
+def _node(cfg: Any, dotted: str) -> Any:
+    for part in dotted.split("."):
+        if not _has(cfg, part):
+            return None
+        cfg = getattr(cfg, part)
+    return cfg
+
+
+def _apply(node: Any, changes: Mapping[str, Any], prefix: str, root: Any) -> Any:
+    """``node`` (at ``prefix``) with its relative dotted ``changes`` set: per field, a
+    type chosen first, then its own settings; then ``node`` rebuilt once, so its checks
+    see all the changes together (``rule=none`` with ``test.gain=1``)."""
+    groups: dict[str, dict[str, Any]] = {}
+    for key, value in changes.items():
+        name, _, rest = key.partition(".")
+        groups.setdefault(name, {})[rest] = value
+    new = {}
+    for name, sub in groups.items():
+        key = prefix + name
+        if not _has(node, name) or name == KIND:
+            raise _unknown(key + next((f".{r}" for r in sub if r), ""), node, root)
+        annotation, current = _hints(type(node))[name], getattr(node, name)
+        if "" in sub:
+            current = _value(current, annotation, sub.pop(""), key)
+        if sub:
+            if not dataclasses.is_dataclass(current):
+                raise _unknown(f"{key}.{next(iter(sub))}", None, root)
+            current = _apply(current, sub, key + ".", root)
+        new[name] = current
+    try:
+        return dataclasses.replace(node, **new)
+    except SkinnyInputError as err:
+        owner = prefix[:-1]
+        raise SkinnyInputError(f"{owner}: {err}" if owner else str(err)) from None
+    except (TypeError, ValueError) as err:  # a component's own check (e.g. ESNConfig's)
+        raise SkinnyInputError(f"{prefix[:-1] or 'config'}: {err}") from None
+
+
+def _value(current: Any, annotation: Any, value: Any, key: str) -> Any:
+    """The new value of the field ``key`` (``current`` now) set to ``value``: a type
+    chosen by its kind name, or a scalar checked against its annotation."""
+    if _is_union(annotation):
+        if not isinstance(value, str):
+            raise SkinnyInputError(f"{key} is a choice of types: give its name as a string, "
+                                   f"got {value!r}")
+        cls = _member_of(annotation, value, key)
+        return current if type(current) is cls and getattr(current, KIND) == value \
+            else _switch(current, cls, value)
+    if _members(annotation):
+        raise SkinnyInputError(f"{key} is a group of settings ({', '.join(_fields(current))}): "
+                               f"set them as {key}.NAME=VALUE")
+    return _checked(value, annotation, key)
+
+
+def _checked(value: Any, annotation: Any, key: str) -> Any:
+    """``value`` if it fits ``annotation`` (a JSON list becomes a tuple; an int is a
+    float; a bool is neither)."""
+    allowed = typing.get_args(annotation) if typing.get_args(annotation) else (annotation,)
+    if isinstance(value, list) and any(typing.get_origin(a) is tuple for a in allowed):
+        return tuple(value)
+    for kind in allowed:
+        kind = typing.get_origin(kind) or kind
+        if kind is type(None) and value is None:
+            return value
+        if kind is bool and isinstance(value, bool):
+            return value
+        if isinstance(value, bool):
+            continue
+        if kind is float and isinstance(value, int | float):
+            return float(value) if isinstance(value, int) else value
+        if kind in (int, str, tuple) and isinstance(value, kind):
+            return value
+        if kind is Any:
+            return value
+    raise SkinnyInputError(f"{key} must be {_describe(annotation)}, got {value!r}")
+
+
+def _describe(annotation: Any) -> str:
+    names = {int: "a whole number", float: "a number", str: "a string", bool: "true or false",
+             type(None): "none"}
+    allowed = typing.get_args(annotation) or (annotation,)
+    return " or ".join(names.get(a, getattr(a, "__name__", str(a))) for a in allowed)
+
+
+def override(cfg: Any, changes: Mapping[str, Any]) -> Any:
+    """``cfg`` with the dotted keys of ``changes`` set (a type-choosing key before its
+    fields), validated again by the dataclasses' own checks, once with all the changes."""
+    return _apply(cfg, changes, "", cfg) if changes else cfg
+
+
+def field_type(cfg: Any, key: str) -> Any:
+    """The annotation of the leaf ``key`` on ``cfg`` (a union field: ``str``)."""
+    *owner, name = key.split(".")
+    node = _node(cfg, ".".join(owner)) if owner else cfg
+    if node is None or not _has(node, name) or name == KIND:
+        raise _unknown(key, node, cfg)
+    annotation = _hints(type(node))[name]
+    if _is_union(annotation):
+        return str
+    if _members(annotation):
+        raise SkinnyInputError(f"{key} is a group of settings: set {key}.NAME=VALUE")
+    return annotation
+
+
+_TRUE, _FALSE, _NONE = ("true", "yes", "on", "1"), ("false", "no", "off", "0"), ("none", "null")
+
+
+def parse_value(cfg: Any, key: str, text: str) -> Any:
+    """``text`` (from a command line) as the type of ``key``'s field on ``cfg``."""
+    annotation = field_type(cfg, key)
+    allowed = typing.get_args(annotation) or (annotation,)
+    low = text.strip().lower()
+    if type(None) in allowed and low in _NONE:
+        return None
+    for kind in allowed:
+        try:
+            if kind is bool and low in _TRUE + _FALSE:
+                return low in _TRUE
+            if kind is int:
+                return int(text)
+            if kind is float:
+                value = float(text)
+                if not math.isfinite(value):
+                    raise ValueError
+                return value
+            if kind is str:
+                return text
+        except ValueError:
+            continue
+    raise SkinnyInputError(f"{key} must be {_describe(annotation)}, got {text!r}")
