@@ -85,7 +85,7 @@ def train_config(cfg: Config, row: Row):
                           reservoir=p["reservoir"], tt_cycles=cfg.tt_cycles)
     tt = paper_d.train_configs(base, Row(p["exp"], {"method": method, "noise": noise,
                                                     "reps": reps}))["tt"]
-    return replace(tt, tt_input_noise=p["input_noise"])
+    return tt.override({"rule.input_noise": p["input_noise"]})
 
 
 def all_rows(cfg: Config) -> tuple[Row, ...]:

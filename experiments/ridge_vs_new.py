@@ -21,7 +21,6 @@ both), ``ridge`` (the ridge rows of both). ``--movement`` replaces the YMCA.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import json
 from dataclasses import dataclass
@@ -80,7 +79,7 @@ def train_config(cfg: Config, row: Row) -> TrainConfig:
     base = paper_e.train_config(e_cfg, Row(p["paper_row"], {
         "method": method, "beta": beta, "cycles": cycles, "reps": reps}))
     if p["ridge"]:
-        base = dataclasses.replace(base, readout="ridge", ridge_select=True)
+        base = base.override({"esn.readout": "ridge", "rule.fit": "ridge-select"})
     return base
 
 

@@ -86,7 +86,7 @@ def test_dynamic_experiment_rows():
                                         and not any(p in i for p in dynamic.PERTURBATIONS)}
     cfg = dynamic.train_config(exp.config, next(r for r in exp.rows
                                                  if r.row_id == "2d-ymca-mass-20-pd"))
-    assert cfg.actuation == "torque" and cfg.test_mass_scale == 0.8 and cfg.method == "none"
+    assert cfg.torque.test_mass_scale == 0.8 and (cfg.method, cfg.test.gain) == ("none", 1.0)
 
 
 def test_a_diverged_simulation_fails_the_run_and_splits_a_batch(monkeypatch):

@@ -4,7 +4,6 @@ experiment and the ``general`` preset."""
 from __future__ import annotations
 
 import json
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -74,9 +73,10 @@ def test_full_scale_factor_default_is_todays_scale():
     traj = get("ymca", 4)
     base = full_scale_speeds(cfg, traj)
     assert np.array_equal(base, np.maximum(2 * traj.max_speed_rad_s(), 0.5))
-    assert np.allclose(full_scale_speeds(replace(cfg, full_scale_factor=4.0), traj), 2 * base)
+    assert np.allclose(full_scale_speeds(cfg.override({"movement.full_scale_factor": 4.0}),
+                                         traj), 2 * base)
     with pytest.raises(SkinnyInputError):
-        TrainConfig(full_scale_factor=0.0)
+        cfg.override({"movement.full_scale_factor": 0.0})
 
 
 # -- metrics -----------------------------------------------------------------------------
