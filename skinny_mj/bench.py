@@ -111,13 +111,13 @@ def _lockstep_parts(n_runs: int, n_steps: int, seed: int = 0):
     from controllers.esn import ESN
     from skinny_mj.ideal import max_speeds
     from skinny_mj.plant import BatchPlant
-    from skinny_mj.training import TrainConfig, esn_config
+    from skinny_mj.training import TrainConfig
 
     traj = _movement(n_steps)
     speed = max_speeds(traj.angles, traj.dt)
     desired = traj.position_signals("cartesian")
     cfg = TrainConfig()  # paper E exp. 5: desired next + sensed in, one command per DOF out
-    esn = ESN(esn_config(cfg, 2 * desired.shape[1], cfg.dof), n_runs=n_runs, seed=seed)
+    esn = ESN(cfg.esn_config(2 * desired.shape[1], cfg.plant.dof), n_runs=n_runs, seed=seed)
     plant = BatchPlant(4, "cartesian", traj, n_runs=n_runs, seeds=range(n_runs),
                        max_speed_rad_s=speed)
     return traj, speed, desired, esn, plant
@@ -177,7 +177,7 @@ def lockstep_speedup(epochs: int, repeats: int) -> dict:
     (``train_batch``) vs the same 20 one at a time (``train``); checks identical results."""
     from skinny_mj.training import TrainConfig, train, train_batch
 
-    cfg = TrainConfig(epochs=epochs)
+    cfg = TrainConfig().override({"rule.epochs": epochs})
     seeds = list(range(N_RUNS))
     out: dict[str, list] = {}
     best = interleaved({

@@ -12,6 +12,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from skinny_mj.config_flags import TEST_FLAGS, TRACK_FLAGS, TRAIN_FLAGS, add_flags
 from skinny_mj.errors import SkinnyInputError
 
 
@@ -63,39 +64,6 @@ def _positive_int(text: str) -> int:
     return value
 
 
-def _nonnegative_float(text: str) -> float:
-    value = float(text)
-    if not value >= 0.0:  # also refuses NaN
-        raise argparse.ArgumentTypeError(f"must be a number >= 0, got {text}")
-    return value
-
-
-def _add_movement_args(p: argparse.ArgumentParser, *, default: str | None = "ymca") -> None:
-    p.add_argument(
-        "--trajectory",
-        default=default,
-        required=default is None,
-        help="movement name (see `skinny trajectory list`) or a file: .npz/.csv trajectory, "
-        f".amc (with --asf) or .bvh motion capture (default: {default})",
-    )
-    p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc trajectory")
-    p.add_argument("--speed", type=float, default=1.0, help="speed factor, e.g. 0.5 or 1.5")
-    p.add_argument("--reps", type=_positive_int, default=1, help="repetitions of the movement")
-    p.add_argument("--retarget", choices=("angles", "positions"), default="angles",
-                   help="motion capture: joint angles, or the subject's normalized segment "
-                   "vectors as desired positions (default: %(default)s)")
-
-
-def _add_plant_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--dof", type=int, choices=(4, 8), default=4, help="4 = 2D, 8 = 3D")
-    p.add_argument(
-        "--signals",
-        choices=("joint", "cartesian"),
-        default="cartesian",
-        help="position signals the controller sees (default: cartesian)",
-    )
-
-
 _UNSET = object()
 
 
@@ -125,51 +93,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="output folder (default: results/demo/<time>)")
 
     p = sub.add_parser("track", help="run the analytic ideal controller through the task")
-    _add_plant_args(p)
-    _add_movement_args(p)
-    p.add_argument("--sensor-noise", type=_nonnegative_float, default=0.01)
+    add_flags(p, TRACK_FLAGS)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, help="output folder (default: results/track/<time>)")
 
-    p = sub.add_parser("train", help="train an ESN inverse model (FEL or true target)")
-    _add_plant_args(p)
-    _add_movement_args(p)
-    p.add_argument("--method", choices=("original", "new", "true-target"), default="new")
-    p.add_argument("--actuation", choices=("velocity", "torque"), default="velocity",
-                   help="velocity servo (the thesis's) or the torque body with mass and "
-                   "gravity (ESN inverse dynamics, PD teacher)")
-    p.add_argument("--gravity-feedforward", action="store_true",
-                   help="torque: add the gravity (bias) torque to the command, not learned")
-    p.add_argument("--feedback", choices=("pd", "inertia-pd"), default="pd",
-                   help="torque: FEL's teacher, the PD scaled by the torque limits ('pd') or "
-                   "placed in the arm's own inertia-scaled coordinates ('inertia-pd')")
-    p.add_argument("--readout-fit", choices=("cycle", "forgetting", "rls"), default="cycle",
-                   help="torque FEL: fit the readout on each cycle alone, on the statistics "
-                   "of all cycles with forgetting, or by RLS")
-    p.add_argument("--readout-forgetting", type=float, default=0.8,
-                   help="weight of earlier cycles per learning cycle, in [0, 1] "
-                   "(--readout-fit forgetting or rls)")
-    p.add_argument("--beta", type=float, default=0.1, help="β of the new method, in (0, 1]")
-    p.add_argument("--cycles", type=_positive_int, help="learning cycles per epoch")
-    p.add_argument("--epochs", type=_positive_int, default=10)
-    p.add_argument("--reservoir", type=int, default=200, help="reservoir size N")
-    p.add_argument("--spectral-radius", type=float, default=0.5)
-    p.add_argument("--noise", type=float, help="reservoir noise level ν (default by method)")
-    p.add_argument("--readout", choices=("pinv", "ridge"), default="pinv")
-    p.add_argument("--ridge", type=float, default=1e-6, help="λ for --readout ridge")
-    p.add_argument("--test-noise", action="store_true",
-                   help="reservoir noise on during the test (the thesis's toolbox)")
-    p.add_argument("--u-error-gain", type=float, default=1.0, help="scalar on u_error")
-    p.add_argument("--tt-input-noise", type=_nonnegative_float, default=0.0,
-                   help="SD of noise on the true-target's teacher-forced inputs")
-    p.add_argument("--sensor-noise", type=_nonnegative_float, default=0.01)
-    p.add_argument("--seed", type=int, default=0)
+    p = sub.add_parser("train", help="train an ESN inverse model (FEL or true target)",
+                       description="Train an ESN inverse model. Settings: TrainConfig's "
+                       "defaults (paper E exp. 5), then --preset, then --config FILE, then the "
+                       "flags and KEY=VALUE overrides given (any dotted config key, e.g. "
+                       "esn.spectral_radius=0.9 rule=original rule.epochs=2; a metrics.json's "
+                       "\"config\" lists them all).")
+    p.add_argument("overrides", nargs="*", metavar="KEY=VALUE",
+                   help="set any config key (dotted), e.g. esn.leak_rate=0.5")
+    add_flags(p, TRAIN_FLAGS)
+    p.add_argument("--seed", type=int, default=argparse.SUPPRESS, help="the run's seed "
+                   "(default: the --config file's, else 0)")
     p.add_argument("--out", type=Path, help="output folder (default: results/train/<time>)")
     p.add_argument("--config", type=Path, help="repeat a run: its metrics.json (or a bare "
-                   "TrainConfig JSON); flags given as well override its fields")
+                   "config JSON of dotted keys); flags given as well override its settings")
     p.add_argument("--preset", choices=("general",), help="a named configuration; flags "
-                   "given as well override its fields. general: the inverse model for unseen "
-                   "movements: 2D, joint-angle signals, 15 s of motor babbling "
+                   "given as well override its settings. general: the inverse model for "
+                   "unseen movements: 2D, joint-angle signals, 15 s of motor babbling "
                    "(random minimum-jerk moves over every joint's whole range, 1-8 rad/s), "
                    "full scale 4x its fastest speed, paper E exp. 5 schedule; of 12 training "
                    "sets in `skinny experiment generalization` it had the lowest error on "
@@ -181,8 +125,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
     p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny train`")
-    _add_movement_args(p)
-    p.add_argument("--sensor-noise", type=_nonnegative_float, default=0.01)
+    add_flags(p, TEST_FLAGS)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, help="output folder (default: results/test/<time>)")
 
@@ -276,8 +219,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
-    if getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None:
-        args.given = given_options(argv)  # which flags override file/preset
+    if args.command == "experiment" and args.config is not None:
+        args.given = given_options(argv)  # which flags override the file
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
     os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
     from skinny_mj import commands

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj.config import Movement
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
 from skinny_mj.memory import check_export, check_train
@@ -38,19 +39,30 @@ def _out_dir(args: argparse.Namespace, kind: str) -> Path:
     return check_writable(Path(args.out) if args.out is not None else _timestamped(kind))
 
 
-def _load_movement(args: argparse.Namespace, dof: int, check=None):
-    """The movement of ``args``; ``check(steps, cause)`` first sees its length x --reps
-    (one repetition loaded), so a run too big for the memory is refused before it is."""
+def _flag_config(args: argparse.Namespace, groups, base=None):
+    """``base`` (default ``TrainConfig()``) with the config flags of ``groups`` given in
+    ``args`` (:mod:`skinny_mj.config_flags`)."""
+    from skinny_mj.config import TrainConfig
+    from skinny_mj.config_flags import changes, given
+
+    base = TrainConfig() if base is None else base
+    return base.override(changes(base, given(args, groups)))
+
+
+def _load_movement(mv, dof: int, check=None):
+    """The movement ``mv`` (a :class:`skinny_mj.config.Movement`); ``check(steps, cause)``
+    first sees its length x reps (one repetition loaded), so a run too big for the
+    memory is refused before it is."""
     from skinny_mj.memory import steps_cause
     from skinny_mj.trajectories import load_movement
 
-    kw = {"asf": args.asf, "speed": args.speed, "retarget": getattr(args, "retarget", "angles")}
+    kw = {"asf": mv.asf, "speed": mv.speed, "retarget": mv.retarget}
     if check is not None:
-        one, report = load_movement(args.trajectory, dof, reps=1, **kw)
-        check(len(one) * args.reps, steps_cause(one.name, len(one), args.reps))
-        if args.reps == 1:
+        one, report = load_movement(mv.trajectory, dof, reps=1, **kw)
+        check(len(one) * mv.reps, steps_cause(one.name, len(one), mv.reps))
+        if mv.reps == 1:
             return one, report
-    return load_movement(args.trajectory, dof, reps=args.reps, **kw)
+    return load_movement(mv.trajectory, dof, reps=mv.reps, **kw)
 
 
 def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_angles, commands,
@@ -74,41 +86,44 @@ def cmd_track(args: argparse.Namespace) -> int:
     from controllers.metrics import position_nrmse
     from skinny_mj import body, memory
     from skinny_mj.ideal import IdealController
+    from skinny_mj.config_flags import TRACK_FLAGS
     from skinny_mj.task import load
 
+    cfg = _flag_config(args, TRACK_FLAGS)
+    dof, signals, mv = cfg.plant.dof, cfg.plant.signals, cfg.movement
     out = _out_dir(args, "track")
     traj, report = _load_movement(
-        args, args.dof, memory.check_track(args.dof, body.n_signals(args.dof, args.signals)))
-    env = load(args.dof, args.signals, traj, sensor_noise=args.sensor_noise, seed=args.seed)
+        mv, dof, memory.check_track(dof, body.n_signals(dof, signals)))
+    env = load(dof, signals, traj, sensor_noise=cfg.plant.sensor_noise, seed=args.seed)
     ctrl = IdealController(traj.angles, env.task.max_speed_rad_s, traj.dt)
     ts = env.reset()
-    angles, true_sig = [env.physics.joint_angles()], [env.physics.position_signals(args.signals)]
+    angles, true_sig = [env.physics.joint_angles()], [env.physics.position_signals(signals)]
     sensed, commands = [ts.observation["sensed"]], []
     while not ts.last():
         command = ctrl.command(int(ts.observation["step"]), ts.observation["joint_angles"])
         ts = env.step(command)
         commands.append(command)
         angles.append(env.physics.joint_angles())
-        true_sig.append(env.physics.position_signals(args.signals))
+        true_sig.append(env.physics.position_signals(signals))
         sensed.append(ts.observation["sensed"])
-    desired = traj.position_signals(args.signals)
+    desired = traj.position_signals(signals)
     true_sig = np.array(true_sig)
     nrmse = float(position_nrmse(true_sig[None], desired)[0])
     metrics = {
-        "position_nrmse": nrmse, "steps": len(traj), "dof": args.dof, "signals": args.signals,
-        "trajectory": str(args.trajectory), "speed": args.speed, "reps": args.reps,
-        "seed": args.seed, "sensor_noise": args.sensor_noise,
+        "position_nrmse": nrmse, "steps": len(traj), "dof": dof, "signals": signals,
+        "trajectory": str(mv.trajectory), "speed": mv.speed, "reps": mv.reps,
+        "seed": args.seed, "sensor_noise": cfg.plant.sensor_noise,
         "max_speed_rad_s": [float(v) for v in env.task.max_speed_rad_s],
         "clipped_samples": int(report.clipped_samples), "retarget": report.to_dict(),
     }
     with cleaned_on_failure(out):
-        _recording(out / "run.rrd", dof=args.dof, signals=args.signals,
+        _recording(out / "run.rrd", dof=dof, signals=signals,
                    desired_angles=traj.angles, actual_angles=np.array(angles),
                    commands=np.array(commands), desired_signals=desired,
                    actual_signals=true_sig, sensed_signals=np.array(sensed),
                    title=f"ideal controller on {traj.name}", metadata=metrics)
         atomic_write_json(out / "metrics.json", metrics)
-    print(f"track {traj.name}: {args.dof} DOF, {len(traj)} steps, position NRMSE {nrmse:.2e}, "
+    print(f"track {traj.name}: {dof} DOF, {len(traj)} steps, position NRMSE {nrmse:.2e}, "
           f"clipped samples {report.clipped_samples} -> {out}")
     return 0
 
@@ -133,10 +148,10 @@ def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> Non
                            xlabel="epoch (feedback gain K falls linearly from 1 to 0 in the last)")
     record_test(out / "run.rrd", outcome, title)
     outcome.esn.save(out / "model.npz", metadata={
-        "dof": cfg.dof, "signals": cfg.signals, "sensor_noise": cfg.sensor_noise,
-        "actuation": cfg.actuation,
+        "dof": cfg.plant.dof, "signals": cfg.plant.signals,
+        "sensor_noise": cfg.plant.sensor_noise, "actuation": cfg.actuation.kind,
         "max_speed_rad_s": [float(v) for v in outcome.max_speed_rad_s],
-        "trained_on": cfg.trajectory, "config": outcome.metrics["config"],
+        "trained_on": cfg.movement.trajectory, "config": outcome.metrics["config"],
         "training": _training_metadata(outcome, preset),
     })
     atomic_write_json(out / "metrics.json", outcome.metrics)
@@ -147,11 +162,11 @@ def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
     steps and seconds per cycle, repetitions, the seed and the preset."""
     from skinny_mj.trajectories.library import SET_PREFIX, set_pieces
 
-    cfg, steps = outcome.config, int(outcome.metrics["steps_per_cycle"])
-    name = str(cfg.trajectory)
+    mv, steps = outcome.config.movement, int(outcome.metrics["steps_per_cycle"])
+    name = str(mv.trajectory)
     pieces = set_pieces(name) if name.lower().startswith(SET_PREFIX) else [name]
-    return {"movement": name, "pieces": pieces, "asf": cfg.asf, "speed": cfg.speed,
-            "reps": cfg.reps, "steps_per_cycle": steps,
+    return {"movement": name, "pieces": pieces, "asf": mv.asf, "speed": mv.speed,
+            "reps": mv.reps, "steps_per_cycle": steps,
             "seconds_per_cycle": steps * outcome.test.trajectory.dt,
             "seed": int(outcome.seed), "preset": preset}
 
@@ -180,7 +195,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg, seed = train_config(args)
     out = _out_dir(args, "train")
     check_train(cfg)
-    outcome = _train_and_write(cfg, seed, out, f"{cfg.method} on {cfg.trajectory}",
+    outcome = _train_and_write(cfg, seed, out, f"{cfg.method} on {cfg.movement.trajectory}",
                                quiet=args.quiet, preset=getattr(args, "preset", None))
     m = outcome.metrics
     if outcome.failed:
@@ -227,6 +242,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def cmd_test(args: argparse.Namespace) -> int:
     from controllers.esn import ESN, read_metadata
+    from skinny_mj.config_flags import TEST_FLAGS
     from skinny_mj.training import TrainConfig, evaluate, run_of, run_streams
 
     path = Path(args.model)
@@ -243,21 +259,23 @@ def cmd_test(args: argparse.Namespace) -> int:
     dof, signals = int(meta["dof"]), str(meta["signals"])
     from skinny_mj import body, memory
 
+    asked = _flag_config(args, TEST_FLAGS)  # the test's movement and sensor noise
     out = _out_dir(args, "test")
-    traj, report = _load_movement(args, dof, memory.check_test(esn.cfg, dof,
-                                                               body.n_signals(dof, signals)))
+    traj, report = _load_movement(asked.movement, dof,
+                                  memory.check_test(esn.cfg, dof, body.n_signals(dof, signals)))
     saved = meta.get("config") if isinstance(meta.get("config"), dict) else {}
     try:
-        cfg = TrainConfig.from_dict({**saved, "dof": dof, "signals": signals,
-                                     "sensor_noise": args.sensor_noise})
-    except TypeError as err:
+        cfg = TrainConfig.from_dict(saved).override({
+            "plant.dof": dof, "plant.signals": signals,
+            "plant.sensor_noise": asked.plant.sensor_noise})
+    except SkinnyInputError as err:
         raise SkinnyInputError(f"model metadata holds a bad config ({err})", path=path) from None
     run = run_of(cfg, esn, np.asarray(meta["max_speed_rad_s"], dtype=float), traj,
                  [run_streams(args.seed).plant_seed])
     (test,) = evaluate(run)
     metrics: dict[str, Any] = {
         "model": str(path), "trained_on": meta.get("trained_on"),
-        "trajectory": str(args.trajectory),
+        "trajectory": str(asked.movement.trajectory),
         "dof": dof, "signals": signals, "steps": len(traj), "seed": args.seed,
         "clipped_samples": int(report.clipped_samples), "failed": test.failed,
         "fail_reason": test.fail_reason,
@@ -265,7 +283,7 @@ def cmd_test(args: argparse.Namespace) -> int:
     }
     if test.torque is not None:  # torque body: limits, |torque|, work, MuJoCo warnings
         metrics["test"]["torque"] = test.torque["metrics"]
-    if not test.failed and cfg.actuation == "velocity":  # DTW, within 5°, lag
+    if not test.failed and cfg.torque is None:  # DTW, within 5°, lag
         from skinny_mj.imitation import imitation_metrics, saturation
 
         # beside "test" (which stays the train command's own test dict, key for key)
@@ -307,9 +325,8 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
     if args.action == "show":
         from skinny_mj.trajectories.human import movement_stats
 
-        ns = argparse.Namespace(trajectory=args.name, asf=args.asf, speed=1.0, reps=1,
-                                retarget=args.retarget)
-        traj, _ = _load_movement(ns, args.dof)
+        traj, _ = _load_movement(Movement(args.name, asf=args.asf, retarget=args.retarget),
+                                 args.dof)
         print(f"{traj.name} (dof {args.dof}, explicit desired signals: "
               f"{sorted(traj.desired) if traj.desired else 'none'})")
         for key, value in movement_stats(traj).items():
@@ -321,8 +338,9 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
             for line in torque_training.feasibility_report(args.dof, traj):
                 print(line)
         return 0
-    ns = argparse.Namespace(trajectory=args.name, asf=args.asf, speed=args.speed, reps=args.reps)
-    traj, _ = _load_movement(ns, args.dof, check_export(args.dof, args.out))
+    traj, _ = _load_movement(Movement(args.name, asf=args.asf, speed=args.speed,
+                                      reps=args.reps), args.dof,
+                             check_export(args.dof, args.out))
     out = Path(args.out)
     traj.save(out)
     print(f"wrote {traj.name}: {len(traj)} steps, {args.dof} DOF -> {out}")
@@ -335,8 +353,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     check_writable_file(args.out)
     angles = None
     if args.trajectory is not None:
-        ns = argparse.Namespace(trajectory=args.trajectory, asf=None, speed=1.0, reps=1)
-        traj, _ = _load_movement(ns, args.dof)
+        traj, _ = _load_movement(Movement(args.trajectory), args.dof)
         if not 0 <= args.frame < len(traj):
             raise SkinnyInputError(f"--frame must be in [0, {len(traj) - 1}], got {args.frame}")
         angles = traj.angles[args.frame]

@@ -2,24 +2,26 @@
 --config``.
 
 ``skinny train`` writes ``metrics.json`` with the run's whole :class:`TrainConfig`
-(``config``) and its ``seed``; a sweep writes ``config.json`` with the CLI options
-(``options``: quick, movement, asf, dof, signals), the selection of rows and the runs per
-row. Fed back, each repeats the run exactly; a flag given on the command line as well
-overrides that one field (``args.given``, from :func:`skinny_mj.cli.given_options`, says
-which flags were given: argparse defaults never override a file).
+(``config``, flat dotted keys) and its ``seed``; a sweep writes ``config.json`` with the
+CLI options (``options``: quick, movement, asf, dof, signals), the selection of rows and
+the runs per row. Fed back, each repeats the run exactly; a flag given on the command line
+as well overrides that one setting (only the flags given reach ``skinny train``'s
+arguments; ``skinny experiment``'s ``args.given``, from :func:`skinny_mj.cli.given_options`,
+says which were given: argparse defaults never override a file). A ``metrics.json`` or
+config file of an earlier version (flat fields such as ``"reservoir": 200``) is read
+through :data:`skinny_mj.config.LEGACY_KEYS`.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from skinny_mj.config import TrainConfig
+from skinny_mj.config import DERIVED, TrainConfig, is_legacy
 from skinny_mj.errors import SkinnyInputError
 
 __all__ = ["read_json", "read_train_file", "train_config", "SweepInvocation",
@@ -60,46 +62,41 @@ def read_train_file(path: str | Path) -> tuple[dict[str, Any], int | None]:
     return data, None
 
 
-def _make(fields: dict[str, Any], path: Path | None) -> TrainConfig:
+def _make(fields: dict[str, Any], path: Path | None, base: TrainConfig | None = None
+          ) -> TrainConfig:
+    """The config of a file's ``fields`` (today's dotted keys over ``base``, or an earlier
+    version's flat fields); a bad field names the file."""
     try:
-        return TrainConfig.from_dict(fields)
+        if base is None or is_legacy(fields):
+            return TrainConfig.from_dict(fields)
+        return base.override({k: v for k, v in fields.items() if k not in DERIVED})
     except SkinnyInputError as err:
         if path is None:
             raise
         raise SkinnyInputError(str(err), path=path) from None
-    except (TypeError, ValueError) as err:  # a field of the wrong type, e.g. "epochs": "3"
-        raise SkinnyInputError(f"bad training config ({err})", path=path) from None
 
 
 def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
-    """The run ``skinny train`` was asked for, and its seed.
+    """The run ``skinny train`` was asked for, and its seed: ``TrainConfig()``, then
+    ``--preset``'s keys, then ``--config FILE``'s (and its seed), then the flags and
+    ``KEY=VALUE`` overrides given (:mod:`skinny_mj.config_flags`)."""
+    from skinny_mj.config_flags import TRAIN_FLAGS, changes, given, pairs
 
-    Every parsed option whose dest is a :class:`TrainConfig` field sets that field;
-    with ``--config FILE`` only the flags actually given do (``args.given``) and the
-    file's fields and seed stand for the rest.
-    """
-    names = {f.name for f in dataclasses.fields(TrainConfig)}
-    flags = {k: str(v) if isinstance(v, Path) else v for k, v in vars(args).items()
-             if k in names}
+    texts = {**given(args, TRAIN_FLAGS), **pairs(getattr(args, "overrides", None) or [])}
+    cfg, seed = TrainConfig(), None
     preset = getattr(args, "preset", None)
-    if preset is not None:  # the preset's fields, then the flags given
-        if getattr(args, "config", None) is not None:
-            raise SkinnyInputError("give --preset or --config, not both")
+    if preset is not None:
         from skinny_mj.presets import preset_fields
 
-        fields = preset_fields(preset, str(flags.get("actuation", "velocity")))
-        given = getattr(args, "given", set())
-        fields.update({k: v for k, v in flags.items() if k in given})
-        return _make(fields, None), int(args.seed)
-    if getattr(args, "config", None) is None:
-        return _make(flags, None), int(args.seed)
-    path = Path(args.config)
-    fields, seed = read_train_file(path)
-    given = getattr(args, "given", set())
-    fields.update({k: v for k, v in flags.items() if k in given})
-    if "seed" in given or seed is None:
+        cfg = cfg.override(preset_fields(preset, str(texts.get("actuation", "velocity"))))
+    if getattr(args, "config", None) is not None:
+        path = Path(args.config)
+        fields, seed = read_train_file(path)
+        cfg = _make(fields, path, cfg)
+    cfg = cfg.override(changes(cfg, texts))
+    if getattr(args, "seed", None) is not None:
         seed = int(args.seed)
-    return _make(fields, path), seed
+    return cfg, 0 if seed is None else seed
 
 
 @dataclass(frozen=True)

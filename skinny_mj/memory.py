@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from skinny_mj.config import TrueTarget
 from skinny_mj.errors import SkinnyInputError
 
 __all__ = ["Estimate", "available_bytes", "check", "train_estimate", "test_estimate",
@@ -132,26 +133,26 @@ def _weights(n: int, n_in: int, n_out: int, runs: int) -> tuple[int, int]:
 
 def _layout(cfg: Any) -> dict[str, int]:
     """The signal counts of ``cfg`` (a TrainConfig): n_sig, n_out, n_in, D, D_fm."""
-    from skinny_mj import body
-    from skinny_mj.training import controlled_dofs, torque
+    from skinny_mj.run_parts import network_sizes
 
-    n_sig = body.n_signals(cfg.dof, cfg.signals)
-    dofs = controlled_dofs(cfg)
-    n_out = cfg.dof if dofs is None else len(dofs)
-    n_in = (n_sig if cfg.inputs == "desired+sensed" else 0) + n_sig \
-        + (n_sig if cfg.forward is not None else 0) + torque.n_extra_inputs(cfg)
-    d_fm = cfg.forward_reservoir + n_sig + n_out + 1 if cfg.forward is not None else 0
-    return {"n_sig": n_sig, "n_out": n_out, "n_in": n_in, "D": cfg.reservoir + n_in + 1,
+    n_sig, n_out, n_in = network_sizes(cfg)
+    d_fm = _forward_size(cfg) + n_sig + n_out + 1 if _forward_size(cfg) else 0
+    return {"n_sig": n_sig, "n_out": n_out, "n_in": n_in, "D": cfg.esn.n_reservoir + n_in + 1,
             "D_fm": d_fm}
+
+
+def _forward_size(cfg: Any) -> int:
+    """The forward model's reservoir size (0: no forward model)."""
+    return getattr(cfg.forward, "reservoir", 0)
 
 
 def _per_step(cfg: Any, lay: dict[str, int]) -> int:
     """Floats one run's cycle keeps per step: sensed, true signals, angles, u_error,
     commands, ESN outputs, extended states (+ the forward model's, + feed-forward)."""
-    floats = 2 * lay["n_sig"] + cfg.dof + 3 * lay["n_out"] + lay["D"]
-    if cfg.forward is not None:
+    floats = 2 * lay["n_sig"] + cfg.plant.dof + 3 * lay["n_out"] + lay["D"]
+    if _forward_size(cfg):
         floats += lay["D_fm"] + lay["n_sig"]
-    if cfg.actuation == "torque":
+    if cfg.torque is not None:
         floats += lay["n_out"]
     return floats
 
@@ -159,32 +160,32 @@ def _per_step(cfg: Any, lay: dict[str, int]) -> int:
 def train_estimate(cfg: Any, steps: int, test_steps: int, runs: int = 1,
                    steps_cause: str = "") -> Estimate:
     """Bytes one ``train_batch(cfg, seeds)`` of ``runs`` seeds needs: ``steps`` control
-    steps per training cycle (the movement x ``cfg.reps``), ``test_steps`` in the test."""
+    steps per training cycle (the movement x its reps), ``test_steps`` in the test."""
     lay = _layout(cfg)
     step = _per_step(cfg, lay) * _F8
-    n_res = cfg.reservoir
+    n_res, epochs = cfg.esn.n_reservoir, getattr(cfg.rule, "epochs", 0)
     fit = (lay["D"] + lay["n_out"]) * _F8 + 8 * lay["n_out"] * runs * _F8
     if runs > 1:  # pinv of the live runs only copies their states
         fit += lay["D"] * runs * _F8
-    if cfg.ridge_select or cfg.readout == "ridge":
+    if cfg.esn.readout == "ridge":  # (a ridge-select fit needs the ridge readout)
         fit += lay["D"] * _F8
-    if cfg.forward is not None:
+    if _forward_size(cfg):
         fit += (lay["D_fm"] + lay["n_sig"]) * _F8
-    if cfg.method == "true-target":  # teacher-forced states of every run, then the fit
+    if isinstance(cfg.rule, TrueTarget):  # teacher-forced states of every run, then the fit
         fit += lay["D"] * runs * _F8
     kept, drawing = _weights(n_res, lay["n_in"], lay["n_out"], runs)
-    if cfg.forward is not None:
-        fm_kept, fm_drawing = _weights(cfg.forward_reservoir, lay["n_sig"] + lay["n_out"],
+    if _forward_size(cfg):
+        fm_kept, fm_drawing = _weights(_forward_size(cfg), lay["n_sig"] + lay["n_out"],
                                        lay["n_sig"], runs)
         kept, drawing = kept + fm_kept, max(drawing, kept + fm_drawing)
-    movement = (lay["n_sig"] + 4 * cfg.dof) * _F8
+    movement = (lay["n_sig"] + 4 * cfg.plant.dof) * _F8
     cause = steps_cause or f"{steps} steps per cycle"
     lockstep = f" x {runs} lockstep runs" if runs > 1 else ""
     parts = {"per-step buffers": step * runs * steps + movement * steps,
              "readout fit": fit * steps,
              "test": (step * runs + RECORDING_BYTES_PER_STEP) * test_steps,
              # per epoch and run: the curves' arrays, then their JSON lists and text
-             "learning curve": cfg.epochs * (3 * runs * _F8 + runs * CURVE_BYTES_PER_EPOCH)}
+             "learning curve": epochs * (3 * runs * _F8 + runs * CURVE_BYTES_PER_EPOCH)}
     # the weights are drawn before any buffer exists: the peak is the larger of the two
     parts["reservoir weights"] = max(kept, drawing - sum(parts.values()))
     return Estimate(
@@ -192,7 +193,7 @@ def train_estimate(cfg: Any, steps: int, test_steps: int, runs: int = 1,
         {"per-step buffers": cause + lockstep, "readout fit": cause + lockstep,
          "reservoir weights": f"--reservoir {n_res}{lockstep}",
          "test": f"{test_steps} test steps{lockstep}",
-         "learning curve": f"--epochs {cfg.epochs}{lockstep}"})
+         "learning curve": f"--epochs {epochs}{lockstep}"})
 
 
 def test_estimate(n_reservoir: int, n_inputs: int, n_outputs: int, dof: int, n_sig: int,
@@ -268,12 +269,13 @@ def row_configs(module: Any, experiment: Any, row: Any) -> list[Any]:
 
 def _steps(cfg: Any, cache: dict) -> tuple[int, str]:
     """One repetition's control steps of ``cfg``'s movement (cached per movement)."""
-    key = (cfg.trajectory, cfg.asf, cfg.dof, cfg.speed, cfg.retarget)
+    mv = cfg.movement
+    key = (mv.trajectory, mv.asf, cfg.plant.dof, mv.speed, mv.retarget)
     if key not in cache:
         from skinny_mj.run_parts import load_trajectory
 
         cache[key] = len(load_trajectory(cfg)[0])
-    return cache[key], steps_cause(str(cfg.trajectory), cache[key], cfg.reps, flag="")
+    return cache[key], steps_cause(str(mv.trajectory), cache[key], mv.reps, flag="")
 
 
 def row_estimate(module: Any, experiment: Any, row: Any, runs: int = 1,
@@ -287,7 +289,7 @@ def row_estimate(module: Any, experiment: Any, row: Any, runs: int = 1,
     found = None if own is None else own(experiment.config, row, runs)
     if found is not None:
         return found
-    ests = [train_estimate(cfg, one * cfg.reps, one, runs, cause)
+    ests = [train_estimate(cfg, one * cfg.movement.reps, one, runs, cause)
             for cfg in row_configs(module, experiment, row)
             for one, cause in [_steps(cfg, cache)]]
     return max(ests, key=lambda e: e.total, default=None)
@@ -318,9 +320,8 @@ def check_train(cfg: Any, what: str = "the training") -> None:
     from skinny_mj.run_parts import load_trajectory
 
     traj, _ = load_trajectory(cfg)
-    one = len(traj)
-    check(train_estimate(cfg, one * cfg.reps, one, 1, steps_cause(traj.name, one, cfg.reps)),
-          what)
+    one, reps = len(traj), cfg.movement.reps
+    check(train_estimate(cfg, one * reps, one, 1, steps_cause(traj.name, one, reps)), what)
 
 
 def check_test(esn_cfg: Any, dof: int, n_sig: int) -> Any:

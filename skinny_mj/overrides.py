@@ -110,16 +110,17 @@ def _switch(old: Any, cls: type, kind: str) -> Any:
     return cls(**shared, kind=kind)
 
 
-def _unknown(key: str, cfg: Any, root: Any) -> SkinnyInputError:
+def _unknown(key: str, owner: Any, root: Any) -> SkinnyInputError:
+    """The error of ``key``, not a setting of ``owner`` (the config object holding it,
+    or None when the key's path leaves the config)."""
     known = keys(root)
     close = difflib.get_close_matches(key, known, n=1)
     hint = f"; did you mean {close[0]!r}?" if close else ""
-    owner, _, name = key.rpartition(".")
-    node = _node(root, owner) if owner else root
-    if node is not None and _has(node, KIND) and owner:
+    path = key.rpartition(".")[0]
+    if owner is not None and _has(owner, KIND) and path:
         return SkinnyInputError(
-            f"{key!r} is not a setting of {owner}={getattr(node, KIND)} (its settings: "
-            f"{', '.join(_fields(node)) or 'none'})")
+            f"{key!r} is not a setting of {path}={getattr(owner, KIND)} (its settings: "
+            f"{', '.join(_fields(owner)) or 'none'})")
     return SkinnyInputError(f"unknown config key {key!r}{hint}")
 
 
@@ -131,33 +132,50 @@ def _node(cfg: Any, dotted: str) -> Any:
     return cfg
 
 
-def _set(cfg: Any, path: list[str], value: Any, key: str, root: Any) -> Any:
-    name = path[0]
-    if not _has(cfg, name) or name == KIND:
-        raise _unknown(key, cfg, root)
-    annotation, current = _hints(type(cfg))[name], getattr(cfg, name)
-    if len(path) > 1:
-        new = _set(current, path[1:], value, key, root)
-    elif _is_union(annotation):
+def _apply(node: Any, changes: Mapping[str, Any], prefix: str, root: Any) -> Any:
+    """``node`` (at ``prefix``) with its relative dotted ``changes`` set: per field, a
+    type chosen first, then its own settings; then ``node`` rebuilt once, so its checks
+    see all the changes together (``rule=none`` with ``test.gain=1``)."""
+    groups: dict[str, dict[str, Any]] = {}
+    for key, value in changes.items():
+        name, _, rest = key.partition(".")
+        groups.setdefault(name, {})[rest] = value
+    new = {}
+    for name, sub in groups.items():
+        key = prefix + name
+        if not _has(node, name) or name == KIND:
+            raise _unknown(key + next((f".{r}" for r in sub if r), ""), node, root)
+        annotation, current = _hints(type(node))[name], getattr(node, name)
+        if "" in sub:
+            current = _value(current, annotation, sub.pop(""), key)
+        if sub:
+            if not dataclasses.is_dataclass(current):
+                raise _unknown(f"{key}.{next(iter(sub))}", None, root)
+            current = _apply(current, sub, key + ".", root)
+        new[name] = current
+    try:
+        return dataclasses.replace(node, **new)
+    except SkinnyInputError as err:
+        owner = prefix[:-1]
+        raise SkinnyInputError(f"{owner}: {err}" if owner else str(err)) from None
+    except (TypeError, ValueError) as err:  # a component's own check (e.g. ESNConfig's)
+        raise SkinnyInputError(f"{prefix[:-1] or 'config'}: {err}") from None
+
+
+def _value(current: Any, annotation: Any, value: Any, key: str) -> Any:
+    """The new value of the field ``key`` (``current`` now) set to ``value``: a type
+    chosen by its kind name, or a scalar checked against its annotation."""
+    if _is_union(annotation):
         if not isinstance(value, str):
             raise SkinnyInputError(f"{key} is a choice of types: give its name as a string, "
                                    f"got {value!r}")
         cls = _member_of(annotation, value, key)
-        new = current if type(current) is cls and getattr(current, KIND) == value \
+        return current if type(current) is cls and getattr(current, KIND) == value \
             else _switch(current, cls, value)
-    elif _members(annotation):
+    if _members(annotation):
         raise SkinnyInputError(f"{key} is a group of settings ({', '.join(_fields(current))}): "
                                f"set them as {key}.NAME=VALUE")
-    else:
-        new = _checked(value, annotation, key)
-    try:
-        return dataclasses.replace(cfg, **{name: new})
-    except SkinnyInputError as err:
-        owner = key.rpartition(".")[0]
-        raise SkinnyInputError(f"{owner}: {err}" if owner and len(path) == 1 else str(err)) \
-            from None
-    except (TypeError, ValueError) as err:  # a component's own check (e.g. ESNConfig's)
-        raise SkinnyInputError(f"{key}: {err}") from None
+    return _checked(value, annotation, key)
 
 
 def _checked(value: Any, annotation: Any, key: str) -> Any:
@@ -190,17 +208,10 @@ def _describe(annotation: Any) -> str:
     return " or ".join(names.get(a, getattr(a, "__name__", str(a))) for a in allowed)
 
 
-def _depth_order(item: tuple[str, Any]) -> int:
-    return item[0].count(".")
-
-
 def override(cfg: Any, changes: Mapping[str, Any]) -> Any:
     """``cfg`` with the dotted keys of ``changes`` set (a type-choosing key before its
-    fields), validated again by the dataclasses' own checks."""
-    out = cfg
-    for key, value in sorted(changes.items(), key=_depth_order):
-        out = _set(out, key.split("."), value, key, out)
-    return out
+    fields), validated again by the dataclasses' own checks, once with all the changes."""
+    return _apply(cfg, changes, "", cfg) if changes else cfg
 
 
 def field_type(cfg: Any, key: str) -> Any:

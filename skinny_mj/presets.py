@@ -22,7 +22,7 @@ from skinny_mj.errors import SkinnyInputError
 
 __all__ = ["PRESETS", "TORQUE_PRESETS", "preset_fields", "describe"]
 
-#: Preset name -> (one-line reason, TrainConfig fields the preset sets).
+#: Preset name -> (one-line reason, the dotted TrainConfig keys the preset sets).
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "general": (
         "2D, joint-angle signals, trained on 15 s of motor babbling (minimum-jerk moves "
@@ -30,8 +30,9 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
         "with full scale = 4x its fastest speed per DOF, paper E exp. 5 schedule (N = 200), "
         "one washout cycle before the test: row j2-babble15-scale4, the lowest error on "
         "the unseen real clips in the generalization matrix (md_02 0.009, md_03 0.007)",
-        {"dof": 4, "signals": "joint", "trajectory": "babble:seed=0,duration=15",
-         "full_scale_factor": 4.0, "test_washout_cycles": 1},
+        {"plant.dof": 4, "plant.signals": "joint",
+         "movement.trajectory": "babble:seed=0,duration=15",
+         "movement.full_scale_factor": 4.0, "test.washout_cycles": 1},
     ),
 }
 
@@ -42,10 +43,10 @@ TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
         "peak speeds 0.5-4 rad/s (every step within the torque limits, peak "
         "|tau|/limit 0.43), FEL with the inertia-scaled PD teacher, beta = 1, 3 cycles "
         "x 15 epochs, readout on the normal equations with forgetting",
-        {"dof": 4, "signals": "joint", "actuation": "torque",
-         "trajectory": "babble:seed=0,duration=15,vmin=0.5,vmax=4",
-         "feedback": "inertia-pd", "readout_fit": "forgetting", "beta": 1.0,
-         "cycles": 3, "epochs": 15},
+        {"plant.dof": 4, "plant.signals": "joint", "actuation": "torque",
+         "movement.trajectory": "babble:seed=0,duration=15,vmin=0.5,vmax=4",
+         "actuation.feedback": "inertia-pd", "rule.fit": "forgetting", "rule.beta": 1.0,
+         "rule.cycles": 3, "rule.epochs": 15},
     ),
 }
 
@@ -55,7 +56,8 @@ def _table(actuation: str) -> dict[str, tuple[str, dict[str, Any]]]:
 
 
 def preset_fields(name: str, actuation: str = "velocity") -> dict[str, Any]:
-    """A copy of the TrainConfig fields preset ``name`` sets for ``actuation``."""
+    """A copy of the dotted TrainConfig keys preset ``name`` sets for ``actuation``
+    (``TrainConfig().override(preset_fields(name))`` is the preset's config)."""
     table = _table(actuation)
     if name not in table:
         raise SkinnyInputError(f"unknown preset {name!r}; known: {', '.join(table)}")

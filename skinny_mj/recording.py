@@ -350,11 +350,12 @@ def record_test(path: str | Path, outcome: Any, title: str,
     if isinstance(curve, list) and curve:
         curves = {"train_position_nrmse": np.array([np.nan if v is None else v for v in curve],
                                                    dtype=float)}
-    meta = {"seed": outcome.seed, "test": outcome.metrics["test"], "movement": cfg.trajectory,
-            **(metadata or {})}
+    meta = {"seed": outcome.seed, "test": outcome.metrics["test"],
+            "movement": cfg.movement.trajectory, **(metadata or {})}
+    dof = cfg.plant.dof
     return write_recording(
-        path, dt=test.trajectory.dt, dof=cfg.dof, dof_names=list(body.dof_names(cfg.dof)),
-        signal_names=list(body.signal_names(cfg.dof, cfg.signals)),
+        path, dt=test.trajectory.dt, dof=dof, dof_names=list(body.dof_names(dof)),
+        signal_names=list(body.signal_names(dof, cfg.plant.signals)),
         desired_angles=test.trajectory.angles, actual_angles=ro.angles[0],
         commands=ro.commands[0], desired_signals=test.desired,
         actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0], title=title,

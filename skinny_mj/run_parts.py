@@ -10,10 +10,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from controllers.esn import ESNConfig
 from skinny_mj import torque_training as torque
 from skinny_mj.config import TrainConfig
-from skinny_mj.errors import SkinnyInputError
 
 
 class RunStreams(NamedTuple):
@@ -34,23 +32,26 @@ def run_streams(seed: int) -> RunStreams:
 
 
 def load_trajectory(cfg: TrainConfig):
-    """The movement of one repetition (at cfg.speed) and its retarget report."""
+    """The movement of one repetition (at cfg.movement.speed) and its retarget report."""
     from skinny_mj.trajectories import load_movement
 
-    kw = {} if cfg.retarget == "angles" else {"retarget": cfg.retarget}  # today's call
-    return load_movement(cfg.trajectory, cfg.dof, asf=cfg.asf, speed=cfg.speed, **kw)
+    mv = cfg.movement
+    kw = {} if mv.retarget == "angles" else {"retarget": mv.retarget}  # today's call
+    return load_movement(mv.trajectory, cfg.plant.dof, asf=mv.asf, speed=mv.speed, **kw)
 
 
 def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
-    """(n_dof,) rad/s: ``cfg.full_scale_factor`` (default 2) x the fastest speed per DOF
-    of ``trajectory`` (one repetition) or of the movement named by ``cfg.max_speed_from``,
+    """(n_dof,) rad/s: ``movement.full_scale_factor`` (default 2) x the fastest speed per
+    DOF of ``trajectory`` (one repetition) or of the movement named by
+    ``movement.max_speed_from``,
     so that networks trained on different movements share one command scale (paper C)."""
     from skinny_mj.ideal import max_speeds
     from skinny_mj.trajectories import load_movement
 
-    if cfg.max_speed_from is not None:
-        trajectory, _ = load_movement(cfg.max_speed_from, cfg.dof, asf=cfg.asf)
-    return max_speeds(trajectory.angles, trajectory.dt, speed_factor=cfg.full_scale_factor)
+    mv = cfg.movement
+    if mv.max_speed_from is not None:
+        trajectory, _ = load_movement(mv.max_speed_from, cfg.plant.dof, asf=mv.asf)
+    return max_speeds(trajectory.angles, trajectory.dt, speed_factor=mv.full_scale_factor)
 
 
 def make_plant(cfg: TrainConfig, trajectory, plant_seeds: Sequence[int],
@@ -58,51 +59,58 @@ def make_plant(cfg: TrainConfig, trajectory, plant_seeds: Sequence[int],
     """The plant of ``cfg`` imitating ``trajectory``, one run per plant seed."""
     from skinny_mj.plant import BatchPlant, EnvPlant
 
-    seeds = [int(s) for s in plant_seeds]
-    common = dict(n_runs=len(seeds), seeds=seeds, sensor_noise=cfg.sensor_noise,
-                  actuation=cfg.actuation, max_speed_rad_s=max_speed_rad_s)
-    if cfg.leading_arm is not None:
+    seeds, body = [int(s) for s in plant_seeds], cfg.plant
+    common = dict(n_runs=len(seeds), seeds=seeds, sensor_noise=body.sensor_noise,
+                  actuation=cfg.actuation.kind, max_speed_rad_s=max_speed_rad_s)
+    if body.leading_arm is not None:
         from skinny_mj.bimanual import BimanualPlant
 
-        return BimanualPlant(cfg.dof, cfg.signals, trajectory, cfg.leading_arm, **common)
-    if cfg.plant == "env":
+        return BimanualPlant(body.dof, body.signals, trajectory, body.leading_arm, **common)
+    if body.backend == "env":
         from skinny_mj.task import load
 
         if len(seeds) != 1:
             raise ValueError("the dm_control path steps one run per environment")
-        env = load(cfg.dof, cfg.signals, trajectory, actuation=cfg.actuation,
-                   sensor_noise=cfg.sensor_noise, seed=seeds[0], max_speed_rad_s=max_speed_rad_s)
+        env = load(body.dof, body.signals, trajectory, actuation=cfg.actuation.kind,
+                   sensor_noise=body.sensor_noise, seed=seeds[0],
+                   max_speed_rad_s=max_speed_rad_s)
         return EnvPlant(env)
-    return BatchPlant(cfg.dof, cfg.signals, trajectory, **common)
-
-
-def esn_config(cfg: TrainConfig, n_inputs: int, n_outputs: int,
-               n_reservoir: int | None = None) -> ESNConfig:
-    try:
-        return ESNConfig(
-            n_inputs=n_inputs, n_outputs=n_outputs,
-            n_reservoir=cfg.reservoir if n_reservoir is None else n_reservoir,
-            spectral_radius=cfg.spectral_radius, noise_level=cfg.noise_level,
-            readout=cfg.readout, ridge_lambda=cfg.ridge,
-        )
-    except ValueError as err:
-        raise SkinnyInputError(str(err)) from None
+    return BatchPlant(body.dof, body.signals, trajectory, **common)
 
 
 def controlled_dofs(cfg: TrainConfig) -> np.ndarray | None:
     """Body DOFs the ESN drives: None for all, paper B's lagging arm's otherwise."""
-    if cfg.leading_arm is None:
+    if cfg.plant.leading_arm is None:
         return None
     from skinny_mj.bimanual import arm_dofs
 
-    return arm_dofs(cfg.dof, "left" if cfg.leading_arm == "right" else "right")
+    return arm_dofs(cfg.plant.dof, lagging_arm(cfg))
+
+
+def network_sizes(cfg: TrainConfig) -> tuple[int, int, int]:
+    """(n_sig, n_out, n_in): the position signals, the inverse ESN's outputs (the DOFs
+    it drives) and its inputs (desired and sensed signals, the forward model's
+    prediction, the torque loop's velocity inputs)."""
+    from skinny_mj import body
+
+    n_sig = body.n_signals(cfg.plant.dof, cfg.plant.signals)
+    dofs = controlled_dofs(cfg)
+    n_out = cfg.plant.dof if dofs is None else len(dofs)
+    n_in = (n_sig if cfg.inputs == "desired+sensed" else 0) + n_sig \
+        + (0 if cfg.forward.kind == "none" else n_sig) + torque.n_extra_inputs(cfg)
+    return n_sig, n_out, n_in
+
+
+def lagging_arm(cfg: TrainConfig) -> str:
+    """Paper B's arm the ESN drives: the one that is not ``plant.leading_arm``."""
+    return "left" if cfg.plant.leading_arm == "right" else "right"
 
 
 def true_commands_of(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) -> np.ndarray:
     """(T-1, n_controlled) the analytic commands of ``trajectory`` for the ESN's DOFs
     (torque body: the normalized inverse-dynamics torques)."""
-    if cfg.actuation == "torque":
-        return torque.true_torques(cfg.dof, trajectory)
+    if cfg.torque is not None:
+        return torque.true_torques(cfg.plant.dof, trajectory)
     from skinny_mj.ideal import true_commands
 
     commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
@@ -112,22 +120,22 @@ def true_commands_of(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) 
 
 def arm_forward_models(cfg: TrainConfig, rngs: Sequence[np.random.Generator]):
     """Paper B's per-arm forward models (:class:`controllers.arm_forward.ArmForwardModels`,
-    ``cfg.forward_sharing``): the lagging arm's network from each run's forward stream,
+    ``forward.sharing``): the lagging arm's network from each run's forward stream,
     the leading arm's (shared predictions only) from a child of that stream."""
     from controllers.arm_forward import ArmForwardModels
     from controllers.esn import ESN
     from skinny_mj.bimanual import arm_signals
 
-    lead_side = cfg.leading_arm
-    lag_side = "left" if lead_side == "right" else "right"
-    lag_sig, lead_sig = (arm_signals(cfg.dof, cfg.signals, s) for s in (lag_side, lead_side))
+    body, sharing = cfg.plant, cfg.forward.sharing
+    lag_sig, lead_sig = (arm_signals(body.dof, body.signals, s)
+                         for s in (lagging_arm(cfg), body.leading_arm))
     n_arm = len(controlled_dofs(cfg))
 
     def nets(n_sig: int, streams):
-        fm_cfg = esn_config(cfg, n_sig + n_arm, n_sig, cfg.forward_reservoir)
+        fm_cfg = cfg.esn_config(n_sig + n_arm, n_sig, cfg.forward.reservoir)
         return ESN(fm_cfg, n_runs=len(streams), rngs=streams)
 
     lag = nets(len(lag_sig), list(rngs))
     lead = nets(len(lead_sig), [g.spawn(1)[0] for g in rngs]) \
-        if cfg.forward_sharing == "predictions" else None
-    return ArmForwardModels(lag, lead, lag_sig, lead_sig, cfg.forward_sharing)
+        if sharing == "predictions" else None
+    return ArmForwardModels(lag, lead, lag_sig, lead_sig, sharing)

@@ -1,6 +1,7 @@
-"""The torque body in the one training path: what ``actuation="torque"`` adds.
+"""The torque body in the one training path: what ``actuation=torque`` adds.
 
-:mod:`skinny_mj.training` calls these when ``cfg.actuation == "torque"``:
+:mod:`skinny_mj.training` calls these when ``cfg.actuation`` is a
+:class:`skinny_mj.config.Torque`:
 
 - :func:`hook_for`: the :class:`controllers.torque_fel.TorqueLoop` of a movement (the
   rollout hook: velocity inputs, the PD teacher, the gravity feed-forward);
@@ -11,7 +12,8 @@
   [qd_d(t+1); qd_d(t)] / v_max, as the rollout's [qd_d(t+1); qd(t)] / v_max;
 - :func:`perturb`: the robustness test plant (payload, link masses);
 - :func:`controller`: the PD teacher with gains scaled to the limits;
-- :func:`hook_for` with an arm law (``feedback`` in :data:`skinny_mj.config.ARM_LAWS`):
+- :func:`hook_for` with an arm law (``actuation.feedback`` in
+  :data:`skinny_mj.config.ARM_LAWS`):
   an :class:`controllers.torque_arm_loop.ArmLoop` fed by
   :class:`skinny_mj.dynamics.BatchArmState`, its gains :func:`arm_gains`, the movement
   :func:`desired_motion`; :func:`readout_fitter` (FEL fits that remember) and
@@ -40,7 +42,7 @@ from controllers.torque_arm_loop import ArmLoop
 from controllers.torque_feedback import TorqueFeedbackController, TorqueGains
 from controllers.torque_fel import TorqueLoop
 from skinny_mj import body
-from skinny_mj.config import ARM_LAWS, TrainConfig
+from skinny_mj.config import ARM_LAWS, Torque, TrainConfig
 from skinny_mj.errors import SkinnyInputError
 
 #: Default pole placement omega (rad/s) per law, zeta 1 (critically damped): computed
@@ -50,8 +52,8 @@ from skinny_mj.errors import SkinnyInputError
 MEMORY_RIDGE = 1e-2
 ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0}
 
-#: Bodies whose mass and inertia ``test_mass_scale`` scales (both arms), and the hand
-#: that carries ``test_payload_kg`` (a point mass at its centre of mass: the hand's CoM
+#: Bodies whose mass and inertia ``actuation.test_mass_scale`` scales (both arms), and
+#: the hand that carries ``actuation.test_payload_kg`` (a point mass at its centre of mass: the hand's CoM
 #: and its inertia about the CoM are unchanged, only its mass grows).
 ARM_BODIES = tuple(f"{side}_{seg}" for side in body.SIDES
                    for seg in ("upper_arm", "forearm", "hand"))
@@ -110,7 +112,7 @@ def teacher_inputs(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) ->
 
 def n_extra_inputs(cfg: TrainConfig) -> int:
     """ESN inputs the torque loop appends (2 n_dof with velocity inputs, else 0)."""
-    return 2 * cfg.dof if cfg.actuation == "torque" and cfg.uses_velocity_inputs else 0
+    return 2 * cfg.plant.dof if cfg.uses_velocity_inputs else 0
 
 
 def desired_motion(dof: int, trajectory, with_id: bool = False) -> DesiredMotion:
@@ -125,46 +127,48 @@ def desired_motion(dof: int, trajectory, with_id: bool = False) -> DesiredMotion
                                       tau)
 
 
-def arm_gains(cfg: TrainConfig) -> ArmGains:
-    """The pole placement of ``cfg.feedback``'s law (:data:`ARM_OMEGA` unless set)."""
-    omega = ARM_OMEGA[cfg.feedback] if cfg.feedback_omega is None else cfg.feedback_omega
-    return ArmGains(omega, cfg.feedback_zeta)
+def arm_gains(act: Torque) -> ArmGains:
+    """The pole placement of ``act.feedback``'s law (:data:`ARM_OMEGA` unless set)."""
+    omega = ARM_OMEGA[act.feedback] if act.omega is None else act.omega
+    return ArmGains(omega, act.zeta)
 
 
 def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
              plant=None) -> TorqueLoop | None:
     """The torque loop of ``trajectory`` (None for the velocity servo); the laws of
     :mod:`controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant)."""
-    if cfg.actuation != "torque":
+    act, dof, signals = cfg.torque, cfg.plant.dof, cfg.plant.signals
+    if act is None:
         return None
-    if cfg.feedback in ARM_LAWS:
+    if act.feedback in ARM_LAWS:
         from skinny_mj.dynamics import BatchArmState
 
-        law = ARM_LAWS[cfg.feedback]
+        law = ARM_LAWS[act.feedback]
         if plant is None or not hasattr(plant, "model"):
-            raise SkinnyInputError(f"feedback {cfg.feedback!r} needs the lockstep plant "
-                                   "(plant='batch')")
-        return ArmLoop(controller(cfg.dof, cfg.signals),
+            raise SkinnyInputError(f"feedback {act.feedback!r} needs the lockstep plant "
+                                   "(plant.backend=batch)")
+        return ArmLoop(controller(dof, signals),
                        desired_velocities_rad_s(trajectory.angles, trajectory.dt),
                        np.asarray(max_speed_rad_s, float),
-                       velocity_inputs=cfg.uses_velocity_inputs,
-                       gravity_feedforward=cfg.gravity_feedforward, law=law,
-                       gains=arm_gains(cfg),
-                       motion=desired_motion(cfg.dof, trajectory, law == "id-pd"),
+                       velocity_inputs=act.velocity_inputs,
+                       gravity_feedforward=act.gravity_feedforward, law=law,
+                       gains=arm_gains(act),
+                       motion=desired_motion(dof, trajectory, law == "id-pd"),
                        state_of=BatchArmState(plant, gravity=law == "pd-g",
-                                              nominal=perturbed(cfg)),
+                                              nominal=perturbed(act)),
                        dt=trajectory.dt)
-    ff = true_torques(cfg.dof, trajectory) if cfg.feedback == "computed-torque" else None
-    return TorqueLoop(controller(cfg.dof, cfg.signals),
+    ff = true_torques(dof, trajectory) if act.feedback == "computed-torque" else None
+    return TorqueLoop(controller(dof, signals),
                       desired_velocities_rad_s(trajectory.angles, trajectory.dt),
                       np.asarray(max_speed_rad_s, float),
-                      velocity_inputs=cfg.uses_velocity_inputs,
-                      gravity_feedforward=cfg.gravity_feedforward, inverse_dynamics=ff)
+                      velocity_inputs=act.velocity_inputs,
+                      gravity_feedforward=act.gravity_feedforward, inverse_dynamics=ff)
 
 
-def perturbed(cfg: TrainConfig) -> bool:
-    """Does ``cfg``'s test plant differ from the nominal twin (the controllers' model)?"""
-    return cfg.test_payload_kg != 0 or cfg.test_mass_scale != 1
+def perturbed(act: Torque) -> bool:
+    """Does the test plant of ``act`` differ from the nominal twin (the controllers'
+    model)?"""
+    return act.test_payload_kg != 0 or act.test_mass_scale != 1
 
 
 def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0) -> None:
@@ -231,17 +235,18 @@ def feasibility_report(dof: int, trajectory) -> list[str]:
 
 
 def readout_fitter(cfg: TrainConfig, esn, steps: int):
-    """FEL's readout fit for ``cfg.readout_fit`` (None: each cycle alone, ``esn.fit``):
-    the normal equations with forgetting, or RLS, remembering ``cfg.readout_forgetting``
-    of the statistics per learning cycle of ``steps`` samples; ridge ``cfg.ridge`` with a
+    """FEL's readout fit for ``rule.fit`` (None: each cycle alone, ``esn.fit``): the
+    normal equations with forgetting, or RLS, remembering ``rule.forgetting`` of the
+    statistics per learning cycle of ``steps`` samples; ridge ``esn.ridge_lambda`` with a
     ridge readout, else :data:`MEMORY_RIDGE`."""
     from controllers.torque_readout import ForgettingReadout, RLSReadout
 
-    ridge = cfg.ridge if cfg.readout == "ridge" else MEMORY_RIDGE
-    if cfg.readout_fit == "forgetting":
-        return ForgettingReadout(esn, cfg.readout_forgetting, ridge)
-    if cfg.readout_fit == "rls":
-        return RLSReadout(esn, steps, cfg.readout_forgetting, ridge)
+    rule = cfg.rule
+    ridge = cfg.esn.ridge_lambda if cfg.esn.readout == "ridge" else MEMORY_RIDGE
+    if rule.fit == "forgetting":
+        return ForgettingReadout(esn, rule.forgetting, ridge)
+    if rule.fit == "rls":
+        return RLSReadout(esn, steps, rule.forgetting, ridge)
     return None
 
 

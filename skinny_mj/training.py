@@ -40,18 +40,22 @@ from skinny_mj.config import (  # noqa: F401  (re-exported: the training API in 
     DEFAULT_NOISE,
     METHODS,
     PAPER_CYCLES_FOR_BETA,
+    NoForward,
+    NoLearning,
+    Torque,
     TrainConfig,
+    TrueTarget,
     relative_cost,
-    with_overrides,
 )
 from skinny_mj.run_parts import (  # noqa: F401  (re-exported)
     RunStreams,
     arm_forward_models,
     controlled_dofs,
-    esn_config,
     full_scale_speeds,
+    lagging_arm,
     load_trajectory,
     make_plant,
+    network_sizes,
     run_streams,
     true_commands_of,
 )
@@ -88,51 +92,49 @@ class Run:
     @property
     def scored(self) -> np.ndarray | None:
         """Signals the position metrics score: all (None), or paper B's lagging arm's."""
-        if self.cfg.leading_arm is None:
+        body = self.cfg.plant
+        if body.leading_arm is None:
             return None
         from skinny_mj.bimanual import arm_signals
 
-        lagging = "left" if self.cfg.leading_arm == "right" else "right"
-        return arm_signals(self.cfg.dof, self.cfg.signals, lagging)
+        return arm_signals(body.dof, body.signals, lagging_arm(self.cfg))
 
     def fel_config(self) -> fel.FELConfig:
-        cfg = self.cfg
-        return fel.FELConfig(method=cfg.method, beta=cfg.beta,
-                             learning_cycles=cfg.learning_cycles, epochs=cfg.epochs,
-                             gain_schedule=cfg.gain_schedule, gain_factor=cfg.gain_factor,
-                             gain_value=cfg.gain_value, delay_steps=cfg.delay,
+        """The FEL rule's schedule as :class:`controllers.fel.FELConfig`."""
+        cfg, rule = self.cfg, self.cfg.rule
+        return fel.FELConfig(method=rule.kind, beta=rule.beta,
+                             learning_cycles=cfg.learning_cycles, epochs=rule.epochs,
+                             gain_schedule=rule.gain_schedule, gain_factor=rule.gain_factor,
+                             gain_value=rule.gain_value, delay_steps=cfg.plant.delay,
                              inputs=cfg.inputs)
 
 
 @single_threaded
 def build_run(cfg: TrainConfig, seeds: Sequence[int]) -> Run:
     """The parts of ``len(seeds)`` runs of ``cfg`` in lockstep (see :class:`Run`)."""
-    from skinny_mj import body
-
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("build_run needs at least one seed")
     trajectory, report = load_trajectory(cfg)
-    training = trajectory.repeat(cfg.reps) if cfg.reps > 1 else trajectory
+    reps, fwd = cfg.movement.reps, cfg.forward
+    training = trajectory.repeat(reps) if reps > 1 else trajectory
     max_speed = full_scale_speeds(cfg, trajectory)
     streams = [run_streams(s) for s in seeds]
-    n_sig = body.n_signals(cfg.dof, cfg.signals)
-    dofs = controlled_dofs(cfg)
-    n_out = cfg.dof if dofs is None else len(dofs)
-    n_in = (n_sig if cfg.inputs == "desired+sensed" else 0) + n_sig \
-        + (n_sig if cfg.forward is not None else 0) + torque.n_extra_inputs(cfg)
-    esn = ESN(esn_config(cfg, n_in, n_out), n_runs=len(seeds), rngs=[s.esn for s in streams])
+    n_sig, n_out, n_in = network_sizes(cfg)
+    esn = ESN(cfg.esn_config(n_in, n_out), n_runs=len(seeds), rngs=[s.esn for s in streams])
     forward = None
-    if cfg.forward_sharing is not None:  # one forward model per arm (paper B)
+    if isinstance(fwd, NoForward):
+        pass
+    elif fwd.sharing is not None:  # one forward model per arm (paper B)
         forward = arm_forward_models(cfg, [s.forward for s in streams])
-    elif cfg.forward is not None:
-        fm_cfg = esn_config(cfg, n_sig + n_out, n_sig, cfg.forward_reservoir)
+    else:
+        fm_cfg = cfg.esn_config(n_sig + n_out, n_sig, fwd.reservoir)
         forward = ForwardModel(ESN(fm_cfg, n_runs=len(seeds), rngs=[s.forward for s in streams]),
-                               cfg.forward, chained=cfg.forward_input == "chained")
+                               fwd.kind, chained=fwd.input == "chained")
     return Run(cfg=cfg, seeds=seeds, trajectory=trajectory, training=training, report=report,
                max_speed_rad_s=max_speed, esn=esn, forward=forward,
                plant_seeds=[s.plant_seed for s in streams],
-               desired=training.position_signals(cfg.signals),
+               desired=training.position_signals(cfg.plant.signals),
                true_commands=true_commands_of(cfg, training, max_speed))
 
 
@@ -144,7 +146,7 @@ def run_of(cfg: TrainConfig, esn: ESN, max_speed_rad_s: np.ndarray, trajectory,
     return Run(cfg=cfg, seeds=[0] * esn.n_runs, trajectory=trajectory, training=trajectory,
                report=None, max_speed_rad_s=max_speed, esn=esn, forward=None,
                plant_seeds=[int(s) for s in plant_seeds],
-               desired=trajectory.position_signals(cfg.signals),
+               desired=trajectory.position_signals(cfg.plant.signals),
                true_commands=true_commands_of(cfg, trajectory, max_speed))
 
 
@@ -157,7 +159,7 @@ class Training:
     fel: fel.TrainResult | None = None
     true_target: Any = None
     pretrain_prediction_nrmse: np.ndarray | None = None
-    ridge_lambda: np.ndarray | None = None  # (R, E) lambda chosen per epoch (ridge_select)
+    ridge_lambda: np.ndarray | None = None  # (R, E) lambda chosen per epoch (ridge-select)
     feedback_share: Any = None  # torque body: torque_training.ShareRecorder
 
 
@@ -167,50 +169,51 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
     """Train ``run``'s networks in place. ``progress(done, total)`` after every cycle;
     ``observe``: FEL's optional per-cycle diagnostics callback (:func:`controllers.fel.train`,
     e.g. paper E §5.1's y_est / y_used per epoch; ignored by the true-target architecture)."""
-    cfg, out = run.cfg, Training()
-    if run.forward is not None and cfg.forward in ("serial", "hybrid"):
+    cfg, rule, out = run.cfg, run.cfg.rule, Training()
+    fwd, body, is_torque = cfg.forward, cfg.plant, isinstance(cfg.actuation, Torque)
+    if run.forward is not None and fwd.kind in ("serial", "hybrid"):
         out.pretrain_prediction_nrmse = run.forward.pretrain(
-            run.trajectory.position_signals(cfg.signals),
+            run.trajectory.position_signals(body.signals),
             true_commands_of(cfg, run.trajectory, run.max_speed_rad_s),  # chained: one step
-            0 if cfg.forward_input == "chained" else cfg.delay, sensor_noise=cfg.sensor_noise)
-    if cfg.method == "none":  # the feedback controller alone: nothing to learn
+            0 if fwd.input == "chained" else body.delay, sensor_noise=body.sensor_noise)
+    if isinstance(rule, NoLearning):  # the feedback controller alone: nothing to learn
         return out
-    if cfg.method == "true-target":
-        tt = TrueTargetConfig(method="original" if cfg.beta >= 1 else "new", beta=cfg.beta,
-                              cycles=cfg.tt_cycles, noise=cfg.noise_level > 0,
-                              input_noise=cfg.tt_input_noise)
+    if isinstance(rule, TrueTarget):
+        tt = TrueTargetConfig(method="original" if rule.beta >= 1 else "new", beta=rule.beta,
+                              cycles=rule.cycles, noise=cfg.noise_level > 0,
+                              input_noise=rule.input_noise)
         out.true_target = train_true_target(
             run.esn, run.desired, run.true_commands, tt,
-            one_step=None if cfg.actuation == "torque" else  # (kinematic one-step map)
-            ideal.one_step_positions(run.training, cfg.signals, run.max_speed_rad_s),
+            one_step=None if is_torque else  # (kinematic one-step map)
+            ideal.one_step_positions(run.training, body.signals, run.max_speed_rad_s),
             extra_inputs=torque.teacher_inputs(cfg, run.training, run.max_speed_rad_s)
-            if cfg.actuation == "torque" else None,
+            if is_torque else None,
             input_rngs=[protocol.tt_input_rng(s) for s in run.seeds])
         _report(progress, 1, 1)
         return out
     fcfg = run.fel_config()
     per_epoch = fcfg.learning_cycles + 2
-    total = cfg.epochs * per_epoch
+    total = rule.epochs * per_epoch
 
     def tick(epoch: int, cycle: int) -> None:
         _report(progress, epoch * per_epoch + cycle + 1, total)
 
     selector = None
-    if cfg.ridge_select:  # lambda per run and fit, on a validation cycle
+    if rule.fit == "ridge-select":  # lambda per run and fit, on a validation cycle
         from controllers.ridge_select import RidgeSelector
 
-        selector = RidgeSelector(run.esn, cfg.epochs)
-    if cfg.actuation == "torque":  # the torque body: readouts that remember, shares
+        selector = RidgeSelector(run.esn, rule.epochs)
+    if is_torque:  # the torque body: readouts that remember, shares
         selector = torque.readout_fitter(cfg, run.esn, len(run.desired) - 1)
         out.feedback_share = torque.ShareRecorder(fcfg.gains(), run.esn.n_runs,
                                                   fcfg.learning_cycles)
         observe = out.feedback_share if observe is None else _both(observe, out.feedback_share)
     out.fel = fel.train(run.esn, run.plant, run.desired, fcfg, true_commands=run.true_commands,
                         progress=tick, forward=run.forward, scored=run.scored,
-                        feedback=protocol.feedback_of(cfg.u_error_gain),
+                        feedback=protocol.feedback_of(rule.u_error_gain),
                         hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s, run.plant),
                         readout_fit=selector, observe=observe)
-    if cfg.ridge_select:
+    if rule.fit == "ridge-select":
         out.ridge_lambda = selector.chosen
     return out
 
@@ -234,26 +237,27 @@ class TestOutcome:
 @single_threaded
 def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = None,
              plant=None) -> list[TestOutcome]:
-    """Test the R trained networks of ``run`` (K = 0, no learning, reservoir noise
-    only with ``cfg.test_noise``) on
-    ``trajectory`` (default: one repetition of the training movement), after
-    ``cfg.test_washout_cycles`` unscored cycles, with ``run``'s full-scale speeds.
+    """Test the R trained networks of ``run`` (K = ``test.gain``, no learning, reservoir
+    noise only with ``test.noise``) on ``trajectory`` (default: one repetition of the
+    training movement), after ``test.washout_cycles`` unscored cycles, with ``run``'s
+    full-scale speeds.
 
     The plant is a fresh one whose sensor noise restarts from ``plant_seeds``
     (default: the runs' own plant seeds), or ``plant`` as given (e.g. ``run.plant``,
     whose noise stream then continues from training)."""
-    cfg = run.cfg
+    cfg, test = run.cfg, run.cfg.test
     trajectory = run.trajectory if trajectory is None else trajectory
     if plant is None:
         seeds = run.plant_seeds if plant_seeds is None else plant_seeds
         plant = make_plant(cfg, trajectory, seeds, run.max_speed_rad_s)
-        torque.perturb(plant, cfg.test_payload_kg, cfg.test_mass_scale)  # torque: robustness
-    desired = trajectory.position_signals(cfg.signals)
+        if cfg.torque is not None:  # the torque body's robustness test
+            torque.perturb(plant, cfg.torque.test_payload_kg, cfg.torque.test_mass_scale)
+    desired = trajectory.position_signals(cfg.plant.signals)
     hook = torque.hook_for(cfg, trajectory, run.max_speed_rad_s, plant)
     commands = true_commands_of(cfg, trajectory, run.max_speed_rad_s)
-    ev = fel.evaluate(run.esn, plant, desired, commands, cfg.delay, run.forward,
-                      inputs=cfg.inputs, washout_cycles=cfg.test_washout_cycles,
-                      scored=run.scored, noise=cfg.test_noise, gain=cfg.test_gain, hook=hook)
+    ev = fel.evaluate(run.esn, plant, desired, commands, cfg.plant.delay, run.forward,
+                      inputs=cfg.inputs, washout_cycles=test.washout_cycles,
+                      scored=run.scored, noise=test.noise, gain=test.gain, hook=hook)
     return [TestOutcome(
         position_nrmse=None if ev.failed[r] else float(ev.position_nrmse[r]),
         motor_nrmse=None if ev.failed[r] else float(ev.motor_nrmse[r]),
@@ -295,11 +299,11 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
     """Train R = len(seeds) runs of ``cfg`` in lockstep; run r equals ``train(cfg, seeds[r])``.
 
     ``metrics["wall_s"]`` is the batch's wall time divided by R (and
-    ``metrics["lockstep_runs"]`` = R). With ``cfg.plant == "env"`` (dm_control, one run
-    per environment) the runs are trained one after another.
+    ``metrics["lockstep_runs"]`` = R). With ``plant.backend == "env"`` (dm_control, one
+    run per environment) the runs are trained one after another.
     """
     seeds = [int(s) for s in seeds]
-    if cfg.plant == "env" and len(seeds) > 1:
+    if cfg.plant.backend == "env" and len(seeds) > 1:
         return [o for s in seeds for o in train_batch(cfg, [s], progress)]
     if not seeds:
         return []
@@ -324,7 +328,7 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
         metrics["train"] = {"motor_nrmse": float(tt.motor_nrmse[r]),
                             "position_nrmse": None if tt.position_nrmse is None
                             else float(tt.position_nrmse[r])}
-    elif trained.fel is None:  # method "none": nothing was trained
+    elif trained.fel is None:  # rule=none: nothing was trained
         metrics["train"] = {}
     else:
         result = trained.fel
