@@ -179,9 +179,7 @@ def groups(every: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
 def train_config(cfg: Config, row: Row) -> TrainConfig:
     p = dict(row.params)
     factor = p.pop("epoch_factor", 1)
-    # the test gain first: rule=none is refused while test.gain is 0
-    tc = TrainConfig().override({"actuation": "torque", "plant.signals": cfg.signals,
-                                 "test.gain": p.pop("test.gain", 0.0)}).override(p)
+    tc = TrainConfig().override({"actuation": "torque", "plant.signals": cfg.signals, **p})
     if not tc.learns_by_fel:  # the feedback controller alone, or the true target
         return tc
     arm = tc.torque is not None and tc.torque.feedback == "inertia-pd"
