@@ -217,9 +217,10 @@ def forearm_floor(cfg: Config) -> float:
     from skinny_mj.run_parts import load_trajectory
 
     tc = train_config(cfg, "forearm")
-    desired = load_trajectory(tc)[0].position_signals(tc.signals)
+    dof, signals = tc.plant.dof, tc.plant.signals
+    desired = load_trajectory(tc)[0].position_signals(signals)
     reached = desired.copy()
-    reached[:, forearm_rows(tc.dof, tc.signals)] *= cfg.forearm
+    reached[:, forearm_rows(dof, signals)] *= cfg.forearm
     return float(position_nrmse(reached, desired))
 
 
