@@ -41,8 +41,9 @@ def main() -> None:
             skinny_model.TORQUE_INTEGRATOR, skinny_model.TORQUE_TIMESTEP_S = integrator, dt
             for dof in (4, 8):
                 for mv in ("ymca", "ymca-recorded"):
-                    cfg = TrainConfig(actuation="torque", dof=dof, trajectory=mv, method="none",
-                                      test_gain=1.0, feedback="ct")
+                    cfg = TrainConfig().override({
+                        "actuation": "torque", "plant.dof": dof, "movement.trajectory": mv,
+                        "rule": "none", "test.gain": 1.0, "actuation.feedback": "ct"})
                     walls = []
                     for _ in range(3):
                         start = time.perf_counter()

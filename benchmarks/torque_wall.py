@@ -21,11 +21,13 @@ os.environ.setdefault("MUJOCO_GL", "disabled")
 
 from skinny_mj.training import TrainConfig, train_batch  # noqa: E402
 
-ARM_FEL = {"actuation": "torque", "method": "new", "beta": 1.0, "cycles": 3,
-           "feedback": "inertia-pd", "readout_fit": "forgetting"}
-CONFIGS = {"kinematic (10 epochs)": TrainConfig(method="new"),
-           "torque FEL, inertia-scaled teacher (15 epochs)": TrainConfig(epochs=15, **ARM_FEL),
-           "torque FEL, inertia-scaled teacher (10 epochs)": TrainConfig(epochs=10, **ARM_FEL)}
+ARM_FEL = {"actuation": "torque", "rule": "new", "rule.beta": 1.0, "rule.cycles": 3,
+           "actuation.feedback": "inertia-pd", "rule.fit": "forgetting"}
+CONFIGS = {"kinematic (10 epochs)": TrainConfig(),
+           "torque FEL, inertia-scaled teacher (15 epochs)":
+               TrainConfig().override({**ARM_FEL, "rule.epochs": 15}),
+           "torque FEL, inertia-scaled teacher (10 epochs)":
+               TrainConfig().override({**ARM_FEL, "rule.epochs": 10})}
 
 
 def main() -> None:
@@ -41,7 +43,7 @@ def main() -> None:
             best[label] = min(best[label], (time.perf_counter() - start) / len(seeds))
     kin = best["kinematic (10 epochs)"]
     for label, wall in best.items():
-        cycles = (TrainConfig().epochs if "10 epochs" in label else 15) * 5
+        cycles = (TrainConfig().rule.epochs if "10 epochs" in label else 15) * 5
         print(f"{label:48} {wall:6.2f} s per run, x{wall / kin:.2f} per run, "
               f"x{wall / kin * 50 / cycles:.2f} per cycle")
 

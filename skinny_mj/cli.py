@@ -12,13 +12,32 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from skinny_mj.config_flags import TEST_FLAGS, TRACK_FLAGS, TRAIN_FLAGS, add_flags
 from skinny_mj.errors import SkinnyInputError
 
 
 class _Parser(argparse.ArgumentParser):
     """argparse that reports a usage error in one line with a pointer to ``--help``
-    (exit code 2), instead of the whole usage block before it."""
+    (exit code 2), instead of the whole usage block before it; a sub-command's
+    training-config flags (``config_flags``: a group name in
+    :mod:`skinny_mj.config_flags`) are added when it is first used, so that ``skinny
+    --help`` does not import the config."""
+
+    config_flags: str | None = None
+
+    def _complete(self) -> None:
+        name, self.config_flags = self.config_flags, None
+        if name is not None:
+            from skinny_mj import config_flags
+
+            config_flags.add_flags(self, getattr(config_flags, name))
+
+    def format_usage(self) -> str:
+        self._complete()
+        return super().format_usage()
+
+    def format_help(self) -> str:
+        self._complete()
+        return super().format_help()
 
     def error(self, message: str):  # noqa: ANN201 (argparse's signature; never returns)
         self.exit(2, f"{self.prog}: error: {_one_line(message)} "
@@ -27,6 +46,7 @@ class _Parser(argparse.ArgumentParser):
     def parse_known_args(self, args=None, namespace=None):  # noqa: ANN001, ANN201
         """A sub-command (prog "skinny NAME") names its own unknown arguments, so the
         hint points at its help, not at the top-level one."""
+        self._complete()
         namespace, extras = super().parse_known_args(args, namespace)
         if extras and " " in self.prog:
             self.error(f"unrecognized arguments: {' '.join(extras)}")
@@ -93,7 +113,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="output folder (default: results/demo/<time>)")
 
     p = sub.add_parser("track", help="run the analytic ideal controller through the task")
-    add_flags(p, TRACK_FLAGS)
+    p.config_flags = "TRACK_FLAGS"
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, help="output folder (default: results/track/<time>)")
 
@@ -105,7 +125,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "\"config\" lists them all).")
     p.add_argument("overrides", nargs="*", metavar="KEY=VALUE",
                    help="set any config key (dotted), e.g. esn.leak_rate=0.5")
-    add_flags(p, TRAIN_FLAGS)
+    p.config_flags = "TRAIN_FLAGS"
     p.add_argument("--seed", type=int, default=argparse.SUPPRESS, help="the run's seed "
                    "(default: the --config file's, else 0)")
     p.add_argument("--out", type=Path, help="output folder (default: results/train/<time>)")
@@ -125,7 +145,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
     p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny train`")
-    add_flags(p, TEST_FLAGS)
+    p.config_flags = "TEST_FLAGS"
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, help="output folder (default: results/test/<time>)")
 

@@ -43,10 +43,10 @@ def _flag_config(args: argparse.Namespace, groups, base=None):
     """``base`` (default ``TrainConfig()``) with the config flags of ``groups`` given in
     ``args`` (:mod:`skinny_mj.config_flags`)."""
     from skinny_mj.config import TrainConfig
-    from skinny_mj.config_flags import changes, given
+    from skinny_mj.config_flags import changes, flag_names, given
 
     base = TrainConfig() if base is None else base
-    return base.override(changes(base, given(args, groups)))
+    return base.override(changes(base, given(args, groups), flag_names(groups)))
 
 
 def _load_movement(mv, dof: int, check=None):
@@ -85,8 +85,8 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
 def cmd_track(args: argparse.Namespace) -> int:
     from controllers.metrics import position_nrmse
     from skinny_mj import body, memory
-    from skinny_mj.ideal import IdealController
     from skinny_mj.config_flags import TRACK_FLAGS
+    from skinny_mj.ideal import IdealController
     from skinny_mj.task import load
 
     cfg = _flag_config(args, TRACK_FLAGS)

@@ -93,7 +93,8 @@ class Plant:
         check_dof(self.dof)
         check_signals(self.signals)
         _check([
-            (_at_least(self.sensor_noise, 0), f"sensor noise must be >= 0, got {self.sensor_noise}"),
+            (_at_least(self.sensor_noise, 0),
+             f"sensor noise must be >= 0, got {self.sensor_noise}"),
             (isinstance(self.delay, int) and self.delay >= 0,
              f"delay must be >= 0 steps, got {self.delay}"),
             (self.leading_arm is None or self.leading_arm in ARMS,
@@ -231,7 +232,8 @@ class TrueTarget:
 
     def __post_init__(self) -> None:
         _check([
-            (_at_least(self.beta, 0) and 0 < self.beta <= 1, f"beta must be in (0, 1], got {self.beta}"),
+            (_at_least(self.beta, 0) and 0 < self.beta <= 1,
+             f"beta must be in (0, 1], got {self.beta}"),
             (isinstance(self.cycles, int) and self.cycles >= 1,
              f"true-target cycles must be >= 1, got {self.cycles}"),
             (_at_least(self.input_noise, 0), f"input noise must be >= 0, got {self.input_noise}"),
@@ -408,9 +410,9 @@ class TrainConfig:
     @property
     def learning_cycles(self) -> int:
         """Learning cycles per epoch: the FEL rule's ``cycles``; by default 1 for the
-        original method, and for the new method paper E's Table 1 where it has β, else enough cycles for
-        (1 − β)^n to fall below 5 % over all epochs (which reproduces the table for
-        β = 0.1 and 0.05)."""
+        original method, and for the new method paper E's Table 1 where it has β, else
+        enough cycles for (1 − β)^n to fall below 5 % over all epochs (which reproduces
+        the table for β = 0.1 and 0.05)."""
         rule = self.rule
         if not isinstance(rule, FEL_RULES):
             return 1

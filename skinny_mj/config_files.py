@@ -80,9 +80,11 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     """The run ``skinny train`` was asked for, and its seed: ``TrainConfig()``, then
     ``--preset``'s keys, then ``--config FILE``'s (and its seed), then the flags and
     ``KEY=VALUE`` overrides given (:mod:`skinny_mj.config_flags`)."""
-    from skinny_mj.config_flags import TRAIN_FLAGS, changes, given, pairs
+    from skinny_mj.config_flags import TRAIN_FLAGS, changes, flag_names, given, pairs
 
-    texts = {**given(args, TRAIN_FLAGS), **pairs(getattr(args, "overrides", None) or [])}
+    flags, keyed = given(args, TRAIN_FLAGS), pairs(getattr(args, "overrides", None) or [])
+    texts = {**flags, **keyed}
+    names = {k: f for k, f in flag_names(TRAIN_FLAGS).items() if k in flags and k not in keyed}
     cfg, seed = TrainConfig(), None
     preset = getattr(args, "preset", None)
     if preset is not None:
@@ -93,7 +95,7 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
         path = Path(args.config)
         fields, seed = read_train_file(path)
         cfg = _make(fields, path, cfg)
-    cfg = cfg.override(changes(cfg, texts))
+    cfg = cfg.override(changes(cfg, texts, names))
     if getattr(args, "seed", None) is not None:
         seed = int(args.seed)
     return cfg, 0 if seed is None else seed

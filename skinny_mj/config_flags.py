@@ -30,7 +30,8 @@ from skinny_mj.config import (
 )
 from skinny_mj.errors import SkinnyInputError
 
-__all__ = ["Flag", "TRAIN_FLAGS", "MOVEMENT_FLAGS", "add_flags", "changes", "default_of"]
+__all__ = ["Flag", "TRAIN_FLAGS", "TEST_FLAGS", "TRACK_FLAGS", "MOVEMENT_FLAGS", "add_flags",
+           "given", "pairs", "changes", "flag_names", "default_of"]
 
 
 class Flag(NamedTuple):
@@ -107,20 +108,37 @@ TRACK_FLAGS: dict[str, list[Flag]] = {"plant": [*_BODY, _SENSOR_NOISE],
                                       "movement": MOVEMENT_FLAGS}
 
 
+def _owner(key: str, cfg: TrainConfig) -> Any:
+    """The config object holding ``key``'s leaf in ``cfg``, or a default one of the type
+    that has it (``rule.input_noise``: a default :class:`TrueTarget`)."""
+    owner, _, name = key.rpartition(".")
+    node = getattr(cfg, owner) if owner else cfg
+    if hasattr(node, name):
+        return node
+    for member in typing.get_args(typing.get_type_hints(type(cfg)).get(owner, type(None))):
+        if dataclasses.is_dataclass(member) and name in {f.name for f in
+                                                          dataclasses.fields(member)}:
+            return member()
+    raise SkinnyInputError(f"unknown config key {key!r}")
+
+
 def default_of(key: str, cfg: TrainConfig | None = None) -> Any:
     """The default of ``key`` in ``cfg`` (default ``TrainConfig()``); a key of a type
     not chosen there (``rule.input_noise``) gives that type's default."""
     cfg = TrainConfig() if cfg is None else cfg
-    flat = overrides.flatten(cfg)
-    if key in flat:
-        return flat[key]
-    owner, _, name = key.rpartition(".")
-    hints = typing.get_type_hints(type(cfg))
-    for member in typing.get_args(hints.get(owner, type(None))):
-        if dataclasses.is_dataclass(member) and name in {f.name for f in
-                                                          dataclasses.fields(member)}:
-            return getattr(member(), name)
-    raise SkinnyInputError(f"unknown config key {key!r}")
+    if "." not in key and dataclasses.is_dataclass(getattr(cfg, key, None)):
+        return getattr(getattr(cfg, key), overrides.KIND)  # a type's name
+    return getattr(_owner(key, cfg), key.rpartition(".")[2])
+
+
+def _metavar(key: str) -> str:
+    """N (whole number), X (number) or TEXT, from the field's type."""
+    if "." not in key:
+        return "TEXT"
+    owner = _owner(key, TrainConfig())
+    allowed = typing.get_args(typing.get_type_hints(type(owner))[key.rpartition(".")[2]]) \
+        or (typing.get_type_hints(type(owner))[key.rpartition(".")[2]],)
+    return "N" if int in allowed else "X" if float in allowed else "TEXT"
 
 
 def _shown(value: Any) -> str:
@@ -142,7 +160,7 @@ def add_flags(parser: argparse.ArgumentParser, groups: Mapping[str, list[Flag]])
                 group.add_argument(f.flag, dest=f.key, default=argparse.SUPPRESS, help=text,
                                    choices=None if f.choices is None
                                    else [str(c) for c in f.choices],
-                                   metavar=None if f.choices is not None else "X")
+                                   metavar=None if f.choices is not None else _metavar(f.key))
 
 
 def given(args: argparse.Namespace, groups: Mapping[str, list[Flag]]) -> dict[str, Any]:
@@ -163,13 +181,43 @@ def pairs(items: Sequence[str]) -> dict[str, str]:
     return out
 
 
-def changes(base: TrainConfig, texts: Mapping[str, Any]) -> dict[str, Any]:
+def changes(base: TrainConfig, texts: Mapping[str, Any],
+            names: Mapping[str, str] | None = None) -> dict[str, Any]:
     """``texts`` (key -> command-line text, or an already typed value) as typed
     overrides of ``base``: the keys choosing a type first, then each other key read
-    with the type its field has once those types are chosen."""
-    chosen = base.override({k: v for k, v in texts.items() if _is_choice(base, k)})
-    return {k: overrides.parse_value(chosen, k, v) if isinstance(v, str) else v
-            for k, v in texts.items()}
+    with the type its field has once those types are chosen, and checked by its part.
+    A refusal names the key's flag from ``names`` (key -> flag), or the key."""
+    choices = {k: v for k, v in texts.items() if _is_choice(base, k)}
+    chosen = _refusing(lambda: base.override(choices, check=False), names,
+                       next(iter(choices), ""))
+    out = {}
+    for key, value in texts.items():
+        def typed(key=key, value=value):
+            typed = overrides.parse_value(chosen, key, value) if isinstance(value, str) \
+                else value
+            chosen.override({key: typed}, check=False)  # its part's own checks
+            return typed
+        out[key] = _refusing(typed, names, key)
+    return out
+
+
+def _refusing(make, names: Mapping[str, str] | None, key: str):
+    """``make()``; its refusal names ``key``'s flag (``--reservoir (esn.n_reservoir):
+    ...``) when it came from one."""
+    try:
+        return make()
+    except SkinnyInputError as err:
+        flag = (names or {}).get(key)
+        if flag is None:
+            raise
+        owner = key.rpartition(".")[0]
+        text = str(err).removeprefix(f"{owner}: ") if owner else str(err)
+        raise SkinnyInputError(f"{flag} ({key}): {text}") from None
+
+
+def flag_names(groups: Mapping[str, list[Flag]]) -> dict[str, str]:
+    """Key -> flag of ``groups``."""
+    return {f.key: f.flag for fs in groups.values() for f in fs}
 
 
 def _is_choice(cfg: TrainConfig, key: str) -> bool:

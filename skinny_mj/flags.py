@@ -1,9 +1,12 @@
-"""The numeric flags of every ``skinny`` command, checked once after parsing.
+"""The numeric flags of every ``skinny`` command that are not training settings, checked
+once after parsing.
 
 argparse has converted each flag to its type (``int`` or ``float``); :func:`check_args`
 then refuses, with one line naming the flag, a value out of its range: a negative seed,
-a reservoir of no units, a speed of 0, a NaN or infinite number. The same rule holds
-whichever command takes the flag (``--seed`` of train, test, track and demo alike).
+an image of no pixels, a speed of 0, a NaN or infinite number. The same rule holds
+whichever command takes the flag (``--seed`` of train, test, track and demo alike). The
+flags that set a training setting (``--reservoir``, ``--beta``, ...) are checked by the
+config's own parts (:mod:`skinny_mj.config_flags`).
 """
 
 from __future__ import annotations
@@ -34,10 +37,7 @@ def _within(low: float, high: float, *, open_low: bool = False) -> Callable[[flo
 #: dest -> (kind, test, the range in words). Every value must also be finite.
 RULES: dict[str, tuple[type, Callable[[float], bool], str]] = {
     "seed": (int, _at_least(0), ">= 0"),
-    "reservoir": (int, _at_least(1), ">= 1"),
     "reps": (int, _at_least(1), ">= 1"),
-    "epochs": (int, _at_least(1), ">= 1"),
-    "cycles": (int, _at_least(1), ">= 1"),
     "runs": (int, _at_least(1), ">= 1"),
     "workers": (int, _at_least(1), ">= 1"),
     "frame": (int, _at_least(0), ">= 0"),
@@ -47,14 +47,6 @@ RULES: dict[str, tuple[type, Callable[[float], bool], str]] = {
     "grpc_port": (int, _within(1, 65535), "in [1, 65535]"),
     "speed": (float, _within(MIN_SPEED, MAX_SPEED, open_low=True),
               f"in ({MIN_SPEED:g}, {MAX_SPEED:g}]"),
-    "spectral_radius": (float, _at_least(0.0), ">= 0"),
-    "noise": (float, _at_least(0.0), ">= 0"),
-    "sensor_noise": (float, _at_least(0.0), ">= 0"),
-    "tt_input_noise": (float, _at_least(0.0), ">= 0"),
-    "beta": (float, _within(0.0, 1.0, open_low=True), "in (0, 1]"),
-    "ridge": (float, _at_least(0.0), ">= 0"),
-    "u_error_gain": (float, _above(0.0), "> 0"),
-    "readout_forgetting": (float, _within(0.0, 1.0), "in [0, 1]"),
 }
 
 

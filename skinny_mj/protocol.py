@@ -1,9 +1,10 @@
 """The thesis toolbox's protocol options, as the training path applies them.
 
-Each is a :class:`skinny_mj.config.TrainConfig` field whose default is today's behaviour
-bit for bit: ``test_noise`` (reservoir noise during the K = 0 test), ``u_error_gain``
-(a scalar on the feedback controller's u_error, which the thesis leaves unstated) and
-``tt_input_noise`` (noise on the true-target architecture's teacher-forced inputs).
+Each is a :class:`skinny_mj.config.TrainConfig` setting whose default is the thesis
+code's behaviour bit for bit: ``test.noise`` (reservoir noise during the K = 0 test),
+``rule.u_error_gain`` (FEL: a scalar on the feedback controller's u_error, which the
+thesis leaves unstated) and ``rule.input_noise`` (true target: noise on the
+teacher-forced inputs).
 """
 
 from __future__ import annotations

@@ -53,8 +53,8 @@ MEMORY_RIDGE = 1e-2
 ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0}
 
 #: Bodies whose mass and inertia ``actuation.test_mass_scale`` scales (both arms), and
-#: the hand that carries ``actuation.test_payload_kg`` (a point mass at its centre of mass: the hand's CoM
-#: and its inertia about the CoM are unchanged, only its mass grows).
+#: the hand that carries ``actuation.test_payload_kg`` (a point mass at its centre of
+#: mass: the hand's CoM and its inertia about the CoM are unchanged, only its mass grows).
 ARM_BODIES = tuple(f"{side}_{seg}" for side in body.SIDES
                    for seg in ("upper_arm", "forearm", "hand"))
 PAYLOAD_BODY = "right_hand"

@@ -40,7 +40,7 @@ from skinny_mj.config import (  # noqa: F401  (re-exported: the training API in 
     DEFAULT_NOISE,
     METHODS,
     PAPER_CYCLES_FOR_BETA,
-    NoForward,
+    Forward,
     NoLearning,
     Torque,
     TrainConfig,
@@ -123,11 +123,9 @@ def build_run(cfg: TrainConfig, seeds: Sequence[int]) -> Run:
     n_sig, n_out, n_in = network_sizes(cfg)
     esn = ESN(cfg.esn_config(n_in, n_out), n_runs=len(seeds), rngs=[s.esn for s in streams])
     forward = None
-    if isinstance(fwd, NoForward):
-        pass
-    elif fwd.sharing is not None:  # one forward model per arm (paper B)
+    if isinstance(fwd, Forward) and fwd.sharing is not None:  # one per arm (paper B)
         forward = arm_forward_models(cfg, [s.forward for s in streams])
-    else:
+    elif isinstance(fwd, Forward):
         fm_cfg = cfg.esn_config(n_sig + n_out, n_sig, fwd.reservoir)
         forward = ForwardModel(ESN(fm_cfg, n_runs=len(seeds), rngs=[s.forward for s in streams]),
                                fwd.kind, chained=fwd.input == "chained")

@@ -35,33 +35,103 @@ def test_train_repeats_from_its_metrics_json(trained, tmp_path):
                  "--out", str(tmp_path / "b")]) == 0
     again = _metrics(tmp_path / "b")
     assert again == _metrics(trained)  # config, seed, every metric: bit for bit
-    assert again["seed"] == 5 and again["config"]["beta"] == 0.3
+    assert again["seed"] == 5 and again["config"]["rule.beta"] == 0.3
 
 
 def test_train_flags_override_only_what_they_name(trained, tmp_path):
     assert main(["train", "--config", str(trained / "metrics.json"), "--epochs", "2",
                  "--seed", "6", "--quiet", "--out", str(tmp_path / "c")]) == 0
     m, first = _metrics(tmp_path / "c"), _metrics(trained)
-    assert m["seed"] == 6 and m["config"]["epochs"] == 2
-    # every other field is the file's, not an argparse default (reservoir 30, not 200)
-    assert {k: v for k, v in m["config"].items() if k not in ("epochs", "learning_cycles")} \
-        == {k: v for k, v in first["config"].items() if k not in ("epochs", "learning_cycles")}
+    assert m["seed"] == 6 and m["config"]["rule.epochs"] == 2
+    # every other setting is the file's, not a default (reservoir 30, not 200)
+    changed = ("rule.epochs", "learning_cycles")
+    assert {k: v for k, v in m["config"].items() if k not in changed} \
+        == {k: v for k, v in first["config"].items() if k not in changed}
 
 
-def test_train_takes_a_bare_config(tmp_path):
-    (tmp_path / "cfg.json").write_text(json.dumps({"reservoir": 30, "epochs": 1,
-                                                   "method": "original"}))
+@pytest.mark.parametrize("bare", [
+    {"esn.n_reservoir": 30, "rule.epochs": 1, "rule": "original"},
+    {"reservoir": 30, "epochs": 1, "method": "original"},  # an earlier version's flat fields
+])
+def test_train_takes_a_bare_config(tmp_path, bare):
+    (tmp_path / "cfg.json").write_text(json.dumps(bare))
     assert main(["train", "--config", str(tmp_path / "cfg.json"), "--quiet", "--seed", "2",
                  "--out", str(tmp_path / "o")]) == 0
     m = _metrics(tmp_path / "o")
-    assert m["config"]["method"] == "original" and m["config"]["reservoir"] == 30
+    assert m["config"]["rule"] == "original" and m["config"]["esn.n_reservoir"] == 30
     assert m["seed"] == 2
+
+
+def test_train_takes_key_value_overrides_after_the_flags_and_the_file(trained, tmp_path):
+    assert main(["train", "--config", str(trained / "metrics.json"), "--epochs", "3",
+                 "rule.epochs=2", "esn.spectral_radius=0.4", "rule=original", "--quiet",
+                 "--out", str(tmp_path / "kv")]) == 0
+    cfg = _metrics(tmp_path / "kv")["config"]
+    assert (cfg["rule"], cfg["rule.epochs"], cfg["esn.spectral_radius"]) == ("original", 2, 0.4)
+    assert cfg["esn.n_reservoir"] == 30  # the file's
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["esn.spectral_radus=0.9"], "did you mean 'esn.spectral_radius'"),
+    (["rule.fit=forgetting"], "rule.fit=forgetting"),
+    (["rule=original", "rule.beta=0.5"], "not a setting of rule=original"),
+    (["rule.epochs=two"], "rule.epochs must be a whole number"),
+    (["spectral_radius"], "KEY=VALUE"),
+    (["--epochs", "0"], "epochs must be >= 1"),
+])
+def test_train_refuses_a_bad_key_or_value_in_one_line(tmp_path, capsys, argv, words):
+    assert main(["train", *argv, "--quiet", "--out", str(tmp_path / "no")]) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1
+    assert not (tmp_path / "no").exists()
+
+
+def test_key_values_and_flags_apply_together_before_the_config_checks():
+    from skinny_mj.cli import build_parser
+    from skinny_mj.config import NoLearning
+    from skinny_mj.config_files import train_config
+
+    def config(*argv):
+        return train_config(build_parser().parse_args(["train", *argv]))[0]
+
+    # rule=none needs test.gain > 0: either alone is refused, together they are one config
+    cfg = config("rule=none", "test.gain=1", "--actuation", "torque", "--feedback", "ct")
+    assert isinstance(cfg.rule, NoLearning) and cfg.test.gain == 1.0
+    assert cfg.torque.feedback == "ct"
+    assert config("--reservoir", "40", "esn.n_reservoir=50").esn.n_reservoir == 50
+    assert config("--method", "original", "--epochs", "4").rule.epochs == 4
+
+
+_LEGACY = Path(__file__).parent / "data" / "legacy_n5"  # `skinny train --reservoir 5
+# --epochs 1` of the code before the composed config (its flat metrics.json and model.npz)
+
+
+def test_train_repeats_an_earlier_versions_metrics_json(tmp_path):
+    assert main(["train", "--config", str(_LEGACY / "metrics.json"), "--quiet",
+                 "--out", str(tmp_path / "r")]) == 0
+    old, new = json.loads((_LEGACY / "metrics.json").read_text()), _metrics(tmp_path / "r")
+    assert new["config"]["esn.n_reservoir"] == 5 and new["config"]["rule.epochs"] == 1
+    for part in ("train", "test"):  # the same run (float-exact on one machine)
+        for key, value in old[part].items():
+            assert new[part][key] == pytest.approx(value, rel=1e-9)
+
+
+def test_test_runs_an_earlier_versions_model(tmp_path):
+    from controllers.esn import read_metadata
+
+    assert "reservoir" in read_metadata(_LEGACY / "model.npz")["config"]  # flat, old
+    assert main(["test", "--model", str(_LEGACY / "model.npz"), "--out",
+                 str(tmp_path / "t")]) == 0
+    got = json.loads((tmp_path / "t" / "metrics.json").read_text())["test"]
+    trained = json.loads((_LEGACY / "metrics.json").read_text())["test"]  # the same test
+    assert got["position_nrmse"] == pytest.approx(trained["position_nrmse"], rel=1e-9)
 
 
 @pytest.mark.parametrize("content, needle", [
     ("{not json", "not a JSON config"),
     ("[1, 2]", "JSON object"),
-    ('{"epochs": "three"}', "bad training config"),
+    ('{"epochs": "three"}', "rule.epochs must be a whole number"),
+    ('{"rule.epochs": "three"}', "rule.epochs must be a whole number"),
     ('{"no_such_field": 1}', "unknown training config field"),
     ('{"experiment": "paper_e", "options": {}, "selection": {}}', "sweep's config.json"),
     ('{"config": {"reservoir": 30}, "seed": "x"}', "seed"),

@@ -86,22 +86,24 @@ def test_computed_torque_on_the_desired_state_is_the_inverse_dynamics():
 
 
 @pytest.mark.parametrize("changes", [
-    {"actuation": "torque", "feedback": "ct"},  # a controller alone: method "none"
-    {"actuation": "torque", "feedback": "inertia-pd", "method": "true-target"},
-    {"readout_fit": "forgetting"},  # remembering fits are for FEL on the torque body
-    {"actuation": "torque", "readout_fit": "sometimes"},
-    {"actuation": "torque", "readout_forgetting": 1.5},
-    {"actuation": "torque", "feedback": "inertia-pd", "feedback_omega": -1.0},
-    {"feedback_omega": 5.0},  # a torque setting
+    {"actuation": "torque", "actuation.feedback": "ct"},  # a controller alone: rule=none
+    {"actuation": "torque", "actuation.feedback": "inertia-pd", "rule": "true-target"},
+    {"rule.fit": "forgetting"},  # remembering fits are for FEL on the torque body
+    {"actuation": "torque", "rule.fit": "sometimes"},
+    {"actuation": "torque", "rule.forgetting": 1.5},
+    {"actuation": "torque", "actuation.feedback": "inertia-pd", "actuation.omega": -1.0},
+    {"actuation.omega": 5.0},  # a torque setting
 ])
 def test_arm_settings_are_validated(changes):
     with pytest.raises(SkinnyInputError):
-        TrainConfig(**changes)
+        TrainConfig().override(changes)
 
 
 def test_feedback_share_is_the_gain_times_the_error_signal():
-    cfg = TrainConfig(actuation="torque", trajectory="y", method="new", beta=1.0, cycles=1,
-                      epochs=2, feedback="inertia-pd", readout_fit="forgetting")
+    cfg = TrainConfig().override({
+        "actuation": "torque", "movement.trajectory": "y", "rule": "new", "rule.beta": 1.0,
+        "rule.cycles": 1, "rule.epochs": 2, "actuation.feedback": "inertia-pd",
+        "rule.fit": "forgetting"})
     from skinny_mj.training import train
 
     m = train(cfg, 0).metrics["train"]

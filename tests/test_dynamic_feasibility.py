@@ -61,7 +61,8 @@ def test_computed_torque_tracks_ymca_within_its_need():
     # the movement needs, and never at the limit
     from skinny_mj.training import TrainConfig, train
 
-    o = train(TrainConfig(actuation="torque", method="none", test_gain=1.0, feedback="ct"))
+    o = train(TrainConfig().override(actuation="torque", rule="none", test__gain=1.0,
+                                        actuation__feedback="ct"))
     tq = o.metrics["test"]["torque"]
     need = torque_training.feasibility(4, o.test.trajectory)["mean_abs_nm"].mean()
     assert o.metrics["test"]["position_nrmse"] < 0.02

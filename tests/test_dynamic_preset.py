@@ -8,12 +8,10 @@ from skinny_mj.errors import SkinnyInputError
 
 
 def _config(argv):
-    from skinny_mj.cli import build_parser, given_options
+    from skinny_mj.cli import build_parser
     from skinny_mj.config_files import train_config
 
-    args = build_parser().parse_args(argv)
-    args.given = given_options(argv)
-    return train_config(args)
+    return train_config(build_parser().parse_args(argv))
 
 
 def test_torque_general_sets_its_fields_and_the_velocity_preset_is_untouched():
@@ -23,14 +21,15 @@ def test_torque_general_sets_its_fields_and_the_velocity_preset_is_untouched():
     cfg, seed = _config(["train", "--preset", "general", "--actuation", "torque",
                          "--epochs", "2", "--seed", "3"])
     want = preset_fields("general", "torque")
-    assert seed == 3 and cfg.epochs == 2  # a flag given overrides the preset
-    assert {k: getattr(cfg, k) for k in want if k != "epochs"} == \
-        {k: v for k, v in want.items() if k != "epochs"}
-    assert (cfg.actuation, cfg.feedback, cfg.readout_fit) == ("torque", "inertia-pd",
-                                                             "forgetting")
+    got = cfg.to_dict()
+    assert seed == 3 and cfg.rule.epochs == 2  # a flag given overrides the preset
+    assert {k: got[k] for k in want if k != "rule.epochs"} == \
+        {k: v for k, v in want.items() if k != "rule.epochs"}
+    assert (cfg.actuation.kind, cfg.actuation.feedback, cfg.rule.fit) == (
+        "torque", "inertia-pd", "forgetting")
     velocity, _ = _config(["train", "--preset", "general"])
-    assert velocity == TrainConfig.from_dict(preset_fields("general"))  # as before
-    assert velocity.actuation == "velocity" and "vmax" not in velocity.trajectory
+    assert velocity == TrainConfig().override(preset_fields("general"))  # as before
+    assert velocity.torque is None and "vmax" not in velocity.movement.trajectory
     with pytest.raises(SkinnyInputError):
         preset_fields("nope", "torque")
 
@@ -41,8 +40,8 @@ def test_torque_general_babbling_is_within_the_torque_limits():
     from skinny_mj.trajectories.library import load_movement
 
     fields = preset_fields("general", "torque")
-    traj, _ = load_movement(fields["trajectory"], fields["dof"])
-    assert bool(feasibility(fields["dof"], traj)["feasible"])
+    traj, _ = load_movement(fields["movement.trajectory"], fields["plant.dof"])
+    assert bool(feasibility(fields["plant.dof"], traj)["feasible"])
     full_speed, _ = load_movement("md_02.amc", 4)  # the shipped clip is not, at full speed
     assert not bool(feasibility(4, full_speed)["feasible"])
 
@@ -60,5 +59,5 @@ def test_train_torque_general_records_the_preset(tmp_path):
     meta = read_metadata(out / "model.npz")
     assert meta["training"]["preset"] == "general"
     assert meta["config"]["actuation"] == "torque"
-    assert meta["config"]["feedback"] == "inertia-pd"
-    assert meta["config"]["readout_fit"] == "forgetting"
+    assert meta["config"]["actuation.feedback"] == "inertia-pd"
+    assert meta["config"]["rule.fit"] == "forgetting"

@@ -101,12 +101,12 @@ def _untrained_torque_model(path) -> None:
     the ESN commands no torque), so ``skinny test`` runs one cheap test cycle."""
     from skinny_mj.training import TrainConfig, build_run
 
-    cfg = TrainConfig(actuation="torque", epochs=1)
+    cfg = TrainConfig().override(actuation="torque", rule__epochs=1)
     run = build_run(cfg, [1])
-    run.esn.save(path, metadata={"dof": cfg.dof, "signals": cfg.signals,
-                                 "sensor_noise": cfg.sensor_noise, "actuation": "torque",
+    run.esn.save(path, metadata={"dof": cfg.plant.dof, "signals": cfg.plant.signals,
+                                 "sensor_noise": cfg.plant.sensor_noise, "actuation": "torque",
                                  "max_speed_rad_s": [float(v) for v in run.max_speed_rad_s],
-                                 "trained_on": cfg.trajectory, "config": cfg.to_dict()})
+                                 "trained_on": cfg.movement.trajectory, "config": cfg.to_dict()})
 
 
 def test_skinny_test_on_a_torque_model_records_the_torques(tmp_path):

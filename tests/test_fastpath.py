@@ -24,7 +24,8 @@ from skinny_mj.plant import BatchPlant, EnvPlant
 from skinny_mj.task import load
 from skinny_mj.training import TrainConfig, train, train_batch
 
-TINY = TrainConfig(epochs=2, cycles=1)  # new method, 2 epochs of 4 cycles, 313 steps
+# new method, 2 epochs of 4 cycles, 313 steps
+TINY = TrainConfig().override(rule__epochs=2, rule__cycles=1)
 
 
 def _same_outcome(a, b, atol: float = 0.0) -> None:
@@ -43,7 +44,7 @@ def test_fast_path_equals_dm_control_path_per_seed():
     seeds = [5, 6]
     fast = train_batch(TINY, seeds)
     for seed, outcome in zip(seeds, fast, strict=True):
-        slow = train(dataclasses.replace(TINY, plant="env"), seed)
+        slow = train(TINY.override(plant__backend="env"), seed)
         # Same operations on the same numbers: bitwise in practice; 1e-9 is the contract.
         _same_outcome(outcome, slow, atol=1e-9)
         assert outcome.metrics["lockstep_runs"] == len(seeds)
@@ -51,9 +52,9 @@ def test_fast_path_equals_dm_control_path_per_seed():
 
 @pytest.mark.parametrize("cfg", [
     TINY,
-    TrainConfig(method="original", epochs=2, reps=2),
-    TrainConfig(method="true-target", tt_cycles=3),
-    TrainConfig(signals="joint", epochs=1),
+    TrainConfig().override(rule="original", rule__epochs=2, movement__reps=2),
+    TrainConfig().override(rule="true-target", rule__cycles=3),
+    TrainConfig().override(plant__signals="joint", rule__epochs=1),
 ])
 def test_lockstep_equals_one_at_a_time_bitwise(cfg):
     seeds = [1, 2, 3]

@@ -28,7 +28,7 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 from skinny_mj import body  # noqa: E402
-from skinny_mj.config import TrainConfig  # noqa: E402
+from skinny_mj.config import LEGACY_KEYS, TrainConfig  # noqa: E402
 from skinny_mj.errors import SkinnyInputError  # noqa: E402
 from skinny_mj.trajectories import Trajectory, load_movement, ymca  # noqa: E402
 
@@ -197,7 +197,9 @@ def test_fuzz_bvh(data, dof):
     _loads_or_input_error(_write(data, ".bvh"), dof)
 
 
-_FIELDS = [f for f in TrainConfig.__dataclass_fields__]
+_FIELDS = sorted({k for choice in ({}, {"rule": "true-target"}, {"actuation": "torque"},
+                                    {"forward": "parallel"}, {"rule": "original"})
+                   for k in TrainConfig().override(choice).to_dict()} | set(LEGACY_KEYS))
 _VALUES = (st.none() | st.booleans() | st.integers(-10**12, 10**12)
            | st.floats(allow_nan=True, allow_infinity=True) | st.text(max_size=12)
            | st.lists(st.integers(), max_size=3) | st.dictionaries(st.text(max_size=3),

@@ -150,7 +150,7 @@ def test_the_estimate_grows_with_steps_runs_and_reservoir():
     assert longer.parts["reservoir weights"] == base.parts["reservoir weights"]
     lockstep = memory.train_estimate(cfg, 313, 313, runs=10)
     assert lockstep.parts["per-step buffers"] > 9 * base.parts["per-step buffers"]
-    big = memory.train_estimate(TrainConfig(reservoir=2000), 313, 313)
+    big = memory.train_estimate(TrainConfig().override(esn__n_reservoir=2000), 313, 313)
     # the reservoir weights: at least the N x N float64 matrix itself
     assert big.parts["reservoir weights"] >= 2000**2 * 8
     assert big.parts["reservoir weights"] > 50 * base.parts["reservoir weights"]
