@@ -176,10 +176,16 @@ def test_train_preset_general_records_its_training_and_tests_on_a_clip(tmp_path)
     assert training["pieces"] == ["babble:seed=1,duration=1", "y-pure@2"]
     assert training["steps_per_cycle"] == len(
         load_movement("set:babble:seed=1,duration=1+y-pure@2", 4)[0])
-    assert meta["config"]["test_washout_cycles"] == 1  # the preset's, overrides kept apart
+    assert meta["config"]["test.washout_cycles"] == 1  # the preset's, overrides kept apart
     test_out = tmp_path / "test"
     assert main(["test", "--model", str(out / "model.npz"), "--trajectory",
                  "md_03.amc@start=0,duration=1.5", "--out", str(test_out)]) == 0
     m = json.loads((test_out / "metrics.json").read_text())["imitation"]
     assert {"dtw_nrmse", "within5", "within5_per_joint", "lag_s", "saturated"} <= set(m)
-    assert main(["train", "--preset", "general", "--config", str(out / "metrics.json")]) == 2
+    from skinny_mj.cli import build_parser
+    from skinny_mj.config import TrainConfig
+    from skinny_mj.config_files import train_config
+
+    both, _ = train_config(build_parser().parse_args([  # the file's keys over the preset's
+        "train", "--preset", "general", "--config", str(out / "metrics.json")]))
+    assert both == TrainConfig.from_dict(meta["config"]) and both.esn.n_reservoir == 20
