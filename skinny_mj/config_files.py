@@ -21,7 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from skinny_mj.config import DERIVED, TrainConfig, is_legacy
+from skinny_mj.config import DERIVED, TrainConfig
+from skinny_mj.config_legacy import is_legacy
 from skinny_mj.errors import SkinnyInputError
 
 __all__ = ["read_json", "read_train_file", "train_config", "SweepInvocation",
