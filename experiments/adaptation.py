@@ -2,7 +2,7 @@
 left on and learning continuing online.
 
 Each run trains paper E's experiment 5 (new method, β = 0.1, N = 200, YMCA; the
-torque rows: the same on the torque twin, ``actuation="torque"``, as
+torque rows: the same on the torque twin, ``actuation=torque``, as
 ``experiments/dynamic.py``'s ``2d-ymca-fel-new``, no gravity feed-forward, so nothing
 in the loop knows the change), then performs the movement cycle after cycle with
 feedback gain K = ``gain`` and reservoir noise off: ``pre`` nominal cycles, ``change``
@@ -108,8 +108,8 @@ def perturbation(cfg: Config, change: str, n_dof: int) -> dict:
 def train_config(cfg: Config, change: str) -> TrainConfig:
     """Paper E exp. 5, on the torque twin for the torque changes."""
     if change in TORQUE_CHANGES or change == "none-torque":
-        return TrainConfig(actuation="torque", epochs=cfg.epochs)
-    return TrainConfig(epochs=cfg.epochs)
+        return TrainConfig().override({"actuation": "torque", "rule.epochs": cfg.epochs})
+    return TrainConfig().override({"rule.epochs": cfg.epochs})
 
 
 def train_configs(cfg: Config, row: Row) -> dict[str, TrainConfig]:
@@ -153,7 +153,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
         ok = np.array([r is None for r in fel.health(esn, ro)]) & alive
         alive &= ok
         curve[alive, c] = position_nrmse(ro.true_signals, run.desired)[alive]
-        angles = body.normalize_angles(ro.angles, tc.dof)
+        angles = body.normalize_angles(ro.angles, tc.plant.dof)
         angle_curve[alive, c] = position_nrmse(angles, desired_angles)[alive]
         if learner in ("fel", "fel-noise") and alive.any():
             esn.fit(ro.states, fel.beta_target(ro.y_est, ro.y_esn, cfg.beta), runs=alive)
@@ -201,7 +201,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
                   + list(NOISE_ROWS) + list(CONTROL_ROWS))
     groups = {c: tuple(f"{c}-{lr}" for lr in LEARNERS) for c in CHANGES}
     groups["velocity"] = tuple(r.row_id for r in every
-                               if train_config(cfg, r.params["change"]).actuation == "velocity")
+                               if train_config(cfg, r.params["change"]).torque is None)
     groups["torque"] = tuple(r.row_id for r in every if r.row_id not in groups["velocity"])
     groups["noise"] = ("gain-fel", *(f"{c}-{lr}" for c, lr in NOISE_ROWS))
     return Experiment(name=NAME, rows=every, groups=groups,
@@ -217,9 +217,10 @@ def forearm_floor(cfg: Config) -> float:
     from skinny_mj.run_parts import load_trajectory
 
     tc = train_config(cfg, "forearm")
-    desired = load_trajectory(tc)[0].position_signals(tc.signals)
+    dof, signals = tc.plant.dof, tc.plant.signals
+    desired = load_trajectory(tc)[0].position_signals(signals)
     reached = desired.copy()
-    reached[:, forearm_rows(tc.dof, tc.signals)] *= cfg.forearm
+    reached[:, forearm_rows(dof, signals)] *= cfg.forearm
     return float(position_nrmse(reached, desired))
 
 

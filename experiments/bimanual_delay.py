@@ -9,7 +9,7 @@ one arm could have access to the prediction made by the other arm's forward mode
 Rows ``<pattern>-<architecture>-d<delay>``: paper B's plant and run (a forced leading
 arm, the lagging arm's ESN inverse model seeing both arms' sensed joint angles, FEL with
 K 1 -> 0, tests with the leader at 1x, 0.5x, 1.5x and K = 0: :func:`experiments.paper_b.
-run_batch`) with paper A's delay (``TrainConfig.delay``: the internal models' sensed
+run_batch`) with paper A's delay (``plant.delay``: the internal models' sensed
 input lags by 0-10 steps, the feedback controller's does not) and, per architecture,
 the lagging arm's inverse model gets besides the delayed sensed state of both arms:
 
@@ -40,7 +40,7 @@ from skinny_mj.experiment import Experiment, Row, RunFailed
 from skinny_mj.sweep import one_of_batch
 
 NAME = "bimanual-delay"
-#: architecture -> TrainConfig.forward_sharing (None: no forward model)
+#: architecture -> the forward models' ``forward.sharing`` (None: no forward model)
 ARCHITECTURES = {"inverse": None, "forward": "none", "share-predictions": "predictions",
                  "share-commands": "commands"}
 DELAYS = (0, 2, 4, 6, 10)
@@ -49,8 +49,10 @@ SPEEDS = paper_b.SPEEDS
 #: Paper B's run (:data:`experiments.paper_b.MODEL`: N = 100, sensed-only inputs, new
 #: method, K 1 -> 0) with a shorter schedule to fit the compute budget (our choice):
 #: β = 0.1 with 3 learning cycles per epoch and 10 epochs (paper E's experiment 5) in
-#: place of paper B's β = 0.01, 5 cycles, 50 epochs; forward networks N = 100 (paper A).
-MODEL = replace(paper_b.MODEL, beta=0.1, cycles=3, epochs=10, forward_reservoir=100)
+#: place of paper B's β = 0.01, 5 cycles, 50 epochs; forward networks N = 100 (paper A;
+#: ``forward`` holds their settings, each row chooses whether it has them).
+MODEL = paper_b.MODEL.override({"rule.beta": 0.1, "rule.cycles": 3, "rule.epochs": 10,
+                                "forward": "parallel", "forward.reservoir": 100})
 
 
 @dataclass(frozen=True)
@@ -76,9 +78,10 @@ def rows(cfg: Config) -> tuple[Row, ...]:
 def train_config(cfg: Config, row: Row) -> TrainConfig:
     """The row's run: its delay and (but for ``inverse``) the per-arm forward models."""
     sharing = ARCHITECTURES[row.params["architecture"]]
-    return replace(cfg.model, trajectory=paper_b.PREFIX + row.params["pattern"],
-                   delay=int(row.params["delay"]),
-                   forward=None if sharing is None else "parallel", forward_sharing=sharing)
+    forward = {"forward": "none"} if sharing is None else \
+        {"forward": "parallel", "forward.sharing": sharing}
+    return cfg.model.override({"movement.trajectory": paper_b.PREFIX + row.params["pattern"],
+                               "plant.delay": int(row.params["delay"]), **forward})
 
 
 def _tag(speed: float) -> str:
@@ -112,13 +115,13 @@ def cost(cfg: Config, row: Row) -> float:
     costs about as much as the inverse one)."""
     nets = {None: 1, "none": 2, "commands": 2, "predictions": 3}
     tcfg = train_config(cfg, row)
-    return relative_cost(tcfg) * nets[tcfg.forward_sharing]
+    return relative_cost(tcfg) * nets[getattr(tcfg.forward, "sharing", None)]
 
 
 def quick_config() -> Config:
     """A smoke test (2 epochs, one pattern, delays 0 and 4, one run), not a result."""
-    return Config(model=replace(MODEL, epochs=2, cycles=1), patterns=("phase0",),
-                  delays=(0, 4), runs=1)
+    return Config(model=MODEL.override({"rule.epochs": 2, "rule.cycles": 1}),
+                  patterns=("phase0",), delays=(0, 4), runs=1)
 
 
 TABLE_COLUMNS = ("position_nrmse_x1", "relative_error_x1", "worst_relative_error",
@@ -138,7 +141,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
                                "--movement/--asf/--signals do not apply")
     cfg = quick_config() if quick else Config()
     if dof is not None:
-        cfg = replace(cfg, model=replace(cfg.model, dof=dof))
+        cfg = replace(cfg, model=cfg.model.override({"plant.dof": dof}))
     groups = {a: tuple(row_id(p, a, d) for p in cfg.patterns for d in cfg.delays)
               for a in ARCHITECTURES}
     groups.update({p: tuple(row_id(p, a, d) for a in ARCHITECTURES for d in cfg.delays)

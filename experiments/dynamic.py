@@ -2,7 +2,7 @@
 tracked by textbook controllers and learned by an ESN inverse-dynamics model.
 
 Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` with
-``actuation="torque"`` (:mod:`skinny_mj.torque_training`):
+``actuation=torque`` (:mod:`skinny_mj.torque_training`):
 
 - ``table``: for 2D and 3D (``2d``, ``3d``) and YMCA and an excerpt of CMU clip md_02
   (``ymca``, ``md02``; md_02 needs more torque than the motors have, see the report):
@@ -53,35 +53,36 @@ from skinny_mj.sweep import one_of_batch
 from skinny_mj.sweep.options import config_from_dict
 
 NAME = "dynamic"
-#: controller id -> TrainConfig changes
+#: controller id -> TrainConfig overrides
 CONTROLLERS = {
-    "pd": {"method": "none", "test_gain": 1.0},
-    "ct": {"method": "none", "test_gain": 1.0, "feedback": "computed-torque"},
-    "fel-orig": {"method": "original"},
-    "fel-new": {"method": "new", "beta": 0.1},
-    "fel-new-gff": {"method": "new", "beta": 0.1, "gravity_feedforward": True},
-    "tt": {"method": "true-target", "beta": 0.1},
+    "pd": {"rule": "none", "test.gain": 1.0},
+    "ct": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "computed-torque"},
+    "fel-orig": {"rule": "original"},
+    "fel-new": {"rule": "new", "rule.beta": 0.1},
+    "fel-new-gff": {"rule": "new", "rule.beta": 0.1, "actuation.gravity_feedforward": True},
+    "tt": {"rule": "true-target", "rule.beta": 0.1},
 }
 #: The arm's own dynamics (controllers.torque_arm): the textbook controllers alone
 #: (K = 1) and FEL with the inertia-scaled PD teacher (beta = 1, 3 learning cycles per
 #: epoch, 15 epochs of K 1 -> 0; readout on the normal equations with forgetting 0.8,
 #: ridge 1e-2, or on each cycle alone, or by RLS)
-ARM_FEL = {"method": "new", "beta": 1.0, "cycles": 3, "epochs": 15, "feedback": "inertia-pd",
-           "readout_fit": "forgetting"}
+ARM_FEL = {"rule": "new", "rule.beta": 1.0, "rule.cycles": 3, "rule.epochs": 15,
+           "actuation.feedback": "inertia-pd", "rule.fit": "forgetting"}
 ARM_CONTROLLERS = {
-    "arm-ct": {"method": "none", "test_gain": 1.0, "feedback": "ct"},
-    "arm-idpd": {"method": "none", "test_gain": 1.0, "feedback": "id-pd"},
-    "arm-pdg": {"method": "none", "test_gain": 1.0, "feedback": "pd-gravity"},
-    "arm-pd": {"method": "none", "test_gain": 1.0, "feedback": "inertia-pd"},
+    "arm-ct": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "ct"},
+    "arm-idpd": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "id-pd"},
+    "arm-pdg": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "pd-gravity"},
+    "arm-pd": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "inertia-pd"},
     "fel-arm": ARM_FEL,
-    "fel-arm-cycle": {**ARM_FEL, "readout_fit": "cycle"},
-    "fel-arm-rls": {**ARM_FEL, "readout_fit": "rls"},
+    "fel-arm-cycle": {**ARM_FEL, "rule.fit": "cycle"},
+    "fel-arm-rls": {**ARM_FEL, "rule.fit": "rls"},
 }
 #: reservoir size of the 3D arm's ESN in the arm-dynamics rows (2D: the default 200)
 ARM_RESERVOIR_3D = 500
 #: perturbation id -> test-plant changes
-PERTURBATIONS = {"payload1": {"test_payload_kg": 1.0}, "mass+20": {"test_mass_scale": 1.2},
-                 "mass-20": {"test_mass_scale": 0.8}}
+PERTURBATIONS = {"payload1": {"actuation.test_payload_kg": 1.0},
+                 "mass+20": {"actuation.test_mass_scale": 1.2},
+                 "mass-20": {"actuation.test_mass_scale": 0.8}}
 #: goals for the ESN alone on YMCA (position NRMSE), by body: the limit-scaled PD
 #: teacher's (GOALS) and the inertia-scaled teacher's (ARM_GOALS); computed torque's
 #: joint-angle NRMSE goal and its torque budget (x the movement's mean |tau| need)
@@ -118,42 +119,46 @@ def all_rows(cfg: Config) -> tuple[Row, ...]:
     for bd in cfg.bodies:
         for mv, traj in (("ymca", cfg.ymca), ("md02", cfg.clip)):
             for ctl, changes in CONTROLLERS.items():
-                out.append(Row(f"{bd}-{mv}-{ctl}", {"dof": 4 if bd == "2d" else 8,
-                                                    "trajectory": traj, **changes}))
+                out.append(Row(f"{bd}-{mv}-{ctl}", {"plant.dof": 4 if bd == "2d" else 8,
+                                                    "movement.trajectory": traj, **changes}))
     if "2d" in cfg.bodies:
         for pert, changes in PERTURBATIONS.items():
             for ctl, gain in (("fel-new-gff-k0", 0.0), ("fel-new-gff-k1", 1.0)):
                 out.append(Row(f"2d-ymca-{pert}-{ctl}", {
-                    "dof": 4, "trajectory": cfg.ymca, **CONTROLLERS["fel-new-gff"],
-                    "test_gain": gain, **changes}))
-            out.append(Row(f"2d-ymca-{pert}-pd", {"dof": 4, "trajectory": cfg.ymca,
+                    "plant.dof": 4, "movement.trajectory": cfg.ymca,
+                    **CONTROLLERS["fel-new-gff"], "test.gain": gain, **changes}))
+            out.append(Row(f"2d-ymca-{pert}-pd", {"plant.dof": 4, "movement.trajectory": cfg.ymca,
                                                   **CONTROLLERS["pd"], **changes}))
-        out.append(Row("2d-ymca-kinematic", {"dof": 4, "trajectory": cfg.ymca,
-                                             "actuation": "velocity", "method": "new"}))
+        out.append(Row("2d-ymca-kinematic", {"plant.dof": 4, "movement.trajectory": cfg.ymca,
+                                             "actuation": "velocity", "rule": "new"}))
     for bd in cfg.bodies:  # appended last, so the rows above keep their seeds
         for ctl in ("pd", "ct", "fel-new", "fel-new-gff"):
-            out.append(Row(f"{bd}-rec-{ctl}", {"dof": 4 if bd == "2d" else 8,
-                                               "trajectory": cfg.recorded, **CONTROLLERS[ctl]}))
+            out.append(Row(f"{bd}-rec-{ctl}", {"plant.dof": 4 if bd == "2d" else 8,
+                                               "movement.trajectory": cfg.recorded,
+                                               **CONTROLLERS[ctl]}))
     for bd in cfg.bodies:  # the arm's own dynamics, appended after every earlier row
         dof = 4 if bd == "2d" else 8
-        size = {} if dof == 4 else {"reservoir": ARM_RESERVOIR_3D}
+        size = {} if dof == 4 else {"esn.n_reservoir": ARM_RESERVOIR_3D}
         for mv, traj in (("ymca", cfg.ymca), ("rec", cfg.recorded)):
             for ctl, changes in ARM_CONTROLLERS.items():
                 if mv == "rec" and ctl in ("fel-arm-cycle", "fel-arm-rls"):
                     continue
-                out.append(Row(f"{bd}-{mv}-{ctl}", {"dof": dof, "trajectory": traj,
+                out.append(Row(f"{bd}-{mv}-{ctl}", {"plant.dof": dof,
+                                                    "movement.trajectory": traj,
                                                     **changes, **size}))
         for pert, changes in PERTURBATIONS.items() if bd == "2d" else ():
             for ctl, gain in (("fel-arm-k0", 0.0), ("fel-arm-k1", 1.0)):
                 out.append(Row(f"{bd}-ymca-{pert}-{ctl}", {
-                    "dof": dof, "trajectory": cfg.ymca, **ARM_FEL, **size,
-                    "test_gain": gain, **changes}))
+                    "plant.dof": dof, "movement.trajectory": cfg.ymca, **ARM_FEL, **size,
+                    "test.gain": gain, **changes}))
             out.append(Row(f"{bd}-ymca-{pert}-arm-ct", {
-                "dof": dof, "trajectory": cfg.ymca, **ARM_CONTROLLERS["arm-ct"], **changes}))
+                "plant.dof": dof, "movement.trajectory": cfg.ymca, **ARM_CONTROLLERS["arm-ct"],
+                **changes}))
     if "3d" in cfg.bodies:  # the 3D ESN still learning at its last epoch: twice as many
         for mv, traj in (("ymca", cfg.ymca), ("rec", cfg.recorded)):
-            out.append(Row(f"3d-{mv}-fel-arm-long", {"dof": 8, "trajectory": traj, **ARM_FEL,
-                                                     "reservoir": ARM_RESERVOIR_3D,
+            out.append(Row(f"3d-{mv}-fel-arm-long", {"plant.dof": 8, "movement.trajectory": traj,
+                                                     **ARM_FEL,
+                                                     "esn.n_reservoir": ARM_RESERVOIR_3D,
                                                      "epoch_factor": 2}))
     return tuple(out)
 
@@ -174,10 +179,11 @@ def groups(every: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
 def train_config(cfg: Config, row: Row) -> TrainConfig:
     p = dict(row.params)
     factor = p.pop("epoch_factor", 1)
-    if p.get("feedback") == "inertia-pd" and p.get("method") != "none":
-        p["epochs"] = cfg.arm_epochs * factor
-    return TrainConfig(**{"actuation": "torque", "signals": cfg.signals,
-                          "epochs": cfg.epochs, **p})
+    tc = TrainConfig().override({"actuation": "torque", "plant.signals": cfg.signals, **p})
+    if not tc.learns_by_fel:  # the feedback controller alone, or the true target
+        return tc
+    arm = tc.torque is not None and tc.torque.feedback == "inertia-pd"
+    return tc.override({"rule.epochs": cfg.arm_epochs * factor if arm else cfg.epochs})
 
 
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
@@ -214,7 +220,7 @@ def joint_nrmse(outcome) -> float:
     from controllers.metrics import position_nrmse
     from skinny_mj.body import normalize_angles
 
-    dof = outcome.config.dof
+    dof = outcome.config.plant.dof
     angles = outcome.test.rollout.angles[:, :, :dof]
     return float(position_nrmse(normalize_angles(angles, dof),
                                 normalize_angles(outcome.test.trajectory.angles, dof))[0])
@@ -227,7 +233,7 @@ def run_one(cfg: Config, row: Row, seed: int) -> dict:
 def cost(cfg: Config, row: Row) -> float:
     """Relative cost: the training's cycles (a torque cycle costs ~2 velocity cycles)."""
     tc = train_config(cfg, row)
-    return relative_cost(tc) * (2.0 if tc.actuation == "torque" else 1.0)
+    return relative_cost(tc) * (2.0 if tc.torque is not None else 1.0)
 
 
 def build(*, quick: bool = False, movement: str | None = None, asf: str | None = None,
@@ -257,7 +263,6 @@ def feasibility_table(movements: tuple[str, ...], bodies: tuple[str, ...]) -> li
     the desired motion, :meth:`skinny_mj.dynamics.Dynamics.feasibility`), the DOF with the
     largest peak named."""
     from skinny_mj import body
-    from skinny_mj.run_parts import load_trajectory
     from skinny_mj.torque_training import feasibility
 
     lines = ["| movement | body | peak \\|τ\\|/limit (DOF) | p99 | steps over a limit | "
@@ -266,8 +271,7 @@ def feasibility_table(movements: tuple[str, ...], bodies: tuple[str, ...]) -> li
     for mv in movements:
         for bd in bodies:
             dof = 4 if bd == "2d" else 8
-            traj, _ = load_trajectory(TrainConfig(dof=dof, trajectory=mv, actuation="torque"))
-            f = feasibility(dof, traj)
+            f = feasibility(dof, torque_movement(dof, mv))
             worst = int(f["peak_ratio"].argmax())
             lines.append(
                 f"| {mv} | {bd} | {f['peak_ratio'][worst]:.2f} "
@@ -323,10 +327,16 @@ def report(results: dict, out_dir: Path) -> str:
 def floor(dof: int, name: str) -> float:
     """The position NRMSE of the best reachable pose of a movement (no controller beats it)."""
     from skinny_mj.imitation import movement_stats
+
+    return movement_stats(torque_movement(dof, name))["reachable_floor_position_nrmse"]
+
+
+def torque_movement(dof: int, name: str):
+    """The movement ``name`` as the torque body of ``dof`` DOFs loads it."""
     from skinny_mj.run_parts import load_trajectory
 
-    traj, _ = load_trajectory(TrainConfig(dof=dof, trajectory=name, actuation="torque"))
-    return movement_stats(traj)["reachable_floor_position_nrmse"]
+    return load_trajectory(TrainConfig().override({
+        "plant.dof": dof, "movement.trajectory": name, "actuation": "torque"}))[0]
 
 
 def arm_report(out_dir: Path, cfg: Config) -> list[str]:
@@ -334,7 +344,6 @@ def arm_report(out_dir: Path, cfg: Config) -> list[str]:
     import statistics
 
     from experiments.claims import values
-    from skinny_mj.run_parts import load_trajectory
     from skinny_mj.torque_training import feasibility
 
     def mean(row: str, metric: str) -> float | None:
@@ -348,9 +357,7 @@ def arm_report(out_dir: Path, cfg: Config) -> list[str]:
             ct, tau = mean(f"{bd}-{mv}-arm-ct", "joint_nrmse"), \
                 mean(f"{bd}-{mv}-arm-ct", "mean_abs_torque_nm")
             if ct is not None:
-                traj, _ = load_trajectory(TrainConfig(dof=dof, trajectory=name,
-                                                      actuation="torque"))
-                need = float(feasibility(dof, traj)["mean_abs_nm"].mean())
+                need = float(feasibility(dof, torque_movement(dof, name))["mean_abs_nm"].mean())
                 peak = max(values(out_dir, f"{bd}-{mv}-arm-ct", "max_torque_ratio"))
                 lines.append(f"goal {bd} {mv} computed torque joint NRMSE <= {CT_JOINT_GOAL}: "
                              f"{ct:.4f}; mean |τ| {tau:.2f} N m = {tau / need:.2f}x the "

@@ -22,7 +22,7 @@ and correction ratio (paper A's "online correction ratio"), and with a forward m
 prediction error p(t) vs the actual x(t) (``pred_nrmse``, ``pred_mad``).
 
 Rows ``<architecture>[-chained]-d<delay>``; ``chained``: the forward model fed its own
-previous prediction instead of the delayed sensed position (``TrainConfig.forward_input``).
+previous prediction instead of the delayed sensed position (``forward.input``).
 :data:`PLAN` gives each row its epochs (the compute budget: see docs/results/fidelity-a.md).
 """
 
@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments import paper_a
-from skinny_mj.config import TrainConfig, relative_cost
+from skinny_mj.config import LEGACY_KEYS, TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row
 from skinny_mj.sweep import one_of_batch
 from skinny_mj.sweep.options import movement_changes
@@ -83,12 +83,28 @@ class Config:
         names = {f.name for f in dataclasses.fields(cls)}
         kw = {k: v for k, v in d.items() if k in names}
         if "model" in kw:
-            kw["model"] = TrainConfig.from_dict(kw["model"])
+            kw["model"] = TrainConfig.from_dict(dotted(kw["model"]))
         if "plan" in kw:
             kw["plan"] = tuple(tuple(p) for p in kw["plan"])
         if "checkpoints" in kw:
             kw["checkpoints"] = tuple(kw["checkpoints"])
         return cls(**kw)
+
+
+def dotted(d: dict, prefix: str = "") -> dict:
+    """A config written nested (``{"plant": {"dof": 4}, "rule": {"kind": "new", ...}}``,
+    as ``dataclasses.asdict`` writes it) as flat dotted keys (``{"plant.dof": 4, "rule":
+    "new", ...}``); a flat dict as it is."""
+    out: dict = {}
+    for key, value in d.items():
+        if isinstance(value, dict):
+            if "kind" in value:
+                out[prefix + key] = value["kind"]
+            out.update(dotted({k: v for k, v in value.items() if k != "kind"},
+                              f"{prefix}{key}."))
+        else:
+            out[prefix + key] = value
+    return out
 
 
 def row_id(architecture: str, forward_input: str, delay: int) -> str:
@@ -104,10 +120,12 @@ def train_config(cfg: Config, row: Row) -> TrainConfig:
     """Paper A's run of the row (:func:`paper_a.train_config`), with its epochs and the
     forward model's input."""
     p = row.params
-    base = paper_a.Config(model=replace(cfg.model, epochs=int(p["epochs"])))
+    base = paper_a.Config(model=cfg.model.override({"rule.epochs": int(p["epochs"])}))
     tc = paper_a.train_config(base, Row(row.row_id, {"architecture": p["architecture"],
                                                      "delay": p["delay"]}))
-    return replace(tc, forward_input=p["forward_input"])
+    if p["architecture"] == "inverse" and p["forward_input"] == "sensed":
+        return tc  # no forward model: the inverse model's input is the sensed one
+    return tc.override({"forward.input": p["forward_input"]})
 
 
 def checkpoints_of(cfg: Config, epochs: int) -> tuple[int, ...]:
@@ -165,7 +183,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     from skinny_mj.training import build_run, train_run
 
     run = build_run(train_config(cfg, row), seeds)
-    checks = checkpoints_of(cfg, run.cfg.epochs)
+    checks = checkpoints_of(cfg, run.cfg.rule.epochs)
     last_cycle = run.cfg.learning_cycles + 1
     recorded: dict[int, dict[str, np.ndarray]] = {}
 
@@ -179,7 +197,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     result = trained.fel
     outs: list = []
     for r in range(len(seeds)):
-        ok_epochs = run.cfg.epochs if not result.failed[r] else int(result.fail_epoch[r])
+        ok_epochs = run.cfg.rule.epochs if not result.failed[r] else int(result.fail_epoch[r])
         out: dict = {"epochs_ok": float(ok_epochs)}
         for c in checks:
             alive = c <= ok_epochs  # the run had not diverged by the end of epoch c
@@ -203,7 +221,8 @@ def run_one(cfg: Config, row: Row, seed: int) -> dict:
 
 def quick_config() -> Config:
     """A smoke test (N = 100 / 50, 2 cycles, 2–3 epochs, 2 runs), not a result."""
-    return Config(model=replace(paper_a.MODEL, reservoir=100, forward_reservoir=50, cycles=2),
+    return Config(model=paper_a.MODEL.override({"esn.n_reservoir": 100, "forward.reservoir": 50,
+                                                "rule.cycles": 2}),
                   plan=QUICK_PLAN, runs=2, checkpoints=(1, 2, 3))
 
 
@@ -213,7 +232,8 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     2D joint angles (None: the paper's)."""
     cfg = quick_config() if quick else Config()
     changes = movement_changes(movement, asf, dof, signals)
-    cfg = replace(cfg, model=replace(cfg.model, **changes))
+    cfg = replace(cfg, model=cfg.model.override({LEGACY_KEYS[k]: v
+                                                 for k, v in changes.items()}))
     every = rows(cfg)
     groups = {a: tuple(r.row_id for r in every if r.params["architecture"] == a
                        and r.params["forward_input"] == "sensed")

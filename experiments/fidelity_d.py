@@ -1,7 +1,7 @@
 """Paper D's fidelity: which true-target cell trains in the thesis's range, and tests how?
 
 Paper D's true-target (TT) half (``experiments.paper_d.EXPERIMENTS`` / ``train_configs``,
-imported) × Gaussian input noise on the teacher-forced inputs (``tt_input_noise``, SD in
+imported) × Gaussian input noise on the teacher-forced inputs (``rule.input_noise``, SD in
 normalized units, its own seed stream) {0, 0.01, 0.03, 0.05} × reservoir size N {100, 200,
 400} × movement {recorded-like YMCA (``ymca-recorded``: never still, marker noise),
 ``ymca-smooth`` (today's ``ymca``)}. Row ids ``<movement>-n<N>-i<noise>-e<exp>``.
@@ -85,7 +85,7 @@ def train_config(cfg: Config, row: Row):
                           reservoir=p["reservoir"], tt_cycles=cfg.tt_cycles)
     tt = paper_d.train_configs(base, Row(p["exp"], {"method": method, "noise": noise,
                                                     "reps": reps}))["tt"]
-    return replace(tt, tt_input_noise=p["input_noise"])
+    return tt.override({"rule.input_noise": p["input_noise"]})
 
 
 def all_rows(cfg: Config) -> tuple[Row, ...]:

@@ -65,7 +65,8 @@ def train_config(cfg: Config, row: Row):
     tc = paper_e.train_config(base, Row(p["exp"], {"method": method, "beta": beta,
                                                    "cycles": cycles, "reps": reps}))
     trajectory, retarget = _trajectory(p["movement"])
-    return replace(tc, trajectory=trajectory, retarget=retarget, u_error_gain=p["gain"])
+    return tc.override({"movement.trajectory": trajectory, "movement.retarget": retarget,
+                        "rule.u_error_gain": p["gain"]})
 
 
 def all_rows(cfg: Config) -> tuple[Row, ...]:
@@ -83,7 +84,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     run = build_run(train_config(cfg, row), seeds)
     trained = train_run(run)
     clean = evaluate(run)
-    noisy = evaluate(replace(run, cfg=replace(run.cfg, test_noise=True)))
+    noisy = evaluate(replace(run, cfg=run.cfg.override({"test.noise": True})))
     out: list = []
     for r in range(len(seeds)):
         if trained.fel.failed[r] or clean[r].failed:

@@ -48,7 +48,7 @@ from skinny_mj.sweep import one_of_batch
 NAME = "generalization"
 #: Representation id -> (dof, signals).
 REPRESENTATIONS = {"j2": (4, "joint"), "c2": (4, "cartesian"), "c3": (8, "cartesian")}
-#: Training set id -> (movement, TrainConfig changes).
+#: Training set id -> (movement, TrainConfig overrides).
 TRAIN_SETS: dict[str, tuple[str, dict]] = {
     "ymca": ("ymca", {}),  # the thesis's (paper C)
     "ymca-mirrors": ("set:ymca+mirror-right+mirror-left", {}),
@@ -60,8 +60,8 @@ TRAIN_SETS: dict[str, tuple[str, dict]] = {
     "md_02": ("md_02.amc", {}),  # md_03 is unseen
     "md_02-head": ("md_02.amc@start=0,duration=5", {}),  # md_02's tail is unseen
     "babble15+md_03": ("set:babble:seed=0,duration=15+md_03.amc", {}),
-    "babble15-N400": ("babble:seed=0,duration=15", {"reservoir": 400}),
-    "babble15-scale4": ("babble:seed=0,duration=15", {"full_scale_factor": 4.0}),
+    "babble15-N400": ("babble:seed=0,duration=15", {"esn.n_reservoir": 400}),
+    "babble15-scale4": ("babble:seed=0,duration=15", {"movement.full_scale_factor": 4.0}),
 }
 #: Rows added after the first full sweep (the recorded-like YMCA), last in the
 #: experiment so every earlier row keeps its place and seeds: (representation, set id).
@@ -111,9 +111,10 @@ def train_config(cfg: Config, row: Row):
 
     dof, signals = REPRESENTATIONS[row.params["rep"]]
     movement, changes = {**TRAIN_SETS, **TRAIN_SETS_EXTRA}[row.params["train"]]
-    kw = {"reservoir": cfg.reservoir, **changes}
-    return TrainConfig(dof=dof, signals=signals, trajectory=movement, epochs=cfg.epochs,
-                       test_washout_cycles=cfg.test_washout_cycles, **kw)
+    return TrainConfig().override({
+        "plant.dof": dof, "plant.signals": signals, "movement.trajectory": movement,
+        "rule.epochs": cfg.epochs, "test.washout_cycles": cfg.test_washout_cycles,
+        "esn.n_reservoir": cfg.reservoir, **changes})
 
 
 @functools.lru_cache(maxsize=64)
@@ -151,6 +152,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
 
     start = time.perf_counter()
     tcfg = train_config(cfg, row)
+    dof = tcfg.plant.dof
     run = build_run(tcfg, seeds)
     result = train_run(run).fel
     train_wall = (time.perf_counter() - start) / len(seeds)
@@ -158,14 +160,15 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     outs: list = [{
         "train_position_nrmse": float(result.position_nrmse[r, -1]),
         "train_steps": len(traj), "train_wall_s": train_wall, "n_test_failed": 0,
-        "train_coverage": coverage(traj.angles, tcfg.dof),
+        "train_coverage": coverage(traj.angles, dof),
         "train_speed_p99_rad_s": float(np.percentile(np.abs(traj.velocities()), 99)),
         "max_speed_rad_s": [float(v) for v in run.max_speed_rad_s],
     } for r in range(len(seeds))]
     for col in cfg.tests:
-        test = load_test(TESTS[col], tcfg.dof)
+        test = load_test(TESTS[col], dof)
         sat = saturation(test.angles, test.dt, run.max_speed_rad_s)
-        bound = clipped_ideal_nrmse(test.angles, test.dt, run.max_speed_rad_s, tcfg.signals)
+        bound = clipped_ideal_nrmse(test.angles, test.dt, run.max_speed_rad_s,
+                                     tcfg.plant.signals)
         for out, outcome in zip(outs, evaluate(run, test), strict=True):
             out[f"{col}__saturated"] = sat
             out[f"{col}__clipped_ideal_nrmse"] = bound
@@ -173,7 +176,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
                 out["n_test_failed"] += 1
                 continue
             out.update({f"{col}__{k}": v
-                        for k, v in imitation_metrics(outcome, tcfg.dof).items()})
+                        for k, v in imitation_metrics(outcome, dof).items()})
     wall = (time.perf_counter() - start) / len(seeds)
     for r, out in enumerate(outs):
         out["wall_s"] = wall
@@ -244,8 +247,9 @@ def build(*, quick: bool = False, movement: str | None = None, asf: str | None =
 def cost(cfg: Config, row: Row) -> float:
     """Relative cost: training steps x (N / 200), 3D x 1.5."""
     tcfg = train_config(cfg, row)
-    n = len(load_test(tcfg.trajectory, tcfg.dof))
-    return n * max(1.0, tcfg.reservoir / 200) * (1.5 if tcfg.dof == 8 else 1.0)
+    dof = tcfg.plant.dof
+    n = len(load_test(tcfg.movement.trajectory, dof))
+    return n * max(1.0, tcfg.esn.n_reservoir / 200) * (1.5 if dof == 8 else 1.0)
 
 
 def report(results: dict, out_dir: Path) -> str:

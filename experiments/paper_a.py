@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from controllers.fel import run_mean
-from skinny_mj.config import TrainConfig, relative_cost
+from skinny_mj.config import LEGACY_KEYS, TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
 from skinny_mj.sweep import one_of_batch
 from skinny_mj.sweep.options import movement_changes
@@ -51,9 +51,13 @@ PAPER_TEXT = {
 #: chosen here: the schedule of paper C (same year, same inverse network): epochs of 7
 #: cycles (1 washout, 5 learning, 1 evaluation), the original FEL target (β = 1), and
 #: 10 epochs ("all experiments were run the same number of epochs").
-MODEL = TrainConfig(dof=4, signals="joint", reservoir=1000, forward_reservoir=100,
-                    spectral_radius=0.1, noise=0.2, method="original", beta=1.0, cycles=5,
-                    epochs=10, gain_schedule="fixed", gain_value=0.65, sensor_noise=0.01)
+#: ``forward`` holds the forward model's settings; each row chooses its kind (or none).
+MODEL = TrainConfig().override({
+    "plant.dof": 4, "plant.signals": "joint", "plant.sensor_noise": 0.01,
+    "esn.n_reservoir": 1000, "esn.spectral_radius": 0.1, "esn.noise_level": 0.2,
+    "forward": "parallel", "forward.reservoir": 100,
+    "rule": "original", "rule.cycles": 5, "rule.epochs": 10, "rule.gain_schedule": "fixed",
+    "rule.gain_value": 0.65})
 
 
 @dataclass(frozen=True)
@@ -90,8 +94,8 @@ def train_config(cfg: Config, row: Row) -> TrainConfig:
     ``inverse`` (parallel: trained alongside; serial: pre-trained, then frozen; hybrid:
     pre-trained, then trained on)."""
     arch = row.params["architecture"]
-    return replace(cfg.model, delay=int(row.params["delay"]),
-                   forward=None if arch == "inverse" else arch)
+    return cfg.model.override({"plant.delay": int(row.params["delay"]),
+                               "forward": "none" if arch == "inverse" else arch})
 
 
 def mean_abs_error(true_signals: np.ndarray, desired: np.ndarray) -> np.ndarray:
@@ -165,7 +169,8 @@ def cost(cfg: Config, row: Row) -> float:
 
 def quick_config() -> Config:
     """A smoke test (N = 100 / 50, 2 epochs, 2 delays, 2 runs), not a reproduction."""
-    return Config(model=replace(MODEL, reservoir=100, forward_reservoir=50, epochs=2, cycles=2),
+    return Config(model=MODEL.override({"esn.n_reservoir": 100, "forward.reservoir": 50,
+                                        "rule.epochs": 2, "rule.cycles": 2}),
                   delays=QUICK_DELAYS, runs=2)
 
 
@@ -175,7 +180,8 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     replace the paper's YMCA, 2D joint angles (None: the paper's)."""
     cfg = quick_config() if quick else Config()
     changes = movement_changes(movement, asf, dof, signals)
-    cfg = replace(cfg, model=replace(cfg.model, **changes))
+    cfg = replace(cfg, model=cfg.model.override({LEGACY_KEYS[k]: v
+                                                 for k, v in changes.items()}))
     return Experiment(
         name=NAME, rows=rows(cfg.delays), run_one=functools.partial(run_one, cfg),
         run_batch=functools.partial(run_batch, cfg), config=cfg, runs=cfg.runs,

@@ -18,7 +18,7 @@ Each row is a config of the one training path on paper B's plant
 from __future__ import annotations
 
 import functools
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -52,13 +52,14 @@ GOOD_REL, FAIL_REL, GOOD_LAG_DEG = 0.3, 0.6, 20.0
 #: new method β = 0.01 (eq. 6), 7 cycles per epoch (washout + 5 learning + evaluation),
 #: K 1 -> 0 linearly; tests: "one additional epoch with only two cycles, the
 #: initialization cycle and the evaluation cycle" (K = 0).
-MODEL = TrainConfig(
-    dof=4, signals="joint", leading_arm="right", inputs="sensed", reservoir=100,
-    method="new", beta=0.01, cycles=5, test_washout_cycles=1, sensor_noise=0.01,
-    epochs=50,  # not stated; 10 (papers D/E) leaves 1:2 unlearned at β = 0.01
-    spectral_radius=0.5,  # not stated; SPEC §5 default
-    noise=0.2,  # not stated; reservoir noise of the new method (papers D/E)
-)
+MODEL = TrainConfig().override({
+    "plant.dof": 4, "plant.signals": "joint", "plant.leading_arm": "right",
+    "plant.sensor_noise": 0.01, "inputs": "sensed", "esn.n_reservoir": 100,
+    "rule": "new", "rule.beta": 0.01, "rule.cycles": 5, "test.washout_cycles": 1,
+    "rule.epochs": 50,  # not stated; 10 (papers D/E) leaves 1:2 unlearned at β = 0.01
+    "esn.spectral_radius": 0.5,  # not stated; SPEC §5 default
+    "esn.noise_level": 0.2,  # not stated; reservoir noise of the new method (papers D/E)
+})
 
 
 @dataclass(frozen=True)
@@ -76,7 +77,7 @@ def _tag(speed: float) -> str:
 
 
 def train_config(cfg: Config, row: Row) -> TrainConfig:
-    return replace(cfg.model, trajectory=PREFIX + row.row_id)
+    return cfg.model.override({"movement.trajectory": PREFIX + row.row_id})
 
 
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
@@ -94,9 +95,9 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     tcfg = train_config(cfg, row)
     run = build_run(tcfg, seeds)
     result = train_run(run).fel
-    lead_side = tcfg.leading_arm
+    lead_side, dof, movement = tcfg.plant.leading_arm, tcfg.plant.dof, tcfg.movement.trajectory
     lag_side = "left" if lead_side == "right" else "right"
-    lead, lag = arm_dofs(tcfg.dof, lead_side)[0], arm_dofs(tcfg.dof, lag_side)[0]
+    lead, lag = arm_dofs(dof, lead_side)[0], arm_dofs(dof, lag_side)[0]
     outs: list = [{"train_position_nrmse": float(result.position_nrmse[r, -1]),
                    "train_curve_position_nrmse": [float(v) for v in result.position_nrmse[r]],
                    "max_speed_rad_s": [float(v) for v in run.max_speed_rad_s], "traces": {}}
@@ -105,8 +106,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
               for r in range(len(seeds)) if result.failed[r]}
     period_s, pattern = Movement().period_s, PATTERNS[row.row_id]
     for speed in SPEEDS:
-        trajectory = get(f"{tcfg.trajectory}@{speed:g}" if speed != 1.0 else tcfg.trajectory,
-                         tcfg.dof)
+        trajectory = get(f"{movement}@{speed:g}" if speed != 1.0 else movement, dof)
         tests = evaluate(run, trajectory, plant_seeds=[s + 1 for s in run.plant_seeds])
         desired = trajectory.angles[:, lag]
         period_steps = period_s / (speed * trajectory.dt) / pattern.frequency_ratio
@@ -144,7 +144,8 @@ def cost(cfg: Config, row: Row) -> float:
     """One run's relative cost: its pattern's length (2:3 and 3:5 hold more periods)."""
     from skinny_mj.trajectories import get
 
-    return relative_cost(train_config(cfg, row)) * len(get(PREFIX + row.row_id, cfg.model.dof))
+    return relative_cost(train_config(cfg, row)) * len(get(PREFIX + row.row_id,
+                                                          cfg.model.plant.dof))
 
 
 def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
@@ -158,9 +159,11 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
 
         raise SkinnyInputError("paper-b's movements are its coordination patterns (one per "
                                "row, e.g. bimanual-phase90); --movement/--asf do not apply")
-    changes = {k: v for k, v in (("dof", dof), ("signals", signals)) if v is not None}
-    model = replace(MODEL, **changes)
-    cfg = Config(model=replace(model, epochs=2), runs=1) if quick else Config(model=model)
+    changes = {k: v for k, v in (("plant.dof", dof), ("plant.signals", signals))
+               if v is not None}
+    model = MODEL.override(changes)
+    cfg = Config(model=model.override({"rule.epochs": 2}), runs=1) if quick \
+        else Config(model=model)
     columns = [f"{m}_{_tag(s)}" for m in ("relative_error", "phase_lag_deg")
                for s in SPEEDS] + ["position_nrmse_x1", "motor_nrmse_x1"]
     return Experiment(name=NAME, rows=rows(), run_one=functools.partial(run_one, cfg),

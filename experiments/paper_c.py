@@ -112,14 +112,15 @@ def train_config(cfg: Config, movement: str):
     from skinny_mj.config import TrainConfig
 
     asf = cfg.asf if str(movement).lower().split("@")[0].endswith(".amc") else None
-    return TrainConfig(
-        dof=cfg.dof, signals=cfg.signals, trajectory=str(movement), asf=asf,
-        method="original" if cfg.beta >= 1.0 else "new", beta=cfg.beta,
-        cycles=cfg.learning_cycles, epochs=cfg.epochs,
-        gain_schedule="multiplicative", gain_factor=cfg.gain_factor,
-        reservoir=cfg.reservoir, spectral_radius=cfg.spectral_radius, noise=cfg.noise,
-        sensor_noise=cfg.sensor_noise, max_speed_from=cfg.max_speed_from,
-        test_washout_cycles=1)
+    rule = {"rule": "original"} if cfg.beta >= 1.0 else {"rule": "new", "rule.beta": cfg.beta}
+    return TrainConfig().override({
+        "plant.dof": cfg.dof, "plant.signals": cfg.signals,
+        "plant.sensor_noise": cfg.sensor_noise, "movement.trajectory": str(movement),
+        "movement.asf": asf, "movement.max_speed_from": cfg.max_speed_from, **rule,
+        "rule.cycles": cfg.learning_cycles, "rule.epochs": cfg.epochs,
+        "rule.gain_schedule": "multiplicative", "rule.gain_factor": cfg.gain_factor,
+        "esn.n_reservoir": cfg.reservoir, "esn.spectral_radius": cfg.spectral_radius,
+        "esn.noise_level": cfg.noise, "test.washout_cycles": 1})
 
 
 def train_configs(cfg: Config, row: Row) -> dict:

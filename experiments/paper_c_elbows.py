@@ -93,7 +93,7 @@ def main(argv: list[str] | None = None) -> None:
     a = p.parse_args(argv)
     tc = paper_c.train_config(paper_c.Config(epochs=a.epochs), "y-pure")
     if a.quiet:
-        tc = dataclasses.replace(tc, noise=0.0, sensor_noise=0.0)
+        tc = tc.override({"esn.noise_level": 0.0, "plant.sensor_noise": 0.0})
     run = build_run(tc, a.seeds)
     train_run(run)
     print(json.dumps(analyse(run)))

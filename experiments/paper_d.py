@@ -103,17 +103,19 @@ def train_configs(cfg: Config, row: Row) -> dict[str, TrainConfig]:
     """The two runs of one experiment: ``{"tt": ..., "fel": ...}``."""
     p = row.params
     new = p["method"] == "new"
-    common = dict(
-        dof=cfg.dof, signals=cfg.signals, trajectory=cfg.trajectory, asf=cfg.asf,
-        reps=p["reps"], epochs=cfg.gains, reservoir=cfg.reservoir,
-        spectral_radius=cfg.spectral_radius, noise=cfg.noise if p["noise"] else 0.0,
-        sensor_noise=cfg.sensor_noise,
-    )
+    common = TrainConfig().override({
+        "plant.dof": cfg.dof, "plant.signals": cfg.signals,
+        "plant.sensor_noise": cfg.sensor_noise, "movement.trajectory": cfg.trajectory,
+        "movement.asf": cfg.asf, "movement.reps": p["reps"], "esn.n_reservoir": cfg.reservoir,
+        "esn.spectral_radius": cfg.spectral_radius,
+        "esn.noise_level": cfg.noise if p["noise"] else 0.0,
+    })
+    fel = {"rule": "new", "rule.beta": cfg.beta, "rule.cycles": cfg.fel_cycles} if new \
+        else {"rule": "original", "rule.cycles": 1}
     return {
-        "tt": TrainConfig(method="true-target", beta=cfg.beta if new else 1.0,
-                          tt_cycles=cfg.tt_cycles, **common),
-        "fel": TrainConfig(method=p["method"], beta=cfg.beta if new else 1.0,
-                           cycles=cfg.fel_cycles if new else 1, **common),
+        "tt": common.override({"rule": "true-target", "rule.beta": cfg.beta if new else 1.0,
+                               "rule.cycles": cfg.tt_cycles}),
+        "fel": common.override({**fel, "rule.epochs": cfg.gains}),
     }
 
 

@@ -114,20 +114,27 @@ def train_config(cfg: Config, row: Row) -> TrainConfig:
     if p.get("kind") == "convergence":
         return convergence_config(cfg, row)
     default_noise = cfg.noise_new if p["method"] == "new" else cfg.noise_original
-    return TrainConfig(
-        dof=cfg.dof, signals=cfg.signals, trajectory=cfg.trajectory, asf=cfg.asf,
-        reps=p["reps"], method=p["method"], beta=p["beta"], cycles=p["cycles"],
-        epochs=cfg.epochs, reservoir=p.get("reservoir", cfg.reservoir),
-        spectral_radius=cfg.spectral_radius, noise=p.get("noise", default_noise),
-        sensor_noise=cfg.sensor_noise,
-    )
+    rule = {"rule": p["method"], "rule.cycles": p["cycles"], "rule.epochs": cfg.epochs}
+    if p["method"] == "new":
+        rule["rule.beta"] = p["beta"]
+    return TrainConfig().override({
+        "plant.dof": cfg.dof, "plant.signals": cfg.signals,
+        "plant.sensor_noise": cfg.sensor_noise, "movement.trajectory": cfg.trajectory,
+        "movement.asf": cfg.asf, "movement.reps": p["reps"], **rule,
+        "esn.n_reservoir": p.get("reservoir", cfg.reservoir),
+        "esn.spectral_radius": cfg.spectral_radius,
+        "esn.noise_level": p.get("noise", default_noise),
+    })
 
 
 def convergence_config(cfg: Config, row: Row) -> TrainConfig:
     """Fig. 3's network: the Table's, without reservoir noise."""
-    return TrainConfig(dof=cfg.dof, signals=cfg.signals, trajectory=cfg.trajectory,
-                       asf=cfg.asf, method="new", beta=float(row.params["beta"]),
-                       reservoir=cfg.reservoir, spectral_radius=cfg.spectral_radius, noise=0.0)
+    return TrainConfig().override({
+        "plant.dof": cfg.dof, "plant.signals": cfg.signals,
+        "movement.trajectory": cfg.trajectory, "movement.asf": cfg.asf,
+        "rule": "new", "rule.beta": float(row.params["beta"]),
+        "esn.n_reservoir": cfg.reservoir, "esn.spectral_radius": cfg.spectral_radius,
+        "esn.noise_level": 0.0})
 
 
 def run_convergence(cfg: Config, row: Row, seeds: list[int]) -> list[dict]:

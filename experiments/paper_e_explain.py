@@ -177,7 +177,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     keep = {run_seed(cfg.base_seed, 0, k) for k in range(SERIES_RUNS)}  # the kept signals
     run = build_run(train_config(cfg, row), shared)
     diag = EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory),
-                            len(shared), run.cfg.epochs, run.cfg.learning_cycles)
+                            len(shared), run.cfg.rule.epochs, run.cfg.learning_cycles)
     trained = train_run(run, observe=diag).fel
     tests = evaluate(run)
     out = []

@@ -309,7 +309,7 @@ def fig10(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | N
         return None
     e5 = min(5, cfg.epochs)
     tc = train_config(cfg, Row("1", {"exp": "1"}))
-    desired = load_trajectory(tc)[0].position_signals(tc.signals)
+    desired = load_trajectory(tc)[0].position_signals(tc.plant.signals)
     fig, top, (curve, box) = _figure(3)
     for ax, exp, tag in zip(top, EXPS, ("(a)", "(b)", "(c)"), strict=True):
         ex = _example(by_row[exp])

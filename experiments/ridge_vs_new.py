@@ -8,7 +8,7 @@ modern dance md_02, seconds 3 to 9.26, the length of one YMCA):
   built by :func:`experiments.paper_e.train_config`): original method with 1, 5, 10
   repetitions, new method with β = 0.3, 0.1, 0.05;
 - ``<mv>-ridge1``, ``-ridge5``, ``-ridge10``: rows 1–3 (original method, reservoir noise
-  0.03) with ``readout="ridge"`` and ``ridge_select=True``: each fit's lambda from the
+  0.03) with ``esn.readout=ridge`` and ``rule.fit=ridge-select``: each fit's lambda from the
   grid 1e-8 ... 10 (:data:`controllers.ridge_select.RIDGE_GRID`) that best predicts the
   targets of the cycle before it (:class:`controllers.ridge_select.RidgeSelector`);
 - ``<mv>-ridge-new``: row 5 (new method, β = 0.1) with the same ridge selection.
@@ -21,7 +21,6 @@ both), ``ridge`` (the ridge rows of both). ``--movement`` replaces the YMCA.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import json
 from dataclasses import dataclass
@@ -80,7 +79,7 @@ def train_config(cfg: Config, row: Row) -> TrainConfig:
     base = paper_e.train_config(e_cfg, Row(p["paper_row"], {
         "method": method, "beta": beta, "cycles": cycles, "reps": reps}))
     if p["ridge"]:
-        base = dataclasses.replace(base, readout="ridge", ridge_select=True)
+        base = base.override({"esn.readout": "ridge", "rule.fit": "ridge-select"})
     return base
 
 

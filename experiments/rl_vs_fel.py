@@ -95,8 +95,9 @@ def train_config(cfg: Config, row: Row) -> TrainConfig:
     """The row's ESN + FEL training; PPO and SAC take its plant and movement."""
     p = row.params
     trajectory, asf = (cfg.ymca, cfg.asf) if p["movement"] == "ymca" else (cfg.clip, None)
-    return TrainConfig(dof=cfg.dof, signals=cfg.signals, actuation=p["actuation"],
-                       trajectory=trajectory, asf=asf, epochs=cfg.epochs)
+    return TrainConfig().override({
+        "plant.dof": cfg.dof, "plant.signals": cfg.signals, "actuation": p["actuation"],
+        "movement.trajectory": trajectory, "movement.asf": asf, "rule.epochs": cfg.epochs})
 
 
 #: stable-baselines3's defaults: PPO's rollout steps (``quick``: 128), SAC's replay buffer,

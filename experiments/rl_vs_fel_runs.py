@@ -113,8 +113,8 @@ def make_env(tc: TrainConfig, seed: int, velocity_inputs: bool):
     from skinny_mj.gym.env import SkinnyEnv
 
     trajectory, _ = load_trajectory(tc)
-    env = SkinnyEnv(dof=tc.dof, signals=tc.signals, trajectory=trajectory,
-                    actuation=tc.actuation, sensor_noise=tc.sensor_noise, seed=seed,
+    env = SkinnyEnv(dof=tc.plant.dof, signals=tc.plant.signals, trajectory=trajectory,
+                    actuation=tc.actuation.kind, sensor_noise=tc.plant.sensor_noise, seed=seed,
                     max_speed_rad_s=full_scale_speeds(tc, trajectory))
     return tracking_wrapper(env, velocity_inputs)
 
@@ -213,7 +213,7 @@ def rl_curve(name: str, tc: TrainConfig, seed: int, budget: int, evals: int,
     from stable_baselines3.common.callbacks import BaseCallback
 
     torch.set_num_threads(1)
-    velocity_inputs = tc.actuation == "torque"
+    velocity_inputs = tc.torque is not None
     train_env = make_env(tc, seed, velocity_inputs)
     test_env = make_env(tc, seed, velocity_inputs)
     test_seed = run_streams(seed).plant_seed

@@ -14,7 +14,6 @@ of commands clipped at full scale::
 
 from __future__ import annotations
 
-import dataclasses
 import json
 
 import numpy as np
@@ -32,8 +31,8 @@ def target_noise(dof: int, signals: str, sensor_noise: float, seed: int = 0) -> 
     from skinny_mj.training import build_run
 
     cfg = paper_c.Config(dof=dof, signals=signals, reservoir=50)
-    tc = dataclasses.replace(paper_c.train_config(cfg, "ymca"), method="original", beta=1.0,
-                             sensor_noise=sensor_noise)
+    tc = paper_c.train_config(cfg, "ymca").override({"rule": "original",
+                                                     "plant.sensor_noise": sensor_noise})
     run = build_run(tc, [seed])
     run.esn.W_out[:] = 0.0  # the feedback controller alone
     ro = rollout(run.esn, run.plant, run.desired, 1.0, noise=False)

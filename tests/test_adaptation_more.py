@@ -94,8 +94,9 @@ def test_defaults_pass_through_bit_for_bit_and_the_old_rows_keep_their_seeds():
     cfg = adaptation.Config()
     assert (cfg.gain, cfg.pre, cfg.change, cfg.post, cfg.actuator_gain, cfg.offset,
             cfg.epochs, cfg.runs) == (0.5, 2, 8, 4, 0.7, 0.1, 10, 10)
-    assert adaptation.train_config(cfg, "gain") == adaptation.TrainConfig(epochs=10)
-    assert adaptation.train_config(cfg, "payload").actuation == "torque"
+    assert adaptation.train_config(cfg, "gain") == \
+        adaptation.TrainConfig().override({"rule.epochs": 10})
+    assert adaptation.train_config(cfg, "payload").actuation.kind == "torque"
     assert 0 < adaptation.forearm_floor(cfg) < 0.1
     # the batch model without an edit is the one it always was
     from skinny_mj.model import load_batch_model

@@ -101,10 +101,14 @@ def test_ridge_selector_picks_a_large_lambda_for_pure_noise_targets():
 
 
 def test_ridge_select_config_is_validated():
-    assert not TrainConfig().ridge_select
-    TrainConfig(readout="ridge", ridge_select=True, method="original", beta=1.0)
+    assert TrainConfig().rule.fit == "cycle"
+    TrainConfig().override({"esn.readout": "ridge", "rule.fit": "ridge-select",
+                            "rule": "original"})
     with pytest.raises(SkinnyInputError):
-        TrainConfig(ridge_select=True)  # pinv readout
+        TrainConfig().override({"rule.fit": "ridge-select"})  # pinv readout
+    with pytest.raises(SkinnyInputError):  # the torque body
+        TrainConfig().override({"esn.readout": "ridge", "actuation": "torque",
+                                "rule.fit": "ridge-select"})
 
 
 def _toy(n_runs=2):

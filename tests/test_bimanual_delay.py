@@ -68,8 +68,8 @@ def test_the_lagging_arm_gets_delayed_state_its_prediction_and_what_the_leader_s
 def test_each_arms_forward_model_learns_its_own_next_position():
     from skinny_mj.training import build_run, train_run
 
-    cfg = bd.train_config(replace(bd.quick_config(), model=replace(bd.MODEL, epochs=1,
-                                                                    cycles=1, speed=2.0)),
+    model = bd.MODEL.override({"rule.epochs": 1, "rule.cycles": 1, "movement.speed": 2.0})
+    cfg = bd.train_config(replace(bd.quick_config(), model=model),
                           Row("x", {"pattern": "phase0", "architecture": "share-predictions",
                                     "delay": 4}))
     run = build_run(cfg, [7])
@@ -82,21 +82,24 @@ def test_each_arms_forward_model_learns_its_own_next_position():
 
 
 def test_config_needs_a_leading_arm_a_parallel_forward_model_and_joint_signals():
-    assert TrainConfig().forward_sharing is None
-    ok = dict(leading_arm="right", signals="joint", forward="parallel", inputs="sensed")
-    TrainConfig(**ok, forward_sharing="commands")
-    for bad in ({"leading_arm": None}, {"forward": "serial"}, {"forward": None},
-                {"signals": "cartesian"}, {"forward_sharing": "positions"}):
+    assert TrainConfig().forward.kind == "none"
+    assert TrainConfig().override({"forward": "parallel"}).forward.sharing is None
+    ok = {"plant.leading_arm": "right", "plant.signals": "joint", "forward": "parallel",
+          "inputs": "sensed"}
+    TrainConfig().override({**ok, "forward.sharing": "commands"})
+    for bad in ({"plant.leading_arm": None}, {"forward": "serial"}, {"forward": "none"},
+                {"plant.signals": "cartesian"}, {"forward.sharing": "positions"}):
         with pytest.raises(SkinnyInputError):
-            TrainConfig(**{**ok, "forward_sharing": "commands", **bad})
+            TrainConfig().override({**ok, "forward.sharing": "commands", **bad})
 
 
 def test_lockstep_batch_equals_each_seed_alone():
     from skinny_mj.training import build_run, evaluate, train_run
 
-    cfg = replace(bd.MODEL, trajectory="bimanual-phase180", epochs=1, cycles=1, delay=3,
-                  forward="parallel", forward_sharing="predictions", speed=3.0,
-                  test_washout_cycles=0)  # short cycles (100 steps): a fast test
+    cfg = bd.MODEL.override({  # short cycles (100 steps): a fast test
+        "movement.trajectory": "bimanual-phase180", "rule.epochs": 1, "rule.cycles": 1,
+        "plant.delay": 3, "forward": "parallel", "forward.sharing": "predictions",
+        "movement.speed": 3.0, "test.washout_cycles": 0})
 
     def measured(seeds):
         run = build_run(cfg, seeds)
@@ -114,12 +117,11 @@ def test_rows_cover_patterns_architectures_and_delays():
     assert len(exp.rows) == len(bd.PATTERNS) * len(bd.ARCHITECTURES) * len(bd.DELAYS)
     row = next(r for r in exp.rows if r.row_id == "phase180-share-commands-d6")
     cfg = bd.train_config(exp.config, row)
-    assert (cfg.delay, cfg.forward, cfg.forward_sharing, cfg.trajectory) == \
-        (6, "parallel", "commands", "bimanual-phase180")
+    assert (cfg.plant.delay, cfg.forward.kind, cfg.forward.sharing,
+            cfg.movement.trajectory) == (6, "parallel", "commands", "bimanual-phase180")
     inverse = bd.train_config(exp.config, Row("i", {"pattern": "phase0",
                                                     "architecture": "inverse", "delay": 2}))
-    assert (inverse.forward, inverse.forward_sharing, inverse.leading_arm) == (None, None,
-                                                                              "right")
+    assert (inverse.forward.kind, inverse.plant.leading_arm) == ("none", "right")
     with pytest.raises(SkinnyInputError):
         bd.build(movement="ymca")
 

@@ -10,29 +10,33 @@ import pytest
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training import TrainConfig, build_run, train_batch
 
+#: the torque body's limit-scaled PD alone (nothing learned, K = 1)
+TORQUE_PD = TrainConfig().override({"actuation": "torque", "rule": "none", "test.gain": 1.0})
+
 
 @pytest.mark.parametrize("changes", [
-    {"gravity_feedforward": True},  # torque settings on the velocity servo
-    {"test_mass_scale": 1.2},
-    {"actuation": "torque", "feedback": "computed-torque"},  # CT is a controller alone
-    {"actuation": "torque", "method": "none"},  # the controller alone needs K > 0
+    {"actuation.gravity_feedforward": True},  # torque settings on the velocity servo
+    {"actuation.test_mass_scale": 1.2},
+    {"actuation": "torque", "actuation.feedback": "computed-torque"},  # a controller alone
+    {"actuation": "torque", "rule": "none"},  # the controller alone needs K > 0
     {"actuation": "torque", "forward": "parallel"},
-    {"actuation": "torque", "method": "true-target", "gravity_feedforward": True},
+    {"actuation": "torque", "rule": "true-target", "actuation.gravity_feedforward": True},
 ])
 def test_torque_settings_are_validated(changes):
     with pytest.raises(SkinnyInputError):
-        TrainConfig(**changes)
+        TrainConfig().override(changes)
 
 
 def test_velocity_runs_take_no_torque_inputs():
-    run = build_run(TrainConfig(epochs=1), [0])
+    run = build_run(TrainConfig().override({"rule.epochs": 1}), [0])
     assert run.esn.cfg.n_inputs == 2 * run.desired.shape[1]
-    torque = build_run(TrainConfig(actuation="torque", epochs=1), [0])
+    torque = build_run(TrainConfig().override({"actuation": "torque", "rule.epochs": 1}), [0])
     assert torque.esn.cfg.n_inputs == 2 * torque.desired.shape[1] + 2 * 4
 
 
 def test_torque_lockstep_is_each_run_alone():
-    cfg = TrainConfig(actuation="torque", gravity_feedforward=True, epochs=1, cycles=1)
+    cfg = TrainConfig().override({"actuation": "torque", "actuation.gravity_feedforward": True,
+                                  "rule.epochs": 1, "rule.cycles": 1})
     both = train_batch(cfg, [3, 4])
     alone = train_batch(cfg, [4])[0]
     np.testing.assert_array_equal(both[1].test.rollout.commands, alone.test.rollout.commands)
@@ -40,7 +44,7 @@ def test_torque_lockstep_is_each_run_alone():
 
 
 def test_controller_alone_stays_within_limits_without_warnings():
-    (out,) = train_batch(TrainConfig(actuation="torque", method="none", test_gain=1.0), [0])
+    (out,) = train_batch(TORQUE_PD, [0])
     tq = out.metrics["test"]["torque"]
     assert tq["within_limits"] and tq["warnings"] == 0 and tq["mean_abs_torque_nm"] > 0
     series = out.test.torque["series"]
@@ -70,7 +74,8 @@ def test_perturbed_test_plant_changes_every_copy():
 
 
 def test_true_target_learns_torques_with_velocity_inputs():
-    (out,) = train_batch(TrainConfig(actuation="torque", method="true-target", beta=1.0), [0])
+    (out,) = train_batch(TrainConfig().override({"actuation": "torque", "rule": "true-target",
+                                                  "rule.beta": 1.0}), [0])
     assert not out.failed
     assert out.metrics["train"]["motor_nrmse"] < 0.5  # teacher-forced fit of the torques
 
@@ -86,7 +91,7 @@ def test_dynamic_experiment_rows():
                                         and not any(p in i for p in dynamic.PERTURBATIONS)}
     cfg = dynamic.train_config(exp.config, next(r for r in exp.rows
                                                  if r.row_id == "2d-ymca-mass-20-pd"))
-    assert cfg.actuation == "torque" and cfg.test_mass_scale == 0.8 and cfg.method == "none"
+    assert cfg.torque.test_mass_scale == 0.8 and (cfg.method, cfg.test.gain) == ("none", 1.0)
 
 
 def test_a_diverged_simulation_fails_the_run_and_splits_a_batch(monkeypatch):
@@ -97,7 +102,7 @@ def test_a_diverged_simulation_fails_the_run_and_splits_a_batch(monkeypatch):
     from skinny_mj.training import PhysicsBatchError
 
     monkeypatch.setattr(BatchPlant, "warning_count", lambda self: 3)
-    cfg = TrainConfig(actuation="torque", method="none", test_gain=1.0)
+    cfg = TORQUE_PD
     (out,) = train_batch(cfg, [0])
     assert out.failed and "physics diverged" in out.metrics["fail_reason"]
     assert out.metrics["test"]["position_nrmse"] is None

@@ -28,13 +28,15 @@ def _toy(noise=0.2):
 
 def test_protocol_fields_default_to_todays_behaviour_and_validate():
     cfg = TrainConfig()
-    assert (cfg.test_noise, cfg.u_error_gain, cfg.tt_input_noise, cfg.retarget) == \
-        (False, 1.0, 0.0, "angles")
-    assert {"test_noise", "u_error_gain", "tt_input_noise", "retarget"} <= set(cfg.to_dict())
-    for bad in ({"u_error_gain": 0.0}, {"tt_input_noise": -1.0}, {"retarget": "bones"},
-                {"test_noise": 1}):
+    tt = cfg.override({"rule": "true-target"})
+    assert (cfg.test.noise, cfg.rule.u_error_gain, tt.rule.input_noise,
+            cfg.movement.retarget) == (False, 1.0, 0.0, "angles")
+    assert {"test.noise", "rule.u_error_gain", "movement.retarget"} <= set(cfg.to_dict())
+    assert "rule.input_noise" in tt.to_dict()
+    for bad in ({"rule.u_error_gain": 0.0}, {"rule": "true-target", "rule.input_noise": -1.0},
+                {"movement.retarget": "bones"}, {"test.noise": 1}):
         with pytest.raises(SkinnyInputError):
-            TrainConfig(**bad)
+            cfg.override(bad)
 
 
 def test_u_error_gain_scales_u_error_and_training_follows():
@@ -129,7 +131,8 @@ def test_recorded_ymca_is_seeded_never_still_and_not_always_reachable_in_2d():
 def test_build_run_picks_up_explicit_signals():
     from skinny_mj.training import build_run
 
-    run = build_run(TrainConfig(trajectory="ymca-recorded", reservoir=20, epochs=1), [0])
+    run = build_run(TrainConfig().override({"movement.trajectory": "ymca-recorded",
+                                            "esn.n_reservoir": 20, "rule.epochs": 1}), [0])
     np.testing.assert_array_equal(run.desired, ymca_recorded(4).position_signals("cartesian"))
     assert not np.allclose(run.desired, body.cartesian_signals(run.trajectory.angles, 4))
 

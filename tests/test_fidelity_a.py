@@ -13,8 +13,9 @@ from skinny_mj.config import TrainConfig
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.experiment import Row
 
-TINY = fidelity_a.Config(model=replace(paper_a.MODEL, reservoir=30, forward_reservoir=20,
-                                       cycles=1, trajectory="y"), runs=2, checkpoints=(1, 2))
+TINY = fidelity_a.Config(model=paper_a.MODEL.override({
+    "esn.n_reservoir": 30, "forward.reservoir": 20, "rule.cycles": 1,
+    "movement.trajectory": "y"}), runs=2, checkpoints=(1, 2))
 SEEDS = [11, 12]
 
 
@@ -42,7 +43,7 @@ def test_a_short_run_equals_the_long_runs_checkpoint(arch, forward_input):
         assert set(_numbers(g, "_e2")) == {k.replace("_e1", "_e2") for k in first}
     if forward_input == "chained":
         return
-    pa_cfg = paper_a.Config(model=replace(TINY.model, epochs=2))
+    pa_cfg = paper_a.Config(model=TINY.model.override({"rule.epochs": 2}))
     theirs = paper_a.run_batch(pa_cfg, Row(f"{arch}-d3", {"architecture": arch, "delay": 3}),
                                SEEDS)
     for o, t in zip(long, theirs, strict=True):
@@ -57,9 +58,9 @@ def test_a_short_run_equals_the_long_runs_checkpoint(arch, forward_input):
 def test_chained_forward_model_is_fed_its_own_prediction():
     from skinny_mj.training import build_run, train_run
 
-    cfg = replace(TINY.model, epochs=1, delay=3, forward="parallel")
+    cfg = TINY.model.override({"rule.epochs": 1, "plant.delay": 3, "forward": "parallel"})
     for forward_input in ("sensed", "chained"):
-        run = build_run(replace(cfg, forward_input=forward_input), SEEDS[:1])
+        run = build_run(cfg.override({"forward.input": forward_input}), SEEDS[:1])
         ro = train_run(run).fel.last_rollout
         n_res, n_sig = run.forward.esn.cfg.n_reservoir, run.desired.shape[1]
         fed = ro.fm_states[:, :, n_res:n_res + n_sig]  # the position part of its input
@@ -73,15 +74,16 @@ def test_chained_without_delay_is_the_sensed_forward_model():
     a = fidelity_a.run_batch(TINY, _row("hybrid", 0, 1, "chained"), SEEDS[:1])
     b = fidelity_a.run_batch(TINY, _row("hybrid", 0, 1, "sensed"), SEEDS[:1])
     assert a == b
-    with pytest.raises(SkinnyInputError, match="forward_input"):
-        TrainConfig(forward_input="chained")  # no forward model to chain
+    with pytest.raises(SkinnyInputError, match="forward.input"):
+        TrainConfig().override({"forward.input": "chained"})  # no forward model to chain
 
 
 @pytest.mark.slow  # ~6 s CPU: the report on a tiny sweep
 def test_quick_sweep_writes_tables_and_figures(tmp_path):
     from skinny_mj.experiment import run_sweep
 
-    tiny = replace(TINY, model=replace(TINY.model, reservoir=10, forward_reservoir=10), runs=2,
+    tiny = replace(TINY, model=TINY.model.override({"esn.n_reservoir": 10,
+                                                    "forward.reservoir": 10}), runs=2,
                    plan=tuple((a, "sensed", 2, 1) for a in paper_a.ARCHITECTURES),
                    checkpoints=(1,))
     exp = fidelity_a.build(quick=True)

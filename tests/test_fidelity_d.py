@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from dataclasses import replace
 
 import pytest
 
@@ -37,7 +36,8 @@ def test_rows_are_paper_d_true_target_configs_plus_the_grid():
         method, noise, reps = paper_d.EXPERIMENTS[p["exp"]]
         want = paper_d.train_configs(paper_d.Config(), Row(p["exp"], {
             "method": method, "noise": noise, "reps": reps}))["tt"]
-        assert fidelity_d.train_config(cfg, row) == replace(want, trajectory="ymca-smooth")
+        assert fidelity_d.train_config(cfg, row) == \
+            want.override({"movement.trajectory": "ymca-smooth"})
         assert row.paper["tt_position_test"] == paper_d.PAPER_TABLE_1[p["exp"]][2][0]
 
 

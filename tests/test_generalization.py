@@ -4,7 +4,6 @@ experiment and the ``general`` preset."""
 from __future__ import annotations
 
 import json
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -74,9 +73,10 @@ def test_full_scale_factor_default_is_todays_scale():
     traj = get("ymca", 4)
     base = full_scale_speeds(cfg, traj)
     assert np.array_equal(base, np.maximum(2 * traj.max_speed_rad_s(), 0.5))
-    assert np.allclose(full_scale_speeds(replace(cfg, full_scale_factor=4.0), traj), 2 * base)
+    assert np.allclose(full_scale_speeds(cfg.override({"movement.full_scale_factor": 4.0}),
+                                         traj), 2 * base)
     with pytest.raises(SkinnyInputError):
-        TrainConfig(full_scale_factor=0.0)
+        cfg.override({"movement.full_scale_factor": 0.0})
 
 
 # -- metrics -----------------------------------------------------------------------------
@@ -145,17 +145,16 @@ def test_clipped_ideal_is_exact_within_full_scale_and_pays_beyond():
 
 
 def test_preset_general_sets_its_fields_and_flags_given_override_them():
-    from skinny_mj.cli import build_parser, given_options
+    from skinny_mj.cli import build_parser
     from skinny_mj.config_files import train_config
     from skinny_mj.presets import preset_fields
 
     argv = ["train", "--preset", "general", "--epochs", "2", "--seed", "5"]
-    args = build_parser().parse_args(argv)
-    args.given = given_options(argv)
-    cfg, seed = train_config(args)
+    cfg, seed = train_config(build_parser().parse_args(argv))
     want = preset_fields("general")
-    assert seed == 5 and cfg.epochs == 2
-    assert {k: getattr(cfg, k) for k in want} == want  # untouched flags keep the preset's
+    assert seed == 5 and cfg.rule.epochs == 2
+    got = cfg.to_dict()
+    assert {k: got[k] for k in want} == want  # untouched flags keep the preset's
     with pytest.raises(SkinnyInputError):
         preset_fields("nope")
 
@@ -177,10 +176,16 @@ def test_train_preset_general_records_its_training_and_tests_on_a_clip(tmp_path)
     assert training["pieces"] == ["babble:seed=1,duration=1", "y-pure@2"]
     assert training["steps_per_cycle"] == len(
         load_movement("set:babble:seed=1,duration=1+y-pure@2", 4)[0])
-    assert meta["config"]["test_washout_cycles"] == 1  # the preset's, overrides kept apart
+    assert meta["config"]["test.washout_cycles"] == 1  # the preset's, overrides kept apart
     test_out = tmp_path / "test"
     assert main(["test", "--model", str(out / "model.npz"), "--trajectory",
                  "md_03.amc@start=0,duration=1.5", "--out", str(test_out)]) == 0
     m = json.loads((test_out / "metrics.json").read_text())["imitation"]
     assert {"dtw_nrmse", "within5", "within5_per_joint", "lag_s", "saturated"} <= set(m)
-    assert main(["train", "--preset", "general", "--config", str(out / "metrics.json")]) == 2
+    from skinny_mj.cli import build_parser
+    from skinny_mj.config import TrainConfig
+    from skinny_mj.config_files import train_config
+
+    both, _ = train_config(build_parser().parse_args([  # the file's keys over the preset's
+        "train", "--preset", "general", "--config", str(out / "metrics.json")]))
+    assert both == TrainConfig.from_dict(meta["config"]) and both.esn.n_reservoir == 20

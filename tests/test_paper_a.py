@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
@@ -14,7 +12,8 @@ from controllers.metrics import nrmse
 from experiments import get, paper_a
 from skinny_mj.experiment import Experiment, Row, run_sweep
 
-TINY = paper_a.Config(model=replace(paper_a.quick_config().model, epochs=1, cycles=1))
+TINY = paper_a.Config(model=paper_a.quick_config().model.override({"rule.epochs": 1,
+                                                                    "rule.cycles": 1}))
 
 
 def _row(arch: str, delay: int) -> Row:
@@ -157,16 +156,18 @@ def test_quick_sweep_end_to_end(tmp_path):
 
 def test_full_config_matches_the_paper():
     cfg = paper_a.Config()
-    assert (cfg.model.reservoir, cfg.model.forward_reservoir) == (1000, 100)
-    assert (cfg.model.spectral_radius, cfg.model.noise, cfg.model.gain_value) == (0.1, 0.2, 0.65)
-    assert (cfg.model.dof, cfg.model.signals, cfg.model.gain_schedule) == (4, "joint", "fixed")
+    m = cfg.model
+    assert (m.esn.n_reservoir, m.forward.reservoir) == (1000, 100)
+    assert (m.esn.spectral_radius, m.esn.noise_level, m.rule.gain_value) == (0.1, 0.2, 0.65)
+    assert (m.plant.dof, m.plant.signals, m.rule.gain_schedule) == (4, "joint", "fixed")
+    assert (m.method, m.learning_cycles, m.rule.epochs) == ("original", 5, 10)
     assert cfg.delays == tuple(range(11)) and cfg.runs == 10
     assert len(paper_a.rows()) == 44
     tcfg = paper_a.train_config(cfg, _row("hybrid", 3))
-    assert (tcfg.delay, tcfg.forward) == (3, "hybrid")
-    assert paper_a.train_config(cfg, _row("inverse", 3)).forward is None
+    assert (tcfg.plant.delay, tcfg.forward.kind, tcfg.forward.reservoir) == (3, "hybrid", 100)
+    assert paper_a.train_config(cfg, _row("inverse", 3)).forward.kind == "none"
 
 
 def test_dof_8_builds_a_3d_sweep():
     exp = paper_a.build(quick=True, dof=8, signals="cartesian")
-    assert (exp.config.model.dof, exp.config.model.signals) == (8, "cartesian")
+    assert (exp.config.model.plant.dof, exp.config.model.plant.signals) == (8, "cartesian")

@@ -104,11 +104,9 @@ def test_esn_sees_only_the_current_state_of_both_arms():
 
 
 def test_feedback_tracks_and_fel_learns_in_phase():
-    from dataclasses import replace
-
     from skinny_mj.training import build_run, evaluate, train_run
 
-    cfg = replace(paper_b.MODEL, trajectory="bimanual-phase0", epochs=4)
+    cfg = paper_b.MODEL.override({"movement.trajectory": "bimanual-phase0", "rule.epochs": 4})
     untrained = evaluate(build_run(cfg, [3]))[0].position_nrmse
     run = build_run(cfg, [3])
     result = train_run(run).fel
@@ -118,7 +116,7 @@ def test_feedback_tracks_and_fel_learns_in_phase():
 
 
 def test_lockstep_batch_equals_each_seed_alone():
-    cfg = paper_b.Config(model=__import__("dataclasses").replace(paper_b.MODEL, epochs=2))
+    cfg = paper_b.Config(model=paper_b.MODEL.override({"rule.epochs": 2}))
     row = Row("freq1-2", {})
     batch = paper_b.run_batch(cfg, row, [4, 5])
     for seed, out in zip([4, 5], batch, strict=True):

@@ -30,7 +30,7 @@ def test_config_is_paper_c_section_3_5():
     assert gains[-1] < 1e-6  # "decreased to ~0"
     tcfg = paper_c.train_config(cfg, "y-pure")
     assert tcfg.method == "original" and tcfg.learning_cycles == 5 and tcfg.noise_level == 0.2
-    assert tcfg.test_washout_cycles == 1  # "the initialization cycle and the evaluation cycle"
+    assert tcfg.test.washout_cycles == 1  # "the initialization cycle and the evaluation cycle"
 
 
 def test_every_network_shares_ymcas_command_scale():

@@ -27,10 +27,10 @@ def test_rows_follow_the_papers_design():
         c = paper_d.train_configs(cfg, row)
         tt, fel = c["tt"], c["fel"]
         assert tt.method == "true-target" and fel.method == row.params["method"]
-        assert tt.noise_level == fel.noise_level and tt.reps == fel.reps
+        assert tt.noise_level == fel.noise_level and tt.movement.reps == fel.movement.reps
         assert set(row.paper) == {m for k in paper_d.COLUMNS for m in (k, f"{k}_var")}
-        got[row.row_id] = (fel.method, fel.noise_level, fel.reps, fel.learning_cycles,
-                           tt.beta, fel.beta)
+        got[row.row_id] = (fel.method, fel.noise_level, fel.movement.reps,
+                           fel.learning_cycles, tt.rule.beta, fel.rule.beta)
     assert got == {
         "1": ("original", 0.0, 1, 1, 1.0, 1.0),
         "2": ("original", 0.2, 1, 1, 1.0, 1.0),

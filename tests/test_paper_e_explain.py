@@ -70,7 +70,7 @@ def test_the_hook_changes_no_result_and_measures_the_blend(short):
     plain = train_batch(cfg, [seed])[0]
     run = build_run(cfg, [seed])
     diag = pee.EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory), 1,
-                                cfg.epochs, cfg.learning_cycles)
+                                cfg.rule.epochs, cfg.learning_cycles)
     trained = train_run(run, observe=diag).fel
     test = evaluate(run)[0]
     np.testing.assert_array_equal(run.esn.W_out, plain.esn.W_out)

@@ -41,21 +41,21 @@ def test_env_scorer_equals_the_training_paths_test(actuation):
     policy on the same test seed are the same number, bit for bit."""
     from skinny_mj import training
 
-    tc = TrainConfig(actuation=actuation, epochs=1)
+    tc = TrainConfig().override({"actuation": actuation, "rule.epochs": 1})
     run = training.build_run(tc, [7])
     env = runs.make_env(tc, 7, velocity_inputs=actuation == "torque")
-    zero = np.zeros(tc.dof)
+    zero = np.zeros(tc.plant.dof)
     ours = runs.score_policy(lambda obs: zero, env, run_streams(7).plant_seed)
     assert ours == runs._fel_test(run)
     assert 0.1 < ours < 1.0  # standing still is far from tracking
-    n_obs = 3 * 8 + (2 * tc.dof if actuation == "torque" else 0)
+    n_obs = 3 * 8 + (2 * tc.plant.dof if actuation == "torque" else 0)
     assert env.observation_space.shape == (n_obs,)
 
 
 def test_fel_curve_ends_at_the_test_of_train():
     from skinny_mj.training import train
 
-    tc = TrainConfig(epochs=2)
+    tc = TrainConfig().override({"rule.epochs": 2})
     points, facts = runs.fel_curve(tc, 3)
     assert [p["steps"] for p in points] == [0, facts["steps_per_epoch"],
                                            2 * facts["steps_per_epoch"]]
@@ -79,7 +79,8 @@ def test_curve_metrics_first_test_at_or_below_each_threshold():
 def test_a_diverged_simulation_ends_the_episode_with_the_worst_reward(monkeypatch):
     from dm_control.rl.control import PhysicsError
 
-    env = runs.make_env(TrainConfig(actuation="torque"), 0, velocity_inputs=True)
+    env = runs.make_env(TrainConfig().override({"actuation": "torque"}), 0,
+                        velocity_inputs=True)
     obs, _ = env.reset(seed=0)
     for _ in range(3):
         obs, *_ = env.step(np.zeros(4))

@@ -49,10 +49,10 @@ def test_rows_are_the_papers_own_on_both_bodies_the_3d_twin_on_the_2d_seeds():
             assert {k: v for k, v in row.params.items() if k not in ("paper", "dim", "row")} \
                 == dict(own[rid].params)
     papers = exp.config.papers
-    assert (papers["a-2d"]["model"]["dof"], papers["a-2d"]["model"]["signals"]) == (4, "joint")
-    assert (papers["a-3d"]["model"]["dof"], papers["a-3d"]["model"]["signals"]) == (8,
-                                                                                    "cartesian")
-    assert (papers["c-3d"]["dof"], papers["b-3d"]["model"]["dof"]) == (8, 8)
+    plant = {k: papers[k]["model"]["plant"] for k in ("a-2d", "a-3d", "b-3d")}
+    assert (plant["a-2d"]["dof"], plant["a-2d"]["signals"]) == (4, "joint")
+    assert (plant["a-3d"]["dof"], plant["a-3d"]["signals"]) == (8, "cartesian")
+    assert (papers["c-3d"]["dof"], plant["b-3d"]["dof"]) == (8, 8)
     assert set(exp.groups["3d"]) == {i for i in ids if "-3d-" in i}
     with pytest.raises(SkinnyInputError, match="do not apply"):
         three_d.build(movement="ymca")
@@ -65,7 +65,7 @@ def tiny_paper_a(monkeypatch):
 
     quick = paper_a.quick_config()
     monkeypatch.setattr(paper_a, "quick_config", lambda: replace(
-        quick, model=replace(quick.model, epochs=1, cycles=1)))
+        quick, model=quick.model.override({"rule.epochs": 1, "rule.cycles": 1})))
     three_d.paper_experiment.cache_clear()
     yield
     three_d.paper_experiment.cache_clear()
