@@ -55,8 +55,8 @@ def is_legacy(d: Mapping[str, Any]) -> bool:
 def from_legacy(d: Mapping[str, Any], base: Any) -> Any:
     """An earlier version's flat config ``d`` as today's ``base.override(...)`` (``base``:
     ``TrainConfig()``): each field moved to its dotted key; a setting the chosen types
-    do not have is dropped when it has its old default (the old code ignored it), else
-    refused as before."""
+    do not have is dropped, since the old code ignored it (e.g. ``epochs`` of a
+    true-target run, ``forward_reservoir`` without a forward model)."""
     unknown = sorted(set(d) - set(LEGACY_KEYS) - set(_LEGACY_CHOICES))
     if unknown:
         raise SkinnyInputError(f"unknown training config field(s) {unknown}")
@@ -81,29 +81,9 @@ def from_legacy(d: Mapping[str, Any], base: Any) -> Any:
     except SkinnyInputError as err:  # e.g. an unknown method
         raise SkinnyInputError(f"{err} (fields method, actuation, forward)") from None
     available = set(overrides.keys(probe))
-    old_defaults = _LEGACY_DEFAULTS
     for name, value in d.items():
         if name in _LEGACY_CHOICES or (name == "cycles" and method == "true-target"):
             continue  # (FEL's cycles, which the true target ignored; its own: tt_cycles)
-        key = LEGACY_KEYS[name]
-        if key in available:
-            changes[key] = value
-        elif value != old_defaults.get(name, value):
-            raise SkinnyInputError(f"field {name!r} ({key}) has no effect with "
-                                   f"{_choice_text(probe)}, got {value!r}")
+        if LEGACY_KEYS[name] in available:  # else the old code ignored it: dropped
+            changes[LEGACY_KEYS[name]] = value
     return base.override(changes)
-
-
-def _choice_text(cfg: Any) -> str:
-    return f"rule={cfg.rule.kind}, actuation={cfg.actuation.kind}, forward={cfg.forward.kind}"
-
-
-#: Earlier versions' defaults of the fields that moved onto a type.
-_LEGACY_DEFAULTS = {
-    "epochs": 10, "gain_schedule": "linear", "gain_factor": 0.9, "gain_value": 0.65,
-    "u_error_gain": 1.0, "readout_forgetting": 0.8, "cycles": None, "tt_input_noise": 0.0,
-    "feedback": "pd", "gravity_feedforward": False, "velocity_inputs": None,
-    "feedback_omega": None, "feedback_zeta": 1.0, "test_payload_kg": 0.0,
-    "test_mass_scale": 1.0, "forward_reservoir": 100, "forward_input": "sensed",
-    "forward_sharing": None,
-}

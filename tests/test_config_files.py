@@ -127,6 +127,19 @@ def test_test_runs_an_earlier_versions_model(tmp_path):
     assert got["position_nrmse"] == pytest.approx(trained["position_nrmse"], rel=1e-9)
 
 
+def test_an_earlier_versions_setting_it_ignored_is_dropped():
+    """Old files set fields their method never read (a true-target run's epochs, a
+    forward model's size without one): the old code ran them, so they still run."""
+    from skinny_mj.config import TrainConfig
+
+    cfg = TrainConfig.from_dict({"method": "true-target", "epochs": 2, "tt_cycles": 7,
+                                 "forward_reservoir": 50, "u_error_gain": 2.0})
+    assert cfg.method == "true-target" and cfg.rule.cycles == 7
+    assert cfg.forward.kind == "none" and not hasattr(cfg.rule, "epochs")
+    fel = TrainConfig.from_dict({"method": "original", "cycles": 5, "tt_input_noise": 0.1})
+    assert fel.learning_cycles == 5 and not hasattr(fel.rule, "input_noise")
+
+
 @pytest.mark.parametrize("content, needle", [
     ("{not json", "not a JSON config"),
     ("[1, 2]", "JSON object"),
