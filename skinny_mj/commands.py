@@ -206,10 +206,11 @@ def cmd_demo(args: argparse.Namespace) -> int:
     outcome = _train_and_write(cfg, args.seed, out, "demo: paper E exp. 5", quiet=args.quiet)
     wall = time.perf_counter() - start
     m = outcome.metrics
-    paper = registry.get("paper-e").PAPER_TABLE_2["5"]
+    paper = registry.get("paper-e").row("5").paper
     rows = [
-        ("test position NRMSE", _fmt(m["test"]["position_nrmse"]), f"{paper[0]:.4f}"),
-        ("test motor NRMSE", _fmt(m["test"]["motor_nrmse"]), f"{paper[2]:.4f}"),
+        ("test position NRMSE", _fmt(m["test"]["position_nrmse"]),
+         f"{paper['position_nrmse']:.4f}"),
+        ("test motor NRMSE", _fmt(m["test"]["motor_nrmse"]), f"{paper['motor_nrmse']:.4f}"),
         ("wall time (s)", f"{wall:.1f}", "-"),
     ]
     ours_head = f"ours (seed {args.seed})"
@@ -386,7 +387,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
                             progress=_progress_on(args.quiet), options=options)
         cf.warn_if_rebuilt_differs(invocation, out)
         wall = time.perf_counter() - start
-        claims = module.report(results, out)
+        claims = (exp.report or module.report)(results, out)
         table = (out / "table.md").read_text()
         summary = f"{table}\n## Claims\n{claims}\n\nwall time {wall:.1f} s\n"
         atomic_write_text(out / "claims.md", f"## Claims\n{claims}\n")

@@ -282,6 +282,10 @@ class TrainConfig:
         return {**asdict(self), "learning_cycles": self.learning_cycles,
                 "noise_level": self.noise_level}
 
+    def override(self, mapping: dict[str, Any]) -> TrainConfig:
+        """This config with the fields of ``mapping`` replaced (validated again)."""
+        return replace(self, **mapping)
+
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> TrainConfig:
         """From :meth:`to_dict` (or a ``config.json``'s ``config``): unknown keys are an

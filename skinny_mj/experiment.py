@@ -161,6 +161,9 @@ class Experiment:
     #: rows that cannot run on this machine -> why (an optional package missing): left out
     #: of a sweep of every row (with a line saying so), refused when named in ``rows``
     unavailable: Mapping[str, str] = field(default_factory=dict)
+    #: optional ``report(results, out_dir) -> str`` run after the sweep (a study's,
+    #: :mod:`skinny_mj.study_plan`); None: the module's ``report``
+    report: Callable[[Mapping[str, Any], Path], str] | None = None
 
     def __post_init__(self) -> None:
         if not _SAFE_NAME.match(self.name):
