@@ -61,9 +61,8 @@ def _plain(text: str) -> str:
 
 def _config(exp: Any) -> Any:
     """What ``config.json`` records of a built study: its config and its rows."""
-    from skinny_mj.sweep.stats import to_jsonable
-
     from skinny_mj.sweep.folder import recorded_config
+    from skinny_mj.sweep.stats import to_jsonable
 
     return to_jsonable({"config": recorded_config(exp.config), "rows": [(r.row_id, dict(r.params), r.runs)
                                                 for r in exp.rows]})

@@ -22,7 +22,8 @@ from typing import Any
 
 from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import Experiment, Row as EngineRow, RunFailed
+from skinny_mj.experiment import Experiment, RunFailed
+from skinny_mj.experiment import Row as EngineRow
 from skinny_mj.study import OPTIONS, Metric, Row, RunBatch, Study
 from skinny_mj.sweep import one_of_batch
 
