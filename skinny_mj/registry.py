@@ -32,7 +32,7 @@ GROUP = "skinny_mj.experiments"
 PACKAGE = "experiments"
 
 
-def _declared_name(path: Path) -> str | None:
+def declared_name(path: Path) -> str | None:
     """The string a module's top-level ``NAME = "..."`` sets, None without one."""
     try:
         tree = ast.parse(path.read_text(encoding="utf-8"))
@@ -54,7 +54,7 @@ def _package_studies() -> dict[str, str]:
     found = {}
     for folder in spec.submodule_search_locations:
         for path in sorted(Path(folder).glob("*.py")):
-            if not path.name.startswith("_") and (name := _declared_name(path)):
+            if not path.name.startswith("_") and (name := declared_name(path)):
                 found[name] = f"{PACKAGE}.{path.stem}"
     return found
 

@@ -64,8 +64,8 @@ def _config(exp: Any) -> Any:
     from skinny_mj.sweep.folder import recorded_config
     from skinny_mj.sweep.stats import to_jsonable
 
-    return to_jsonable({"config": recorded_config(exp.config), "rows": [(r.row_id, dict(r.params), r.runs)
-                                                for r in exp.rows]})
+    return to_jsonable({"config": recorded_config(exp.config),
+                        "rows": [(r.row_id, dict(r.params), r.runs) for r in exp.rows]})
 
 
 def option_effects(module: Any, base: Any) -> dict[str, str]:

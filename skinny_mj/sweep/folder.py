@@ -29,8 +29,8 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
 from skinny_mj.sweep.stats import to_jsonable
 
-__all__ = ["LOCK_NAME", "config_dict", "recorded_config", "prepare_out_dir", "choose_out_dir", "clear_sweep",
-           "check_unlocked", "sweep_lock", "read_lock"]
+__all__ = ["LOCK_NAME", "config_dict", "recorded_config", "prepare_out_dir", "choose_out_dir",
+           "clear_sweep", "check_unlocked", "sweep_lock", "read_lock"]
 
 LOCK_NAME = "sweep.lock"
 
