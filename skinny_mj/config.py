@@ -284,6 +284,8 @@ class TrainConfig:
 
     def override(self, mapping: dict[str, Any]) -> TrainConfig:
         """This config with the fields of ``mapping`` replaced (validated again)."""
+        if unknown := sorted(set(mapping) - {f.name for f in dataclasses.fields(self)}):
+            raise SkinnyInputError(f"unknown training config key(s) {unknown}")
         return replace(self, **mapping)
 
     @classmethod
