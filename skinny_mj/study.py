@@ -58,7 +58,8 @@ class Row:
     (``runs``), the row whose seeds it takes (``seeds_of``, a paired comparison), its
     group (``--rows GROUP``), study-specific ``params`` (read by a custom run), what
     ``--quick`` changes of this row (``quick``: overrides or params keys), and its own
-    ``run_batch``."""
+    ``run_batch``; ``quick_only``: a row only ``--quick`` sweeps have (a smoke test's
+    smaller grid)."""
 
     id: str
     overrides: Mapping[str, Any] = field(default_factory=dict)
@@ -69,6 +70,7 @@ class Row:
     params: Mapping[str, Any] = field(default_factory=dict)
     quick: Mapping[str, Any] = field(default_factory=dict)
     run_batch: RunBatch | None = None
+    quick_only: bool = False
 
     def __post_init__(self) -> None:
         for name in ("overrides", "paper", "params", "quick"):
@@ -83,7 +85,7 @@ class Row:
         over = {**self.overrides, **{k: v for k, v in self.quick.items()
                                      if k not in self.params}}
         return Row(self.id, over, self.paper, self.runs, self.seeds_of, self.group, params,
-                   {}, self.run_batch)
+                   {}, self.run_batch, self.quick_only)
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,8 @@ experiment`` (``--movement`` -> trajectory + asf, ``--dof``, ``--signals``: thos
 study ``takes``, any other refused in one line), the row's overrides (and, under
 ``--quick``, the row's ``quick`` ones), then the overrides after every row's
 (``Quick.overrides``; the contract test's ``tiny``). A quick sweep keeps
-``Quick.rows`` in the study's order, and a run's seed is
+``Quick.rows`` (default: every row) in the study's order, a full sweep every row but the
+``quick_only`` ones, and a run's seed is
 ``run_seed(base_seed, row_index, run_index)`` over the rows the sweep has.
 """
 
@@ -171,7 +172,7 @@ class Plan:
     def _run_row(p: PlannedRow) -> Row:
         r = p.row
         return Row(r.id, r.overrides, r.paper, r.runs, r.seeds_of, r.group, p.params, {},
-                   r.run_batch)
+                   r.run_batch, r.quick_only)
 
     def experiment(self) -> Experiment:
         """The engine's Experiment of this plan."""
@@ -233,7 +234,7 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
     changes = option_overrides(movement, asf, dof, signals)
     base = study.base.override(changes) if changes else study.base
     after = {**(study.quick.overrides if quick else {}), **(study.tiny if tiny else {})}
-    kept: Sequence[Row] = study.rows
+    kept: Sequence[Row] = [r for r in study.rows if quick or not r.quick_only]
     if quick and study.quick.rows is not None:
         chosen = _expand(study, study.quick.rows)
         kept = [r for r in study.rows if r.id in chosen]
