@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 
 from skinny_mj.config import TrainConfig
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.sweep.options import OPTION_KEYS
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -36,8 +37,9 @@ if TYPE_CHECKING:
 
 __all__ = ["Study", "Row", "Quick", "OPTIONS", "TINY"]
 
-#: ``skinny experiment``'s options a study may take, and the config keys each sets.
-OPTIONS = {"movement": ("trajectory", "asf"), "dof": ("dof",), "signals": ("signals",)}
+#: ``skinny experiment``'s options a study may take (the config keys each sets:
+#: :data:`skinny_mj.sweep.options.OPTION_KEYS`).
+OPTIONS = tuple(OPTION_KEYS)
 #: The contract test's shrink (after ``--quick``'s): one epoch of a small reservoir.
 TINY = {"epochs": 1, "reservoir": 20}
 
@@ -126,7 +128,7 @@ class Study:
     run_batch: RunBatch | None = None
     trainings: Callable[[TrainConfig, Row], Mapping[str, TrainConfig]] | None = None
     report: Callable[[Results, Plan, Path], str] | None = None
-    takes: tuple[str, ...] = tuple(OPTIONS)
+    takes: tuple[str, ...] = OPTIONS
     tiny: Mapping[str, Any] = field(default_factory=lambda: dict(TINY))
     base_seed: int = 0
 

@@ -1,7 +1,7 @@
 """What ``skinny experiment list`` and ``skinny experiment NAME --help`` print.
 
-The help of one study is read off the study itself: its description (the module
-docstring), the rows, groups and runs of the ``Experiment`` its ``build()`` returns, which
+The help of one study is read off the study itself: its description (a Study's, or the
+module docstring), the rows, groups and runs of the ``Experiment`` its ``build()`` returns, which
 of ``--movement --dof --signals`` change its runs (each tried: a changed ``config.json``
 means the option is taken, a refusal that it is not, no change that it has no effect),
 and its cost: the run count, the time per run measured by earlier sweeps under

@@ -25,24 +25,11 @@ from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.experiment import Experiment, RunFailed
 from skinny_mj.experiment import Row as EngineRow
-from skinny_mj.study import OPTIONS, Metric, Row, RunBatch, Study
+from skinny_mj.study import Metric, Row, RunBatch, Study
 from skinny_mj.sweep import one_of_batch
+from skinny_mj.sweep.options import OPTION_KEYS, movement_changes
 
-__all__ = ["Plan", "Results", "plan", "option_overrides", "train_metrics", "read_metric"]
-
-
-def option_overrides(movement: str | None = None, asf: Any = None, dof: int | None = None,
-                     signals: str | None = None) -> dict[str, Any]:
-    """The config keys ``skinny experiment``'s options set (None: not given; ``asf``
-    only with a movement, as a string: it is recorded in ``config.json``)."""
-    out: dict[str, Any] = {}
-    if movement is not None:
-        key, asf_key = OPTIONS["movement"]
-        out.update({key: movement, asf_key: None if asf is None else str(asf)})
-    for option, value in (("dof", dof), ("signals", signals)):
-        if value is not None:
-            out[OPTIONS[option][0]] = value
-    return out
+__all__ = ["Plan", "Results", "plan", "train_metrics", "read_metric"]
 
 
 def read_metric(metrics: Mapping[str, Any], where: Metric) -> Any:
@@ -231,7 +218,7 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
         takes = ", ".join(f"--{k}" for k in study.takes) or "none of them"
         raise SkinnyInputError(f"study {study.name!r} takes no --{refused[0]} (it takes "
                                f"{takes})")
-    changes = option_overrides(movement, asf, dof, signals)
+    changes = movement_changes(movement, asf, dof, signals, OPTION_KEYS)
     base = study.base.override(changes) if changes else study.base
     after = {**(study.quick.overrides if quick else {}), **(study.tiny if tiny else {})}
     kept: Sequence[Row] = [r for r in study.rows if quick or not r.quick_only]
