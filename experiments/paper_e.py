@@ -101,7 +101,7 @@ ROWS = (
           group="table") for i, (m, b, c, r) in TABLE_1.items()),
     # Fig. 3: the Table's network without reservoir noise, its own run
     *(Row(f"fig3-b{b:g}", {"method": "new", "beta": b, "noise": 0.0},
-          {"cycles_to_converge": PAPER_FIG3_CYCLES[b]}, FIGURE_RUNS, group="fig3",
+          {"cycles_to_converge": PAPER_FIG3_CYCLES[b]}, runs=FIGURE_RUNS, group="fig3",
           params={"cycles": 400}, quick={"cycles": 20}, run_batch=run_convergence)
       for b in (0.3, 0.1, 0.05, 1.0)),
     *(Row(f"fig4-n{n}", {"method": "original", "beta": 1.0, "cycles": 1, "reps": 5,

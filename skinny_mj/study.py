@@ -137,6 +137,9 @@ class Study:
         ids = [r.id for r in self.rows]
         if not ids or len(set(ids)) != len(ids):
             raise SkinnyInputError(f"study {self.name!r} needs unique row ids, got {ids}")
+        known = {*ids, *(r.group for r in self.rows if r.group), *self.groups}
+        if bad := sorted({m for ms in self.groups.values() for m in ms} - known):
+            raise SkinnyInputError(f"study {self.name!r}: groups name no row or group {bad}")
         if bad := sorted(set(self.takes) - set(OPTIONS)):
             raise SkinnyInputError(f"study {self.name!r}: takes {bad}; options are "
                                    f"{', '.join(OPTIONS)}")

@@ -102,6 +102,8 @@ def test_a_study_checks_its_rows():
         Row("a", {"k": 1}, params={"k": 2})
     with pytest.raises(SkinnyInputError, match="no metrics and no run_batch"):
         Study("s", (Row("a"),))
+    with pytest.raises(SkinnyInputError, match="groups name no row or group"):
+        Study("s", (Row("a"),), metrics={"x": "wall_s"}, groups={"g": ("zz",)})
     with pytest.raises(SkinnyInputError, match="plain file-name word"):
         Study("s", (Row("a/b"),), metrics={"x": "wall_s"}).build()
 
