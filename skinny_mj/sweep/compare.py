@@ -3,9 +3,9 @@
 ``python -m skinny_mj.sweep.compare BEFORE AFTER`` prints every difference (exit 1 when
 the metrics or seeds differ, 0 otherwise): run files only in one folder, and per run file
 the fields that differ, wall-clock fields left out (``wall_s``, ``finished_at``, any
-metric whose name ends in ``wall_s``). ``params`` differences are listed apart: a row
-whose parameters are spelled differently (e.g. as config overrides) may still run the
-same thing, which the metrics then show.
+metric whose name holds ``wall_s``: ``train_wall_s``, ``wall_s_run``, ...). ``params``
+differences are listed apart: a row whose parameters are spelled differently (e.g. as
+config overrides) may still run the same thing, which the metrics then show.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ WALL_FIELDS = ("wall_s", "finished_at", "fallback_traceback", "traceback")
 
 
 def _is_wall(key: str) -> bool:
-    return key in WALL_FIELDS or key.endswith("wall_s")
+    return key in WALL_FIELDS or "wall_s" in key
 
 
 def _load(folder: Path) -> dict[str, dict[str, Any]]:
