@@ -2,8 +2,9 @@
 
 ``python -m skinny_mj.sweep.compare BEFORE AFTER`` prints every difference (exit 1 when
 the metrics or seeds differ, 0 otherwise): run files only in one folder, and per run file
-the fields that differ, wall-clock fields left out (``wall_s``, ``finished_at``, any
-metric whose name holds ``wall_s``: ``train_wall_s``, ``wall_s_run``, ...). ``params``
+the fields that differ, the machine's measurements left out (``wall_s``, ``finished_at``,
+any metric whose name holds ``wall_s``, ``cpu_s`` or ``peak_rss``: ``train_wall_s``,
+``wall_s_run``, ``peak_rss_mb``, ...). ``params``
 differences are listed apart: a row whose parameters are spelled differently (e.g. as
 config overrides) may still run the same thing, which the metrics then show.
 """
@@ -15,12 +16,14 @@ import sys
 from pathlib import Path
 from typing import Any
 
-#: Record fields that are wall-clock, not results.
+#: Record fields that are the machine's measurements (time, memory), not results.
 WALL_FIELDS = ("wall_s", "finished_at", "fallback_traceback", "traceback")
+#: Parts of metric names that mark a measurement of time or memory.
+MEASURED = ("wall_s", "cpu_s", "peak_rss")
 
 
 def _is_wall(key: str) -> bool:
-    return key in WALL_FIELDS or "wall_s" in key
+    return key in WALL_FIELDS or any(part in key for part in MEASURED)
 
 
 def _load(folder: Path) -> dict[str, dict[str, Any]]:
@@ -65,7 +68,8 @@ def main(argv: list[str] | None = None) -> int:
     for line in [*diffs, *params]:
         print(line)
     print(f"{n} run files before; {len(diffs)} differences in files, seeds or metrics "
-          f"(wall-clock fields left out); {len(params)} run files with other params")
+          f"(time and memory measurements left out); {len(params)} run files with other "
+          "params")
     return 1 if diffs else 0
 
 
