@@ -29,7 +29,6 @@ are never used in place of ours.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -288,20 +287,10 @@ STUDY = Study(
 
 
 # -- for the studies still built on paper D's rows through its former Config ------------
-@dataclass(frozen=True)
-class Config:
-    """The body, movement, reservoir and TT rounds of :func:`train_configs`."""
-
-    dof: int = 8
-    signals: str = "cartesian"
-    trajectory: str = "ymca"
-    reservoir: int = 200
-    tt_cycles: int = 50
+#: What such a study changes of an experiment: TrainConfig keys (``dof``, ``reservoir`` ...).
+Config = dict
 
 
-def train_configs(cfg: Config, row) -> dict[str, TrainConfig]:
-    """Experiment ``row.row_id``'s two trainings on ``cfg``'s body, movement, reservoir."""
-    config = STUDY.config(row.row_id).override({
-        "dof": cfg.dof, "signals": cfg.signals, "trajectory": cfg.trajectory,
-        "reservoir": cfg.reservoir, "tt_cycles": cfg.tt_cycles})
-    return trainings(config, STUDY.row(row.row_id))
+def train_configs(changes: dict, row) -> dict[str, TrainConfig]:
+    """Experiment ``row.row_id``'s two trainings with ``changes`` applied."""
+    return trainings(STUDY.config(row.row_id).override(dict(changes)), STUDY.row(row.row_id))

@@ -26,7 +26,6 @@ The paper's numbers are shown beside ours, labelled; never in place of ours.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -151,20 +150,10 @@ STUDY = Study(
 
 
 # -- for the studies still built on paper E's rows through its former Config ------------
-@dataclass(frozen=True)
-class Config:
-    """The body, movement, reservoir and epochs of :func:`train_config`."""
-
-    dof: int = 4
-    signals: str = "cartesian"
-    trajectory: str = "ymca"
-    asf: str | None = None
-    reservoir: int = 200
-    epochs: int = 10
+#: What such a study changes of a Table row: TrainConfig keys (``dof``, ``trajectory`` ...).
+Config = dict
 
 
-def train_config(cfg: Config, row) -> TrainConfig:
-    """Table row ``row.row_id``'s training on ``cfg``'s body, movement, reservoir, epochs."""
-    return STUDY.config(row.row_id).override({
-        "dof": cfg.dof, "signals": cfg.signals, "trajectory": cfg.trajectory,
-        "asf": cfg.asf, "reservoir": cfg.reservoir, "epochs": cfg.epochs})
+def train_config(changes: dict, row) -> TrainConfig:
+    """Table row ``row.row_id``'s training with ``changes`` applied."""
+    return STUDY.config(row.row_id).override(dict(changes))
