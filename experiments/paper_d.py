@@ -29,18 +29,14 @@ are never used in place of ours.
 
 from __future__ import annotations
 
-import dataclasses
-import functools
-import json
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from skinny_mj.experiment import Experiment, Row
-from skinny_mj.sweep.options import movement_changes
-from skinny_mj.training import TrainConfig, TrainOutcome, train
+from skinny_mj.config import LEGACY_KEYS, TrainConfig
+from skinny_mj.study import Quick, Row, Study
+from skinny_mj.training import TrainOutcome, train
 
 NAME = "paper-d"
 
@@ -75,74 +71,39 @@ EXPERIMENTS: dict[str, tuple[str, bool, int]] = {
     "3b": ("original", True, 10),
     "4": ("new", True, 1),
 }
+NOISE = 0.2  # "noise level 0.2, effectively adding 10% noise", "when included"
+BETA = 0.1  # new method
+FEL_CYCLES = 5  # FEL new method: 5 learning cycles per K value (the paper's "50 rounds")
+TT_CYCLES = 50  # TT new method: 50 rounds (--quick: 3)
 
 #: Figure 4: the experiments whose TT test is drawn (right arm, desired vs actual).
 FIGURE_4_ROWS = ("1", "2", "4")
 
 
-@dataclass(frozen=True)
-class Config:
-    """Shared parameters (paper D §5–6); rows vary method, noise and repetitions."""
-
-    dof: int = 8
-    signals: str = "cartesian"
-    trajectory: str = "ymca"
-    asf: str | None = None
-    reservoir: int = 200  # not stated in paper D; paper E's 200 (see module docstring)
-    spectral_radius: float = 0.5
-    noise: float = 0.2  # "noise level 0.2, effectively adding 10% noise"
-    sensor_noise: float = 0.01
-    beta: float = 0.1  # new method
-    gains: int = 10  # FEL: K falls linearly from 1 to 0 over 10 epochs
-    fel_cycles: int = 5  # FEL new method: 5 learning cycles per K value (50 rounds)
-    tt_cycles: int = 50  # TT new method: 50 rounds
-    runs: int = 50
+def trainings(config: TrainConfig, row: Row) -> dict[str, TrainConfig]:
+    """The two runs of one experiment: ``{"tt": ..., "fel": ...}`` (the row's config is
+    FEL's; TT fits the same network to the analytic commands, ``tt_cycles`` rounds)."""
+    return {"tt": config.override({"rule": "true-target", "rule.beta": config.rule.beta,
+                                   "rule.cycles": row.params["tt_cycles"]}), "fel": config}
 
 
-def train_configs(cfg: Config, row: Row) -> dict[str, TrainConfig]:
-    """The two runs of one experiment: ``{"tt": ..., "fel": ...}``."""
-    p = row.params
-    new = p["method"] == "new"
-    common = TrainConfig().override({
-        "plant.dof": cfg.dof, "plant.signals": cfg.signals,
-        "plant.sensor_noise": cfg.sensor_noise, "movement.trajectory": cfg.trajectory,
-        "movement.asf": cfg.asf, "movement.reps": p["reps"], "esn.n_reservoir": cfg.reservoir,
-        "esn.spectral_radius": cfg.spectral_radius,
-        "esn.noise_level": cfg.noise if p["noise"] else 0.0,
-    })
-    fel = {"rule": "new", "rule.beta": cfg.beta, "rule.cycles": cfg.fel_cycles} if new \
-        else {"rule": "original", "rule.cycles": 1}
-    return {
-        "tt": common.override({"rule": "true-target", "rule.beta": cfg.beta if new else 1.0,
-                               "rule.cycles": cfg.tt_cycles}),
-        "fel": common.override({**fel, "rule.epochs": cfg.gains}),
-    }
+def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list[dict[str, Any]]:
+    """Train and test both architectures of one experiment from each seed, in lockstep.
 
-
-def _test_value(outcome: TrainOutcome, key: str) -> float | None:
-    return None if outcome.failed else outcome.metrics["test"][key]
-
-
-def run_one(cfg: Config, row: Row, seed: int) -> dict[str, Any]:
-    """Train and test both architectures of one experiment from ``seed``.
-
-    Returns the five Table 1 metrics (NRMSE; ``None`` where that architecture's run
+    Per seed the five Table 1 metrics (NRMSE; ``None`` where that architecture's run
     diverged), ``fel_motor_test`` (which the paper could not compute; our plant has
     the analytic commands), ``tt_failed`` / ``fel_failed`` (0 or 1, so their mean is
     the failure rate), each architecture's wall time in s, and failure reasons.
     """
-    configs = train_configs(cfg, row)
-    return _metrics(train(configs["tt"], seed), train(configs["fel"], seed))
-
-
-def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list[dict[str, Any]]:
-    """:func:`run_one` for several seeds in lockstep (the engine's fast path,
-    :func:`skinny_mj.training.train_batch`): seed by seed the same numbers."""
     from skinny_mj.training import train_batch
 
-    configs = train_configs(cfg, row)
-    tts, fels = train_batch(configs["tt"], seeds), train_batch(configs["fel"], seeds)
+    both = trainings(config, row)
+    tts, fels = train_batch(both["tt"], seeds), train_batch(both["fel"], seeds)
     return [_metrics(tt, fel) for tt, fel in zip(tts, fels, strict=True)]
+
+
+def _test_value(outcome: TrainOutcome, key: str) -> float | None:
+    return None if outcome.failed else outcome.metrics["test"][key]
 
 
 def _metrics(tt, fel) -> dict[str, Any]:
@@ -163,44 +124,18 @@ def _metrics(tt, fel) -> dict[str, Any]:
     }
 
 
-def rows() -> tuple[Row, ...]:
-    out = []
-    for row_id, (method, noise, reps) in EXPERIMENTS.items():
-        paper: dict[str, float] = {}
-        for metric, (mean, var) in zip(COLUMNS, PAPER_TABLE_1[row_id], strict=True):
-            paper[metric], paper[f"{metric}_var"] = mean, var
-        out.append(Row(row_id, {"method": method, "noise": noise, "reps": reps}, paper))
-    return tuple(out)
-
-
-def quick_config(cfg: Config | None = None) -> Config:
-    """A smoke test, not a reproduction: 2 runs, 2 gain values, 3 TT rounds."""
-    return dataclasses.replace(cfg or Config(), gains=2, tt_cycles=3, runs=2)
-
-
-def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          dof: int | None = None, signals: str | None = None) -> Experiment:
-    """The sweep: one row per experiment, both architectures per run. ``movement``
-    (a library name, a file, or an excerpt such as
-    ``md_02.amc@start=3,duration=6.26``) replaces YMCA in training
-    and testing; ``dof``/``signals`` another body (None: the paper's 3D Cartesian)."""
-    changes = movement_changes(movement, asf, dof, signals)
-    cfg = dataclasses.replace(quick_config() if quick else Config(), **changes)
-    return Experiment(
-        name=NAME, rows=rows(), run_one=functools.partial(run_one, cfg), config=cfg,
-        runs=cfg.runs, run_batch=functools.partial(run_batch, cfg),
-        table_columns={**COLUMNS, "fel_motor_test": "FEL motor test (extra)",
-                       "tt_failed": "TT failed", "fel_failed": "FEL failed"},
-    )
+def _row(row_id: str, method: str, noise: bool, reps: int) -> Row:
+    new = method == "new"
+    paper: dict[str, float] = {}
+    for metric, (mean, var) in zip(COLUMNS, PAPER_TABLE_1[row_id], strict=True):
+        paper[metric], paper[f"{metric}_var"] = mean, var
+    return Row(row_id, {"rule": method, **({"rule.beta": BETA} if new else {}),
+                        "rule.cycles": FEL_CYCLES if new else 1, "movement.reps": reps,
+                        "esn.noise_level": NOISE if noise else 0.0}, paper,
+               params={"tt_cycles": TT_CYCLES}, quick={"tt_cycles": 3})
 
 
 # -- report -----------------------------------------------------------------------------
-def _config_from(out_dir: Path) -> Config:
-    raw = json.loads((out_dir / "config.json").read_text())["config"]
-    names = {f.name for f in dataclasses.fields(Config)}
-    return Config(**{k: v for k, v in raw.items() if k in names})
-
-
 def _average_run(out_dir: Path, row_id: str) -> dict | None:
     """The ok run of ``row_id`` whose TT test position NRMSE is nearest the row's mean
     (the paper's Figure 4 shows "one average run")."""
@@ -214,16 +149,16 @@ def _average_run(out_dir: Path, row_id: str) -> dict | None:
     return min(runs, key=lambda r: abs(r["metrics"]["tt_position_test"] - mean))
 
 
-def _record(path: Path, outcome: TrainOutcome, row: Row) -> None:
+def _record(path: Path, outcome: TrainOutcome, row_id: str) -> None:
     """The TT test of one run as an ``.rrd`` (rerun) recording."""
     from skinny_mj.recording import record_test
 
     record_test(path, outcome,
-                f"paper D exp {row.row_id}, true-target test, average run (seed {outcome.seed})",
-                {"row": row.row_id, "params": dict(row.params)})
+                f"paper D exp {row_id}, true-target test, average run (seed {outcome.seed})",
+                {"row": row_id, "config": outcome.config.to_dict()})
 
 
-def figure_4(out_dir: Path, cfg: Config, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
+def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
              reproduced: list[bool] | None = None) -> Path | None:
     """Desired (dashed) vs actual (solid) right-arm signals during the TT test of one
     average run per experiment, re-trained from its seed (runs are reproducible from
@@ -235,18 +170,18 @@ def figure_4(out_dir: Path, cfg: Config, row_ids: tuple[str, ...] = FIGURE_4_ROW
 
     reproduced = [] if reproduced is None else reproduced
     picked = []
-    for row in (r for r in rows() if r.row_id in row_ids):
-        run = _average_run(out_dir, row.row_id)
+    for row_id in (p.row.id for p in plan.rows if p.row.id in row_ids):
+        run = _average_run(out_dir, row_id)
         if run is not None:
-            outcome = train(train_configs(cfg, row)["tt"], int(run["seed"]))
+            outcome = train(plan.trainings(row_id)["tt"], int(run["seed"]))
             if not outcome.failed:
-                picked.append((row.row_id, outcome))
-                _record(out_dir / f"exp{row.row_id}_tt_average_run.rrd", outcome, row)
+                picked.append((row_id, outcome))
+                _record(out_dir / f"exp{row_id}_tt_average_run.rrd", outcome, row_id)
                 reproduced.append(outcome.metrics["test"]["position_nrmse"]
                                   == run["metrics"]["tt_position_test"])
     if not picked:
         return None
-    names = body.signal_names(cfg.dof, cfg.signals)
+    names = body.signal_names(plan.base.plant.dof, plan.base.plant.signals)
     plt = pyplot()
     fig, axes = plt.subplots(len(picked), 2, figsize=(11, 2.6 * len(picked)), squeeze=False,
                              sharex=True)
@@ -301,7 +236,7 @@ def _relative_gain(out_dir: Path, metric: str, better: str, worse: str) -> float
     return 1.0 - float(np.median(a)) / float(np.median(b))
 
 
-def report(results: dict, out_dir: Path) -> str:
+def report(results: dict, plan: Any, out_dir: Path) -> str:
     """Figure 3 (box plots beside the paper's means), Figure 4 and the paper's claims."""
     from experiments.claims import claim_lines, values
     from skinny_mj.plots import boxplot_png
@@ -316,7 +251,7 @@ def report(results: dict, out_dir: Path) -> str:
                         reference={k: ref[k] for k in groups},
                         title=f"Paper D, Figure 3: {COLUMNS[metric]}")
     reproduced: list[bool] = []
-    figure_4(out_dir, _config_from(out_dir), reproduced=reproduced)
+    figure_4(out_dir, plan, reproduced=reproduced)
     lines = [claim_lines(out_dir, CLAIMS)]
     if reproduced:
         mark = "holds" if all(reproduced) else "does NOT hold"
@@ -337,3 +272,33 @@ def report(results: dict, out_dir: Path) -> str:
         lines.append(f"- [{mark}] TT: original with 10 reps about as good as the new method "
                      f"(median position 3b / 4 = {ratio:.2f}; 'about' = within 1.5x)")
     return "\n".join(lines)
+
+
+STUDY = Study(
+    name=NAME, description=__doc__, runs=50,
+    rows=tuple(_row(i, *e) for i, e in EXPERIMENTS.items()),
+    # paper D §5-6: 3D, Cartesian, N = 200 (see above), spectral radius 0.5, sensor noise
+    # 0.01, K 1 -> 0 over 10 gain values (epochs), TT new method: 50 rounds
+    base=TrainConfig().override({"plant.dof": 8, "rule.epochs": 10}),
+    run_batch=run_batch, trainings=trainings,
+    columns={**COLUMNS, "fel_motor_test": "FEL motor test (extra)", "tt_failed": "TT failed",
+             "fel_failed": "FEL failed"},
+    # a smoke test, not a reproduction: 2 runs, 2 gain values, 3 TT rounds
+    quick=Quick({"rule.epochs": 2}, runs=2),
+    report=report,
+)
+
+
+# -- for the studies still built on paper D's rows through its former Config ------------
+#: What such a study changes of an experiment: TrainConfig keys (``dof``, ``reservoir`` ...).
+Config = dict
+
+
+def train_configs(changes: dict, row) -> dict[str, TrainConfig]:
+    """Experiment ``row.row_id``'s two trainings with ``changes`` applied (earlier flat
+    names; ``tt_cycles``: the true target's rounds)."""
+    changes = dict(changes)
+    paper_row = STUDY.row(row.row_id)
+    params = {**paper_row.params, "tt_cycles": changes.pop("tt_cycles", TT_CYCLES)}
+    config = STUDY.config(row.row_id).override({LEGACY_KEYS[k]: v for k, v in changes.items()})
+    return trainings(config, Row(paper_row.id, paper_row.overrides, params=params))

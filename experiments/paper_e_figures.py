@@ -13,18 +13,21 @@ from pathlib import Path
 import numpy as np
 
 from experiments.claims import claim_lines, values
-from experiments.paper_e import (
-    PAPER_FIG3_CYCLES,
-    PAPER_TABLE_2,
-    TABLE_1,
-    TABLE_COLUMNS,
-    Config,
-    group_of,
-    train_config,
-)
-from skinny_mj.experiment import Row
+from experiments.paper_e import PAPER_FIG3_CYCLES, PAPER_TABLE_2, TABLE_1, TABLE_COLUMNS
+from skinny_mj.config import TrainConfig
 from skinny_mj.io import atomic_write_text
+from skinny_mj.study_plan import Plan
 from skinny_mj.sweep.stats import load_runs, markdown_table
+
+
+def group_of(row_id: str) -> str:
+    """``table`` for Table rows, else the id's prefix (``fig3``, ``fig4``, ``fig5a`` ...)."""
+    return "table" if row_id in TABLE_1 else row_id.split("-")[0]
+
+
+def _group_config(plan: Plan, group: str) -> TrainConfig | None:
+    """The config of the group's first row in this sweep (None: the group has none)."""
+    return next((p.config for p in plan.rows if p.row.group == group), None)
 
 
 def _ok_runs(out_dir: Path, group: str) -> list[dict]:
@@ -45,27 +48,27 @@ def _padded(columns: Sequence[list[float]]) -> np.ndarray:
     return out
 
 
-def movement_line(cfg: Config) -> str:
+def movement_line(cfg: TrainConfig) -> str:
     """Which movement the rows trained and tested on, and how much was clipped."""
     from skinny_mj.trajectories import load_movement
 
-    traj, rep = load_movement(cfg.trajectory, cfg.dof, asf=cfg.asf)
-    return (f"Movement: `{cfg.trajectory}` ({traj.name}, {len(traj)} steps = "
-            f"{traj.duration_s:.2f} s, {cfg.dof} DOF, {cfg.signals}); clipped into the joint "
-            f"ranges: {rep.clipped_samples} samples in {rep.clipped_steps} steps "
+    traj, rep = load_movement(cfg.movement.trajectory, cfg.plant.dof, asf=cfg.movement.asf)
+    return (f"Movement: `{cfg.movement.trajectory}` ({traj.name}, {len(traj)} steps = "
+            f"{traj.duration_s:.2f} s, {cfg.plant.dof} DOF, {cfg.plant.signals}); clipped into "
+            f"the joint ranges: {rep.clipped_samples} samples in {rep.clipped_steps} steps "
             f"(max {rep.max_excess_deg:.1f} deg)")
 
 
-def write_table(results: dict, out_dir: Path, cfg: Config) -> Path:
+def write_table(results: dict, out_dir: Path, plan: Plan) -> Path:
     """table.md: the movement, then every row (Table 2 rows first), ours beside the paper."""
-    text = (movement_line(cfg) + "\n\n" + markdown_table(results, TABLE_COLUMNS) + "\n\n"
+    text = (movement_line(plan.base) + "\n\n" + markdown_table(results, TABLE_COLUMNS) + "\n\n"
             "Fig. 3 rows: cycles = training cycles until y_used is within "
-            f"{cfg.fig3_tolerance:g} x its initial excess of the final value; the paper's "
+            f"{plan.params['tolerance']:g} x its initial excess of the final value; the paper's "
             "value = Table 1 cycles/epoch x 10 epochs.\n")
     return atomic_write_text(out_dir / "table.md", text)
 
 
-def fig3(out_dir: Path, cfg: Config) -> Path | None:
+def fig3(out_dir: Path) -> Path | None:
     """Fig. 3: NRMSE(y_used, y_true) per cycle, mean ± sd over runs, per β (log y);
     dashed lines: the cycles the paper used (Table 1 x 10 epochs)."""
     from skinny_mj.plots import pyplot, save_figure
@@ -75,9 +78,9 @@ def fig3(out_dir: Path, cfg: Config) -> Path | None:
         return None
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    for beta in sorted({float(r["params"]["beta"]) for r in runs}, reverse=True):
+    for beta in sorted({float(r["params"]["rule.beta"]) for r in runs}, reverse=True):
         curves = np.array([r["metrics"]["convergence_curve"] for r in runs
-                           if float(r["params"]["beta"]) == beta], dtype=float)
+                           if float(r["params"]["rule.beta"]) == beta], dtype=float)
         mean, sd = curves.mean(axis=0), curves.std(axis=0)
         x = np.arange(1, curves.shape[1] + 1)
         if not np.any(mean > 0):  # β = 1: y_used = y_true from the first cycle
@@ -97,15 +100,16 @@ def fig3(out_dir: Path, cfg: Config) -> Path | None:
     return save_figure(fig, out_dir / "fig3.png")
 
 
-def fig3_summary(out_dir: Path, cfg: Config) -> str:
+def fig3_summary(out_dir: Path, plan: Plan) -> str:
     """Cycles each β needs (mean, min–max over runs) beside the paper's Table 1 count."""
     runs = _ok_runs(out_dir, "fig3")
     if not runs:
         return "Fig. 3: no runs"
-    lines = [f"Fig. 3 — training cycles until y_used is within {cfg.fig3_tolerance:g} of its "
+    lines = [f"Fig. 3 — training cycles until y_used is within {plan.params['tolerance']:g} "
+             "of its "
              "initial distance from the final value (perfect targets, teacher forcing):"]
-    for beta in sorted({float(r["params"]["beta"]) for r in runs}, reverse=True):
-        sel = [r["metrics"] for r in runs if float(r["params"]["beta"]) == beta]
+    for beta in sorted({float(r["params"]["rule.beta"]) for r in runs}, reverse=True):
+        sel = [r["metrics"] for r in runs if float(r["params"]["rule.beta"]) == beta]
         c = np.array([m["cycles_to_converge"] for m in sel])
         final = np.array([m["final_nrmse"] for m in sel])
         paper = PAPER_FIG3_CYCLES.get(beta)
@@ -130,7 +134,7 @@ def fig3_proportion(runs: Sequence[dict]) -> str:
     β = 0.3 / 0.1 / 0.05 — whatever the tolerance: no tolerance gives all three counts."""
     means = {}
     for r in runs:
-        b = float(r["params"]["beta"])
+        b = float(r["params"]["rule.beta"])
         if b < 1 and b in PAPER_FIG3_CYCLES:
             means.setdefault(b, []).append(r["metrics"]["cycles_to_converge"])
     betas = sorted(means, reverse=True)
@@ -152,17 +156,18 @@ def fig3_proportion(runs: Sequence[dict]) -> str:
             "for any tolerance")
 
 
-def fig4(out_dir: Path, cfg: Config) -> Path | None:
+def fig4(out_dir: Path, plan: Plan) -> Path | None:
     """Fig. 4: mean test position NRMSE vs reservoir size (original method, 5 reps)."""
     from skinny_mj.plots import line_sweep_png
 
     runs = _ok_runs(out_dir, "fig4")
-    sizes = sorted({int(r["params"]["reservoir"]) for r in runs})
-    if not sizes:
+    sizes = sorted({int(r["params"]["esn.n_reservoir"]) for r in runs})
+    cfg = _group_config(plan, "fig4")
+    if not sizes or cfg is None:
         return None
     cols = [values(out_dir, f"fig4-n{n}", "position_nrmse") for n in sizes]
     failed = sum(_n_failed(out_dir, f"fig4-n{n}") for n in sizes)
-    label = f"original, {cfg.fig4_reps} reps, noise {cfg.fig4_noise:g} (failed runs: {failed})"
+    label = f"original, {cfg.movement.reps} reps, noise {cfg.noise_level:g} (failed runs: {failed})"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         return line_sweep_png(out_dir / "fig4.png", sizes, {label: _padded(cols)},
@@ -170,13 +175,17 @@ def fig4(out_dir: Path, cfg: Config) -> Path | None:
                               title="Paper E, Figure 4 (the paper chose N = 200)", log_x=True)
 
 
-def fig5(out_dir: Path, cfg: Config) -> Path | None:
+def fig5(out_dir: Path, plan: Plan) -> Path | None:
     """Fig. 5: mean test position NRMSE vs reservoir noise, (a) original (b) new β."""
     from skinny_mj.plots import line_sweep_png
 
-    series = {"fig5a": f"(a) original, {cfg.fig5a_reps} reps (paper chose 0.03)",
-              "fig5b": f"(b) new β = {cfg.fig5b_beta:g}, 1 rep (paper chose 0.2)"}
-    levels = sorted({float(r["params"]["noise"]) for g in series for r in _ok_runs(out_dir, g)})
+    a, b = _group_config(plan, "fig5a"), _group_config(plan, "fig5b")
+    if a is None or b is None:
+        return None
+    series = {"fig5a": f"(a) original, {a.movement.reps} reps (paper chose 0.03)",
+              "fig5b": f"(b) new β = {b.rule.beta:g}, {b.movement.reps} rep (paper chose 0.2)"}
+    levels = sorted({float(r["params"]["esn.noise_level"]) for g in series
+                     for r in _ok_runs(out_dir, g)})
     if not levels:
         return None
     ys = {}
@@ -260,7 +269,8 @@ def claims(out_dir: Path) -> str:
          "mean", "6", "motor_nrmse", "<", "mean", "4"),
     ])
     runs = load_runs(out_dir)
-    ids = {g: {r["row"]: float(r["params"].get("reservoir" if g == "fig4" else "noise", 0))
+    key = {"fig4": "esn.n_reservoir", "fig5a": "esn.noise_level", "fig5b": "esn.noise_level"}
+    ids = {g: {r["row"]: float(r["params"].get(key[g], 0))
                for r in runs if group_of(r["row"]) == g} for g in ("fig4", "fig5a", "fig5b")}
     return "\n".join([
         text,
@@ -288,7 +298,7 @@ def _size_line(out_dir: Path, ids: dict[str, float]) -> str:
             f"original method (Fig. 4, lowest mean position): ours {best[0]:g}")
 
 
-def median_recordings(out_dir: Path, cfg: Config, table_rows: Sequence[Row]) -> list[str]:
+def median_recordings(out_dir: Path, plan: Plan, table_rows: Sequence[str]) -> list[str]:
     """One ``exp<row>_median_seed<seed>.rrd`` per Table row: the run with the median test
     position NRMSE (lower middle for an even count), re-trained from its seed (runs are
     deterministic in (config, seed); the lines say whether the re-run matched)."""
@@ -297,32 +307,33 @@ def median_recordings(out_dir: Path, cfg: Config, table_rows: Sequence[Row]) -> 
     for r in load_runs(out_dir):
         if r.get("status") == "ok" and r["metrics"].get("position_nrmse") is not None:
             by_row[r["row"]].append(r)
-    for row in table_rows:
-        ok = sorted(by_row.get(row.row_id, []), key=lambda r: r["metrics"]["position_nrmse"])
+    for row_id in table_rows:
+        ok = sorted(by_row.get(row_id, []), key=lambda r: r["metrics"]["position_nrmse"])
         if not ok:
             continue
         run = ok[(len(ok) - 1) // 2]
-        path = out_dir / f"exp{row.row_id}_median_seed{run['seed']}.rrd"
-        for old in out_dir.glob(f"exp{row.row_id}_median_seed*.rrd"):
+        path = out_dir / f"exp{row_id}_median_seed{run['seed']}.rrd"
+        for old in out_dir.glob(f"exp{row_id}_median_seed*.rrd"):
             if old != path:
                 old.unlink()
         if not path.is_file():
-            same = _record_run(path, cfg, row, int(run["seed"]), run["metrics"])
+            same = _record_run(path, plan.config(row_id), row_id, int(run["seed"]),
+                               run["metrics"])
             note = "re-run identical" if same else "re-run DIFFERS from the sweep's run"
         else:
             note = "existing"
-        lines.append(f"- exp {row.row_id}: seed {run['seed']}, test position NRMSE "
+        lines.append(f"- exp {row_id}: seed {run['seed']}, test position NRMSE "
                      f"{run['metrics']['position_nrmse']:.4f} -> {path.name} ({note})")
     return lines
 
 
-def _record_run(path: Path, cfg: Config, row: Row, seed: int, metrics: dict) -> bool:
+def _record_run(path: Path, cfg: TrainConfig, row_id: str, seed: int, metrics: dict) -> bool:
     """Re-train one run, write its test as an .rrd; True when it reproduces ``metrics``."""
     from skinny_mj.recording import record_test
     from skinny_mj.training import train
 
-    outcome = train(train_config(cfg, row), seed)
-    record_test(path, outcome, f"paper E exp {row.row_id}, median run (seed {seed})",
-                {"row": row.row_id, "params": dict(row.params)})
+    outcome = train(cfg, seed)
+    record_test(path, outcome, f"paper E exp {row_id}, median run (seed {seed})",
+                {"row": row_id, "config": cfg.to_dict()})
     return (outcome.metrics["test"]["position_nrmse"] == metrics.get("position_nrmse")
             and outcome.metrics["test"]["motor_nrmse"] == metrics.get("motor_nrmse"))

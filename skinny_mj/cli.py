@@ -195,6 +195,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--config", type=Path, help="repeat a sweep: its config.json (options, "
                    "rows, runs); flags given as well override them")
 
+    p = sub.add_parser("sweep", help="a grid over any config keys on the experiment engine: "
+                       "skinny sweep esn.spectral_radius=0.5,0.9 --runs 20")
+    p.add_argument("axes", nargs="+", metavar="KEY=V1,V2", help="a config key and its values "
+                   "(quote a value holding a comma: KEY='a,b',c); rows are the product of the "
+                   "keys with several values, a key with one value changes every row")
+    p.add_argument("--runs", type=_positive_int, help="runs per row (default 10)")
+    p.add_argument("--study", help="start from a study's row (with --row): its config, "
+                   "metrics and run (default: paper E exp. 5, TrainConfig's defaults)")
+    p.add_argument("--row", help="the --study row to start from")
+    p.add_argument("--rows", help="comma-separated row ids to run (default: all)")
+    p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
+    p.add_argument("--out", type=Path, help="output folder (default: results/sweep/<time>)")
+    p.add_argument("--resume", action="store_true", help="continue the sweep in --out")
+    p.add_argument("--overwrite", action="store_true", help="replace the sweep in --out")
+    p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
+
     p = sub.add_parser("bench", help="measure the fast path: ratios vs reservoirpy, physics, "
                        "the naive loop (prints a table)")
     p.add_argument("--quick", action="store_true", help="short timings; no full paper-E sweep")
@@ -223,7 +239,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "0.0.0.0: every interface)")
     p.add_argument("--dry-run", action="store_true", help="print the viewer command only")
 
-    for name in ("demo", "train", "experiment", "bench"):  # the long commands
+    for name in ("demo", "train", "experiment", "sweep", "bench"):  # the long commands
         sub.choices[name].add_argument(
             "--quiet", "-q", action="store_true",
             help="no progress bar (also off when stderr is not a terminal)")

@@ -5,6 +5,11 @@ A paper module describes an :class:`Experiment`; :func:`run_sweep` runs it in pa
 ``out/runs/<row>-<seed>.json``; :func:`aggregate` rebuilds ``results.json`` from those
 files only and :func:`markdown_table` sets our numbers beside the paper's.
 
+A study declared as data (:class:`skinny_mj.study.Study`: a base config, rows of
+overrides) is turned into an :class:`Experiment` by :mod:`skinny_mj.study_plan`; the
+contract below is the execution layer under it, and what a study module of the older
+form implements by hand.
+
 The contract
 ------------
 **A paper module** (``experiments/paper_*.py``) exposes ``NAME``, ``report(results,
@@ -161,6 +166,9 @@ class Experiment:
     #: rows that cannot run on this machine -> why (an optional package missing): left out
     #: of a sweep of every row (with a line saying so), refused when named in ``rows``
     unavailable: Mapping[str, str] = field(default_factory=dict)
+    #: optional ``report(results, out_dir) -> str`` run after the sweep (a study's,
+    #: :mod:`skinny_mj.study_plan`); None: the module's ``report``
+    report: Callable[[Mapping[str, Any], Path], str] | None = None
 
     def __post_init__(self) -> None:
         if not _SAFE_NAME.match(self.name):

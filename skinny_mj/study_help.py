@@ -1,7 +1,7 @@
 """What ``skinny experiment list`` and ``skinny experiment NAME --help`` print.
 
-The help of one study is read off the study itself: its description (the module
-docstring), the rows, groups and runs of the ``Experiment`` its ``build()`` returns, which
+The help of one study is read off the study itself: its description (a Study's, or the
+module docstring), the rows, groups and runs of the ``Experiment`` its ``build()`` returns, which
 of ``--movement --dof --signals`` change its runs (each tried: a changed ``config.json``
 means the option is taken, a refusal that it is not, no change that it has no effect),
 and its cost: the run count, the time per run measured by earlier sweeps under
@@ -10,13 +10,11 @@ and its cost: the run count, the time per run measured by earlier sweeps under
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
 import re
 import textwrap
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 from skinny_mj import registry
@@ -63,16 +61,14 @@ def _plain(text: str) -> str:
 
 def _config(exp: Any) -> Any:
     """What ``config.json`` records of a built study: its config and its rows."""
+    from skinny_mj.sweep.folder import recorded_config
     from skinny_mj.sweep.stats import to_jsonable
 
-    cfg = exp.config
-    if dataclasses.is_dataclass(cfg) and not isinstance(cfg, type):
-        cfg = dataclasses.asdict(cfg)
-    return to_jsonable({"config": cfg, "rows": [(r.row_id, dict(r.params), r.runs)
-                                                for r in exp.rows]})
+    return to_jsonable({"config": recorded_config(exp.config),
+                        "rows": [(r.row_id, dict(r.params), r.runs) for r in exp.rows]})
 
 
-def option_effects(module: ModuleType, base: Any) -> dict[str, str]:
+def option_effects(module: Any, base: Any) -> dict[str, str]:
     """Per option of ``_PROBES``: what the study does with it, tried value by value."""
     ref = _config(base)
     out = {}
@@ -156,7 +152,7 @@ def study_help(name: str) -> str:
     """``skinny experiment NAME --help``: the study's description, rows, groups, runs,
     the options it takes and its cost. An unknown name is a SkinnyInputError."""
     module = registry.get(name)
-    doc = _plain((module.__doc__ or "").strip())
+    doc = _plain(registry.doc(name).strip())
     try:
         exp = module.build()
     except SkinnyInputError as err:  # e.g. an optional extra missing: the text still helps

@@ -14,23 +14,26 @@ from skinny_mj.sweep.stats import load_runs, summarize
 
 
 def test_registered_and_described():
-    assert experiments.get("paper-d") is paper_d
+    assert experiments.get("paper-d") is paper_d.STUDY
     assert "YMCA" in experiments.describe("paper-d")
 
 
 def test_rows_follow_the_papers_design():
-    cfg = paper_d.Config()
-    assert (cfg.dof, cfg.signals, cfg.spectral_radius, cfg.noise, cfg.sensor_noise,
-            cfg.runs) == (8, "cartesian", 0.5, 0.2, 0.01, 50)
+    study = paper_d.STUDY
+    cfg = study.base
+    assert (cfg.plant.dof, cfg.plant.signals, cfg.esn.spectral_radius, cfg.plant.sensor_noise,
+            study.runs) == (
+        8, "cartesian", 0.5, 0.01, 50)
+    plan = study.build().config
     got = {}
-    for row in paper_d.rows():
-        c = paper_d.train_configs(cfg, row)
+    for row in study.rows:
+        c = plan.trainings(row.id)
         tt, fel = c["tt"], c["fel"]
-        assert tt.method == "true-target" and fel.method == row.params["method"]
+        assert tt.method == "true-target" and fel.method == row.overrides["rule"]
         assert tt.noise_level == fel.noise_level and tt.movement.reps == fel.movement.reps
         assert set(row.paper) == {m for k in paper_d.COLUMNS for m in (k, f"{k}_var")}
-        got[row.row_id] = (fel.method, fel.noise_level, fel.movement.reps,
-                           fel.learning_cycles, tt.rule.beta, fel.rule.beta)
+        got[row.id] = (fel.method, fel.noise_level, fel.movement.reps, fel.learning_cycles,
+                       tt.rule.beta, fel.rule.beta)
     assert got == {
         "1": ("original", 0.0, 1, 1, 1.0, 1.0),
         "2": ("original", 0.2, 1, 1, 1.0, 1.0),
@@ -39,24 +42,27 @@ def test_rows_follow_the_papers_design():
         "4": ("new", 0.2, 1, 5, 0.1, 0.1),
     }
     # 50 rounds for the new method in both architectures: 5 cycles x 10 gains, 50 TT rounds.
-    assert cfg.fel_cycles * cfg.gains == cfg.tt_cycles == 50
-    assert [r.row_id for r in paper_d.rows()] == ["1", "2", "3a", "3b", "4"]
+    assert paper_d.FEL_CYCLES * cfg.rule.epochs == paper_d.TT_CYCLES == 50
+    assert all(plan.trainings(r.id)["tt"].rule.cycles == 50 for r in study.rows)
+    assert [r.id for r in study.rows] == ["1", "2", "3a", "3b", "4"]
 
 
 def test_build_options():
-    exp = paper_d.build(quick=True, movement="y")
-    assert exp.runs == 2 and exp.config.gains == 2 and exp.config.tt_cycles == 3
-    assert exp.config.trajectory == "y" and len(exp.rows) == 5
-    assert exp.name == paper_d.build().name == "paper-d"  # the movement is in the config
-    two_d = paper_d.build(dof=4, signals="joint")
-    assert (two_d.config.dof, two_d.config.signals) == (4, "joint")
+    exp = paper_d.STUDY.build(quick=True, movement="y")
+    tt = exp.config.trainings("2")["tt"]
+    fel = exp.config.trainings("2")["fel"]
+    assert exp.runs == 2 and fel.rule.epochs == 2 and tt.rule.cycles == 3
+    assert tt.movement.trajectory == "y" and len(exp.rows) == 5
+    assert exp.name == paper_d.STUDY.build().name == "paper-d"  # the movement is in the config
+    two_d = paper_d.STUDY.build(dof=4, signals="joint").config.config("1")
+    assert (two_d.plant.dof, two_d.plant.signals) == (4, "joint")
     assert set(paper_d.COLUMNS) <= set(exp.table_columns)
 
 
 @pytest.fixture(scope="module")
 def quick_sweep(tmp_path_factory):
     out = tmp_path_factory.mktemp("paper_d")
-    exp = paper_d.build(quick=True)
+    exp = paper_d.STUDY.build(quick=True)
     results = run_sweep(exp, out, workers=1, progress=False)
     return exp, out, results
 
@@ -99,8 +105,8 @@ def test_both_architectures_are_trained_and_differ(quick_sweep):
 
 
 def test_report_writes_figures_and_claims(quick_sweep):
-    _, out, results = quick_sweep
-    text = paper_d.report(results, out)
+    exp, out, results = quick_sweep
+    text = exp.report(results, out)
     for name in ("fig3_tt_position_test", "fig3_tt_motor_test", "fig3_fel_position_test",
                  "fig4_right_arm_tt"):
         assert (out / f"{name}.png").stat().st_size > 1000
@@ -112,20 +118,20 @@ def test_report_writes_figures_and_claims(quick_sweep):
 
 
 def test_run_one_is_reproducible_from_its_seed():
-    cfg = paper_d.quick_config(paper_d.Config(reservoir=30))
-    row = next(r for r in paper_d.rows() if r.row_id == "2")
-    a, b = paper_d.run_one(cfg, row, 7), paper_d.run_one(cfg, row, 7)
-    c = paper_d.run_one(cfg, row, 8)
+    exp = paper_d.STUDY.build(quick=True)
+    cfg = exp.config.config("2").override({"esn.n_reservoir": 30})
+    a, b = (paper_d.run_batch(cfg, paper_d.STUDY.row("2"), [7])[0] for _ in range(2))
+    c = paper_d.run_batch(cfg, paper_d.STUDY.row("2"), [8])[0]
     keys = [*paper_d.COLUMNS]
     assert [a[k] for k in keys] == [b[k] for k in keys]
     assert not np.allclose([a[k] for k in keys], [c[k] for k in keys])
 
 
 def test_lockstep_batch_equals_one_run_at_a_time():
-    cfg = paper_d.quick_config()
-    row = next(r for r in paper_d.rows() if r.row_id == "2")
-    single = [paper_d.run_one(cfg, row, seed) for seed in (11, 12)]
-    batch = paper_d.run_batch(cfg, row, [11, 12])
+    exp = paper_d.STUDY.build(quick=True)
+    row = next(r for r in exp.rows if r.row_id == "2")
+    single = [exp.run_one(row, seed) for seed in (11, 12)]
+    batch = exp.run_batch(row, [11, 12])
     for one, many in zip(single, batch, strict=True):
         assert {k: v for k, v in one.items() if not k.endswith("wall_s")} == \
             {k: v for k, v in many.items() if not k.endswith("wall_s")}

@@ -23,9 +23,9 @@ MD02 = sample_clip("md_02")  # shipped with the package
 def quick_sweep(tmp_path_factory):
     """``skinny experiment paper-e --quick --workers 1``, through the Python API."""
     out = tmp_path_factory.mktemp("paper_e_quick")
-    exp = paper_e.build(quick=True)
+    exp = paper_e.STUDY.build(quick=True)
     results = run_sweep(exp, out, workers=1, progress=False)
-    text = paper_e.report(results, out)
+    text = exp.report(results, out)
     return exp, out, results, text
 
 
@@ -34,7 +34,7 @@ def test_quick_sweep_is_complete(quick_sweep):
     ids = [r.row_id for r in exp.rows]
     assert [r["row"] for r in results["rows"]] == ids  # Table rows first, then the figures
     assert ids[:6] == ["1", "2", "3", "4", "5", "6"]
-    assert {paper_e.group_of(i) for i in ids} == {"table", "fig3", "fig4", "fig5a", "fig5b"}
+    assert set(exp.groups) == {"table", "fig3", "fig4", "fig5a", "fig5b", "fig5"}
     for row in results["rows"]:
         assert row["n_ok"] + row["n_failed"] == 2, row["row"]
     assert len(list((out / "runs").glob("*.json"))) == 2 * len(ids)
@@ -70,8 +70,8 @@ def test_results_equal_the_aggregate_of_the_run_files(quick_sweep):
     row = next(r for r in results["rows"] if r["row"] == "fig4-n50")
     values = [r["metrics"]["position_nrmse"] for r in runs]
     assert row["metrics"]["position_nrmse"]["mean"] == pytest.approx(np.mean(values))
-    assert row["params"]["reservoir"] == 50 and row["params"]["noise"] == 0.02
-    assert row["params"]["reps"] == 1  # quick; the paper: 5
+    assert row["params"]["esn.n_reservoir"] == 50 and row["params"]["esn.noise_level"] == 0.02
+    assert row["params"]["movement.reps"] == 1  # quick; the paper: 5
 
 
 def test_report_writes_figures_table_recordings_and_claims(quick_sweep):
@@ -101,14 +101,12 @@ def test_resume_does_no_new_runs(quick_sweep):
 
 
 def test_row_groups_and_run_counts():
-    cfg = paper_e.Config()
-    every = paper_e.rows(cfg)
+    exp = paper_e.STUDY.build()
+    every, groups = exp.rows, exp.groups
     assert len(every) == 6 + 4 + 7 + 9 + 9
-    groups = paper_e.groups(every)
     assert groups["table"] == ("1", "2", "3", "4", "5", "6")
     fig5 = groups["fig5"]
     assert fig5[0] == "fig5a-nu0" and fig5[-1] == "fig5b-nu0.5" and len(fig5) == 18
-    exp = paper_e.build()
     chosen = select_rows(exp, ["5", "fig4-n200"])
     assert [r.row_id for r in chosen] == ["5", "fig4-n200"]
     assert {r.runs for r in every if r.row_id in paper_e.TABLE_1} == {None}  # 20 (Config.runs)
@@ -170,12 +168,13 @@ def test_mocap_excerpt_reports_its_own_clipping():
 
 def test_sweep_on_a_movement_excerpt(tmp_path):
     movement = f"{MD02}@start=3,duration=6.26"
-    exp = paper_e.build(quick=True, movement=movement)
+    exp = paper_e.STUDY.build(quick=True, movement=movement)
     assert exp.name == "paper-e"  # the movement is recorded in config.json
-    assert exp.config.trajectory == movement
+    assert exp.config.base.movement.trajectory == movement
+    assert {exp.config.config(r.row_id).movement.trajectory for r in exp.rows} == {movement}
     results = run_sweep(exp, tmp_path, rows=["5", "fig3-b0.3"], runs=1, workers=1,
                         progress=False)
-    text = paper_e.report(results, tmp_path)
+    text = exp.report(results, tmp_path)
     table = (tmp_path / "table.md").read_text()
     assert "md_02" in table.splitlines()[0] and "313 steps" in table
     assert (tmp_path / "fig3.png").is_file()

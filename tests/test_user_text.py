@@ -103,7 +103,7 @@ def test_cli_help_speaks_to_users():
 
 @pytest.mark.parametrize("name", registry.names())
 def test_study_descriptions_speak_to_users(name):
-    assert diary_words(registry.get(name).__doc__ or "") == []
+    assert diary_words(registry.doc(name)) == []
 
 
 @pytest.mark.parametrize("path", sorted((ROOT / "docs/results").glob("*.md")),

@@ -10,15 +10,26 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
+#: ``skinny experiment``'s options that change a study's runs, and the TrainConfig keys
+#: each sets (a :class:`skinny_mj.study.Study`'s base takes them as overrides).
+OPTION_KEYS = {"movement": ("movement.trajectory", "movement.asf"), "dof": ("plant.dof",),
+               "signals": ("plant.signals",)}
+#: The same, as the fields of the config classes of studies in the older module form.
+FIELD_KEYS = {"movement": ("trajectory", "asf"), "dof": ("dof",), "signals": ("signals",)}
 
-def movement_changes(movement: str | None, asf: str | None, dof: int | None,
-                     signals: str | None) -> dict[str, Any]:
-    """The config fields to replace: only the options given (None: the paper's), and
-    ``asf`` with a movement only, as a string (it is recorded in ``config.json``)."""
-    changes: dict[str, Any] = {k: v for k, v in (("trajectory", movement), ("dof", dof),
-                                                 ("signals", signals)) if v is not None}
+
+def movement_changes(movement: str | None, asf: Any, dof: int | None, signals: str | None,
+                     keys: dict[str, tuple[str, ...]] = FIELD_KEYS) -> dict[str, Any]:
+    """The config keys to set (``keys``: option -> keys): only the options given (None:
+    the paper's), and ``asf`` with a movement only, as a string (it is recorded in
+    ``config.json``)."""
+    changes: dict[str, Any] = {}
     if movement is not None:
-        changes["asf"] = None if asf is None else str(asf)
+        key, asf_key = keys["movement"]
+        changes.update({key: movement, asf_key: None if asf is None else str(asf)})
+    for option, value in (("dof", dof), ("signals", signals)):
+        if value is not None:
+            changes[keys[option][0]] = value
     return changes
 
 

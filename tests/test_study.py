@@ -1,0 +1,186 @@
+"""A study as data (skinny_mj.study, skinny_mj.study_plan), the ad-hoc grid of
+``skinny sweep`` (skinny_mj.sweep.grid) and the run-file comparison
+(skinny_mj.sweep.compare)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from skinny_mj.cli import main
+from skinny_mj.config import TrainConfig
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.experiment import run_seed, run_sweep
+from skinny_mj.overrides import parse_value
+from skinny_mj.study import Quick, Row, Study
+from skinny_mj.study_plan import Results, plan, read_metric
+from skinny_mj.sweep import compare
+from skinny_mj.sweep.grid import grid_study
+
+
+def toy_run(config: TrainConfig, row: Row, seeds: list[int]) -> list:
+    """A run without training: the config and params it was given, per seed."""
+    return [{"reservoir": config.esn.n_reservoir, "epochs": config.rule.epochs,
+             "k": row.params["k"],
+             "seed": s} for s in seeds]
+
+
+def toy(**changes) -> Study:
+    rows = (Row("a", {"esn.n_reservoir": 30}, group="g", params={"k": 1}),
+            Row("b", {"esn.n_reservoir": 40}, {"x": 0.5}, runs=1, group="g", params={"k": 2},
+                quick={"k": 3, "esn.n_reservoir": 35}),
+            Row("c", {"rule.epochs": 3}, seeds_of="a", params={"k": 4}),
+            Row("q", {"esn.n_reservoir": 25}, params={"k": 5}, quick_only=True))
+    return Study(**{"name": "toy", "rows": rows, "run_batch": toy_run, "runs": 3,
+                    "params": {"k": 0, "tol": 0.1}, "groups": {"all": ("g", "c")},
+                    "quick": Quick({"rule.epochs": 2}, runs=2, rows=("g", "c", "q")),
+                    **changes})
+
+
+def test_rows_configs_params_groups_and_quick_are_derived():
+    full = plan(toy())
+    assert [p.row.id for p in full.rows] == ["a", "b", "c"]  # q only in quick sweeps
+    assert full.config("a").esn.n_reservoir == 30 and full.config("c").rule.epochs == 3
+    assert full.row("b").params == {"k": 2, "tol": 0.1}
+    assert full.groups() == {"g": ("a", "b"), "all": ("a", "b", "c")}
+    quick = plan(toy(), quick=True)
+    assert [p.row.id for p in quick.rows] == ["a", "b", "c", "q"]
+    assert quick.config("b").esn.n_reservoir == 35 and quick.row("b").params["k"] == 3
+    assert quick.config("c").rule.epochs == 2  # Quick.overrides come after the row's
+    exp = toy().build(quick=True)
+    assert exp.runs == 2 and [r.runs for r in exp.rows] == [None, 1, None, None]
+    assert exp.rows[1].params == {"esn.n_reservoir": 35, "k": 3}  # what run files record
+    with pytest.raises(SkinnyInputError, match="seeds_of no row"):
+        toy(quick=Quick(rows=("c",))).build(quick=True)  # c takes a's seeds: a must run
+
+
+def test_options_are_overrides_of_the_base_and_refused_when_not_taken():
+    exp = toy().build(movement="md_02.amc", asf=None, dof=8, signals="joint")
+    assert {(c.movement.trajectory, c.plant.dof, c.plant.signals) for c in
+            (exp.config.config(r.row_id) for r in exp.rows)} == {("md_02.amc", 8, "joint")}
+    with pytest.raises(SkinnyInputError, match="takes no --dof"):
+        toy(takes=("movement",)).build(dof=8)
+    with pytest.raises(SkinnyInputError, match="unknown config key"):
+        Study("bad", (Row("a", {"no_such_key": 1}),), metrics={"x": "wall_s"}).build()
+
+
+def test_sweep_runs_the_custom_run_with_the_sweeps_seeds(tmp_path):
+    exp = toy().build(quick=True)
+    results = run_sweep(exp, tmp_path, workers=1, progress=False)
+    runs = {(r["row"], r["run_index"]): r for r in Results(results, tmp_path).runs()}
+    assert runs[("b", 0)]["metrics"]["reservoir"] == 35
+    assert runs[("c", 1)]["seed"] == run_seed(0, 0, 1) == runs[("c", 1)]["metrics"]["seed"]
+    assert runs[("q", 0)]["seed"] == run_seed(0, 3, 0)  # over the rows this sweep has
+    config = json.loads((tmp_path / "config.json").read_text())["config"]
+    assert config["after_rows"] == {"rule.epochs": 2} and config["base"]["esn.n_reservoir"] == 200
+    assert Results(results, tmp_path).values("c", "k") == [4, 4]
+
+
+def test_a_report_gets_typed_results_and_the_plan(tmp_path):
+    seen = {}
+
+    def report(results, plan, out_dir):
+        seen.update(values=results.values("a", "k"), base=plan.base, out=out_dir)
+        return "claims"
+
+    exp = toy(report=report).build()
+    results = run_sweep(exp, tmp_path, rows=["a"], runs=1, workers=1, progress=False)
+    assert exp.report(results, tmp_path) == "claims"
+    assert seen == {"values": [1], "base": TrainConfig(), "out": tmp_path}
+
+
+def test_read_metric_follows_dotted_paths_or_calls():
+    m = {"test": {"position_nrmse": 0.1}, "wall_s": 2.0}
+    assert read_metric(m, "test.position_nrmse") == 0.1
+    assert read_metric(m, "test.nope") is None
+    assert read_metric(m, lambda d: d["wall_s"] * 2) == 4.0
+
+
+def test_a_study_checks_its_rows():
+    with pytest.raises(SkinnyInputError, match="unique row ids"):
+        Study("s", (Row("a"), Row("a")), metrics={"x": "wall_s"})
+    with pytest.raises(SkinnyInputError, match="both a config override and"):
+        Row("a", {"k": 1}, params={"k": 2})
+    with pytest.raises(SkinnyInputError, match="no metrics and no run_batch"):
+        Study("s", (Row("a"),))
+    with pytest.raises(SkinnyInputError, match="groups name no row or group"):
+        Study("s", (Row("a"),), metrics={"x": "wall_s"}, groups={"g": ("zz",)})
+    with pytest.raises(SkinnyInputError, match="plain file-name word"):
+        Study("s", (Row("a/b"),), metrics={"x": "wall_s"}).build()
+
+
+# -- skinny sweep --------------------------------------------------------------------------
+def test_grid_values_take_the_fields_type():
+    cfg = TrainConfig()
+    assert parse_value(cfg, "esn.spectral_radius", "0.9") == 0.9
+    assert parse_value(cfg, "esn.n_reservoir", "3") == 3
+    assert parse_value(cfg, "esn.noise_level", "none") is None
+    assert parse_value(cfg, "test.noise", "yes") is True
+    assert parse_value(cfg, "movement.trajectory", "ymca") == "ymca"
+    for text, key in (("x", "esn.spectral_radius"), ("1.5", "esn.n_reservoir"),
+                      ("maybe", "test.noise"), ("none", "esn.n_reservoir")):
+        with pytest.raises(SkinnyInputError):
+            parse_value(cfg, key, text)
+
+
+def test_a_grid_parses_a_types_settings_after_the_type_is_chosen():
+    study = grid_study(["actuation.feedback=pd,inertia-pd", "actuation=torque"])
+    assert study.base.torque is not None
+    assert [r.overrides["actuation.feedback"] for r in study.rows] == ["pd", "inertia-pd"]
+
+
+def test_grid_rows_are_the_product_of_the_swept_keys():
+    study = grid_study(["esn.spectral_radius=0.5,0.9", "esn.n_reservoir=100,200",
+                        "rule.epochs=2"])
+    assert [r.id for r in study.rows] == [
+        "esn.spectral_radius=0.5+esn.n_reservoir=100",
+        "esn.spectral_radius=0.5+esn.n_reservoir=200",
+        "esn.spectral_radius=0.9+esn.n_reservoir=100",
+        "esn.spectral_radius=0.9+esn.n_reservoir=200"]
+    assert study.base.rule.epochs == 2 and study.rows[3].overrides == {
+        "esn.spectral_radius": 0.9, "esn.n_reservoir": 200}
+    quoted = grid_study(["movement.trajectory='md_02.amc@start=3,duration=6.26',ymca"])
+    assert [r.overrides["movement.trajectory"] for r in quoted.rows] == [
+        "md_02.amc@start=3,duration=6.26", "ymca"]
+    assert all(Row(r.id) for r in quoted.rows)  # plain file-name words
+    for bad in (["reservoir"], ["esn.n_reservoir=1,1"], ["no_such=1"], ["rule.epochs=0,1"], []):
+        with pytest.raises(SkinnyInputError):
+            grid_study(bad)
+
+
+def test_skinny_sweep_runs_resumes_and_refuses_in_one_line(tmp_path, capsys):
+    out = tmp_path / "sr"
+    args = ["sweep", "esn.spectral_radius=0.5,0.9", "rule.epochs=1", "esn.n_reservoir=20",
+            "--runs", "1",
+            "--workers", "1", "--out", str(out), "-q"]
+    assert main(args) == 0
+    table = (out / "table.md").read_text()
+    assert "| esn.spectral_radius=0.9 | 0 / 1 |" in table and "position_nrmse" in table
+    files = sorted(p.name for p in (out / "runs").glob("*.json"))
+    assert files == [f"esn.spectral_radius={v}-{run_seed(0, i, 0)}.json"
+                     for i, v in enumerate(("0.5", "0.9"))]
+    before = {p: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
+    assert main([*args, "--resume"]) == 0
+    assert {p: p.stat().st_mtime_ns for p in (out / "runs").iterdir()} == before
+    capsys.readouterr()
+    assert main(["sweep", "esn.spectral_radius=x"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "must be a number" in err
+
+
+# -- comparing two sweep folders ----------------------------------------------------------
+def test_compare_reports_metric_and_seed_differences_but_not_wall_time(tmp_path):
+    exp = toy().build(quick=True)
+    run_sweep(exp, tmp_path / "a", workers=1, progress=False)
+    run_sweep(exp, tmp_path / "b", workers=1, progress=False)
+    assert compare.compare(tmp_path / "a", tmp_path / "b") == ([], [])
+    path = next((tmp_path / "b" / "runs").glob("b-*.json"))
+    record = json.loads(path.read_text())
+    record["metrics"]["k"] = 99
+    record["params"] = {"renamed": 1}
+    path.write_text(json.dumps(record))
+    diffs, params = compare.compare(tmp_path / "a", tmp_path / "b")
+    assert diffs == [f"{path.name}: metrics differ in ['k']"] and len(params) == 1
+    next((tmp_path / "b" / "runs").glob("c-*.json")).unlink()
+    assert compare.main([str(tmp_path / "a"), str(tmp_path / "b")]) == 1
