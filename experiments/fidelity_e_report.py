@@ -20,11 +20,18 @@ def _stat(results: dict, row_id: str, metric: str) -> tuple[float, float, int, i
     return np.nan, np.nan, 0, 0
 
 
-def ratios(results: dict, cfg) -> list[dict]:
+def _grid(plan) -> tuple[list[str], list[float]]:
+    """The movements (in the study's order) and u_error gains the sweep planned."""
+    movements = list(dict.fromkeys(p.row.group for p in plan.rows))
+    return movements, sorted({p.config.rule.u_error_gain for p in plan.rows})
+
+
+def ratios(results: dict, plan) -> list[dict]:
     """One dict per (movement, gain, test noise, metric): exp means and the ratios."""
     out = []
-    for m in cfg.movements:
-        for g in cfg.gains:
+    movements, gains = _grid(plan)
+    for m in movements:
+        for g in gains:
             for noisy in (False, True):
                 for metric in ("position_nrmse", "motor_nrmse"):
                     key = ("noisy_" if noisy else "") + metric
@@ -38,10 +45,10 @@ def ratios(results: dict, cfg) -> list[dict]:
     return out
 
 
-def write_report(results: dict, out_dir: Path, cfg) -> str:
+def write_report(results: dict, out_dir: Path, plan) -> str:
     from experiments.fidelity_e import THESIS_RATIO
 
-    rows = ratios(results, cfg)
+    rows = ratios(results, plan)
     lines = ["| movement | u_error gain | test noise | metric | exp 1 | exp 2 | exp 5 | "
              "exp 2 / exp 5 | thesis |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -53,11 +60,11 @@ def write_report(results: dict, out_dir: Path, cfg) -> str:
                      f"×{r['ratio_2_5']:.2f} | ×{THESIS_RATIO[r['metric']]:.1f} |")
     text = "\n".join(lines) + "\n\nmean ± sd over the ok runs (failed / n in brackets).\n"
     atomic_write_text(Path(out_dir) / "ratios.md", text)
-    _figure(rows, cfg, Path(out_dir) / "fig_ratio.png", THESIS_RATIO)
+    _figure(rows, _grid(plan)[0], Path(out_dir) / "fig_ratio.png", THESIS_RATIO)
     return text
 
 
-def _figure(rows: list[dict], cfg, path: Path, thesis: dict) -> None:
+def _figure(rows: list[dict], movements: list[str], path: Path, thesis: dict) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -65,7 +72,7 @@ def _figure(rows: list[dict], cfg, path: Path, thesis: dict) -> None:
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
     for ax, metric in zip(axes, ("position_nrmse", "motor_nrmse"), strict=True):
-        for i, m in enumerate(cfg.movements):
+        for i, m in enumerate(movements):
             for noisy, style in ((False, "o-"), (True, "s--")):
                 cell = [r for r in rows if r["movement"] == m and
                         r["metric"] == metric and r["test_noise"] == noisy]
