@@ -15,12 +15,12 @@ curves by eye; here every seed's are measured, per epoch:
   against the desired ones during the learning cycle (Fig. 10 plots "the position
   sequences in epoch 5"; the positions that are the ESN's "current position" input).
 
-The rows are paper E's exps 1, 2 and 5 (``paper_e.TABLE_1`` / ``paper_e.train_config``,
-imported). **One initial network per seed:** rows ``2`` and ``5`` take row ``1``'s seeds
-(:attr:`skinny_mj.experiment.Row.seeds_of`), so the three rows of run k train from the
-same seed and share the ESN weights, the initial readout, the reservoir-noise and the
-sensor-noise streams (``run_streams(seed)``); exp 1's runs are paper-e row 1's runs,
-seed for seed.
+The rows are paper E's exps 1, 2 and 5 (their rows of ``paper_e.ROWS``, 20 runs each;
+``--quick``: 2 runs of 2 epochs). **One initial network per seed:** rows ``2`` and ``5``
+take row ``1``'s seeds (:attr:`skinny_mj.study.Row.seeds_of`), so the three rows of run k
+train from the same seed and share the ESN weights, the initial readout, the
+reservoir-noise and the sensor-noise streams (``run_streams(seed)``); exp 1's runs are
+paper-e row 1's runs, seed for seed.
 
 A run whose network diverges keeps its diagnostics up to the failing epoch (None after
 it): the run file is status ``ok`` with ``diverged`` = 1 and no test NRMSE, because the
@@ -30,9 +30,6 @@ training curves are this experiment's data. Figures and the table: ``report``
 
 from __future__ import annotations
 
-import functools
-import json
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -40,10 +37,9 @@ import numpy as np
 from controllers.metrics import nrmse, position_nrmse
 from controllers.rollout import Rollout
 from experiments import paper_e
-from skinny_mj.config import TrainConfig, relative_cost
-from skinny_mj.experiment import Experiment, Row, run_seed
-from skinny_mj.sweep import one_of_batch
-from skinny_mj.sweep.options import config_from_dict, movement_changes
+from skinny_mj.config import TrainConfig
+from skinny_mj.experiment import run_seed
+from skinny_mj.study import Quick, Row, Study
 from skinny_mj.sweep.stats import to_jsonable
 
 NAME = "paper-e-explain"
@@ -55,24 +51,7 @@ SERIES_RUNS = 2  # runs (by run index) whose signals are kept: the figures show 
 LEARN_KEYS = ("est_nrmse", "est_rough", "used_nrmse", "used_rough", "esn_learn_nrmse",
               "esn_learn_rough", "tf_position_nrmse", "tf_sensed_nrmse")
 EVAL_KEYS = ("esn_nrmse", "esn_rough", "eval_position_nrmse")
-
-
-@dataclass(frozen=True)
-class Config:
-    """Paper E's network and schedule (:class:`paper_e.Config`), 20 runs per row."""
-
-    dof: int = 4
-    signals: str = "cartesian"
-    trajectory: str = "ymca"
-    asf: str | None = None
-    reservoir: int = 200
-    epochs: int = 10
-    runs: int = 20
-    base_seed: int = 0
-
-    @classmethod
-    def from_dict(cls, d: dict) -> Config:
-        return config_from_dict(cls, d)
+BASE_SEED = 0
 
 
 def roughness(y: np.ndarray) -> np.ndarray:
@@ -83,15 +62,6 @@ def roughness(y: np.ndarray) -> np.ndarray:
     y = np.ascontiguousarray(y, float)
     d2 = y[..., 2:, :] - 2.0 * y[..., 1:-1, :] + y[..., :-2, :]
     return np.sqrt(np.mean(d2**2, axis=-2)).mean(axis=-1)
-
-
-def train_config(cfg: Config, row: Row) -> TrainConfig:
-    """Paper E's training of exp ``row.params["exp"]`` (its Table 1 row), unchanged."""
-    method, beta, cycles, reps = paper_e.TABLE_1[row.params["exp"]]
-    base = paper_e.Config(dof=cfg.dof, signals=cfg.signals, trajectory=cfg.trajectory,
-                          asf=cfg.asf, reservoir=cfg.reservoir, epochs=cfg.epochs)
-    return paper_e.train_config(base, Row(row.params["exp"], {
-        "method": method, "beta": beta, "cycles": cycles, "reps": reps}))
 
 
 class EpochDiagnostics:
@@ -169,13 +139,13 @@ class EpochDiagnostics:
         return out
 
 
-def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
-    """Seeds of one row in lockstep (row ``1``'s seeds in every row: :func:`all_rows`)."""
+def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
+    """Seeds of one row in lockstep (row ``1``'s seeds in every row: ``seeds_of``)."""
     from skinny_mj.training import build_run, evaluate, train_run
 
     shared = list(seeds)
-    keep = {run_seed(cfg.base_seed, 0, k) for k in range(SERIES_RUNS)}  # the kept signals
-    run = build_run(train_config(cfg, row), shared)
+    keep = {run_seed(BASE_SEED, 0, k) for k in range(SERIES_RUNS)}  # the kept signals
+    run = build_run(config, shared)
     diag = EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory),
                             len(shared), run.cfg.rule.epochs, run.cfg.learning_cycles)
     trained = train_run(run, observe=diag).fel
@@ -193,35 +163,18 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     return out
 
 
-def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
-
-
-def all_rows() -> tuple[Row, ...]:
-    return tuple(Row(e, {"exp": e}, {k: v for k, v in zip(
-        ("position_nrmse", "position_nrmse_var", "motor_nrmse", "motor_nrmse_var"),
-        paper_e.PAPER_TABLE_2[e], strict=True)}, seeds_of=None if e == EXPS[0] else EXPS[0])
-        for e in EXPS)
-
-
-def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          dof: int | None = None, signals: str | None = None) -> Experiment:
-    """Exps 1, 2, 5 from one network per seed; ``quick``: 2 runs of 2 epochs."""
-    changes = movement_changes(movement, asf, dof, signals)
-    cfg = Config(**({"runs": 2, "epochs": 2} if quick else {}), **changes)
-    return Experiment(
-        name=NAME, rows=all_rows(), run_one=functools.partial(run_one, cfg), config=cfg,
-        runs=cfg.runs, base_seed=cfg.base_seed,
-        table_columns=("est_rough_e1", "used_rough_e5", "esn_rough_e5", "tf_position_nrmse_e5",
-                       "position_nrmse", "motor_nrmse"),
-        run_batch=functools.partial(run_batch, cfg),
-        cost=lambda row: relative_cost(train_config(cfg, row)))
-
-
-def report(results: dict, out_dir: Path) -> str:
+def report(results, plan, out_dir: Path) -> str:
     """explain.md (per-epoch table) and fig7_*.png … fig10_*.png."""
     from experiments.paper_e_explain_report import write_report
 
-    out_dir = Path(out_dir)
-    cfg = Config.from_dict(json.loads((out_dir / "config.json").read_text())["config"])
-    return write_report(out_dir, cfg)
+    return write_report(out_dir, plan)
+
+
+STUDY = Study(
+    name=NAME, description=__doc__, runs=20, base_seed=BASE_SEED, run_batch=run_batch,
+    rows=tuple(Row(e, paper_e.STUDY.row(e).overrides, paper_e.STUDY.row(e).paper,
+                   seeds_of=None if e == EXPS[0] else EXPS[0]) for e in EXPS),
+    columns=("est_rough_e1", "used_rough_e5", "esn_rough_e5", "tf_position_nrmse_e5",
+             "position_nrmse", "motor_nrmse"),
+    quick=Quick({"rule.epochs": 2}, runs=2), report=report,
+)

@@ -11,8 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.paper_e_explain import EXPS, Config, train_config
-from skinny_mj.experiment import Row
+from experiments.paper_e_explain import EXPS
 from skinny_mj.io import atomic_write_text
 from skinny_mj.sweep.stats import load_runs
 
@@ -126,14 +125,17 @@ def table(by_row: dict[str, list[dict]], epochs: int) -> str:
     return "\n".join(lines)
 
 
-def write_report(out_dir: Path, cfg: Config) -> str:
+def write_report(out_dir: Path, plan) -> str:
+    """explain.md and Figs. 7–10 of the sweep ``plan`` in ``out_dir``."""
     by_row = _runs(out_dir)
-    epochs = cfg.epochs
+    cfg = plan.config(EXPS[0])
+    epochs = cfg.rule.epochs
     true_rough = [r["metrics"]["true_rough"] for runs in by_row.values() for r in runs]
     n = {e: len(by_row[e]) for e in EXPS}
     diverged = {e: sum(r["metrics"]["diverged"] for r in by_row[e]) for e in EXPS}
     text = "\n".join([
-        f"Movement `{cfg.trajectory}`, {epochs} epochs, N = {cfg.reservoir}; runs per exp "
+        f"Movement `{cfg.movement.trajectory}`, {epochs} epochs, N = {cfg.esn.n_reservoir}; "
+        "runs per exp "
         + ", ".join(f"{e}: {n[e]} ({diverged[e]} diverged)" for e in EXPS) + ".",
         f"Roughness of the true commands: {np.mean(true_rough):.4f}" if true_rough else "",
         "", "Mean (sd) over runs; y_est / y_used of the epoch's last learning cycle; "
@@ -142,7 +144,7 @@ def write_report(out_dir: Path, cfg: Config) -> str:
         "## Claims (paired: the same network in every exp)", *claims(by_row, epochs), ""])
     atomic_write_text(out_dir / "explain.md", text)
     for fig in (fig7, fig8, fig9, fig10):
-        fig(out_dir, cfg, by_row)
+        fig(out_dir, plan, by_row)
     return text
 
 
@@ -198,10 +200,18 @@ def _epoch_axes(ax, ylabel: str, true_rough: float | None = None, log: bool = Tr
     ax.legend(fontsize=7)
 
 
-def _true_commands(cfg: Config, exp: str) -> np.ndarray:
+def _movement(plan) -> str:
+    return plan.base.movement.trajectory
+
+
+def _epochs(plan) -> int:
+    return plan.config(EXPS[0]).rule.epochs
+
+
+def _true_commands(plan, exp: str) -> np.ndarray:
     from skinny_mj.run_parts import full_scale_speeds, load_trajectory, true_commands_of
 
-    tc = train_config(cfg, Row(exp, {"exp": exp}))
+    tc = plan.config(exp)
     traj, _ = load_trajectory(tc)
     return true_commands_of(tc, traj, full_scale_speeds(tc, traj))
 
@@ -222,7 +232,7 @@ def _figure(n_top: int):
     return fig, top, bottom
 
 
-def fig7(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | None:
+def fig7(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
     """Fig. 7: why exp 1 fails (true target, initial output, y_est and the output after
     training in epoch 1), and per epoch roughness / NRMSE of y_est and the ESN output."""
     from skinny_mj.plots import save_figure
@@ -232,7 +242,7 @@ def fig7(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | No
     if ex is None:
         return None
     fig, top, (rough, err) = _figure(4)
-    _commands_panel(top[0], _true_commands(cfg, "1"), "(a) true target")
+    _commands_panel(top[0], _true_commands(plan, "1"), "(a) true target")
     _commands_panel(top[1], np.asarray(ex["metrics"]["series"]["initial_output"], float),
                     "(b) initial ESN output (W_out = 0)")
     _commands_panel(top[2], _series(ex, "y_est", 1), "(c) y_est, epoch 1")
@@ -244,20 +254,20 @@ def fig7(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | No
     for key, label in (("est_nrmse", "y_est"), ("esn_nrmse", "ESN output (eval)")):
         _band(err, runs, key, label)
     _epoch_axes(err, "NRMSE vs true commands", log=False)
-    fig.suptitle(f"Exp 1 (original, 1 rep), {cfg.trajectory}: example run "
+    fig.suptitle(f"Exp 1 (original, 1 rep), {_movement(plan)}: example run "
                  f"(seed {ex['metrics']['network_seed']}); bottom: mean ± sd, "
                  f"{len(runs)} runs", fontsize=9)
     return save_figure(fig, out_dir / "fig7_exp1.png")
 
 
-def fig8(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | None:
+def fig8(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
     """Fig. 8: the ESN output after training, exp 1 vs exp 2 (repetitions)."""
     from skinny_mj.plots import save_figure
 
     if not by_row["1"] or not by_row["2"]:
         return None
     fig, top, (rough, err) = _figure(2)
-    last, exp_reps = cfg.epochs, {"1": "1 rep", "2": "5 reps"}
+    last, exp_reps = _epochs(plan), {"1": "1 rep", "2": "5 reps"}
     for ax, exp, tag in ((top[0], "1", "(a)"), (top[1], "2", "(b)")):
         _commands_panel(ax, _series(_example(by_row[exp]), "y_esn", last),
                         f"{tag} exp {exp}, {exp_reps[exp]}: ESN output, epoch {last}")
@@ -267,12 +277,12 @@ def fig8(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | No
         _band(err, by_row[exp], "esn_nrmse", LABEL[exp])
     _epoch_axes(rough, "ESN output roughness (eval)", _true_rough(by_row["1"]))
     _epoch_axes(err, "ESN output NRMSE vs true commands", log=False)
-    fig.suptitle(f"Repetitions, {cfg.trajectory}: same initial network; bottom: mean ± sd "
+    fig.suptitle(f"Repetitions, {_movement(plan)}: same initial network; bottom: mean ± sd "
                  "over runs", fontsize=9)
     return save_figure(fig, out_dir / "fig8_reps.png")
 
 
-def fig9(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | None:
+def fig9(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
     """Fig. 9: exp 5 in epoch 5: y_est, y_used, the ESN output after the fit; per epoch
     roughness / NRMSE of the three (and exp 1's y_est for reference)."""
     from skinny_mj.plots import save_figure
@@ -281,7 +291,7 @@ def fig9(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | No
     ex = _example(runs)
     if ex is None:
         return None
-    e5 = min(5, cfg.epochs)
+    e5 = min(5, _epochs(plan))
     fig, top, (rough, err) = _figure(3)
     _commands_panel(top[0], _series(ex, "y_est", e5), f"(a) y_est, epoch {e5}")
     _commands_panel(top[1], _series(ex, "y_used", e5), f"(b) y_used, epoch {e5}")
@@ -294,12 +304,12 @@ def fig9(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | No
     _band(err, by_row["1"], "est_nrmse", "exp 1 y_est", ":")
     _epoch_axes(rough, "roughness (RMS 2nd difference)", _true_rough(runs))
     _epoch_axes(err, "NRMSE vs true commands", log=False)
-    fig.suptitle(f"Exp 5 (new, β = 0.1), {cfg.trajectory}: last learning cycle of each epoch; "
+    fig.suptitle(f"Exp 5 (new, β = 0.1), {_movement(plan)}: last learning cycle of each epoch; "
                  "bottom: mean ± sd over runs", fontsize=9)
     return save_figure(fig, out_dir / "fig9_exp5.png")
 
 
-def fig10(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | None:
+def fig10(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
     """Fig. 10: teacher forcing in epoch 5: the plant's positions (one repetition)
     beside the desired ones, and the position NRMSE of the learning cycles per epoch."""
     from skinny_mj.plots import save_figure
@@ -307,8 +317,8 @@ def fig10(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | N
 
     if not any(by_row.values()):
         return None
-    e5 = min(5, cfg.epochs)
-    tc = train_config(cfg, Row("1", {"exp": "1"}))
+    e5 = min(5, _epochs(plan))
+    tc = plan.config("1")
     desired = load_trajectory(tc)[0].position_signals(tc.plant.signals)
     fig, top, (curve, box) = _figure(3)
     for ax, exp, tag in zip(top, EXPS, ("(a)", "(b)", "(c)"), strict=True):
@@ -332,6 +342,6 @@ def fig10(out_dir: Path, cfg: Config, by_row: dict[str, list[dict]]) -> Path | N
     box.set_yscale("log")
     box.set_ylabel(f"position NRMSE, epoch {e5}", fontsize=8)
     box.tick_params(labelsize=7, which="both")
-    fig.suptitle(f"Teacher forcing, {cfg.trajectory}: 8 position signals of the plant "
+    fig.suptitle(f"Teacher forcing, {_movement(plan)}: 8 position signals of the plant "
                  "during the learning cycle", fontsize=9)
     return save_figure(fig, out_dir / "fig10_teacher_forcing.png")

@@ -4,28 +4,31 @@ writes its table and Figs. 7–10."""
 
 from __future__ import annotations
 
-import functools
+import dataclasses
 
 import numpy as np
 import pytest
 
 from experiments import paper_e_explain as pee
 from skinny_mj.experiment import Experiment, run_seed, run_sweep
+from skinny_mj.study import Quick
 from skinny_mj.training import build_run, evaluate, train_batch, train_run
 
-TINY = pee.Config(epochs=1, reservoir=20, runs=1)
-ROWS = {r.row_id: r for r in pee.all_rows()}
+TINY = {"rule.epochs": 1, "esn.n_reservoir": 20}
+
+
+def _config(exp: str, changes: dict):
+    """Exp ``exp``'s training (the study's row) with ``changes``."""
+    return pee.STUDY.config(exp).override(changes)
 
 
 @pytest.fixture(scope="module")
-def short(tmp_path_factory) -> pee.Config:
+def short(tmp_path_factory) -> dict:
     """TINY on the first 1.5 s of YMCA (75 steps): fast enough for the default run."""
-    from dataclasses import replace
-
     from skinny_mj.trajectories.ymca import ymca
 
     path = ymca(4).save(tmp_path_factory.mktemp("movement") / "ymca.npz")
-    return replace(TINY, trajectory=f"{path}@start=0,duration=1.5")
+    return {**TINY, "movement.trajectory": f"{path}@start=0,duration=1.5"}
 
 
 def test_roughness_of_known_signals():
@@ -50,13 +53,13 @@ def _load(results: dict, out_dir) -> list[dict]:
 
 
 def test_the_three_exps_of_a_run_start_from_one_network(tmp_path):
-    seeds = Experiment("seeds", pee.all_rows(), _seed_of, runs=3)
+    seeds = Experiment("seeds", pee.STUDY.build().rows, _seed_of, runs=3)
     runs = [r for r in _load(run_sweep(seeds, tmp_path, workers=1, progress=False), tmp_path)]
     for k in range(3):  # row 1's seed of run k, in all three rows
         assert {r["row"]: r["metrics"]["seed"] for r in runs if r["run_index"] == k} == \
             dict.fromkeys(pee.EXPS, float(run_seed(0, 0, k)))
     engine = [run_seed(0, 0, 2)]
-    nets = [build_run(pee.train_config(TINY, ROWS[e]), [engine[0]]).esn for e in pee.EXPS]
+    nets = [build_run(_config(e, TINY), [engine[0]]).esn for e in pee.EXPS]
     for esn in nets[1:]:
         for name in ("W", "W_in", "W_back", "W_out"):
             np.testing.assert_array_equal(getattr(esn, name), getattr(nets[0], name))
@@ -65,7 +68,7 @@ def test_the_three_exps_of_a_run_start_from_one_network(tmp_path):
 
 
 def test_the_hook_changes_no_result_and_measures_the_blend(short):
-    cfg = pee.train_config(short, ROWS["5"])
+    cfg = _config("5", short)
     seed = run_seed(0, 0, 0)
     plain = train_batch(cfg, [seed])[0]
     run = build_run(cfg, [seed])
@@ -107,11 +110,11 @@ def test_claims_pair_runs_of_the_same_network():
 
 @pytest.mark.slow
 def test_tiny_sweep_writes_table_and_figures(short, tmp_path):
-    exp = Experiment(pee.NAME, pee.all_rows(), functools.partial(pee.run_one, short),
-                     config=short, runs=1, run_batch=functools.partial(pee.run_batch, short))
+    study = dataclasses.replace(pee.STUDY, quick=Quick(short, runs=1))
+    exp = study.build(quick=True)
     results = run_sweep(exp, tmp_path, workers=1, progress=False)
     assert results["n_ok"] == 3
-    text = pee.report(results, tmp_path)
+    text = exp.report(results, tmp_path)
     assert "y_est roughness" in text and "Fig. 9" in text
     for name in ("fig7_exp1", "fig8_reps", "fig9_exp5", "fig10_teacher_forcing"):
         assert (tmp_path / f"{name}.png").stat().st_size > 10_000
