@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skinny_mj.config import LEGACY_KEYS, TrainConfig
+from skinny_mj.config import TrainConfig
 from skinny_mj.study import Quick, Row, Study
 
 NAME = "paper-e"
@@ -153,14 +153,3 @@ STUDY = Study(
                                                for nu in ("0.03", "0.2")))),
     report=report,
 )
-
-
-# -- for the studies still built on paper E's rows through its former Config ------------
-#: What such a study changes of a Table row: earlier flat names (``dof``, ``trajectory``,
-#: ``epochs`` ...), read through :data:`skinny_mj.config.LEGACY_KEYS`.
-Config = dict
-
-
-def train_config(changes: dict, row) -> TrainConfig:
-    """Table row ``row.row_id``'s training with ``changes`` applied."""
-    return STUDY.config(row.row_id).override({LEGACY_KEYS[k]: v for k, v in changes.items()})
