@@ -30,14 +30,13 @@ position NRMSE at 1x.
 
 from __future__ import annotations
 
-import functools
-from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from experiments import paper_b
-from skinny_mj.config import TrainConfig, relative_cost
-from skinny_mj.experiment import Experiment, Row, RunFailed
-from skinny_mj.sweep import one_of_batch
+from skinny_mj.config import TrainConfig
+from skinny_mj.experiment import Row as EngineRow
+from skinny_mj.experiment import RunFailed
+from skinny_mj.study import Quick, Row, Study
 
 NAME = "bimanual-delay"
 #: architecture -> the forward models' ``forward.sharing`` (None: no forward model)
@@ -55,45 +54,32 @@ MODEL = paper_b.MODEL.override({"rule.beta": 0.1, "rule.cycles": 3, "rule.epochs
                                 "forward": "parallel", "forward.reservoir": 100})
 
 
-@dataclass(frozen=True)
-class Config:
-    """The sweep: the run (``model``; each row sets its pattern, delay and architecture),
-    the patterns, the delays and the runs per row."""
-
-    model: TrainConfig = field(default_factory=lambda: MODEL)
-    patterns: tuple[str, ...] = PATTERNS
-    delays: tuple[int, ...] = DELAYS
-    runs: int = 10
-
-
 def row_id(pattern: str, architecture: str, delay: int) -> str:
     return f"{pattern}-{architecture}-d{delay}"
 
 
-def rows(cfg: Config) -> tuple[Row, ...]:
-    return tuple(Row(row_id(p, a, d), {"pattern": p, "architecture": a, "delay": d})
-                 for p in cfg.patterns for a in ARCHITECTURES for d in cfg.delays)
-
-
-def train_config(cfg: Config, row: Row) -> TrainConfig:
-    """The row's run: its delay and (but for ``inverse``) the per-arm forward models."""
-    sharing = ARCHITECTURES[row.params["architecture"]]
+def _row(pattern: str, architecture: str, delay: int) -> Row:
+    """The row's run: its pattern, its delay and (but for ``inverse``) the per-arm
+    forward models."""
+    sharing = ARCHITECTURES[architecture]
     forward = {"forward": "none"} if sharing is None else \
         {"forward": "parallel", "forward.sharing": sharing}
-    return cfg.model.override({"movement.trajectory": paper_b.PREFIX + row.params["pattern"],
-                               "plant.delay": int(row.params["delay"]), **forward})
+    return Row(row_id(pattern, architecture, delay),
+               {"movement.trajectory": paper_b.PREFIX + pattern, "plant.delay": delay,
+                **forward},
+               params={"pattern": pattern, "architecture": architecture, "delay": delay})
 
 
 def _tag(speed: float) -> str:
     return f"x{speed:g}"
 
 
-def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
+def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Paper B's training and tests (:func:`experiments.paper_b.run_batch`) of the row's
     config, for several seeds in lockstep; adds |timing error| per speed and the worst
     over the three speeds."""
-    pb = paper_b.Config(model=train_config(cfg, row), runs=cfg.runs)
-    outs = paper_b.run_batch(pb, Row(row.params["pattern"], {}), seeds)
+    pb = paper_b.Config(model=config)
+    outs = paper_b.run_batch(pb, EngineRow(row.params["pattern"], {}), seeds)
     for out in outs:
         if isinstance(out, RunFailed):
             continue
@@ -105,56 +91,28 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     return outs
 
 
-def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    """One run of ``row``: :func:`run_batch` of one seed."""
-    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
-
-
-def cost(cfg: Config, row: Row) -> float:
-    """One run's relative cost: its training's size x its networks (a forward network
-    costs about as much as the inverse one)."""
-    nets = {None: 1, "none": 2, "commands": 2, "predictions": 3}
-    tcfg = train_config(cfg, row)
-    return relative_cost(tcfg) * nets[getattr(tcfg.forward, "sharing", None)]
-
-
-def quick_config() -> Config:
-    """A smoke test (2 epochs, one pattern, delays 0 and 4, one run), not a result."""
-    return Config(model=MODEL.override({"rule.epochs": 2, "rule.cycles": 1}),
-                  patterns=("phase0",), delays=(0, 4), runs=1)
-
-
 TABLE_COLUMNS = ("position_nrmse_x1", "relative_error_x1", "worst_relative_error",
                  "abs_phase_lag_deg_x1", "abs_phase_lag_deg_x0.5", "abs_phase_lag_deg_x1.5")
 
 
-def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          dof: int | None = None, signals: str | None = None) -> Experiment:
-    """The sweep over (pattern, architecture, delay); ``quick``: :func:`quick_config`.
-    ``dof`` 8 runs the patterns on the 3D body; the movements are paper B's patterns
-    and the signals its joint angles (``--movement``/``--asf``/``--signals`` do not apply:
-    the per-arm forward models need joint signals)."""
-    if movement is not None or asf is not None or signals not in (None, "joint"):
-        from skinny_mj.errors import SkinnyInputError
-
-        raise SkinnyInputError("bimanual-delay runs paper B's patterns on joint signals; "
-                               "--movement/--asf/--signals do not apply")
-    cfg = quick_config() if quick else Config()
-    if dof is not None:
-        cfg = replace(cfg, model=cfg.model.override({"plant.dof": dof}))
-    groups = {a: tuple(row_id(p, a, d) for p in cfg.patterns for d in cfg.delays)
-              for a in ARCHITECTURES}
-    groups.update({p: tuple(row_id(p, a, d) for a in ARCHITECTURES for d in cfg.delays)
-                   for p in cfg.patterns})
-    return Experiment(name=NAME, rows=rows(cfg), run_one=functools.partial(run_one, cfg),
-                      run_batch=functools.partial(run_batch, cfg),
-                      cost=functools.partial(cost, cfg), config=cfg, runs=cfg.runs,
-                      groups=groups, table_columns=TABLE_COLUMNS)
-
-
-def report(results: dict, out_dir: Path) -> str:
+def report(results: dict, plan, out_dir: Path) -> str:
     """Figures (metrics against delay per architecture; traces at the largest delay)
     and the comparisons with the inverse-only network: :mod:`experiments.bimanual_delay_report`."""
     from experiments.bimanual_delay_report import report as _report
 
     return _report(results, Path(out_dir))
+
+
+STUDY = Study(
+    name=NAME, description=__doc__, base=MODEL, runs=10, run_batch=run_batch,
+    rows=tuple(_row(p, a, d) for p in PATTERNS for a in ARCHITECTURES for d in DELAYS),
+    groups={**{a: [row_id(p, a, d) for p in PATTERNS for d in DELAYS] for a in ARCHITECTURES},
+            **{p: [row_id(p, a, d) for a in ARCHITECTURES for d in DELAYS] for p in PATTERNS}},
+    columns=TABLE_COLUMNS,
+    # a smoke test (2 epochs, one pattern, delays 0 and 4, one run), not a result
+    quick=Quick({"rule.epochs": 2, "rule.cycles": 1}, runs=1,
+                rows=tuple(row_id("phase0", a, d) for a in ARCHITECTURES for d in (0, 4))),
+    # --dof 8 runs the patterns on the 3D body; the movements are paper B's patterns and
+    # the signals its joint angles (the per-arm forward models need joint signals)
+    takes=("dof",), report=report,
+)

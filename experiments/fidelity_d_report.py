@@ -111,6 +111,7 @@ def stage_2_table(results: dict, cells: list[str], runs: list[dict] | None = Non
 
 
 def write_report(results: dict, out_dir: Path, cfg) -> str:
+    """Write stages.md and the two figures of the grid ``cfg`` (a fidelity_d.Grid)."""
     from experiments.fidelity_d import STAGE_2_CELLS, cells, in_thesis_range
 
     out_dir = Path(out_dir)

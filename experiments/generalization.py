@@ -35,15 +35,15 @@ from __future__ import annotations
 
 import functools
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from skinny_mj import body
-from skinny_mj.experiment import Experiment, Row, RunFailed
+from skinny_mj.config import TrainConfig
+from skinny_mj.experiment import RunFailed
 from skinny_mj.imitation import imitation_metrics, saturation  # noqa: F401 (API)
-from skinny_mj.sweep import one_of_batch
+from skinny_mj.study import Quick, Row, Study
 
 NAME = "generalization"
 #: Representation id -> (dof, signals).
@@ -91,32 +91,6 @@ QUICK_SETS = ("ymca", "babble5", "md_03")
 QUICK_TESTS = ("ymca", "md_02", "md_02-tail")
 
 
-@dataclass(frozen=True)
-class Config:
-    """The matrix's schedule (paper E experiment 5) and its size."""
-
-    representations: tuple[str, ...] = tuple(REPRESENTATIONS)
-    train_sets: tuple[str, ...] = tuple(TRAIN_SETS)
-    cartesian_sets: tuple[str, ...] = CORE_SETS  # c2 and c3 rows
-    tests: tuple[str, ...] = tuple(TESTS)
-    reservoir: int = 200
-    epochs: int = 10
-    test_washout_cycles: int = 1
-    runs: int = 10
-
-
-def train_config(cfg: Config, row: Row):
-    """The row's :class:`TrainConfig`: paper E exp. 5 on the row's training set."""
-    from skinny_mj.config import TrainConfig
-
-    dof, signals = REPRESENTATIONS[row.params["rep"]]
-    movement, changes = {**TRAIN_SETS, **TRAIN_SETS_EXTRA}[row.params["train"]]
-    return TrainConfig().override({
-        "plant.dof": dof, "plant.signals": signals, "movement.trajectory": movement,
-        "rule.epochs": cfg.epochs, "test.washout_cycles": cfg.test_washout_cycles,
-        "esn.n_reservoir": cfg.reservoir, **changes})
-
-
 @functools.lru_cache(maxsize=64)
 def load_test(movement: str, dof: int):
     """A test movement for ``dof`` (cached: every row of a worker reuses it)."""
@@ -142,16 +116,12 @@ def clipped_ideal_nrmse(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarr
                                 body.position_signals(angles, dof, signals))[0])
 
 
-def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
-
-
-def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
-    """Train the row's R networks once in lockstep, then test them on every column."""
+def run_batch(tcfg: TrainConfig, row: Row, seeds: list[int]) -> list:
+    """Train the row's R networks once in lockstep, then test them on every column of
+    ``row.params["tests"]``."""
     from skinny_mj.training import build_run, evaluate, train_run
 
     start = time.perf_counter()
-    tcfg = train_config(cfg, row)
     dof = tcfg.plant.dof
     run = build_run(tcfg, seeds)
     result = train_run(run).fel
@@ -164,7 +134,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
         "train_speed_p99_rad_s": float(np.percentile(np.abs(traj.velocities()), 99)),
         "max_speed_rad_s": [float(v) for v in run.max_speed_rad_s],
     } for r in range(len(seeds))]
-    for col in cfg.tests:
+    for col in row.params["tests"]:
         test = load_test(TESTS[col], dof)
         sat = saturation(test.angles, test.dt, run.max_speed_rad_s)
         bound = clipped_ideal_nrmse(test.angles, test.dt, run.max_speed_rad_s,
@@ -195,65 +165,40 @@ def coverage(angles: np.ndarray, dof: int, bins: int = 6) -> float:
                           / bins**n_arm for a in range(2)]))
 
 
-def rows(cfg: Config) -> tuple[Row, ...]:
-    """j2: every training set; c2, c3: ``cfg.cartesian_sets`` (of ``cfg.train_sets``);
-    then :data:`EXTRA_ROWS` (full sweep only)."""
-    main = [Row(f"{rep}-{ts}", {"rep": rep, "train": ts, "movement": TRAIN_SETS[ts][0]})
-            for rep in cfg.representations for ts in cfg.train_sets
-            if rep == "j2" or ts in cfg.cartesian_sets]
-    extra = [Row(f"{rep}-{ts}", {"rep": rep, "train": ts, "movement": TRAIN_SETS_EXTRA[ts][0]})
-             for rep, ts in EXTRA_ROWS
-             if rep in cfg.representations and cfg.train_sets == tuple(TRAIN_SETS)]
-    return tuple(main + extra)
+def _row(rep: str, ts: str, movement: str, changes: dict) -> Row:
+    dof, signals = REPRESENTATIONS[rep]
+    return Row(f"{rep}-{ts}", {"plant.dof": dof, "plant.signals": signals,
+                               "movement.trajectory": movement, **changes},
+               group=rep, params={"rep": rep, "train": ts, "tests": tuple(TESTS)},
+               quick={"tests": QUICK_TESTS})
 
 
-def build(*, quick: bool = False, movement: str | None = None, asf: str | None = None,
-          dof: int | None = None, signals: str | None = None) -> Experiment:
-    """The matrix. ``dof``/``signals``: only that representation (``--dof 4 --signals
-    joint`` = j2); ``movement``: not supported (the rows are the training sets).
-    ``quick``: N = 50, 2 epochs, 2 runs, 3 sets x 3 tests on j2 (a smoke test)."""
-    from skinny_mj.errors import SkinnyInputError
-
-    if movement is not None or asf is not None:
-        raise SkinnyInputError("generalization's rows are its training sets; --movement "
-                               "is not an option here (train one with skinny train)")
-    changes: dict = {}
-    if dof is not None or signals is not None:
-        want = (dof or 4, signals or "cartesian")
-        changes["representations"] = tuple(k for k, v in REPRESENTATIONS.items() if v == want)
-        if not changes["representations"]:
-            raise SkinnyInputError(f"no representation {want}; known: {REPRESENTATIONS}")
-    if quick:
-        changes.update(reservoir=50, epochs=2, runs=2, train_sets=QUICK_SETS,
-                       tests=QUICK_TESTS)
-        changes.setdefault("representations", ("j2",))
-    cfg = Config(**changes)
-    rs = rows(cfg)
-    groups = {rep: tuple(r.row_id for r in rs if r.params["rep"] == rep)
-              for rep in cfg.representations}
-    extra = tuple(f"{rep}-{ts}" for rep, ts in EXTRA_ROWS if f"{rep}-{ts}" in
-                  {r.row_id for r in rs})
-    if extra:
-        groups["extra"] = extra
-    table = {"train_position_nrmse": "train pos", "ymca__position_nrmse": "YMCA pos",
-             "md_02__position_nrmse": "md_02 pos", "md_03__position_nrmse": "md_03 pos",
-             "train_wall_s": "train s/run"}
-    return Experiment(name=NAME, rows=rs, run_one=functools.partial(run_one, cfg),
-                      config=cfg, runs=cfg.runs, table_columns=table,
-                      run_batch=functools.partial(run_batch, cfg),
-                      cost=functools.partial(cost, cfg), groups=groups)
+#: j2: every training set; c2, c3: CORE_SETS; then EXTRA_ROWS.
+ROWS = (*(_row(rep, ts, *TRAIN_SETS[ts]) for rep in REPRESENTATIONS for ts in TRAIN_SETS
+          if rep == "j2" or ts in CORE_SETS),
+        *(_row(rep, ts, *TRAIN_SETS_EXTRA[ts]) for rep, ts in EXTRA_ROWS))
 
 
-def cost(cfg: Config, row: Row) -> float:
-    """Relative cost: training steps x (N / 200), 3D x 1.5."""
-    tcfg = train_config(cfg, row)
-    dof = tcfg.plant.dof
-    n = len(load_test(tcfg.movement.trajectory, dof))
-    return n * max(1.0, tcfg.esn.n_reservoir / 200) * (1.5 if dof == 8 else 1.0)
-
-
-def report(results: dict, out_dir: Path) -> str:
+def report(results: dict, plan, out_dir: Path) -> str:
     """Matrices, figures and findings (:mod:`experiments.generalization_report`)."""
     from experiments import generalization_report
 
     return generalization_report.report(results, Path(out_dir))
+
+
+STUDY = Study(
+    name=NAME, description=__doc__, rows=ROWS, run_batch=run_batch, runs=10,
+    # paper E exp. 5's schedule (TrainConfig's defaults), 10 epochs, N = 200, one
+    # unscored washout cycle before each test
+    base=TrainConfig().override({"rule.epochs": 10, "test.washout_cycles": 1,
+                                 "esn.n_reservoir": 200}),
+    columns={"train_position_nrmse": "train pos", "ymca__position_nrmse": "YMCA pos",
+             "md_02__position_nrmse": "md_02 pos", "md_03__position_nrmse": "md_03 pos",
+             "train_wall_s": "train s/run"},
+    groups={"extra": [f"{rep}-{ts}" for rep, ts in EXTRA_ROWS]},
+    # a smoke test: N = 50, 2 epochs, 2 runs, 3 sets x 3 tests on j2
+    quick=Quick({"esn.n_reservoir": 50, "rule.epochs": 2}, runs=2,
+                rows=tuple(f"j2-{ts}" for ts in QUICK_SETS)),
+    # the rows are the training sets and their bodies (select one with --rows j2|c2|c3)
+    takes=(), report=report,
+)

@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from skinny_mj.config import LEGACY_KEYS, TrainConfig
+from skinny_mj.config import TrainConfig
 from skinny_mj.study import Quick, Row, Study
 from skinny_mj.training import TrainOutcome, train
 
@@ -288,17 +288,3 @@ STUDY = Study(
     report=report,
 )
 
-
-# -- for the studies still built on paper D's rows through its former Config ------------
-#: What such a study changes of an experiment: TrainConfig keys (``dof``, ``reservoir`` ...).
-Config = dict
-
-
-def train_configs(changes: dict, row) -> dict[str, TrainConfig]:
-    """Experiment ``row.row_id``'s two trainings with ``changes`` applied (earlier flat
-    names; ``tt_cycles``: the true target's rounds)."""
-    changes = dict(changes)
-    paper_row = STUDY.row(row.row_id)
-    params = {**paper_row.params, "tt_cycles": changes.pop("tt_cycles", TT_CYCLES)}
-    config = STUDY.config(row.row_id).override({LEGACY_KEYS[k]: v for k, v in changes.items()})
-    return trainings(config, Row(paper_row.id, paper_row.overrides, params=params))

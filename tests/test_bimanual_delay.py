@@ -3,8 +3,6 @@ fits, their config, lockstep determinism, and the report's table on known record
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
@@ -17,7 +15,6 @@ from skinny_mj import bimanual as bm
 from skinny_mj.body import position_signals
 from skinny_mj.config import TrainConfig
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import Row
 from skinny_mj.ideal import max_speeds
 from skinny_mj.trajectories import get
 
@@ -68,10 +65,8 @@ def test_the_lagging_arm_gets_delayed_state_its_prediction_and_what_the_leader_s
 def test_each_arms_forward_model_learns_its_own_next_position():
     from skinny_mj.training import build_run, train_run
 
-    model = bd.MODEL.override({"rule.epochs": 1, "rule.cycles": 1, "movement.speed": 2.0})
-    cfg = bd.train_config(replace(bd.quick_config(), model=model),
-                          Row("x", {"pattern": "phase0", "architecture": "share-predictions",
-                                    "delay": 4}))
+    cfg = bd.STUDY.build(quick=True).config.config("phase0-share-predictions-d4").override(
+        {"rule.epochs": 1, "rule.cycles": 1, "movement.speed": 2.0})
     run = build_run(cfg, [7])
     assert isinstance(run.forward, ArmForwardModels) and run.esn.cfg.n_inputs == 8
     ro = train_run(run).fel.last_rollout
@@ -113,17 +108,19 @@ def test_lockstep_batch_equals_each_seed_alone():
 
 
 def test_rows_cover_patterns_architectures_and_delays():
-    exp = bd.build()
+    exp = bd.STUDY.build()
     assert len(exp.rows) == len(bd.PATTERNS) * len(bd.ARCHITECTURES) * len(bd.DELAYS)
-    row = next(r for r in exp.rows if r.row_id == "phase180-share-commands-d6")
-    cfg = bd.train_config(exp.config, row)
+    cfg = exp.config.config("phase180-share-commands-d6")
     assert (cfg.plant.delay, cfg.forward.kind, cfg.forward.sharing,
             cfg.movement.trajectory) == (6, "parallel", "commands", "bimanual-phase180")
-    inverse = bd.train_config(exp.config, Row("i", {"pattern": "phase0",
-                                                    "architecture": "inverse", "delay": 2}))
+    inverse = exp.config.config("phase0-inverse-d2")
     assert (inverse.forward.kind, inverse.plant.leading_arm) == ("none", "right")
-    with pytest.raises(SkinnyInputError):
-        bd.build(movement="ymca")
+    assert exp.groups["share-predictions"] == tuple(
+        f"{p}-share-predictions-d{d}" for p in bd.PATTERNS for d in bd.DELAYS)
+    assert bd.STUDY.build(dof=8).config.config("phase0-forward-d4").plant.dof == 8
+    for option in ({"movement": "ymca"}, {"signals": "cartesian"}):
+        with pytest.raises(SkinnyInputError):
+            bd.STUDY.build(**option)
 
 
 def test_report_table_and_comparisons_from_known_runs():
@@ -149,10 +146,10 @@ def test_report_table_and_comparisons_from_known_runs():
 def test_quick_sweep_end_to_end(tmp_path):
     from skinny_mj.experiment import run_sweep
 
-    exp = bd.build(quick=True)
+    exp = bd.STUDY.build(quick=True)
     results = run_sweep(exp, tmp_path, workers=1, progress=False)
     assert all(r["n_ok"] == 1 for r in results["rows"])
-    text = bd.report(results, tmp_path)
+    text = bd.report(results, exp.config, tmp_path)
     assert text.count("| phase0 |") == len(exp.rows)
     assert (tmp_path / "delay_sweep.png").stat().st_size > 0
     assert (tmp_path / "traces_d4.png").stat().st_size > 0

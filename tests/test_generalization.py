@@ -3,6 +3,7 @@ experiment and the ``general`` preset."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -107,18 +108,24 @@ def test_imitation_metrics_on_known_signals():
 def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
     pytest.importorskip("dtaidistance")
     from experiments import generalization as g
-    from skinny_mj.experiment import Row
 
-    exp = g.build(quick=True)
+    exp = g.STUDY.build(quick=True)
     assert {r.row_id for r in exp.rows} == {f"j2-{s}" for s in g.QUICK_SETS}
-    full = g.build()
+    full = g.STUDY.build()
     assert len(full.rows) == len(g.TRAIN_SETS) + 2 * len(g.CORE_SETS) + len(g.EXTRA_ROWS)
     assert set(full.groups) == {*g.REPRESENTATIONS, "extra"}
     assert [r.row_id for r in full.rows[-len(g.EXTRA_ROWS):]] == list(full.groups["extra"])
+    c3 = full.config.config("c3-md_03")
+    assert (c3.plant.dof, c3.plant.signals, c3.movement.trajectory, c3.esn.n_reservoir) == \
+        (8, "cartesian", "md_03.amc", 200)
+    assert full.config.config("j2-babble15-N400").esn.n_reservoir == 400
     with pytest.raises(SkinnyInputError):
-        g.build(movement="ymca")
-    cfg = g.Config(reservoir=20, epochs=1, tests=("y-pure", "md_03-tail"))
-    outs = g.run_batch(cfg, Row("j2-md_02-head", {"rep": "j2", "train": "md_02-head"}), [1, 2])
+        g.STUDY.build(movement="ymca")
+    config = full.config.config("j2-md_02-head").override(
+        {"esn.n_reservoir": 20, "rule.epochs": 1})
+    row = dataclasses.replace(g.STUDY.row("j2-md_02-head"),
+                              params={"tests": ("y-pure", "md_03-tail")})
+    outs = g.run_batch(config, row, [1, 2])
     assert len(outs) == 2
     for out in outs:
         assert out["train_steps"] == 250 and 0 < out["train_coverage"] <= 1
@@ -127,7 +134,7 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
             assert 0 <= out[f"{col}__clipped_ideal_nrmse"] <= out[f"{col}__position_nrmse"]
             assert 0 <= out[f"{col}__within5"] <= 1 and len(out[f"{col}__rmse_deg_per_joint"]) == 4
             assert out[f"{col}__dtw_nrmse"] > 0
-    single = g.run_batch(cfg, Row("j2-md_02-head", {"rep": "j2", "train": "md_02-head"}), [2])
+    single = g.run_batch(config, row, [2])
     key = "md_03-tail__position_nrmse"
     assert single[0][key] == outs[1][key]  # lockstep == alone, bit for bit
 
