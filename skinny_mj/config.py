@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from controllers.reservoir import ESNConfig
-from skinny_mj import overrides
+from skinny_mj import fits, overrides
 from skinny_mj.body import ACTUATIONS, SIGNALS, check_actuation, check_dof, check_signals
 from skinny_mj.config_legacy import LEGACY_KEYS, from_legacy, is_legacy
 from skinny_mj.errors import SkinnyInputError
@@ -55,7 +55,6 @@ METHODS = ("original", "new", "true-target", "none")
 #: three controllers alone, and FEL's teacher "inertia-pd"
 ARM_LAWS = {"ct": "ct", "id-pd": "id-pd", "pd-gravity": "pd-g", "inertia-pd": "fel"}
 FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS)
-FITS = ("cycle", "ridge-select", "forgetting", "rls")
 INPUTS = ("desired+sensed", "sensed")
 FORWARD_INPUTS = ("sensed", "chained")
 FORWARD_SHARING = ("none", "predictions", "commands")
@@ -190,7 +189,7 @@ class _FEL:
             (_at_least(self.gain_value, 0), f"feedback gain must be >= 0, got {self.gain_value}"),
             (_at_least(self.u_error_gain, 0) and self.u_error_gain > 0,
              f"u_error gain must be > 0, got {self.u_error_gain}"),
-            (self.fit in FITS, f"fit must be one of {FITS}, got {self.fit!r}"),
+            (self.fit in fits.FITS, f"fit must be one of {tuple(fits.FITS)}, got {self.fit!r}"),
             (_at_least(self.forgetting, 0) and self.forgetting <= 1,
              f"forgetting must be in [0, 1], got {self.forgetting}"),
             (self.cycles is None or (isinstance(self.cycles, int) and self.cycles >= 1),
@@ -347,9 +346,9 @@ class TrainConfig:
                 self.esn.readout == "ridge" and torque is None),
              "rule.fit=ridge-select chooses the ridge lambda of FEL fits on a validation "
              "cycle: it needs esn.readout=ridge and the velocity body"),
-            (not fel or self.rule.fit not in ("forgetting", "rls") or torque is not None,
-             "rule.fit=forgetting and rls remember earlier cycles on the torque body: use "
-             "actuation=torque"),
+            (not fel or self.actuation.kind in fits.FITS[self.rule.fit].bodies,
+             f"rule.fit={getattr(self.rule, 'fit', '')} runs on actuation="
+             f"{' or '.join(fits.FITS[self.rule.fit].bodies) if fel else ''}"),
             (sharing is None or (self.plant.leading_arm is not None and fwd.kind == "parallel"
                                  and self.plant.signals == "joint"),
              "forward.sharing needs a leading arm, forward=parallel and joint signals"),

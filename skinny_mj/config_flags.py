@@ -22,13 +22,13 @@ from skinny_mj import overrides
 from skinny_mj.config import (
     ACTUATIONS,
     FEEDBACKS,
-    FITS,
     METHODS,
     RETARGETS,
     SIGNALS,
     TrainConfig,
 )
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.fits import FITS
 
 __all__ = ["Flag", "TRAIN_FLAGS", "TEST_FLAGS", "TRACK_FLAGS", "MOVEMENT_FLAGS", "add_flags",
            "given", "pairs", "changes", "flag_names", "default_of"]
@@ -91,7 +91,7 @@ TRAIN_FLAGS: dict[str, list[Flag]] = {
         Flag("--readout-fit", "rule.fit", "FEL: fit the readout on each cycle alone, with "
              "λ chosen on a validation cycle (ridge-select, velocity body), or remembering "
              "earlier cycles: the normal equations with forgetting, or RLS (torque body)",
-             FITS),
+             tuple(FITS)),
         Flag("--readout-forgetting", "rule.forgetting", "weight of earlier cycles per "
              "learning cycle, in [0, 1] (--readout-fit forgetting or rls)"),
         Flag("--tt-input-noise", "rule.input_noise", "SD of noise on the true target's "

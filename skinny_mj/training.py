@@ -47,6 +47,7 @@ from skinny_mj.config import (  # noqa: F401  (re-exported: the training API in 
     TrueTarget,
     relative_cost,
 )
+from skinny_mj.fits import make_rule
 from skinny_mj.run_parts import (  # noqa: F401  (re-exported)
     RunStreams,
     arm_forward_models,
@@ -196,13 +197,8 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
     def tick(epoch: int, cycle: int) -> None:
         _report(progress, epoch * per_epoch + cycle + 1, total)
 
-    selector = None
-    if rule.fit == "ridge-select":  # lambda per run and fit, on a validation cycle
-        from controllers.ridge_select import RidgeSelector
-
-        selector = RidgeSelector(run.esn, rule.epochs)
-    if is_torque:  # the torque body: readouts that remember, shares
-        selector = torque.readout_fitter(cfg, run.esn, len(run.desired) - 1)
+    selector = make_rule(cfg, run.esn, len(run.desired) - 1)  # rule.fit (skinny_mj.fits)
+    if is_torque:  # the torque body: the feedback's share of the command
         out.feedback_share = torque.ShareRecorder(fcfg.gains(), run.esn.n_runs,
                                                   fcfg.learning_cycles)
         observe = out.feedback_share if observe is None else _both(observe, out.feedback_share)

@@ -40,7 +40,8 @@ MOVEMENTS = ("skinny_mj.trajectories",)
 # imitation metrics.
 TRAINING = ("skinny_mj.config", "skinny_mj.overrides", "skinny_mj.config_legacy",
             "skinny_mj.presets", "skinny_mj.run_parts", "skinny_mj.training",
-            "skinny_mj.torque_training", "skinny_mj.protocol", "skinny_mj.imitation")
+            "skinny_mj.torque_training", "skinny_mj.protocol", "skinny_mj.imitation",
+            "skinny_mj.fits")
 # Many runs: the experiment engine, its sweep helpers, the registry of studies.
 ENGINE = ("skinny_mj.experiment", "skinny_mj.sweep", "skinny_mj.sweep.folder",
           "skinny_mj.sweep.options", "skinny_mj.sweep.stats", "skinny_mj.registry",
