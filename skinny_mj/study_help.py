@@ -86,11 +86,13 @@ def option_effects(module: Any, base: Any) -> dict[str, str]:
             continue
         taken = [f"{v} (default)" if how == "same" else str(v)
                  for v, how in said.items() if how != "refused"]
-        if all(how == "same" for how in said.values()):
+        if all(how == "refused" for how in said.values()):
+            taken = ["refused"]
+        elif all(how == "same" for how in said.values()):
             taken = ["no effect on this study"]
         elif "same" not in said.values():
             taken[-1] += " (default: the study's own mix)"
-        refused = [str(v) for v, how in said.items() if how == "refused"]
+        refused = [str(v) for v, how in said.items() if how == "refused" and taken != ["refused"]]
         out[option] = " | ".join(taken) + (f"; refuses {', '.join(refused)}" if refused
                                            else "")
     return out
