@@ -37,10 +37,10 @@ from pathlib import Path
 import numpy as np
 
 from experiments import paper_a
-from skinny_mj.config import LEGACY_KEYS, TrainConfig, relative_cost
+from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row
 from skinny_mj.sweep import one_of_batch
-from skinny_mj.sweep.options import movement_changes
+from skinny_mj.sweep.options import OPTION_KEYS, movement_changes
 
 NAME = "fidelity-a"
 #: Epochs at which a run's metrics are recorded (those <= the row's epochs, and its last).
@@ -231,9 +231,8 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     """The plan's rows; ``movement``/``asf``/``dof``/``signals`` replace paper A's YMCA,
     2D joint angles (None: the paper's)."""
     cfg = quick_config() if quick else Config()
-    changes = movement_changes(movement, asf, dof, signals)
-    cfg = replace(cfg, model=cfg.model.override({LEGACY_KEYS[k]: v
-                                                 for k, v in changes.items()}))
+    cfg = replace(cfg, model=cfg.model.override(
+        movement_changes(movement, asf, dof, signals, OPTION_KEYS)))
     every = rows(cfg)
     groups = {a: tuple(r.row_id for r in every if r.params["architecture"] == a
                        and r.params["forward_input"] == "sensed")

@@ -29,10 +29,10 @@ from pathlib import Path
 import numpy as np
 
 from controllers.fel import run_mean
-from skinny_mj.config import LEGACY_KEYS, TrainConfig, relative_cost
+from skinny_mj.config import TrainConfig, relative_cost
 from skinny_mj.experiment import Experiment, Row, RunFailed
 from skinny_mj.sweep import one_of_batch
-from skinny_mj.sweep.options import movement_changes
+from skinny_mj.sweep.options import OPTION_KEYS, movement_changes
 
 NAME = "paper-a"
 ARCHITECTURES = ("inverse", "parallel", "serial", "hybrid")
@@ -179,9 +179,8 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     """The sweep over (architecture, delay); ``movement``/``asf``/``dof``/``signals``
     replace the paper's YMCA, 2D joint angles (None: the paper's)."""
     cfg = quick_config() if quick else Config()
-    changes = movement_changes(movement, asf, dof, signals)
-    cfg = replace(cfg, model=cfg.model.override({LEGACY_KEYS[k]: v
-                                                 for k, v in changes.items()}))
+    cfg = replace(cfg, model=cfg.model.override(
+        movement_changes(movement, asf, dof, signals, OPTION_KEYS)))
     return Experiment(
         name=NAME, rows=rows(cfg.delays), run_one=functools.partial(run_one, cfg),
         run_batch=functools.partial(run_batch, cfg), config=cfg, runs=cfg.runs,

@@ -342,10 +342,9 @@ class TrainConfig:
             (self.esn.n_inputs is None and self.esn.n_outputs is None,
              "esn.n_inputs and esn.n_outputs are set by the plant and the inputs"),
             (self.inputs in INPUTS, f"inputs must be one of {INPUTS}, got {self.inputs!r}"),
-            (not fel or self.rule.fit != "ridge-select" or (
-                self.esn.readout == "ridge" and torque is None),
+            (not fel or self.rule.fit != "ridge-select" or self.esn.readout == "ridge",
              "rule.fit=ridge-select chooses the ridge lambda of FEL fits on a validation "
-             "cycle: it needs esn.readout=ridge and the velocity body"),
+             "cycle: it needs esn.readout=ridge"),  # (its body: the fit's own, skinny_mj.fits)
             (not fel or self.actuation.kind in fits.FITS[self.rule.fit].bodies,
              f"rule.fit={getattr(self.rule, 'fit', '')} runs on actuation="
              f"{' or '.join(fits.FITS[self.rule.fit].bodies) if fel else ''}"),
