@@ -23,7 +23,7 @@ from pathlib import Path
 
 _CHILD = r"""
 import json, resource, sys, time
-from skinny_mj.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import Experiment, Row, run_sweep
 
 def run_one(row, seed):  # trivial: the cost measured is the engine's
     return {"x": float(seed % 997) / 997.0, "row_mu": row.params["mu"]}

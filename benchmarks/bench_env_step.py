@@ -16,9 +16,9 @@ os.environ.setdefault("MUJOCO_GL", "disabled")
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from skinny_mj import body  # noqa: E402
-from skinny_mj.plant import BatchPlant  # noqa: E402
-from skinny_mj.task import load  # noqa: E402
+from skinny_mj.plant import body  # noqa: E402
+from skinny_mj.plant.adapters import BatchPlant  # noqa: E402
+from skinny_mj.plant.task import load  # noqa: E402
 
 
 @dataclass(frozen=True)

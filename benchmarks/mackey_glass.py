@@ -72,10 +72,10 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--bias", type=float, default=0.2)
     p.add_argument("--feedback-scaling", type=float, default=0.56)
     p.add_argument("--reservoirpy", action="store_true",
-                   help="compare with reservoirpy on the same series (skinny_mj.bench)")
+                   help="compare with reservoirpy on the same series (skinny_mj.cli.bench)")
     args = p.parse_args(argv)
     if args.reservoirpy:
-        from skinny_mj.bench_mackey_glass import mackey_glass as compare
+        from skinny_mj.cli.bench_mackey_glass import mackey_glass as compare
 
         print(compare(args.reservoir, args.trials, args.washout, args.train, args.seed))
         return

@@ -8,7 +8,7 @@ torque twin with its integrator and step replaced, against the twin as it is (RK
 Per body (2D, 3D) and movement (YMCA, the recorded-like YMCA): joint-angle and
 Cartesian position NRMSE of one seed, mean |tau|, and the wall time of the whole run (build,
 test; best of 3). The model's integrator and step are module constants of
-:mod:`skinny_mj.model`, replaced here for the run (nothing is cached).
+:mod:`skinny_mj.plant.model`, replaced here for the run (nothing is cached).
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ os.environ.setdefault("MUJOCO_GL", "disabled")
 import mujoco  # noqa: E402
 
 from experiments.dynamic import joint_nrmse  # noqa: E402
-from skinny_mj import model as skinny_model  # noqa: E402
-from skinny_mj.training import TrainConfig, train  # noqa: E402
+from skinny_mj.plant import model as skinny_model  # noqa: E402
+from skinny_mj.training.loop import TrainConfig, train  # noqa: E402
 
 RK4, IMPLICITFAST = mujoco.mjtIntegrator.mjINT_RK4, mujoco.mjtIntegrator.mjINT_IMPLICITFAST
 #: label: (integrator, timestep s); the first is the twin as it is

@@ -14,7 +14,7 @@ Variants of the 3D arm (the 2D arm is the control): the model as it was (armatur
 RK4 at 5 ms), smaller RK4 steps with the same 20 ms control step, ``implicitfast`` and
 ``implicit`` at 1 ms, stiffer joint limits (solref time constant 10 ms = 2 steps,
 MuJoCo's lower bound), and armature on the three shoulder hinges (0.5 ... 3.6e-3 kg m^2;
-3.6e-3 = :data:`skinny_mj.model.TORQUE_ARMATURE_3D_SHOULDER`, the chosen one).
+3.6e-3 = :data:`skinny_mj.plant.model.TORQUE_ARMATURE_3D_SHOULDER`, the chosen one).
 
 ``--limits``: the joint limits' hold alone, the worst overshoot past a limit with the
 twin's limits (time constant 20 ms) and with stiffer ones (10 ms), on both arms.
@@ -38,8 +38,8 @@ os.environ.setdefault("MUJOCO_GL", "disabled")
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from skinny_mj import body  # noqa: E402
-from skinny_mj.model import TORQUE_ARMATURE_3D_SHOULDER, load_model  # noqa: E402
+from skinny_mj.plant import body  # noqa: E402
+from skinny_mj.plant.model import TORQUE_ARMATURE_3D_SHOULDER, load_model  # noqa: E402
 
 CONTROL_DT_S = 0.02
 SECONDS = 10.0
@@ -131,7 +131,7 @@ def stress_table(runs: int, holds=(1, 5)) -> str:
 
 
 def fidelity_table() -> str:
-    from skinny_mj.dynamics import Dynamics
+    from skinny_mj.plant.dynamics import Dynamics
     from skinny_mj.trajectories import get
 
     with_arm = Dynamics(load_model(8, "torque"))
@@ -154,10 +154,10 @@ def fidelity_table() -> str:
 
 def limits_table(runs: int, holds=(1, 5)) -> str:
     """The joint limits' hold under the same bang-bang torques: worst overshoot past a
-    limit with the twin's limits (:data:`skinny_mj.model.TORQUE_LIMIT_SOLREF`, MuJoCo's
+    limit with the twin's limits (:data:`skinny_mj.plant.model.TORQUE_LIMIT_SOLREF`, MuJoCo's
     default time constant 20 ms) and with a stiffer 10 ms (two physics steps, MuJoCo's
     bound), on both arms."""
-    from skinny_mj.model import TORQUE_LIMIT_SOLREF
+    from skinny_mj.plant.model import TORQUE_LIMIT_SOLREF
 
     lines = ["| arm | limit time constant | hold (steps) | failed / n | past limit (rad) |"
              " max \\|qvel\\| (rad/s) |", "|---|---|---|---|---|---|"]

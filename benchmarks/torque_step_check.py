@@ -35,7 +35,7 @@ os.environ.setdefault("MUJOCO_GL", "disabled")
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from skinny_mj.model import load_model  # noqa: E402
+from skinny_mj.plant.model import load_model  # noqa: E402
 
 CONTROL_DT_S = 0.02
 REF = ("rk4", 0.0001)

@@ -19,7 +19,7 @@ import time
 
 os.environ.setdefault("MUJOCO_GL", "disabled")
 
-from skinny_mj.training import TrainConfig, train_batch  # noqa: E402
+from skinny_mj.training.loop import TrainConfig, train_batch  # noqa: E402
 
 ARM_FEL = {"actuation": "torque", "rule": "new", "rule.beta": 1.0, "rule.cycles": 3,
            "actuation.feedback": "inertia-pd", "rule.fit": "forgetting"}

@@ -96,7 +96,7 @@ class ArmForwardModels:
         """Bind the plant of the cycle about to run (its forced arm's commands)."""
         if not hasattr(plant, "leader_command"):
             raise TypeError("ArmForwardModels needs a plant with a forced leading arm "
-                            "(skinny_mj.bimanual.BimanualPlant)")
+                            "(skinny_mj.plant.bimanual.BimanualPlant)")
         self._plant = plant
 
     def step(self, sensed: np.ndarray, command: np.ndarray, noise: bool = True) -> np.ndarray:

@@ -1,6 +1,6 @@
 """The plant protocol the training engine talks to, and a pure-NumPy toy plant.
 
-``skinny_mj.plant`` implements :class:`Plant` over MuJoCo; :class:`ToyPlant` is a
+``skinny_mj.plant.adapters`` implements :class:`Plant` over MuJoCo; :class:`ToyPlant` is a
 kinematic stand-in (a joint-space integrator with clipping at the limits) for tests
 and for users without MuJoCo. Both hold R independent copies stepping in lockstep.
 """

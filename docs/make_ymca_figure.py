@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 
-from skinny_mj.render import render_png  # noqa: E402
+from skinny_mj.plant.render import render_png  # noqa: E402
 from skinny_mj.trajectories import get, letter_end_steps  # noqa: E402
 
 HERE = Path(__file__).resolve().parent

@@ -6,7 +6,7 @@ torque rows: the same on the torque twin, ``actuation=torque``, as
 ``experiments/dynamic.py``'s ``2d-ymca-fel-new``, no gravity feed-forward, so nothing
 in the loop knows the change), then performs the movement cycle after cycle with
 feedback gain K = ``gain`` and reservoir noise off: ``pre`` nominal cycles, ``change``
-cycles with the plant changed (:class:`skinny_mj.perturb.PerturbedPlant`), then
+cycles with the plant changed (:class:`skinny_mj.plant.perturb.PerturbedPlant`), then
 ``post`` cycles with the change undone. Changes:
 
 - ``gain``: every actuator's effect x 0.7, "actuator gain −30 %";
@@ -20,7 +20,7 @@ cycles with the plant changed (:class:`skinny_mj.perturb.PerturbedPlant`), then
   joint motion can remove, and it is orthogonal to every Jacobian column, so neither
   the feedback nor FEL's target sees it; the angle columns score the rest;
 - torque twin: ``payload``: 1 kg at the right hand's centre of mass; ``mass``: every
-  arm link's mass and inertia x 1.2 (:func:`skinny_mj.torque_training.perturb`,
+  arm link's mass and inertia x 1.2 (:func:`skinny_mj.training.torque.perturb`,
   swapped into the running model between cycles).
 
 Learners (rows ``<change>-<learner>``):
@@ -56,9 +56,9 @@ from pathlib import Path
 import numpy as np
 
 from experiments.claims import claim_lines
-from skinny_mj.config import TrainConfig
-from skinny_mj.experiment import Experiment, Row, RunFailed
-from skinny_mj.sweep import one_of_batch
+from skinny_mj.engine.experiment import Experiment, Row, RunFailed
+from skinny_mj.engine.sweep import one_of_batch
+from skinny_mj.training.config import TrainConfig
 
 NAME = "adaptation"
 CHANGES = ("gain", "offset", "forearm", "payload", "mass")
@@ -122,10 +122,10 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     from controllers import fel
     from controllers.metrics import position_nrmse
     from controllers.online import OnlineRLS
-    from skinny_mj import body
-    from skinny_mj import torque_training as torque
-    from skinny_mj.perturb import PerturbedPlant
-    from skinny_mj.training import PhysicsBatchError, build_run, train_run
+    from skinny_mj.plant import body
+    from skinny_mj.plant.perturb import PerturbedPlant
+    from skinny_mj.training import torque
+    from skinny_mj.training.loop import PhysicsBatchError, build_run, train_run
 
     change, learner = row.params["change"], row.params["learner"]
     tc = train_config(cfg, change)
@@ -213,8 +213,8 @@ def forearm_floor(cfg: Config) -> float:
     """Position NRMSE of the long-forearm arm moving exactly along the desired angles:
     the part of the ``forearm`` rows' error that no joint motion can remove."""
     from controllers.metrics import position_nrmse
-    from skinny_mj.perturb import forearm_rows
-    from skinny_mj.run_parts import load_trajectory
+    from skinny_mj.plant.perturb import forearm_rows
+    from skinny_mj.training.parts import load_trajectory
 
     tc = train_config(cfg, "forearm")
     dof, signals = tc.plant.dof, tc.plant.signals
@@ -235,8 +235,8 @@ def _curves(runs: list, rows: dict[str, str], key: str = "curve") -> dict[str, n
 def report(results: dict, out_dir: Path) -> str:
     """Error over cycles per change (mean ± sd over runs, per learner), the drift test,
     the forearm's floor, the claims."""
+    from skinny_mj.engine.stats import load_runs
     from skinny_mj.plots import learning_curve_png
-    from skinny_mj.sweep.stats import load_runs
 
     out_dir = Path(out_dir)
     cfg = Config(**json.loads((out_dir / "config.json").read_text())["config"])

@@ -23,7 +23,7 @@ the lagging arm's inverse model gets besides the delayed sensed state of both ar
 
 Coordination is paper B's: the lagging shoulder's timing error against its desired
 (which is defined relative to the leader) in degrees of its period
-(:func:`skinny_mj.bimanual.phase_lag_deg`) and the relative error (RMS error / RMS of
+(:func:`skinny_mj.plant.bimanual.phase_lag_deg`) and the relative error (RMS error / RMS of
 the desired swing), at the trained and at the new speeds; plus the lagging arm's
 position NRMSE at 1x.
 """
@@ -33,10 +33,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from experiments import paper_b
-from skinny_mj.config import TrainConfig
-from skinny_mj.experiment import Row as EngineRow
-from skinny_mj.experiment import RunFailed
-from skinny_mj.study import Quick, Row, Study
+from skinny_mj.engine.experiment import Row as EngineRow
+from skinny_mj.engine.experiment import RunFailed
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.training.config import TrainConfig
 
 NAME = "bimanual-delay"
 #: architecture -> the forward models' ``forward.sharing`` (None: no forward model)

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments.bimanual_delay import ARCHITECTURES, row_id
-from skinny_mj.body import CONTROL_DT_S
+from skinny_mj.plant.body import CONTROL_DT_S
 
 #: metric, panel label
 PANELS = (("position_nrmse_x1", "lagging-arm position NRMSE (1x)"),
@@ -32,7 +32,7 @@ SUMMARY = (("position_nrmse_x1", "pos. NRMSE 1x", 4), ("relative_error_x1", "rel
 
 
 def _records(out_dir: Path) -> list[dict]:
-    from skinny_mj.sweep.stats import load_runs
+    from skinny_mj.engine.stats import load_runs
 
     return sorted(load_runs(out_dir), key=lambda r: (r["row"], r["run_index"]))
 

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from skinny_mj.sweep.stats import load_runs
+from skinny_mj.engine.stats import load_runs
 
 _STATS = {"min": np.min, "max": np.max, "mean": np.mean, "median": np.median}
 _OPS = {"<": operator.lt, ">": operator.gt, "<=": operator.le, ">=": operator.ge}

@@ -2,7 +2,7 @@
 tracked by textbook controllers and learned by an ESN inverse-dynamics model.
 
 Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` with
-``actuation=torque`` (:mod:`skinny_mj.torque_training`):
+``actuation=torque`` (:mod:`skinny_mj.training.torque`):
 
 - ``table``: for 2D and 3D (``2d``, ``3d``) and YMCA and an excerpt of CMU clip md_02
   (``ymca``, ``md02``; md_02 needs more torque than the motors have, see the report):
@@ -47,10 +47,10 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from skinny_mj.config import TrainConfig, relative_cost
-from skinny_mj.experiment import Experiment, Row, RunFailed
-from skinny_mj.sweep import one_of_batch
-from skinny_mj.sweep.options import config_from_dict
+from skinny_mj.engine.experiment import Experiment, Row, RunFailed
+from skinny_mj.engine.options import config_from_dict
+from skinny_mj.engine.sweep import one_of_batch
+from skinny_mj.training.config import TrainConfig, relative_cost
 
 NAME = "dynamic"
 #: controller id -> TrainConfig overrides
@@ -188,7 +188,7 @@ def train_config(cfg: Config, row: Row) -> TrainConfig:
 
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     """Several seeds of one row in lockstep; seed by seed what each gets alone."""
-    from skinny_mj.training import train_batch
+    from skinny_mj.training.loop import train_batch
 
     out = []
     for o in train_batch(train_config(cfg, row), seeds):
@@ -216,9 +216,9 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
 
 def joint_nrmse(outcome) -> float:
     """Test joint-angle NRMSE (each angle normalized to [-1, 1] over its range) of a
-    :class:`skinny_mj.training.TrainOutcome` against its movement's angles."""
+    :class:`skinny_mj.training.loop.TrainOutcome` against its movement's angles."""
     from controllers.metrics import position_nrmse
-    from skinny_mj.body import normalize_angles
+    from skinny_mj.plant.body import normalize_angles
 
     dof = outcome.config.plant.dof
     angles = outcome.test.rollout.angles[:, :, :dof]
@@ -260,10 +260,10 @@ def build(*, quick: bool = False, movement: str | None = None, asf: str | None =
 
 def feasibility_table(movements: tuple[str, ...], bodies: tuple[str, ...]) -> list[str]:
     """Markdown rows: what each movement asks of each body's motors (inverse dynamics of
-    the desired motion, :meth:`skinny_mj.dynamics.Dynamics.feasibility`), the DOF with the
+    the desired motion, :meth:`skinny_mj.plant.dynamics.Dynamics.feasibility`), the DOF with the
     largest peak named."""
-    from skinny_mj import body
-    from skinny_mj.torque_training import feasibility
+    from skinny_mj.plant import body
+    from skinny_mj.training.torque import feasibility
 
     lines = ["| movement | body | peak \\|τ\\|/limit (DOF) | p99 | steps over a limit | "
              "mean \\|τ\\| (N m) | peak speed (rad/s) | peak accel (rad/s²) | motor work (J) "
@@ -326,14 +326,14 @@ def report(results: dict, out_dir: Path) -> str:
 
 def floor(dof: int, name: str) -> float:
     """The position NRMSE of the best reachable pose of a movement (no controller beats it)."""
-    from skinny_mj.imitation import movement_stats
+    from skinny_mj.training.imitation import movement_stats
 
     return movement_stats(torque_movement(dof, name))["reachable_floor_position_nrmse"]
 
 
 def torque_movement(dof: int, name: str):
     """The movement ``name`` as the torque body of ``dof`` DOFs loads it."""
-    from skinny_mj.run_parts import load_trajectory
+    from skinny_mj.training.parts import load_trajectory
 
     return load_trajectory(TrainConfig().override({
         "plant.dof": dof, "movement.trajectory": name, "actuation": "torque"}))[0]
@@ -344,7 +344,7 @@ def arm_report(out_dir: Path, cfg: Config) -> list[str]:
     import statistics
 
     from experiments.claims import values
-    from skinny_mj.torque_training import feasibility
+    from skinny_mj.training.torque import feasibility
 
     def mean(row: str, metric: str) -> float | None:
         v = values(out_dir, row, metric)

@@ -37,10 +37,10 @@ from pathlib import Path
 import numpy as np
 
 from experiments import paper_a
-from skinny_mj.config import TrainConfig, relative_cost
-from skinny_mj.experiment import Experiment, Row
-from skinny_mj.sweep import one_of_batch
-from skinny_mj.sweep.options import OPTION_KEYS, movement_changes
+from skinny_mj.engine.experiment import Experiment, Row
+from skinny_mj.engine.options import OPTION_KEYS, movement_changes
+from skinny_mj.engine.sweep import one_of_batch
+from skinny_mj.training.config import TrainConfig, relative_cost
 
 NAME = "fidelity-a"
 #: Epochs at which a run's metrics are recorded (those <= the row's epochs, and its last).
@@ -156,7 +156,7 @@ def _cycle_metrics(ro, desired: np.ndarray, prefix: str) -> dict[str, np.ndarray
 
 def _test_metrics(run) -> dict[str, np.ndarray]:
     """The K = 0 test of ``run``'s networks as they are, on a fresh plant, (R,) each."""
-    from skinny_mj.training import evaluate
+    from skinny_mj.training.loop import evaluate
 
     tests = evaluate(run)
     ro = _stack_rollouts([t.rollout for t in tests])
@@ -180,7 +180,7 @@ def _stack_rollouts(ros: list):
 
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     """Train one row for its epochs, recording every checkpoint (see the module doc)."""
-    from skinny_mj.training import build_run, train_run
+    from skinny_mj.training.loop import build_run, train_run
 
     run = build_run(train_config(cfg, row), seeds)
     checks = checkpoints_of(cfg, run.cfg.rule.epochs)

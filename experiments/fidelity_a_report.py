@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.io import atomic_write_text
-from skinny_mj.sweep.stats import load_runs
 
 ARCHS = ("inverse", "parallel", "serial", "hybrid")
 WHERE = {"train": "last training epoch (K = 0.65)", "test": "K = 0 test"}

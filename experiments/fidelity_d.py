@@ -27,8 +27,8 @@ from pathlib import Path
 from typing import Any
 
 from experiments import paper_d
-from skinny_mj.study import Quick, Row, Study
-from skinny_mj.study_plan import train_metrics
+from skinny_mj.engine.plan import train_metrics
+from skinny_mj.engine.study import Quick, Row, Study
 
 NAME = "fidelity-d"
 MOVEMENTS = {"recorded": "ymca-recorded", "smooth": "ymca-smooth"}

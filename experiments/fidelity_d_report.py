@@ -125,7 +125,7 @@ def write_report(results: dict, out_dir: Path, cfg) -> str:
            if all(_row(results, f"{c}-e{e}") and _row(results, f"{c}-e{e}")["n"]
                   for e in ORDER)]
     if ran:
-        from skinny_mj.sweep.stats import load_runs
+        from skinny_mj.engine.stats import load_runs
 
         text += ["", "## Stage 2 (all TT exps)", "",
                  stage_2_table(results, ran, load_runs(out_dir))]

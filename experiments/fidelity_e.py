@@ -18,9 +18,9 @@ from dataclasses import replace
 from pathlib import Path
 
 from experiments import paper_e
-from skinny_mj.config import TrainConfig
-from skinny_mj.experiment import RunFailed
-from skinny_mj.study import Quick, Row, Study
+from skinny_mj.engine.experiment import RunFailed
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.training.config import TrainConfig
 
 NAME = "fidelity-e"
 MD02 = "md_02.amc@start=3,duration=6.26"  # paper E's md_02 excerpt (docs/RESULTS.md)
@@ -51,7 +51,7 @@ def _row(m: str, g: float, e: str) -> Row:
 
 def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Train in lockstep, test noise off then on (same networks)."""
-    from skinny_mj.training import build_run, evaluate, train_run
+    from skinny_mj.training.loop import build_run, evaluate, train_run
 
     run = build_run(config, seeds)
     trained = train_run(run)

@@ -29,7 +29,7 @@ import numpy as np
 from controllers.esn import ESNConfig
 from controllers.generation import figure_eight
 from experiments import generation_runs as common
-from skinny_mj.experiment import Experiment, Row
+from skinny_mj.engine.experiment import Experiment, Row
 
 NAME = "figure-eight"
 #: Methods also trained on the short sequence.

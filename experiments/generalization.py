@@ -14,9 +14,9 @@ network instead of the movement: the reservoir size (N = 400) and the command sc
 Every network is trained once (paper E's experiment 5 schedule: new method, β = 0.1,
 3 learning cycles x 10 epochs, K 1 -> 0, N = 200, spectral radius 0.5) and tested on
 every column (:data:`TESTS`: the YMCA family with mirrors and speeds, both clips whole and
-their unseen tails, and an unseen babble) with :func:`skinny_mj.training.evaluate`
-after one unscored washout cycle, K = 0. Per cell (:mod:`skinny_mj.imitation`): position
-NRMSE, DTW NRMSE (:mod:`skinny_mj.dtw`), the fraction of steps within 5° per joint,
+their unseen tails, and an unseen babble) with :func:`skinny_mj.training.loop.evaluate`
+after one unscored washout cycle, K = 0. Per cell (:mod:`skinny_mj.training.imitation`): position
+NRMSE, DTW NRMSE (:mod:`skinny_mj.training.dtw`), the fraction of steps within 5° per joint,
 per-joint RMS error, the timing lag, the produced angles scored on Cartesian signals,
 the fraction of true-command samples beyond full scale (|c| > 1 before clipping, the
 run's own scale) and what that alone costs: the position NRMSE of the exact inverse
@@ -39,11 +39,11 @@ from pathlib import Path
 
 import numpy as np
 
-from skinny_mj import body
-from skinny_mj.config import TrainConfig
-from skinny_mj.experiment import RunFailed
-from skinny_mj.imitation import imitation_metrics, saturation  # noqa: F401 (API)
-from skinny_mj.study import Quick, Row, Study
+from skinny_mj.engine.experiment import RunFailed
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.plant import body
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.imitation import imitation_metrics, saturation  # noqa: F401 (API)
 
 NAME = "generalization"
 #: Representation id -> (dof, signals).
@@ -119,7 +119,7 @@ def clipped_ideal_nrmse(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarr
 def run_batch(tcfg: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Train the row's R networks once in lockstep, then test them on every column of
     ``row.params["tests"]``."""
-    from skinny_mj.training import build_run, evaluate, train_run
+    from skinny_mj.training.loop import build_run, evaluate, train_run
 
     start = time.perf_counter()
     dof = tcfg.plant.dof

@@ -18,7 +18,7 @@ REAL = ("md_02", "md_03", "md_02-tail", "md_03-tail")
 
 
 def _runs(out_dir: Path) -> list[dict]:
-    from skinny_mj.sweep.stats import load_runs
+    from skinny_mj.engine.stats import load_runs
 
     return [r for r in load_runs(out_dir) if r.get("status") == "ok"]
 

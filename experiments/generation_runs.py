@@ -34,7 +34,7 @@ import numpy as np
 from controllers import generation as gen
 from controllers.esn import ESN, ESNConfig
 from experiments.claims import claim_lines
-from skinny_mj.experiment import Row
+from skinny_mj.engine.experiment import Row
 
 #: Row order fixes each row's seeds (the engine's per-row seeds): new rows go last.
 METHODS = ("ordinary", "new", "new-blend", "force", "reservoirpy", "new-conv")
@@ -148,8 +148,8 @@ def claims_for(kind: str) -> list:
 def report(results: dict, out_dir: Path, kind: str, extra: list[str] | None = None) -> str:
     """Box plots of horizon and free-run NRMSE per row, the claims, the median run's
     free run of each row as a PNG."""
+    from skinny_mj.engine.stats import load_runs
     from skinny_mj.plots import boxplot_png
-    from skinny_mj.sweep.stats import load_runs
 
     out_dir = Path(out_dir)
     runs = load_runs(out_dir)

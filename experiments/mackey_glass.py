@@ -1,12 +1,12 @@
 """Mackey-Glass (τ = 17) 84-step prediction with output feedback: does paper E's new β
 method beat the ordinary teacher-forced fit and reservoirpy?
 
-Jaeger & Haas (2004)'s task and network (:func:`skinny_mj.bench_mackey_glass.esn_config`:
+Jaeger & Haas (2004)'s task and network (:func:`skinny_mj.cli.bench_mackey_glass.esn_config`:
 leak 0.6, spectral radius 0.95, bias 0.2, feedback scaling 0.56, state noise 1e-8,
 pinv), N = 400: teacher-forced through 1000 washout + 2000 training samples of a series
 of its own (:func:`controllers.mackey_glass.mackey_glass`, one per seed), then free for
 500 steps. Rows: :mod:`experiments.generation_runs` (no FORCE row); reservoirpy: its own
-way (:func:`skinny_mj.bench_mackey_glass.mackey_glass_reservoirpy`: d(t) -> d(t + 1),
+way (:func:`skinny_mj.cli.bench_mackey_glass.mackey_glass_reservoirpy`: d(t) -> d(t + 1),
 ridge 1e-10, closed loop). Metrics: Jaeger & Haas's NRMSE_84 of each run (|y(84) −
 d(84)| / std(d), and log10), the free-run NRMSE over the first 84 steps, the horizon
 before the error exceeds 0.1 std, stability, fit wall time. 20 seeds per row.
@@ -24,7 +24,7 @@ import numpy as np
 
 from controllers.mackey_glass import mackey_glass
 from experiments import generation_runs as common
-from skinny_mj.experiment import Experiment, Row
+from skinny_mj.engine.experiment import Experiment, Row
 
 NAME = "mackey-glass"
 HORIZON = 84
@@ -57,7 +57,7 @@ def _with_nrmse84(m: dict, free: np.ndarray, target: np.ndarray, scale: float) -
 
 
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
-    from skinny_mj.bench_mackey_glass import esn_config
+    from skinny_mj.cli.bench_mackey_glass import esn_config
 
     method = row.params["method"]
     if method == "reservoirpy":
@@ -75,7 +75,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
 
 
 def _reservoirpy(cfg: Config, seed: int) -> dict:
-    from skinny_mj.bench_mackey_glass import mackey_glass_reservoirpy
+    from skinny_mj.cli.bench_mackey_glass import mackey_glass_reservoirpy
 
     series = _series(cfg, common.streams(seed)[0])
     scale = float(series[cfg.washout:cfg.n_fit].std())
@@ -93,7 +93,7 @@ def _reservoirpy(cfg: Config, seed: int) -> dict:
 
 def estimate_bytes(cfg: Config, row: Row, runs: int):
     """The memory a batch of ``runs`` seeds of ``row`` needs (the sweep's check)."""
-    from skinny_mj.bench_mackey_glass import esn_config
+    from skinny_mj.cli.bench_mackey_glass import esn_config
 
     return common.estimate(row.params["method"], esn_config(cfg.reservoir), cfg.n_fit,
                            cfg.free, runs)
@@ -117,7 +117,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
 
 
 def report(results: dict, out_dir: Path) -> str:
-    from skinny_mj.sweep.stats import load_runs
+    from skinny_mj.engine.stats import load_runs
 
     lines = []
     for row in METHODS:  # Jaeger & Haas pool the squared errors over trials

@@ -29,10 +29,10 @@ from pathlib import Path
 import numpy as np
 
 from controllers.fel import run_mean
-from skinny_mj.config import TrainConfig, relative_cost
-from skinny_mj.experiment import Experiment, Row, RunFailed
-from skinny_mj.sweep import one_of_batch
-from skinny_mj.sweep.options import OPTION_KEYS, movement_changes
+from skinny_mj.engine.experiment import Experiment, Row, RunFailed
+from skinny_mj.engine.options import OPTION_KEYS, movement_changes
+from skinny_mj.engine.sweep import one_of_batch
+from skinny_mj.training.config import TrainConfig, relative_cost
 
 NAME = "paper-a"
 ARCHITECTURES = ("inverse", "parallel", "serial", "hybrid")
@@ -127,7 +127,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     import time
 
     from controllers.forward_model import rollout_prediction_error
-    from skinny_mj.training import build_run, evaluate, train_run
+    from skinny_mj.training.loop import build_run, evaluate, train_run
 
     start = time.perf_counter()
     run = build_run(train_config(cfg, row), seeds)

@@ -12,7 +12,7 @@ qualitative claims that :func:`report` checks here with our numbers.
 Not stated in paper B (our choices, in :data:`MODEL` and :class:`Config`): the number
 of epochs, runs, spectral radius, reservoir noise, the movement's period and amplitude.
 Each row is a config of the one training path on paper B's plant
-(:class:`skinny_mj.bimanual.BimanualPlant`, ``leading_arm="right"``).
+(:class:`skinny_mj.plant.bimanual.BimanualPlant`, ``leading_arm="right"``).
 """
 
 from __future__ import annotations
@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from skinny_mj.body import CONTROL_DT_S
-from skinny_mj.config import TrainConfig, relative_cost
-from skinny_mj.experiment import Experiment, Row, RunFailed
-from skinny_mj.sweep import one_of_batch
+from skinny_mj.engine.experiment import Experiment, Row, RunFailed
+from skinny_mj.engine.sweep import one_of_batch
+from skinny_mj.plant.body import CONTROL_DT_S
+from skinny_mj.training.config import TrainConfig, relative_cost
 from skinny_mj.trajectories.patterns import PATTERNS, PREFIX
 
 NAME = "paper-b"
@@ -86,8 +86,8 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     from the run's plant seed + 1)."""
     import time
 
-    from skinny_mj.bimanual import arm_dofs, phase_lag_deg
-    from skinny_mj.training import build_run, evaluate, train_run
+    from skinny_mj.plant.bimanual import arm_dofs, phase_lag_deg
+    from skinny_mj.training.loop import build_run, evaluate, train_run
     from skinny_mj.trajectories import get
     from skinny_mj.trajectories.patterns import Movement
 
@@ -184,7 +184,7 @@ def _roughness(out_dir: Path, row: str, tag: str = "x1") -> float | None:
     """Median over runs of RMS(Δ² actual) / RMS(Δ² desired) of the lagging shoulder
     (from the stored traces): 1 = as smooth as the target, larger = jerkier. Unlike the
     motor NRMSE it does not depend on the pattern's command scale."""
-    from skinny_mj.sweep.stats import load_runs
+    from skinny_mj.engine.stats import load_runs
 
     vals = []
     for run in load_runs(out_dir):
@@ -276,8 +276,8 @@ def _fig3(path: Path, row: str, traces: dict) -> None:
 
 def report(results: dict, out_dir: Path) -> str:
     """Fig. 3-style traces (first ok run per pattern), a box plot, the claims."""
+    from skinny_mj.engine.stats import load_runs
     from skinny_mj.plots import boxplot_png
-    from skinny_mj.sweep.stats import load_runs
 
     out_dir = Path(out_dir)
     runs = sorted((r for r in load_runs(out_dir) if r.get("status") == "ok"),

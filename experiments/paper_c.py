@@ -60,9 +60,9 @@ from pathlib import Path
 import numpy as np
 
 from controllers.metrics import nrmse
-from skinny_mj import body
-from skinny_mj.experiment import Experiment, Row, RunFailed
-from skinny_mj.sweep import one_of_batch
+from skinny_mj.engine.experiment import Experiment, Row, RunFailed
+from skinny_mj.engine.sweep import one_of_batch
+from skinny_mj.plant import body
 from skinny_mj.trajectories import sample_clip
 
 NAME = "paper-c"
@@ -109,7 +109,7 @@ def train_config(cfg: Config, movement: str):
     """Paper C §3.5: the original target (β = 1) fitted after each of 5 learning cycles
     per epoch, K x 0.9 per epoch, one command scale (``max_speed_from``), and a test of
     one initialization cycle + one evaluation cycle (§3.6)."""
-    from skinny_mj.config import TrainConfig
+    from skinny_mj.training.config import TrainConfig
 
     asf = cfg.asf if str(movement).lower().split("@")[0].endswith(".amc") else None
     rule = {"rule": "original"} if cfg.beta >= 1.0 else {"rule": "new", "rule.beta": cfg.beta}
@@ -189,7 +189,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     """:func:`run_one` for several seeds of one row in lockstep (the engine's fast path):
     seed k's metrics dict, or its :class:`RunFailed`, bit for bit what it gets alone;
     the wall times are the batch's, shared out per run."""
-    from skinny_mj.training import build_run, evaluate, train_run
+    from skinny_mj.training.loop import build_run, evaluate, train_run
 
     start = time.perf_counter()
     run = build_run(train_config(cfg, row.params["train"]), seeds)
@@ -223,7 +223,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
 
 
 def _test_metrics(cfg: Config, col: str, outcome) -> dict:
-    """One run's metrics on test column ``col`` (a :class:`skinny_mj.training.TestOutcome`)."""
+    """One run's metrics on test column ``col`` (a :class:`skinny_mj.training.loop.TestOutcome`)."""
     test, angles = outcome.trajectory, outcome.rollout.angles[0]
     desired_rng = elbow_range(test.angles, cfg.dof)
     out = {

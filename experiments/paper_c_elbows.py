@@ -19,7 +19,7 @@ import json
 import numpy as np
 
 from experiments import paper_c
-from skinny_mj import body
+from skinny_mj.plant import body
 
 
 def jacobian(esn, r: int, states: np.ndarray, y_esn: np.ndarray, n_in: int) -> np.ndarray:
@@ -47,7 +47,7 @@ def dead_beat_gain(run, joint: int, dof: int, dt: float) -> float:
 def analyse(run, dof: int = 4) -> list[dict]:
     """Per run: YM elbow range ratio and correlation, the elbows' Jacobian rows, and the
     produced elbow ranges (deg) with YM's elbow targets held (both, left only)."""
-    from skinny_mj.training import evaluate
+    from skinny_mj.training.loop import evaluate
 
     names, elbows = body.dof_names(dof), paper_c.elbow_dofs(dof)
     cfg = paper_c.Config(dof=dof)
@@ -84,7 +84,7 @@ def analyse(run, dof: int = 4) -> list[dict]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    from skinny_mj.training import build_run, train_run
+    from skinny_mj.training.loop import build_run, train_run
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1])

@@ -21,11 +21,11 @@ from experiments.paper_c import (
     elbow_range,
     load,
 )
-from skinny_mj import body
+from skinny_mj.plant import body
 
 
 def _runs(out_dir: Path) -> list[dict]:
-    from skinny_mj.sweep.stats import load_runs
+    from skinny_mj.engine.stats import load_runs
 
     return [r for r in load_runs(out_dir) if r.get("status") == "ok"]
 

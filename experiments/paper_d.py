@@ -34,9 +34,9 @@ from typing import Any
 
 import numpy as np
 
-from skinny_mj.config import TrainConfig
-from skinny_mj.study import Quick, Row, Study
-from skinny_mj.training import TrainOutcome, train
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.loop import TrainOutcome, train
 
 NAME = "paper-d"
 
@@ -95,7 +95,7 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list[dict[str,
     the analytic commands), ``tt_failed`` / ``fel_failed`` (0 or 1, so their mean is
     the failure rate), each architecture's wall time in s, and failure reasons.
     """
-    from skinny_mj.training import train_batch
+    from skinny_mj.training.loop import train_batch
 
     both = trainings(config, row)
     tts, fels = train_batch(both["tt"], seeds), train_batch(both["fel"], seeds)
@@ -139,7 +139,7 @@ def _row(row_id: str, method: str, noise: bool, reps: int) -> Row:
 def _average_run(out_dir: Path, row_id: str) -> dict | None:
     """The ok run of ``row_id`` whose TT test position NRMSE is nearest the row's mean
     (the paper's Figure 4 shows "one average run")."""
-    from skinny_mj.sweep.stats import load_runs
+    from skinny_mj.engine.stats import load_runs
 
     runs = [r for r in load_runs(out_dir) if r.get("row") == row_id and r.get("status") == "ok"
             and r["metrics"].get("tt_position_test") is not None]
@@ -165,7 +165,7 @@ def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
     (config, seed)); also writes each one's ``.rrd``. Rows: experiments; columns:
     elbow, wrist (x, y, z each). ``reproduced`` collects, per re-trained run, whether
     it reproduced the run file's TT test position NRMSE exactly."""
-    from skinny_mj import body
+    from skinny_mj.plant import body
     from skinny_mj.plots import pyplot, save_figure
 
     reproduced = [] if reproduced is None else reproduced

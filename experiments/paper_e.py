@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from skinny_mj.config import TrainConfig
-from skinny_mj.study import Quick, Row, Study
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.training.config import TrainConfig
 
 NAME = "paper-e"
 
@@ -71,7 +71,7 @@ def run_convergence(config: TrainConfig, row: Row, seeds: list[int]) -> list[dic
     and teacher forcing (true commands at full scale 2 x the fastest speed), for
     several seeds in lockstep."""
     from controllers.true_target import convergence_curve
-    from skinny_mj.training import build_run
+    from skinny_mj.training.loop import build_run
 
     run = build_run(config, seeds)
     curves = convergence_curve(run.esn, run.desired, run.true_commands, config.rule.beta,

@@ -17,7 +17,7 @@ curves by eye; here every seed's are measured, per epoch:
 
 The rows are paper E's exps 1, 2 and 5 (their rows of ``paper_e.ROWS``, 20 runs each;
 ``--quick``: 2 runs of 2 epochs). **One initial network per seed:** rows ``2`` and ``5``
-take row ``1``'s seeds (:attr:`skinny_mj.study.Row.seeds_of`), so the three rows of run k
+take row ``1``'s seeds (:attr:`skinny_mj.engine.study.Row.seeds_of`), so the three rows of run k
 train from the same seed and share the ESN weights, the initial readout, the
 reservoir-noise and the sensor-noise streams (``run_streams(seed)``); exp 1's runs are
 paper-e row 1's runs, seed for seed.
@@ -37,10 +37,10 @@ import numpy as np
 from controllers.metrics import nrmse, position_nrmse
 from controllers.rollout import Rollout
 from experiments import paper_e
-from skinny_mj.config import TrainConfig
-from skinny_mj.experiment import run_seed
-from skinny_mj.study import Quick, Row, Study
-from skinny_mj.sweep.stats import to_jsonable
+from skinny_mj.engine.experiment import run_seed
+from skinny_mj.engine.stats import to_jsonable
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.training.config import TrainConfig
 
 NAME = "paper-e-explain"
 EXPS = ("1", "2", "5")  # paper E §5.1: original 1 rep, original 5 reps, new β = 0.1
@@ -141,7 +141,7 @@ class EpochDiagnostics:
 
 def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Seeds of one row in lockstep (row ``1``'s seeds in every row: ``seeds_of``)."""
-    from skinny_mj.training import build_run, evaluate, train_run
+    from skinny_mj.training.loop import build_run, evaluate, train_run
 
     shared = list(seeds)
     keep = {run_seed(BASE_SEED, 0, k) for k in range(SERIES_RUNS)}  # the kept signals

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from experiments.paper_e_explain import EXPS
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.io import atomic_write_text
-from skinny_mj.sweep.stats import load_runs
 
 TABLE_EPOCHS = (1, 2, 5, 10)
 #: table rows: (run-file key, label)
@@ -209,7 +209,7 @@ def _epochs(plan) -> int:
 
 
 def _true_commands(plan, exp: str) -> np.ndarray:
-    from skinny_mj.run_parts import full_scale_speeds, load_trajectory, true_commands_of
+    from skinny_mj.training.parts import full_scale_speeds, load_trajectory, true_commands_of
 
     tc = plan.config(exp)
     traj, _ = load_trajectory(tc)
@@ -313,7 +313,7 @@ def fig10(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
     """Fig. 10: teacher forcing in epoch 5: the plant's positions (one repetition)
     beside the desired ones, and the position NRMSE of the learning cycles per epoch."""
     from skinny_mj.plots import save_figure
-    from skinny_mj.run_parts import load_trajectory
+    from skinny_mj.training.parts import load_trajectory
 
     if not any(by_row.values()):
         return None

@@ -14,10 +14,10 @@ import numpy as np
 
 from experiments.claims import claim_lines, values
 from experiments.paper_e import PAPER_FIG3_CYCLES, PAPER_TABLE_2, TABLE_1, TABLE_COLUMNS
-from skinny_mj.config import TrainConfig
+from skinny_mj.engine.plan import Plan
+from skinny_mj.engine.stats import load_runs, markdown_table
 from skinny_mj.io import atomic_write_text
-from skinny_mj.study_plan import Plan
-from skinny_mj.sweep.stats import load_runs, markdown_table
+from skinny_mj.training.config import TrainConfig
 
 
 def group_of(row_id: str) -> str:
@@ -330,7 +330,7 @@ def median_recordings(out_dir: Path, plan: Plan, table_rows: Sequence[str]) -> l
 def _record_run(path: Path, cfg: TrainConfig, row_id: str, seed: int, metrics: dict) -> bool:
     """Re-train one run, write its test as an .rrd; True when it reproduces ``metrics``."""
     from skinny_mj.recording import record_test
-    from skinny_mj.training import train
+    from skinny_mj.training.loop import train
 
     outcome = train(cfg, seed)
     record_test(path, outcome, f"paper E exp {row_id}, median run (seed {seed})",

@@ -27,7 +27,7 @@ import numpy as np
 
 from experiments import paper_e
 from experiments.claims import claim_lines
-from skinny_mj.study import Quick, Row, Study
+from skinny_mj.engine.study import Quick, Row, Study
 
 NAME = "ridge-vs-new"
 #: md_02's excerpt: seconds 3 to 9.26 (313 steps at 50 Hz, as one YMCA).
@@ -116,7 +116,7 @@ def report(results, plan, out_dir: Path) -> str:
 def _recordings(out_dir: Path, results, plan, mv: str) -> list[str]:
     """The median run of ``<mv>-ridge1`` and ``<mv>-5`` re-trained and recorded."""
     from skinny_mj.recording import record_test
-    from skinny_mj.training import train
+    from skinny_mj.training.loop import train
 
     lines = []
     for row_id in (f"{mv}-ridge1", f"{mv}-5"):

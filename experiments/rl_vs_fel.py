@@ -21,7 +21,7 @@ steps for both movements).
 
 Every run is tested before training and during it (FEL: after every epoch; RL: every
 ``budget / evals`` env steps, deterministic policy) on a fresh plant, K = 0, by the
-position NRMSE :func:`skinny_mj.training.evaluate` computes
+position NRMSE :func:`skinny_mj.training.loop.evaluate` computes
 (:mod:`experiments.rl_vs_fel_runs`). Metrics per run: final and best test error, env
 steps used, training wall and CPU time (tests excluded), and for 0.05 and 0.02 the env
 steps, wall and CPU time of the first test at or below it. Budgets per run
@@ -39,9 +39,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from experiments import rl_vs_fel_runs as runs_mod
-from skinny_mj.config import TrainConfig
-from skinny_mj.experiment import Experiment, Row, RunFailed
-from skinny_mj.sweep.options import config_from_dict
+from skinny_mj.engine.experiment import Experiment, Row, RunFailed
+from skinny_mj.engine.options import config_from_dict
+from skinny_mj.training.config import TrainConfig
 
 NAME = "rl-vs-fel"
 LEARNERS = ("fel", "ppo", "sac")
@@ -119,8 +119,8 @@ def estimate_bytes(cfg: Config, row: Row, runs: int):
     before), float64 observations, actions and five scalars per step; the networks'
     float32 weights, gradients and Adam's two moments (a target copy: weights only).
     ESN + FEL rows: None (their :func:`train_config` says)."""
-    from skinny_mj import body
     from skinny_mj.memory import Estimate
+    from skinny_mj.plant import body
 
     learner = row.params["learner"]
     if learner == "fel":

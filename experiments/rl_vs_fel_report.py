@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.io import atomic_write_text
-from skinny_mj.sweep.stats import load_runs
 
 COLOURS = {"fel": "tab:blue", "ppo": "tab:orange", "sac": "tab:green"}
 LABELS = {"fel": "ESN + FEL", "ppo": "PPO", "sac": "SAC"}

@@ -6,15 +6,15 @@ steps taken so far, training wall time and CPU time of the run's process so far 
 tests themselves excluded; on a shared machine the CPU time is the fairer clock) and
 the K = 0 test error then (None when the test diverged). Both kinds of learner are tested alike: a
 fresh plant whose sensor noise starts from the run's plant seed
-(:func:`skinny_mj.run_parts.run_streams`), one pass of the movement from its first
+(:func:`skinny_mj.training.parts.run_streams`), one pass of the movement from its first
 pose, the controller alone, no learning and no exploration, scored by
 :func:`controllers.metrics.position_nrmse` on the noise-free signals (what
-:func:`skinny_mj.training.evaluate` scores).
+:func:`skinny_mj.training.loop.evaluate` scores).
 
-- ESN + FEL (:func:`fel_curve`): the one training path (:func:`skinny_mj.training.
+- ESN + FEL (:func:`fel_curve`): the one training path (:func:`skinny_mj.training.loop.
   train_run`) with a test after every epoch through FEL's ``observe`` hook (the test
   only resets the reservoir state, which the next epoch resets anyway, and draws no
-  reservoir noise, so the training is the one :func:`skinny_mj.training.train` runs).
+  reservoir noise, so the training is the one :func:`skinny_mj.training.loop.train` runs).
   Env steps per epoch: every cycle the plant ran, (learning cycles + 2) x (T - 1).
 - PPO and SAC (:func:`rl_curve`): stable-baselines3 on :class:`skinny_mj.gym.env.
   SkinnyEnv` (imported lazily: the ``rl`` extra), tested every ``budget / evals`` env
@@ -30,9 +30,9 @@ from typing import Any
 import numpy as np
 
 from controllers.metrics import position_nrmse
-from skinny_mj.config import TrainConfig
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.run_parts import full_scale_speeds, load_trajectory, run_streams
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.parts import full_scale_speeds, load_trajectory, run_streams
 
 RL_EXTRA = "rl-vs-fel needs the rl extra: pip install -e '.[rl]'"
 #: The reward's worst value per step: -mean |desired - true| with signals in [-1, 1].
@@ -77,7 +77,7 @@ def point(steps: int, elapsed: tuple[float, float], nrmse: float | None) -> dict
 
 # -- ESN + FEL ----------------------------------------------------------------------------
 def _fel_test(run) -> float | None:
-    from skinny_mj import training
+    from skinny_mj.training import loop as training
 
     test = training.evaluate(run)[0]
     if test.failed or (test.torque is not None and test.torque["metrics"]["warnings"]):
@@ -88,7 +88,7 @@ def _fel_test(run) -> float | None:
 def fel_curve(tc: TrainConfig, seed: int) -> tuple[list[dict], dict]:
     """ESN + FEL's curve (a test before training and after every epoch) and facts of the
     run: ``failed`` (diverged in training), ``steps_per_epoch``."""
-    from skinny_mj import training
+    from skinny_mj.training import loop as training
 
     run = training.build_run(tc, [seed])
     steps_per_epoch = (run.fel_config().learning_cycles + 2) * (len(run.desired) - 1)
@@ -129,7 +129,7 @@ def tracking_wrapper(env, velocity_inputs: bool):
     from dm_control.rl.control import PhysicsError
     from gymnasium import spaces
 
-    from skinny_mj.torque_training import desired_velocities_rad_s
+    from skinny_mj.training.torque import desired_velocities_rad_s
 
     class Tracking(gymnasium.Wrapper):
         def __init__(self, inner):

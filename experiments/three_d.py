@@ -6,7 +6,7 @@ Rows ``<paper>-<dim>-<paper row>`` (``a-2d-serial-d4``, ``b-3d-phase90``,
 ``run_batch`` as that paper's ``build(dof=..., signals=...)`` makes it, so no recipe is
 copied here. ``2d`` is the paper's setting (4 DOF, joint angles); ``3d`` is ``dof=8,
 signals="cartesian"`` (``--dof`` / ``--signals`` replace it). A 3D row takes its 2D
-twin's seeds (:attr:`skinny_mj.experiment.Row.seeds_of`): run k of both starts from the
+twin's seeds (:attr:`skinny_mj.engine.experiment.Row.seeds_of`): run k of both starts from the
 same seed. :mod:`experiments.three_d_report` writes the table (2D vs 3D, mean ± sd,
 failed / n), each paper's own figures and claims on each body, and the claims side by side.
 
@@ -47,7 +47,7 @@ import importlib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from skinny_mj.experiment import Experiment, Row
+from skinny_mj.engine.experiment import Experiment, Row
 
 NAME = "three-d"
 #: paper id -> its module

@@ -20,8 +20,8 @@ import numpy as np
 
 from experiments import paper_a, paper_b
 from experiments.three_d import DIMS, PAPERS, module, paper_experiment, row_id, subset
+from skinny_mj.engine.stats import aggregate, load_runs
 from skinny_mj.io import atomic_write_json, atomic_write_text
-from skinny_mj.sweep.stats import aggregate, load_runs
 
 #: The table's lines: paper -> (paper row or None for every row of the subset, metric,
 #: label). Paper C's metrics are ``<test movement>__<metric>``.
@@ -56,7 +56,7 @@ def angle_nrmse(produced: np.ndarray, desired: np.ndarray, dof: int) -> float | 
     """NRMSE of normalized joint angles (produced, desired: (T, dof) rad), None if the
     lengths differ: the same measure on both bodies, whatever the signals."""
     from controllers.metrics import nrmse
-    from skinny_mj import body
+    from skinny_mj.plant import body
 
     if produced.shape != desired.shape:
         return None
@@ -81,7 +81,7 @@ def _with_angle_errors(rec: dict, paper_c_config) -> dict:
 
 def write_views(out_dir: Path, runs: list[dict], cfg: dict) -> dict[str, Path]:
     """``papers/<paper>-<dim>/``: each paper's run files on each body under the paper's
-    own row ids and seeds (:mod:`skinny_mj.sweep.stats` format), and its config."""
+    own row ids and seeds (:mod:`skinny_mj.engine.stats` format), and its config."""
     views = {}
     for p in PAPERS:
         for dim in DIMS:

@@ -21,14 +21,14 @@ import numpy as np
 from controllers.fel import rollout
 from controllers.metrics import nrmse
 from experiments import paper_c
-from skinny_mj import body
+from skinny_mj.plant import body
 
 BODIES = ((4, "joint"), (4, "cartesian"), (8, "joint"), (8, "cartesian"))
 
 
 def target_noise(dof: int, signals: str, sensor_noise: float, seed: int = 0) -> dict:
     """One feedback-only cycle of YMCA: y_est's error per DOF against the true commands."""
-    from skinny_mj.training import build_run
+    from skinny_mj.training.loop import build_run
 
     cfg = paper_c.Config(dof=dof, signals=signals, reservoir=50)
     tc = paper_c.train_config(cfg, "ymca").override({"rule": "original",

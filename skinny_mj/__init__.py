@@ -2,7 +2,7 @@
 it imitates, and the glue that lets echo state networks learn to control it.
 
 Heavy imports (mujoco, dm_control, rerun) happen on first use, so that
-``skinny_mj.body`` and ``skinny_mj.trajectories`` stay importable without them.
+``skinny_mj.plant.body`` and ``skinny_mj.trajectories`` stay importable without them.
 """
 
 from __future__ import annotations
@@ -10,13 +10,13 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from skinny_mj import headless
+from skinny_mj.plant import headless
 
 __version__ = "0.1.0"
 headless.install()  # no display, no MUJOCO_GL: dm_control skips GLFW without a warning
 
 _LAZY = {
-    "load": ("skinny_mj.task", "load"),
+    "load": ("skinny_mj.plant.task", "load"),
     "Trajectory": ("skinny_mj.trajectories", "Trajectory"),
     "SkinnyInputError": ("skinny_mj.errors", "SkinnyInputError"),
 }

@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from skinny_mj.config import TrueTarget
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.training.config import TrueTarget
 
 __all__ = ["Estimate", "available_bytes", "check", "train_estimate", "test_estimate",
            "track_estimate", "generation_estimate", "row_configs", "row_estimate",
@@ -133,7 +133,7 @@ def _weights(n: int, n_in: int, n_out: int, runs: int) -> tuple[int, int]:
 
 def _layout(cfg: Any) -> dict[str, int]:
     """The signal counts of ``cfg`` (a TrainConfig): n_sig, n_out, n_in, D, D_fm."""
-    from skinny_mj.run_parts import network_sizes
+    from skinny_mj.training.parts import network_sizes
 
     n_sig, n_out, n_in = network_sizes(cfg)
     d_fm = _forward_size(cfg) + n_sig + n_out + 1 if _forward_size(cfg) else 0
@@ -252,7 +252,7 @@ def row_configs(module: Any, experiment: Any, row: Any) -> list[Any]:
     """The TrainConfigs one run of ``row`` trains, where the experiment module says:
     its ``train_config(config, row)`` or ``train_configs(config, row)`` (a mapping); []
     for a module or a row built otherwise (no estimate then)."""
-    from skinny_mj.config import TrainConfig
+    from skinny_mj.training.config import TrainConfig
 
     for name in ("train_configs", "train_config"):
         fn = getattr(module, name, None)
@@ -272,7 +272,7 @@ def _steps(cfg: Any, cache: dict) -> tuple[int, str]:
     mv = cfg.movement
     key = (mv.trajectory, mv.asf, cfg.plant.dof, mv.speed, mv.retarget)
     if key not in cache:
-        from skinny_mj.run_parts import load_trajectory
+        from skinny_mj.training.parts import load_trajectory
 
         cache[key] = len(load_trajectory(cfg)[0])
     return cache[key], steps_cause(str(mv.trajectory), cache[key], mv.reps, flag="")
@@ -317,7 +317,7 @@ def sweep_estimate(module: Any, experiment: Any, rows: Sequence[Any], runs: int,
 def check_train(cfg: Any, what: str = "the training") -> None:
     """Refuse a training of ``cfg`` the machine cannot hold (loads one repetition of its
     movement to count the steps)."""
-    from skinny_mj.run_parts import load_trajectory
+    from skinny_mj.training.parts import load_trajectory
 
     traj, _ = load_trajectory(cfg)
     one, reps = len(traj), cfg.movement.reps
@@ -345,7 +345,7 @@ def check_sweep(module: Any, experiment: Any, rows: Any, runs: int | None,
                 workers: int | None, scheduler: str | None) -> None:
     """Refuse a sweep whose largest row, times the workers running at once, does not
     fit; on a remote Dask cluster the memory is the cluster's (no check here)."""
-    from skinny_mj.experiment import default_batch_size, default_workers, select_rows
+    from skinny_mj.engine.experiment import default_batch_size, default_workers, select_rows
 
     if scheduler is not None and scheduler != "local":
         return
@@ -381,7 +381,7 @@ def check_bench(workers: int | None, quick: bool) -> None:
     (not with ``--quick``), a sweep on ``workers`` processes: checked as a sweep is."""
     if quick:
         return
-    from skinny_mj import registry
+    from skinny_mj.engine import registry
 
     module = registry.get("paper-e")
     rows = list(getattr(module, "TABLE_1", ())) or None

@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path
+from skinny_mj.plant import body
 from skinny_mj.preflight import check_free_space
 from skinny_mj.recording_layout import (  # noqa: F401 (colours re-exported for tests)
     ACTUAL_RGB,
@@ -150,7 +150,7 @@ def write_recording(
     path : output file, conventionally ``run.rrd``.
     dt : control step, s.
     dof : 4 (2D) or 8 (3D); used for the arm drawing and the joint ranges.
-    dof_names : (n_dof,) names in :func:`skinny_mj.body.dof_names` order.
+    dof_names : (n_dof,) names in :func:`skinny_mj.plant.body.dof_names` order.
     signal_names : (n_sig,) names of the position signals.
     desired_angles, actual_angles : (T, n_dof) joint angles, rad.
     commands : (T-1, n_dof) normalized velocity commands in [-1, 1]; command t moves
@@ -342,7 +342,7 @@ def _log_torques(rec, torques: Mapping[str, np.ndarray], dof_names: list[str],
 def record_test(path: str | Path, outcome: Any, title: str,
                 metadata: Mapping[str, Any] | None = None) -> Path:
     """Write the closed-loop test of a trained run (a
-    :class:`skinny_mj.training.TrainOutcome`) as one ``.rrd``: desired vs actual angles
+    :class:`skinny_mj.training.loop.TrainOutcome`) as one ``.rrd``: desired vs actual angles
     and signals, commands, the arms in 3D, and the training curve."""
     test, cfg, ro = outcome.test, outcome.config, outcome.test.rollout
     curve = outcome.metrics["train"].get("position_nrmse")

@@ -18,7 +18,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from skinny_mj import body
+from skinny_mj.plant import body
 
 DESIRED_RGB = (40, 120, 230)
 ACTUAL_RGB = (240, 120, 30)

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from experiments import adaptation
-from skinny_mj import body
-from skinny_mj.perturb import PerturbedPlant, forearm_rows
-from skinny_mj.plant import BatchPlant
+from skinny_mj.plant import body
+from skinny_mj.plant.adapters import BatchPlant
+from skinny_mj.plant.perturb import PerturbedPlant, forearm_rows
 
 Q = np.array([[0.3, 0.8, -0.2, 0.5], [1.0, 0.2, 0.4, 1.1]])  # two poses, rad
 
@@ -99,7 +99,7 @@ def test_defaults_pass_through_bit_for_bit_and_the_old_rows_keep_their_seeds():
     assert adaptation.train_config(cfg, "payload").actuation.kind == "torque"
     assert 0 < adaptation.forearm_floor(cfg) < 0.1
     # the batch model without an edit is the one it always was
-    from skinny_mj.model import load_batch_model
+    from skinny_mj.plant.model import load_batch_model
     a, b = load_batch_model(4, 2), load_batch_model(4, 2, edit=None)
     assert np.array_equal(a.body_pos, b.body_pos) and a.nbody == b.nbody
     assert isinstance(a, mujoco.MjModel)

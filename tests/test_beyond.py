@@ -13,9 +13,9 @@ from controllers.online import OnlineRLS
 from controllers.plant import ToyPlant
 from controllers.readout import RLS, ridge_solve, rls_solve
 from controllers.ridge_select import RidgeSelector, ridge_path, validation_errors
-from skinny_mj.config import TrainConfig
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.perturb import PerturbedPlant
+from skinny_mj.plant.perturb import PerturbedPlant
+from skinny_mj.training.config import TrainConfig
 
 EPS = np.finfo(float).eps
 

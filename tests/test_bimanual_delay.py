@@ -11,11 +11,11 @@ from controllers.arm_forward import ArmForwardModels
 from controllers.esn import ESN, ESNConfig
 from experiments import bimanual_delay as bd
 from experiments import bimanual_delay_report as bdr
-from skinny_mj import bimanual as bm
-from skinny_mj.body import position_signals
-from skinny_mj.config import TrainConfig
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.ideal import max_speeds
+from skinny_mj.plant import bimanual as bm
+from skinny_mj.plant.body import position_signals
+from skinny_mj.plant.ideal import max_speeds
+from skinny_mj.training.config import TrainConfig
 from skinny_mj.trajectories import get
 
 N = 20  # reservoir units of the tiny networks
@@ -63,7 +63,7 @@ def test_the_lagging_arm_gets_delayed_state_its_prediction_and_what_the_leader_s
 
 
 def test_each_arms_forward_model_learns_its_own_next_position():
-    from skinny_mj.training import build_run, train_run
+    from skinny_mj.training.loop import build_run, train_run
 
     cfg = bd.STUDY.build(quick=True).config.config("phase0-share-predictions-d4").override(
         {"rule.epochs": 1, "rule.cycles": 1, "movement.speed": 2.0})
@@ -89,7 +89,7 @@ def test_config_needs_a_leading_arm_a_parallel_forward_model_and_joint_signals()
 
 
 def test_lockstep_batch_equals_each_seed_alone():
-    from skinny_mj.training import build_run, evaluate, train_run
+    from skinny_mj.training.loop import build_run, evaluate, train_run
 
     cfg = bd.MODEL.override({  # short cycles (100 steps): a fast test
         "movement.trajectory": "bimanual-phase180", "rule.epochs": 1, "rule.cycles": 1,
@@ -144,7 +144,7 @@ def test_report_table_and_comparisons_from_known_runs():
 
 @pytest.mark.slow
 def test_quick_sweep_end_to_end(tmp_path):
-    from skinny_mj.experiment import run_sweep
+    from skinny_mj.engine.experiment import run_sweep
 
     exp = bd.STUDY.build(quick=True)
     results = run_sweep(exp, tmp_path, workers=1, progress=False)

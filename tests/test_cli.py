@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skinny_mj.cli import main
+from skinny_mj.cli.parser import main
 from skinny_mj.trajectories.samples import SAMPLE_ASF
 
 CMU = SAMPLE_ASF.parent  # the CMU clips shipped with the package
@@ -169,7 +169,7 @@ def test_train_true_target_architecture_3d(tmp_path):
 def test_a_reader_that_stops_early_is_no_error():
     """``skinny experiment list | head -1``: the closed pipe ends the command quietly."""
     env = {**os.environ, "MUJOCO_GL": "disabled", "OMP_NUM_THREADS": "1"}
-    proc = subprocess.Popen([sys.executable, "-m", "skinny_mj.cli", "experiment", "list"],
+    proc = subprocess.Popen([sys.executable, "-m", "skinny_mj.cli.parser", "experiment", "list"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
     proc.stdout.close()  # the reader is gone before the first line is written
     err = proc.stderr.read().decode()

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from skinny_mj import registry
-from skinny_mj.cli import main
+from skinny_mj.cli.parser import main
+from skinny_mj.engine import registry
 
 
 def _exit(argv, capsys) -> tuple[int, str, str]:
@@ -87,7 +87,7 @@ def test_experiment_list_shows_whole_descriptions(capsys):
 def test_measured_time_per_run_comes_from_earlier_sweeps(tmp_path):
     import json
 
-    from skinny_mj.study_help import measured_here
+    from skinny_mj.cli.study_help import measured_here
 
     assert measured_here("paper-e", tmp_path) is None
     for stamp, rows in (("a", [(2.0, 10), (4.0, 10)]), ("b", [(3.0, 20)])):

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from skinny_mj import registry
-from skinny_mj.cli import main
-from skinny_mj.experiment import Experiment, Row
+from skinny_mj.cli.parser import main
+from skinny_mj.engine import registry
+from skinny_mj.engine.experiment import Experiment, Row
 
 TINY = ["--reservoir", "30", "--epochs", "1", "--quiet"]
 
@@ -87,9 +87,9 @@ def test_train_refuses_a_bad_key_or_value_in_one_line(tmp_path, capsys, argv, wo
 
 
 def test_key_values_and_flags_apply_together_before_the_config_checks():
-    from skinny_mj.cli import build_parser
-    from skinny_mj.config import NoLearning
-    from skinny_mj.config_files import train_config
+    from skinny_mj.cli.config_files import train_config
+    from skinny_mj.cli.parser import build_parser
+    from skinny_mj.training.config import NoLearning
 
     def config(*argv):
         return train_config(build_parser().parse_args(["train", *argv]))[0]
@@ -130,7 +130,7 @@ def test_test_runs_an_earlier_versions_model(tmp_path):
 def test_an_earlier_versions_setting_it_ignored_is_dropped():
     """Old files set fields their method never read (a true-target run's epochs, a
     forward model's size without one): the old code ran them, so they still run."""
-    from skinny_mj.config import TrainConfig
+    from skinny_mj.training.config import TrainConfig
 
     cfg = TrainConfig.from_dict({"method": "true-target", "epochs": 2, "tt_cycles": 7,
                                  "forward_reservoir": 50, "u_error_gain": 2.0})

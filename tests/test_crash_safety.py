@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skinny_mj.sweep.stats import load_run
+from skinny_mj.engine.stats import load_run
 
 _ENV = {**os.environ, "MUJOCO_GL": "disabled", "OMP_NUM_THREADS": "1",
         "OPENBLAS_NUM_THREADS": "1"}
@@ -28,7 +28,7 @@ _ENV = {**os.environ, "MUJOCO_GL": "disabled", "OMP_NUM_THREADS": "1",
 _FAKE = r"""
 import sys, time
 import numpy as np
-from skinny_mj.experiment import Experiment, Row, RunFailed, run_sweep
+from skinny_mj.engine.experiment import Experiment, Row, RunFailed, run_sweep
 
 def run_one(row, seed):
     time.sleep(0.03)

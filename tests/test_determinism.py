@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skinny_mj.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import Experiment, Row, run_sweep
 
 _CLOCK = ("wall_s", "finished_at")
 
@@ -51,7 +51,7 @@ def test_run_files_are_identical_across_worker_counts(tmp_path):
 @pytest.mark.slow
 def test_paper_e_run_files_identical_across_processes_workers_dask_and_lockstep(tmp_path):
     pytest.importorskip("dask.distributed")
-    from skinny_mj import registry
+    from skinny_mj.engine import registry
 
     exp = registry.get("paper-e").build(quick=True)
     kw = {"rows": ["5"], "runs": 2, "progress": False}
@@ -73,8 +73,8 @@ _THREADS_PROBE = """
 import hashlib
 from dataclasses import replace
 from threadpoolctl import threadpool_info
-from skinny_mj.config import TrainConfig
-from skinny_mj.training import train
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.loop import train
 out = train(TrainConfig().override(rule__epochs=3), 3)
 blas = max(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
 print(blas, out.metrics["test"]["position_nrmse"].hex(),

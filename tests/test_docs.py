@@ -105,8 +105,8 @@ def test_command_finder_reads_blocks_as_a_shell_would():
 def test_documented_commands_parse_and_name_real_studies(path, capsys):
     import shlex
 
-    from skinny_mj import registry
-    from skinny_mj.cli import build_parser
+    from skinny_mj.cli.parser import build_parser
+    from skinny_mj.engine import registry
 
     for cmd in shell_commands(path.read_text()):
         try:

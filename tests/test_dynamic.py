@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.training import TrainConfig, build_run, train_batch
+from skinny_mj.training.loop import TrainConfig, build_run, train_batch
 
 #: the torque body's limit-scaled PD alone (nothing learned, K = 1)
 TORQUE_PD = TrainConfig().override({"actuation": "torque", "rule": "none", "test.gain": 1.0})
@@ -56,8 +56,8 @@ def test_controller_alone_stays_within_limits_without_warnings():
 
 
 def test_perturbed_test_plant_changes_every_copy():
-    from skinny_mj.perturb import perturb
-    from skinny_mj.plant import BatchPlant
+    from skinny_mj.plant.adapters import BatchPlant
+    from skinny_mj.plant.perturb import perturb
 
     plant = BatchPlant(4, "cartesian", None, n_runs=2, actuation="torque")
     names = [mujoco.mj_id2name(plant.model, mujoco.mjtObj.mjOBJ_BODY, i)
@@ -98,8 +98,8 @@ def test_a_diverged_simulation_fails_the_run_and_splits_a_batch(monkeypatch):
     """MuJoCo resets a diverged simulation (all copies of a batch at once) and only logs a
     warning: a torque run with warnings is a failed run, never an ok one, and a lockstep
     batch with warnings is run again one seed at a time by the engine."""
-    from skinny_mj.plant import BatchPlant
-    from skinny_mj.training import PhysicsBatchError
+    from skinny_mj.plant.adapters import BatchPlant
+    from skinny_mj.training.loop import PhysicsBatchError
 
     monkeypatch.setattr(BatchPlant, "warning_count", lambda self: 3)
     cfg = TORQUE_PD

@@ -12,9 +12,9 @@ from controllers.readout import ridge_solve
 from controllers.reservoir import ESNConfig
 from controllers.torque_arm import ArmGains, ArmState, DesiredMotion, arm_torque
 from controllers.torque_readout import ForgettingReadout, RLSReadout
-from skinny_mj import torque_training
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.training import TrainConfig
+from skinny_mj.training import torque as torque_training
+from skinny_mj.training.loop import TrainConfig
 
 
 def _esn(n_runs=2) -> ESN:
@@ -105,7 +105,7 @@ def test_feedback_share_is_the_gain_times_the_error_signal():
         "actuation": "torque", "movement.trajectory": "y", "rule": "new", "rule.beta": 1.0,
         "rule.cycles": 1, "rule.epochs": 2, "actuation.feedback": "inertia-pd",
         "rule.fit": "forgetting"})
-    from skinny_mj.training import train
+    from skinny_mj.training.loop import train
 
     m = train(cfg, 0).metrics["train"]
     np.testing.assert_allclose(m["feedback_share"],

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinny_mj import torque_training
-from skinny_mj.cli import main
+from skinny_mj.cli.parser import main
+from skinny_mj.training import torque as torque_training
 from skinny_mj.trajectories import get
 
 
@@ -39,8 +39,8 @@ def test_show_prints_the_torques(capsys):
 def test_arm_state_matches_the_one_robot_dynamics():
     # the plant side of the textbook laws: each robot's M(q), bias and gravity as the
     # one-robot Dynamics computes them, in a lockstep batch of two
-    from skinny_mj.dynamics import BatchArmState
-    from skinny_mj.plant import BatchPlant
+    from skinny_mj.plant.adapters import BatchPlant
+    from skinny_mj.plant.dynamics import BatchArmState
 
     traj = get("ymca", 8)
     plant = BatchPlant(8, "joint", traj, n_runs=2, actuation="torque", sensor_noise=0.0)
@@ -59,7 +59,7 @@ def test_arm_state_matches_the_one_robot_dynamics():
 def test_computed_torque_tracks_ymca_within_its_need():
     # the textbook law at 50 Hz tracks the feasible YMCA closely with about the torque
     # the movement needs, and never at the limit
-    from skinny_mj.training import TrainConfig, train
+    from skinny_mj.training.loop import TrainConfig, train
 
     o = train(TrainConfig().override(actuation="torque", rule="none", test__gain=1.0,
                                         actuation__feedback="ct"))
@@ -72,8 +72,8 @@ def test_computed_torque_tracks_ymca_within_its_need():
 def test_a_perturbed_plant_is_controlled_with_the_nominal_model():
     # robustness rows: the controllers' M(q) and bias come from the nominal twin at the
     # plant's state; on an unchanged plant that is the plant's own, on a heavier one not
-    from skinny_mj.dynamics import BatchArmState
-    from skinny_mj.plant import BatchPlant
+    from skinny_mj.plant.adapters import BatchPlant
+    from skinny_mj.plant.dynamics import BatchArmState
 
     plant = BatchPlant(4, "joint", get("ymca", 4), n_runs=2, actuation="torque",
                        sensor_noise=0.0)

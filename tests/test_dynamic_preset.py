@@ -8,15 +8,15 @@ from skinny_mj.errors import SkinnyInputError
 
 
 def _config(argv):
-    from skinny_mj.cli import build_parser
-    from skinny_mj.config_files import train_config
+    from skinny_mj.cli.config_files import train_config
+    from skinny_mj.cli.parser import build_parser
 
     return train_config(build_parser().parse_args(argv))
 
 
 def test_torque_general_sets_its_fields_and_the_velocity_preset_is_untouched():
-    from skinny_mj.config import TrainConfig
-    from skinny_mj.presets import preset_fields
+    from skinny_mj.training.config import TrainConfig
+    from skinny_mj.training.presets import preset_fields
 
     cfg, seed = _config(["train", "--preset", "general", "--actuation", "torque",
                          "--epochs", "2", "--seed", "3"])
@@ -35,8 +35,8 @@ def test_torque_general_sets_its_fields_and_the_velocity_preset_is_untouched():
 
 
 def test_torque_general_babbling_is_within_the_torque_limits():
-    from skinny_mj.presets import preset_fields
-    from skinny_mj.torque_training import feasibility
+    from skinny_mj.training.presets import preset_fields
+    from skinny_mj.training.torque import feasibility
     from skinny_mj.trajectories.library import load_movement
 
     fields = preset_fields("general", "torque")
@@ -49,7 +49,7 @@ def test_torque_general_babbling_is_within_the_torque_limits():
 @pytest.mark.slow  # the CLI end to end (imports matplotlib and rerun)
 def test_train_torque_general_records_the_preset(tmp_path):
     from controllers.esn import read_metadata
-    from skinny_mj.cli import main
+    from skinny_mj.cli.parser import main
 
     out = tmp_path / "train"
     assert main(["train", "--preset", "general", "--actuation", "torque", "--epochs", "1",

@@ -11,14 +11,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from skinny_mj import body
-from skinny_mj.model import (
+from skinny_mj.plant import body
+from skinny_mj.plant.adapters import BatchPlant
+from skinny_mj.plant.model import (
     TORQUE_ARMATURE,
     TORQUE_ARMATURE_3D_SHOULDER,
     load_model,
     xml_path,
 )
-from skinny_mj.plant import BatchPlant
 from skinny_mj.recording import recording_entities
 
 TORQUE_ROLES = ("commanded", "applied", "gravity", "limit_upper", "limit_lower")
@@ -99,7 +99,7 @@ def _blueprint_paths(path) -> set[str]:
 def _untrained_torque_model(path) -> None:
     """A torque model file as ``skinny train`` writes it, its readout untrained (zero:
     the ESN commands no torque), so ``skinny test`` runs one cheap test cycle."""
-    from skinny_mj.training import TrainConfig, build_run
+    from skinny_mj.training.loop import TrainConfig, build_run
 
     cfg = TrainConfig().override(actuation="torque", rule__epochs=1)
     run = build_run(cfg, [1])
@@ -110,7 +110,7 @@ def _untrained_torque_model(path) -> None:
 
 
 def test_skinny_test_on_a_torque_model_records_the_torques(tmp_path):
-    from skinny_mj.cli import main
+    from skinny_mj.cli.parser import main
     from skinny_mj.recording import read_recording_series
 
     model, tested = tmp_path / "model.npz", tmp_path / "test"
@@ -139,7 +139,7 @@ def test_skinny_test_on_a_torque_model_records_the_torques(tmp_path):
 def test_the_torque_twin_keeps_the_servos_joint_limits(dof):
     # a stiffer limit halves the overshoot under bang-bang torques but made FEL learn the
     # 3D YMCA worse (the model card); the twin keeps MuJoCo's default
-    from skinny_mj.model import TORQUE_LIMIT_SOLREF
+    from skinny_mj.plant.model import TORQUE_LIMIT_SOLREF
 
     twin, servo = load_model(dof, "torque"), load_model(dof)
     np.testing.assert_array_equal(twin.jnt_solref, np.tile(TORQUE_LIMIT_SOLREF, (twin.njnt, 1)))

@@ -8,16 +8,16 @@ import mujoco
 import numpy as np
 import pytest
 
-from skinny_mj import body
-from skinny_mj.dynamics import Dynamics
-from skinny_mj.model import (
+from skinny_mj.plant import body
+from skinny_mj.plant.adapters import BatchPlant
+from skinny_mj.plant.dynamics import Dynamics
+from skinny_mj.plant.model import (
     TORQUE_ARMATURE_3D_SHOULDER,
     TORQUE_GEAR_NM,
     forearm_hand_inertia,
     load_model,
     segment_inertias,
 )
-from skinny_mj.plant import BatchPlant
 
 G = 9.81
 L_UPPER = body.UPPER_ARM_LENGTH_M

@@ -16,7 +16,7 @@ import sys
 _CHILD = r"""
 import json, resource, sys
 import numpy as np
-from skinny_mj.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import Experiment, Row, run_sweep
 
 def run_one(row, seed):
     return {"x": float(seed % 97), "trace": np.random.default_rng(seed).normal(size=400)}

@@ -142,7 +142,7 @@ def test_noise_is_each_runs_own_stream_in_blocks(kind, dtype):
 
 
 def test_one_run_split_from_a_lockstep_esn_continues_its_noise():
-    from skinny_mj.training import esn_run  # reads _noise_buf as (B, R, N)
+    from skinny_mj.training.loop import esn_run  # reads _noise_buf as (B, R, N)
 
     cfg = ESNConfig(3, 2, n_reservoir=40, noise_level=0.2)
     u = _inputs(n_runs=3, n_steps=400)

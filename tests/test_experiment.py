@@ -9,8 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import (
+from skinny_mj.engine.experiment import (
     Experiment,
     Row,
     RunFailed,
@@ -19,7 +18,8 @@ from skinny_mj.experiment import (
     run_seed,
     run_sweep,
 )
-from skinny_mj.sweep.stats import load_runs, summarize
+from skinny_mj.engine.stats import load_runs, summarize
+from skinny_mj.errors import SkinnyInputError
 
 
 def make_run_one(marker_dir: Path | None = None):

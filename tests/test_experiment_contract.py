@@ -16,8 +16,7 @@ import cloudpickle
 import numpy as np
 import pytest
 
-from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import (
+from skinny_mj.engine.experiment import (
     Experiment,
     Row,
     RunFailed,
@@ -26,7 +25,8 @@ from skinny_mj.experiment import (
     run_sweep,
     select_rows,
 )
-from skinny_mj.sweep.stats import MEANS_NOTE, load_runs
+from skinny_mj.engine.stats import MEANS_NOTE, load_runs
+from skinny_mj.errors import SkinnyInputError
 
 # Loky workers unpickle these fakes by value: they need not import the tests.
 cloudpickle.register_pickle_by_value(sys.modules[__name__])
@@ -261,8 +261,8 @@ def _fake_module(calls: list, rows: tuple[Row, ...]) -> types.ModuleType:
 
 
 def _cli(monkeypatch, module: types.ModuleType, *argv: str) -> int:
-    from skinny_mj import registry
-    from skinny_mj.cli import main
+    from skinny_mj.cli.parser import main
+    from skinny_mj.engine import registry
 
     monkeypatch.setattr(registry, "get", lambda name: module)
     return main(["experiment", "fake", "--workers", "1", *argv])
@@ -296,7 +296,7 @@ def test_cli_exits_0_with_failed_runs_and_2_on_an_unknown_row(tmp_path, monkeypa
 
 
 def test_cli_parser_knows_dof_and_signals():
-    from skinny_mj.cli import build_parser
+    from skinny_mj.cli.parser import build_parser
 
     args = build_parser().parse_args(["experiment", "paper-e"])
     assert isinstance(args, argparse.Namespace) and args.dof is None and args.signals is None

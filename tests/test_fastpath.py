@@ -18,11 +18,11 @@ import pytest
 from controllers import fel
 from controllers.esn import ESN
 from controllers.metrics import position_nrmse
-from skinny_mj import bench
-from skinny_mj.experiment import Experiment, Row, RunFailed, execute_batch, run_sweep
-from skinny_mj.plant import BatchPlant, EnvPlant
-from skinny_mj.task import load
-from skinny_mj.training import TrainConfig, train, train_batch
+from skinny_mj.cli import bench
+from skinny_mj.engine.experiment import Experiment, Row, RunFailed, execute_batch, run_sweep
+from skinny_mj.plant.adapters import BatchPlant, EnvPlant
+from skinny_mj.plant.task import load
+from skinny_mj.training.loop import TrainConfig, train, train_batch
 
 # new method, 2 epochs of 4 cycles, 313 steps
 TINY = TrainConfig().override(rule__epochs=2, rule__cycles=1)
@@ -175,7 +175,7 @@ def test_engine_batch_resume_and_raising_batch_falls_back(tmp_path):
 
 
 def test_default_batch_size_gives_every_worker_the_same_number_of_jobs():
-    from skinny_mj.experiment import default_batch_size
+    from skinny_mj.engine.experiment import default_batch_size
 
     assert default_batch_size(n_rows=6, runs=20, workers=2) == 20  # whole rows
     assert default_batch_size(n_rows=5, runs=50, workers=2) == 25  # 10 jobs
@@ -200,7 +200,7 @@ def test_costliest_batches_start_first_and_files_do_not_change(tmp_path):
 
 
 def test_execute_batch_refuses_mixed_rows():
-    from skinny_mj.experiment import RunSpec
+    from skinny_mj.engine.experiment import RunSpec
 
     specs = [RunSpec(Row("a"), 0, 0, 1), RunSpec(Row("b"), 1, 0, 2)]
     with pytest.raises(ValueError):

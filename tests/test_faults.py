@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import controllers._io
-from skinny_mj.cli import main
+from skinny_mj.cli.parser import main
+from skinny_mj.engine.experiment import Experiment, Row, RunFailed, run_sweep
 from skinny_mj.errors import SkinnyEnvironmentError
-from skinny_mj.experiment import Experiment, Row, RunFailed, run_sweep
 
 
 def _never(*args, **kwargs):
@@ -49,7 +49,7 @@ def _fake_tempfile(error: int, spare_probe: bool = False):
 
 def test_output_under_a_file_fails_before_training(tmp_path, monkeypatch, capsys):
     (tmp_path / "plain").write_text("x")
-    monkeypatch.setattr("skinny_mj.training.train", _never)
+    monkeypatch.setattr("skinny_mj.training.loop.train", _never)
     code = main(["train", "--epochs", "1", "--out", str(tmp_path / "plain" / "run")])
     _one_line_error(capsys, code, 1, "Not a directory")
 
@@ -58,7 +58,7 @@ def test_output_under_a_file_fails_before_training(tmp_path, monkeypatch, capsys
 def test_unwritable_or_full_output_fails_before_training(error, tmp_path, monkeypatch,
                                                          capsys):
     monkeypatch.setattr(controllers._io, "tempfile", _fake_tempfile(error))
-    monkeypatch.setattr("skinny_mj.training.train", _never)
+    monkeypatch.setattr("skinny_mj.training.loop.train", _never)
     code = main(["train", "--epochs", "1", "--out", str(tmp_path / "run")])
     _one_line_error(capsys, code, 1, os.strerror(error))
     assert not (tmp_path / "run").exists()
@@ -80,7 +80,7 @@ def test_nearly_full_disk_is_refused_before_the_work(tmp_path, monkeypatch, caps
 
     usage = namedtuple("usage", "total used free")
     monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(1 << 30, 1 << 30, 4096))
-    monkeypatch.setattr("skinny_mj.training.train", _never)
+    monkeypatch.setattr("skinny_mj.training.loop.train", _never)
     code = main(["train", "--out", str(tmp_path / "run")])
     _one_line_error(capsys, code, 1, "is full")
 
@@ -106,7 +106,7 @@ def test_a_failing_gl_context_is_one_line_exit_1(tmp_path, monkeypatch, capsys):
 
 
 def test_a_missing_model_folder_is_an_environment_error(tmp_path, monkeypatch, capsys):
-    from skinny_mj.model import xml_path
+    from skinny_mj.plant.model import xml_path
 
     monkeypatch.setenv("SKINNY_MJ_MODELS", str(tmp_path / "nowhere"))
     with pytest.raises(SkinnyEnvironmentError, match="SKINNY_MJ_MODELS"):
@@ -123,7 +123,7 @@ def _dies_on(seed_to_kill: int | None):
 
 
 def test_a_killed_worker_is_reported_and_resume_recovers(tmp_path):
-    from skinny_mj.experiment import run_seed
+    from skinny_mj.engine.experiment import run_seed
 
     victim = run_seed(0, 1, 3)
     rows = (Row("a"), Row("b"))
@@ -140,9 +140,9 @@ def test_a_killed_worker_is_reported_and_resume_recovers(tmp_path):
 
 def test_unreachable_dask_scheduler_is_one_line_exit_1(tmp_path, monkeypatch, capsys):
     pytest.importorskip("dask.distributed")
-    import skinny_mj.sweep
+    import skinny_mj.engine.sweep
 
-    monkeypatch.setattr(skinny_mj.sweep, "DASK_CONNECT_TIMEOUT_S", 1)
+    monkeypatch.setattr(skinny_mj.engine.sweep, "DASK_CONNECT_TIMEOUT_S", 1)
     exp = Experiment("dask", (Row("a"),), _dies_on(None), runs=1)
     with pytest.raises(SkinnyEnvironmentError, match="cannot reach the Dask scheduler"):
         run_sweep(exp, tmp_path, workers=1, scheduler="tcp://127.0.0.1:1", progress=False)
@@ -152,8 +152,8 @@ def test_unreachable_dask_scheduler_is_one_line_exit_1(tmp_path, monkeypatch, ca
 # -- numerical faults ---------------------------------------------------------------------
 def _train_row(row: Row, seed: int) -> dict:
     """One real (tiny) training per run; a diverged network is a RunFailed."""
-    from skinny_mj.config import TrainConfig
-    from skinny_mj.training import train
+    from skinny_mj.training.config import TrainConfig
+    from skinny_mj.training.loop import train
 
     fel = row.params.get("rule", "new") in ("original", "new")
     outcome = train(TrainConfig().override({"esn.n_reservoir": 20, "movement.trajectory": "y",
@@ -190,8 +190,8 @@ def test_singular_readout_solves_give_finite_or_nan_never_raise():
 
 
 def test_an_unstable_torque_plant_counts_warnings_and_does_not_crash(monkeypatch):
-    import skinny_mj.model as model
-    from skinny_mj.plant import BatchPlant
+    import skinny_mj.plant.model as model
+    from skinny_mj.plant.adapters import BatchPlant
 
     monkeypatch.setattr(model, "TORQUE_GEAR_NM",
                         {k: v * 1e12 for k, v in model.TORQUE_GEAR_NM.items()})

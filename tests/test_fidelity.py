@@ -9,10 +9,10 @@ from controllers.feedback import FeedbackController
 from controllers.fel import FELConfig, evaluate, train
 from controllers.plant import ToyPlant, toy_movement
 from controllers.true_target import TrueTargetConfig, train_true_target
-from skinny_mj import body
-from skinny_mj.config import TrainConfig
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.imitation import movement_stats
+from skinny_mj.plant import body
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.imitation import movement_stats
 from skinny_mj.trajectories import Trajectory, excerpt, ik, load_movement, sample_clip, ymca
 from skinny_mj.trajectories.human import markers, ymca_recorded
 from skinny_mj.trajectories.retarget import solve_ik
@@ -129,7 +129,7 @@ def test_recorded_ymca_is_seeded_never_still_and_not_always_reachable_in_2d():
 
 
 def test_build_run_picks_up_explicit_signals():
-    from skinny_mj.training import build_run
+    from skinny_mj.training.loop import build_run
 
     run = build_run(TrainConfig().override({"movement.trajectory": "ymca-recorded",
                                             "esn.n_reservoir": 20, "rule.epochs": 1}), [0])
@@ -150,7 +150,7 @@ def test_position_retargeting_of_motion_capture():
 
 
 def test_trajectory_show_cli(capsys):
-    from skinny_mj.cli import main
+    from skinny_mj.cli.parser import main
 
     assert main(["trajectory", "show", "ymca-smooth"]) == 0
     assert "still_steps                      162" in capsys.readouterr().out

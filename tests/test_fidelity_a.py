@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from experiments import fidelity_a, paper_a
-from skinny_mj.config import TrainConfig
+from skinny_mj.engine.experiment import Row
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import Row
+from skinny_mj.training.config import TrainConfig
 
 TINY = fidelity_a.Config(model=paper_a.MODEL.override({
     "esn.n_reservoir": 30, "forward.reservoir": 20, "rule.cycles": 1,
@@ -56,7 +56,7 @@ def test_a_short_run_equals_the_long_runs_checkpoint(arch, forward_input):
 
 
 def test_chained_forward_model_is_fed_its_own_prediction():
-    from skinny_mj.training import build_run, train_run
+    from skinny_mj.training.loop import build_run, train_run
 
     cfg = TINY.model.override({"rule.epochs": 1, "plant.delay": 3, "forward": "parallel"})
     for forward_input in ("sensed", "chained"):
@@ -80,7 +80,7 @@ def test_chained_without_delay_is_the_sensed_forward_model():
 
 @pytest.mark.slow  # ~6 s CPU: the report on a tiny sweep
 def test_quick_sweep_writes_tables_and_figures(tmp_path):
-    from skinny_mj.experiment import run_sweep
+    from skinny_mj.engine.experiment import run_sweep
 
     tiny = replace(TINY, model=TINY.model.override({"esn.n_reservoir": 10,
                                                     "forward.reservoir": 10}), runs=2,

@@ -6,9 +6,9 @@ import pytest
 
 import experiments
 from experiments import fidelity_d, paper_d
-from skinny_mj.experiment import run_sweep
-from skinny_mj.study_plan import Results
-from skinny_mj.training import build_run, train_run
+from skinny_mj.engine.experiment import run_sweep
+from skinny_mj.engine.plan import Results
+from skinny_mj.training.loop import build_run, train_run
 
 
 def test_registered_rows_and_groups():

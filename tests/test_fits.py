@@ -1,13 +1,13 @@
-"""skinny_mj.fits: rule.fit's values are a registry; a registered rule is chosen by the key,
-refused on a body it does not run on, and a name is registered once."""
+"""skinny_mj.training.fits: rule.fit's values are a registry; a registered rule is chosen
+by the key, refused on a body it does not run on, and a name is registered once."""
 
 from __future__ import annotations
 
 import pytest
 
-from skinny_mj import fits
-from skinny_mj.config import TrainConfig
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.training import fits
+from skinny_mj.training.config import TrainConfig
 
 
 @pytest.fixture

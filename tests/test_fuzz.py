@@ -27,9 +27,9 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from skinny_mj import body  # noqa: E402
-from skinny_mj.config import LEGACY_KEYS, TrainConfig  # noqa: E402
 from skinny_mj.errors import SkinnyInputError  # noqa: E402
+from skinny_mj.plant import body  # noqa: E402
+from skinny_mj.training.config import LEGACY_KEYS, TrainConfig  # noqa: E402
 from skinny_mj.trajectories import Trajectory, load_movement, ymca  # noqa: E402
 
 DATA = Path(__file__).parent / "data"
@@ -232,7 +232,7 @@ _JSON = st.recursive(st.none() | st.booleans() | st.integers() | st.floats() | s
                                           "run_index", "experiment", None]),
        raw=st.none() | st.binary(max_size=60))
 def test_fuzz_run_file_is_valid_or_a_clear_error(value, key, raw, tmp_path_factory):
-    from skinny_mj.sweep.stats import load_run
+    from skinny_mj.engine.stats import load_run
 
     rec = {"experiment": "x", "row": "a", "row_index": 0, "run_index": 0, "seed": 1,
            "status": "ok", "metrics": {"m": 1.0}}
@@ -255,7 +255,7 @@ def test_fuzz_run_file_is_valid_or_a_clear_error(value, key, raw, tmp_path_facto
 def test_fuzz_resume_config_json(content, tmp_path_factory):
     """--resume reads the folder's config.json: anything there is the same sweep (runs
     it) or one SkinnyInputError; the file is never half-rewritten."""
-    from skinny_mj.experiment import Experiment, Row, run_sweep
+    from skinny_mj.engine.experiment import Experiment, Row, run_sweep
 
     out = tmp_path_factory.mktemp("sweep")
     (out / "runs").mkdir()

@@ -22,7 +22,7 @@ pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from skinny_mj.cli import main  # noqa: E402
+from skinny_mj.cli.parser import main  # noqa: E402
 from skinny_mj.trajectories import Trajectory, ymca  # noqa: E402
 
 LONG = os.environ.get("HYPOTHESIS_PROFILE") == "ci-long"
@@ -112,9 +112,13 @@ def _run(argv: list[str]) -> tuple[int | str, str]:
 @FUZZ
 @given(data=st.data())
 def test_fuzz_cli_argv(data, files, monkeypatch):
-    for module, name in [("skinny_mj.training", "train"), ("skinny_mj.training", "evaluate"),
-                         ("skinny_mj.task", "load"), ("skinny_mj.experiment", "run_sweep"),
-                         ("skinny_mj.render", "render_png")]:
+    for module, name in [
+        ("skinny_mj.training.loop", "train"),
+        ("skinny_mj.training.loop", "evaluate"),
+        ("skinny_mj.plant.task", "load"),
+        ("skinny_mj.engine.experiment", "run_sweep"),
+        ("skinny_mj.plant.render", "render_png"),
+    ]:
         monkeypatch.setattr(f"{module}.{name}", _stub)
     monkeypatch.chdir(tempfile.gettempdir())  # a default results/ would land here
     with tempfile.TemporaryDirectory() as out:

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from controllers.metrics import fraction_within, rmse_per_signal, timing_lag
-from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
 from skinny_mj.trajectories import get, load_movement
 from skinny_mj.trajectories.babble import LIMIT_MARGIN_RAD, babble, bridge
 
@@ -67,8 +67,8 @@ def test_training_set_joins_pieces_with_smooth_bridges():
 
 
 def test_full_scale_factor_default_is_todays_scale():
-    from skinny_mj.config import TrainConfig
-    from skinny_mj.training import full_scale_speeds
+    from skinny_mj.training.config import TrainConfig
+    from skinny_mj.training.loop import full_scale_speeds
 
     cfg = TrainConfig()
     traj = get("ymca", 4)
@@ -84,7 +84,7 @@ def test_full_scale_factor_default_is_todays_scale():
 
 
 def test_imitation_metrics_on_known_signals():
-    from skinny_mj.dtw import dtw_nrmse
+    from skinny_mj.training.dtw import dtw_nrmse
 
     t = np.linspace(0, 6, 300)
     x = np.stack([np.sin(t), np.cos(2 * t)], axis=1)
@@ -152,9 +152,9 @@ def test_clipped_ideal_is_exact_within_full_scale_and_pays_beyond():
 
 
 def test_preset_general_sets_its_fields_and_flags_given_override_them():
-    from skinny_mj.cli import build_parser
-    from skinny_mj.config_files import train_config
-    from skinny_mj.presets import preset_fields
+    from skinny_mj.cli.config_files import train_config
+    from skinny_mj.cli.parser import build_parser
+    from skinny_mj.training.presets import preset_fields
 
     argv = ["train", "--preset", "general", "--epochs", "2", "--seed", "5"]
     cfg, seed = train_config(build_parser().parse_args(argv))
@@ -170,7 +170,7 @@ def test_preset_general_sets_its_fields_and_flags_given_override_them():
 def test_train_preset_general_records_its_training_and_tests_on_a_clip(tmp_path):
     pytest.importorskip("dtaidistance")
     from controllers.esn import read_metadata
-    from skinny_mj.cli import main
+    from skinny_mj.cli.parser import main
 
     out = tmp_path / "train"
     assert main(["train", "--preset", "general", "--epochs", "1", "--reservoir", "20",
@@ -189,9 +189,9 @@ def test_train_preset_general_records_its_training_and_tests_on_a_clip(tmp_path)
                  "md_03.amc@start=0,duration=1.5", "--out", str(test_out)]) == 0
     m = json.loads((test_out / "metrics.json").read_text())["imitation"]
     assert {"dtw_nrmse", "within5", "within5_per_joint", "lag_s", "saturated"} <= set(m)
-    from skinny_mj.cli import build_parser
-    from skinny_mj.config import TrainConfig
-    from skinny_mj.config_files import train_config
+    from skinny_mj.cli.config_files import train_config
+    from skinny_mj.cli.parser import build_parser
+    from skinny_mj.training.config import TrainConfig
 
     both, _ = train_config(build_parser().parse_args([  # the file's keys over the preset's
         "train", "--preset", "general", "--config", str(out / "metrics.json")]))

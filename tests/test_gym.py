@@ -19,7 +19,7 @@ import skinny_mj.gym  # noqa: E402  (registers the ids)
 from skinny_mj.gym import IDS  # noqa: E402
 from skinny_mj.gym.env import SkinnyEnv  # noqa: E402
 from skinny_mj.gym.vector import SkinnyVectorEnv  # noqa: E402
-from skinny_mj.task import load  # noqa: E402
+from skinny_mj.plant.task import load  # noqa: E402
 
 VELOCITY_IDS = [i for i, kw in IDS.items() if kw["actuation"] == "velocity"]
 TORQUE_IDS = [i for i, kw in IDS.items() if kw["actuation"] == "torque"]
@@ -30,8 +30,11 @@ UNBOUNDED = ("observation space minimum value is -infinity",
 
 
 def test_importing_skinny_mj_does_not_import_gymnasium():
-    code = ("import sys, skinny_mj, skinny_mj.task, skinny_mj.plant, skinny_mj.training; "
-            "skinny_mj.load(4); assert 'gymnasium' not in sys.modules, 'gymnasium imported'")
+    code = (
+        "import sys, skinny_mj, skinny_mj.plant.task, skinny_mj.plant.adapters, "
+        "skinny_mj.training.loop; "
+        "skinny_mj.load(4); assert 'gymnasium' not in sys.modules, 'gymnasium imported'"
+    )
     env = dict(os.environ, MUJOCO_GL="disabled")
     subprocess.run([sys.executable, "-c", code], check=True, env=env)
 

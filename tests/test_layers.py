@@ -30,28 +30,55 @@ KNOWN_PRIVATE_READS: set[str] = set()
 # -- the parts of skinny_mj, as module-name prefixes ------------------------------------
 # The body and its MuJoCo model, the dm_control task, the plant adapters and the Gymnasium
 # envs over them, the analytic ideal controller, changes of the body, pictures.
-PLANT = ("skinny_mj.body", "skinny_mj.model", "skinny_mj.physics", "skinny_mj.task",
-         "skinny_mj.plant", "skinny_mj.dynamics", "skinny_mj.perturb", "skinny_mj.bimanual",
-         "skinny_mj.ideal", "skinny_mj.render", "skinny_mj.headless", "skinny_mj.gym")
+PLANT = (
+    "skinny_mj.plant.body",
+    "skinny_mj.plant.model",
+    "skinny_mj.plant.physics",
+    "skinny_mj.plant.task",
+    "skinny_mj.plant.adapters",
+    "skinny_mj.plant.dynamics",
+    "skinny_mj.plant.perturb",
+    "skinny_mj.plant.bimanual",
+    "skinny_mj.plant.ideal",
+    "skinny_mj.plant.render",
+    "skinny_mj.plant.headless",
+    "skinny_mj.gym",
+)
 # What Skinny imitates (pure NumPy/SciPy: no mujoco, no dm_control).
 MOVEMENTS = ("skinny_mj.trajectories",)
 # One run: its configuration (dotted overrides, earlier versions' flat configs, presets),
 # its parts, the training path, the torque additions, the toolbox's protocol options, the
 # imitation metrics.
-TRAINING = ("skinny_mj.config", "skinny_mj.overrides", "skinny_mj.config_legacy",
-            "skinny_mj.presets", "skinny_mj.run_parts", "skinny_mj.training",
-            "skinny_mj.torque_training", "skinny_mj.protocol", "skinny_mj.imitation",
-            "skinny_mj.fits")
+TRAINING = (
+    "skinny_mj.training.config",
+    "skinny_mj.training.overrides",
+    "skinny_mj.training.legacy",
+    "skinny_mj.training.presets",
+    "skinny_mj.training.parts",
+    "skinny_mj.training.loop",
+    "skinny_mj.training.torque",
+    "skinny_mj.training.protocol",
+    "skinny_mj.training.imitation",
+    "skinny_mj.training.fits",
+)
 # Many runs: the experiment engine, its sweep helpers, the registry of studies.
-ENGINE = ("skinny_mj.experiment", "skinny_mj.sweep", "skinny_mj.sweep.folder",
-          "skinny_mj.sweep.options", "skinny_mj.sweep.stats", "skinny_mj.registry",
-          "skinny_mj.study", "skinny_mj.study_plan", "skinny_mj.sweep.grid",
-          "skinny_mj.sweep.compare")
+ENGINE = ("skinny_mj.engine.experiment", "skinny_mj.engine.sweep", "skinny_mj.engine.folder",
+          "skinny_mj.engine.options", "skinny_mj.engine.stats", "skinny_mj.engine.registry",
+          "skinny_mj.engine.study", "skinny_mj.engine.plan", "skinny_mj.engine.grid",
+          "skinny_mj.engine.compare")
 # The `skinny` command: parser, handlers, flags (the configuration's flags; a run repeated
 # from its files with --config), help texts, bench, viewer.
-COMMAND_LINE = ("skinny_mj.cli", "skinny_mj.commands", "skinny_mj.flags",
-                "skinny_mj.config_flags", "skinny_mj.config_files", "skinny_mj.study_help",
-                "skinny_mj.bench", "skinny_mj.bench_mackey_glass", "skinny_mj.viewer")
+COMMAND_LINE = (
+    "skinny_mj.cli.parser",
+    "skinny_mj.cli.commands",
+    "skinny_mj.cli.flags",
+    "skinny_mj.cli.config_flags",
+    "skinny_mj.cli.config_files",
+    "skinny_mj.cli.study_help",
+    "skinny_mj.cli.bench",
+    "skinny_mj.cli.bench_mackey_glass",
+    "skinny_mj.cli.viewer",
+)
 # Not listed, shared by every part: errors, io, threads, progress, preflight, memory
 # (its generic check; its run and sweep estimates import training and the engine inside
 # functions), dtw, plots, recording, recording_layout.
@@ -103,7 +130,7 @@ def test_no_skinny_mj_module_imports_experiments(tmp_path):
             " onerror=fail) if not m.name.endswith('.__main__')] + ['skinny_mj.models']\n"
             "assert len(names) > 20, names\n"
             "for name in names:\n    importlib.import_module(name)\n"
-            "import skinny_mj.registry as registry\n"
+            "import skinny_mj.engine.registry as registry\n"
             "assert 'paper-e' in registry.names()\n")
     loaded = _imported_in_subprocess(code, tmp_path)
     assert "skinny_mj" in loaded and "experiments" not in loaded
@@ -198,7 +225,11 @@ def _plant(root: Path, module: str, code: str) -> str:
 def test_the_import_scan_reads_every_import_and_finds_a_planted_violation(tmp_path):
     """The planted modules are named from the parts' data, so this holds in any layout."""
     movement, sibling = f"{MOVEMENTS[0]}.a", f"{MOVEMENTS[0]}.b"
-    parts, torque, perturb = "skinny_mj.run_parts", "skinny_mj.torque_training", "skinny_mj.perturb"
+    parts, torque, perturb = (
+        "skinny_mj.training.parts",
+        "skinny_mj.training.torque",
+        "skinny_mj.plant.perturb",
+    )
     assert parts in TRAINING and torque in TRAINING and perturb in PLANT
     up = "." * (MOVEMENTS[0].count(".") + 1) + parts.removeprefix("skinny_mj.")  # relative
     package, _, leaf = torque.rpartition(".")
@@ -232,9 +263,18 @@ def test_every_import_keeps_the_layering_rules():
 def test_every_module_is_placed_in_a_part_or_is_shared():
     """A new module of skinny_mj must be placed in :data:`RULES`' parts or named shared (a
     package is placed by the modules in it)."""
-    shared = ("skinny_mj.errors", "skinny_mj.io", "skinny_mj.threads", "skinny_mj.progress",
-              "skinny_mj.preflight", "skinny_mj.memory", "skinny_mj.dtw", "skinny_mj.plots",
-              "skinny_mj.recording", "skinny_mj.recording_layout")
+    shared = (
+        "skinny_mj.errors",
+        "skinny_mj.io",
+        "skinny_mj.threads",
+        "skinny_mj.progress",
+        "skinny_mj.preflight",
+        "skinny_mj.memory",
+        "skinny_mj.training.dtw",
+        "skinny_mj.plots",
+        "skinny_mj.recording",
+        "skinny_mj.recording_layout",
+    )
     parts = (*PLANT, *MOVEMENTS, *TRAINING, *ENGINE, *COMMAND_LINE, *shared)
     modules = {_module_name(p, ROOT) for p in (ROOT / "skinny_mj").rglob("*.py")
                if p.name != "__main__.py"}  # a package's program, placed with its package
@@ -350,7 +390,7 @@ def test_every_package_folder_is_listed_in_pyproject():
 
 
 def test_models_and_sample_clips_are_package_data():
-    import skinny_mj.model as model
+    import skinny_mj.plant.model as model
     from skinny_mj.trajectories import SAMPLE_ASF, SAMPLE_CLIPS, load_movement, sample_clip
 
     assert _setuptools()["package-dir"]["skinny_mj.models"] == "models"
@@ -369,7 +409,7 @@ def test_studies_are_found_from_the_package():
     """Every module of ``experiments`` that sets NAME is a study (none is listed twice in
     pyproject); ``experiments.get`` is the registry's."""
     import experiments
-    from skinny_mj import registry
+    from skinny_mj.engine import registry
     from skinny_mj.errors import SkinnyInputError
 
     modules = {p.stem for p in (ROOT / "experiments").glob("*.py")

@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
 from skinny_mj.trajectories import ArmClip, load_movement, retarget
 from skinny_mj.trajectories.asf_amc import load_asf_amc, parse_asf
 from skinny_mj.trajectories.bvh import load_bvh, parse_bvh

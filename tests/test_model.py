@@ -1,4 +1,4 @@
-"""Skinny's MJCF: loads, steps cleanly, names everything, and equals skinny_mj/body.py."""
+"""Skinny's MJCF: loads, steps cleanly, names everything, and equals skinny_mj/plant/body.py."""
 
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from skinny_mj import body
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
-from skinny_mj.model import TORQUE_GEAR_NM, load_model, models_dir, xml_path
-from skinny_mj.physics import SkinnyPhysics
+from skinny_mj.plant import body
+from skinny_mj.plant.model import TORQUE_GEAR_NM, load_model, models_dir, xml_path
+from skinny_mj.plant.physics import SkinnyPhysics
 
 VARIANTS = [(d, a) for d in (4, 8) for a in ("velocity", "torque")]
 

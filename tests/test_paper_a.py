@@ -10,7 +10,7 @@ from controllers.fel import Rollout
 from controllers.forward_model import ForwardModel
 from controllers.metrics import nrmse
 from experiments import get, paper_a
-from skinny_mj.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import Experiment, Row, run_sweep
 
 TINY = paper_a.Config(model=paper_a.quick_config().model.override({"rule.epochs": 1,
                                                                     "rule.cycles": 1}))

@@ -11,10 +11,10 @@ from controllers import fel
 from controllers.esn import ESN, ESNConfig
 from controllers.plant import Plant
 from experiments import paper_b
-from skinny_mj import bimanual as bm
-from skinny_mj.body import position_signals
-from skinny_mj.experiment import Row
-from skinny_mj.ideal import max_speeds
+from skinny_mj.engine.experiment import Row
+from skinny_mj.plant import bimanual as bm
+from skinny_mj.plant.body import position_signals
+from skinny_mj.plant.ideal import max_speeds
 from skinny_mj.trajectories import get
 from skinny_mj.trajectories import patterns as pt
 
@@ -104,7 +104,7 @@ def test_esn_sees_only_the_current_state_of_both_arms():
 
 
 def test_feedback_tracks_and_fel_learns_in_phase():
-    from skinny_mj.training import build_run, evaluate, train_run
+    from skinny_mj.training.loop import build_run, evaluate, train_run
 
     cfg = paper_b.MODEL.override({"movement.trajectory": "bimanual-phase0", "rule.epochs": 4})
     untrained = evaluate(build_run(cfg, [3]))[0].position_nrmse
@@ -128,7 +128,7 @@ def test_lockstep_batch_equals_each_seed_alone():
 @pytest.mark.parametrize("workers", [1])
 def test_quick_sweep_end_to_end(tmp_path, workers):
     from experiments import get
-    from skinny_mj.experiment import run_sweep
+    from skinny_mj.engine.experiment import run_sweep
 
     module = get("paper-b")
     exp = module.build(quick=True)

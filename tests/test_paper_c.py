@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from experiments import paper_c, paper_c_report
+from skinny_mj.engine.experiment import run_sweep
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import run_sweep
-from skinny_mj.ideal import max_speeds
+from skinny_mj.plant.ideal import max_speeds
 from skinny_mj.trajectories import get
 
 
@@ -20,7 +20,7 @@ def test_config_is_paper_c_section_3_5():
     assert (cfg.signals, cfg.reservoir, cfg.spectral_radius, cfg.noise) == ("joint", 1000, 0.1,
                                                                             0.2)
     assert (cfg.sensor_noise, cfg.epochs, cfg.learning_cycles) == (0.01, 150, 5)
-    from skinny_mj.training import build_run
+    from skinny_mj.training.loop import build_run
 
     fcfg = build_run(paper_c.train_config(cfg, "ymca"), [0]).fel_config()
     assert fcfg.effective_beta == 1.0  # u_target = u + u_error(t+1): the original target
@@ -34,7 +34,7 @@ def test_config_is_paper_c_section_3_5():
 
 
 def test_every_network_shares_ymcas_command_scale():
-    from skinny_mj.training import full_scale_speeds
+    from skinny_mj.training.loop import full_scale_speeds
 
     cfg = paper_c.Config()
     ymca = max_speeds(get("ymca").angles, 0.02)
@@ -65,7 +65,7 @@ def test_elbow_range_of_the_derived_movements():
 
 def test_untrained_network_leaves_the_arm_still_at_test():
     """K = 0 and a zero readout: the commands are zero, so the plant keeps its first pose."""
-    from skinny_mj.training import build_run, evaluate
+    from skinny_mj.training.loop import build_run, evaluate
 
     cfg = paper_c.Config(reservoir=30)
     run = build_run(paper_c.train_config(cfg, "ymca"), [0])

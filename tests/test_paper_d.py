@@ -9,8 +9,8 @@ import pytest
 
 import experiments
 from experiments import paper_d
-from skinny_mj.experiment import run_sweep
-from skinny_mj.sweep.stats import load_runs, summarize
+from skinny_mj.engine.experiment import run_sweep
+from skinny_mj.engine.stats import load_runs, summarize
 
 
 def test_registered_and_described():

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from experiments import paper_e
+from skinny_mj.engine.experiment import Experiment, Row, aggregate, run_sweep, select_rows
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import Experiment, Row, aggregate, run_sweep, select_rows
-from skinny_mj.sweep.stats import load_runs
 from skinny_mj.trajectories import load_movement, sample_clip, ymca
 from skinny_mj.trajectories.library import split_excerpt
 

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from experiments import paper_e_explain as pee
-from skinny_mj.experiment import Experiment, run_seed, run_sweep
-from skinny_mj.study import Quick
-from skinny_mj.training import build_run, evaluate, train_batch, train_run
+from skinny_mj.engine.experiment import Experiment, run_seed, run_sweep
+from skinny_mj.engine.study import Quick
+from skinny_mj.training.loop import build_run, evaluate, train_batch, train_run
 
 TINY = {"rule.epochs": 1, "esn.n_reservoir": 20}
 
@@ -46,7 +46,7 @@ def _seed_of(row, seed: int) -> dict:
 
 
 def _load(results: dict, out_dir) -> list[dict]:
-    from skinny_mj.sweep.stats import load_runs
+    from skinny_mj.engine.stats import load_runs
 
     assert results["n_ok"] == 9
     return load_runs(out_dir)
@@ -119,7 +119,7 @@ def test_tiny_sweep_writes_table_and_figures(short, tmp_path):
     for name in ("fig7_exp1", "fig8_reps", "fig9_exp5", "fig10_teacher_forcing"):
         assert (tmp_path / f"{name}.png").stat().st_size > 10_000
     # original method: the fitted target is the estimate itself
-    from skinny_mj.sweep.stats import load_runs
+    from skinny_mj.engine.stats import load_runs
 
     exp1 = [r for r in load_runs(tmp_path) if r["row"] == "1"][0]["metrics"]
     assert exp1["used_rough"] == exp1["est_rough"] and exp1["series"]["epochs"] == [1]

@@ -7,9 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from skinny_mj import body
-from skinny_mj.plant import BatchPlant, EnvPlant, Plant
-from skinny_mj.task import load
+from skinny_mj.plant import body
+from skinny_mj.plant.adapters import BatchPlant, EnvPlant, Plant
+from skinny_mj.plant.task import load
 
 
 @dataclass(frozen=True)
@@ -107,7 +107,7 @@ def test_batch_model_copies_are_the_one_robot_model(dof, actuation):
     """Every copy in the batch model has the one-robot model's numbers (bodies, joints,
     dofs, sites, actuators, options): the (R, ...) views and the bitwise equality of
     the fast path rest on it."""
-    from skinny_mj.model import load_batch_model, load_model
+    from skinny_mj.plant.model import load_batch_model, load_model
 
     one, batch = load_model(dof, actuation), load_batch_model(dof, 3, actuation)
     compared = 0

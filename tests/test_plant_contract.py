@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from controllers.plant import Plant, ToyPlant
-from skinny_mj import body
-from skinny_mj.ideal import max_speeds
+from skinny_mj.plant import body
+from skinny_mj.plant.ideal import max_speeds
 from skinny_mj.trajectories import Trajectory
 
 EPISODE = 60  # steps per episode; the stand-in movement has EPISODE + 1 samples
@@ -57,8 +57,8 @@ def _toy(dof: int, signals: str) -> Callable:
 
 
 def _env(dof: int, signals: str, actuation: str) -> Callable:
-    from skinny_mj.plant import EnvPlant
-    from skinny_mj.task import load
+    from skinny_mj.plant.adapters import EnvPlant
+    from skinny_mj.plant.task import load
 
     def make(seeds: Sequence[int], noise: float) -> Plant:
         (seed,) = seeds
@@ -67,7 +67,7 @@ def _env(dof: int, signals: str, actuation: str) -> Callable:
 
 
 def _batch(dof: int, signals: str, actuation: str) -> Callable:
-    from skinny_mj.plant import BatchPlant
+    from skinny_mj.plant.adapters import BatchPlant
 
     def make(seeds: Sequence[int], noise: float) -> Plant:
         return BatchPlant(dof, signals, stand_in(dof), n_runs=len(seeds), seeds=list(seeds),
@@ -76,7 +76,7 @@ def _batch(dof: int, signals: str, actuation: str) -> Callable:
 
 
 def _bimanual(dof: int, signals: str) -> Callable:
-    from skinny_mj.bimanual import BimanualPlant
+    from skinny_mj.plant.bimanual import BimanualPlant
 
     traj = stand_in(dof)
 

@@ -8,8 +8,8 @@ import subprocess
 import numpy as np
 import pytest
 
-from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
 from skinny_mj.recording import read_recording_series, recording_entities, write_recording
 
 RERUN_CLI = shutil.which("rerun")

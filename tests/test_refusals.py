@@ -15,11 +15,11 @@ from hypothesis import given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 from skinny_mj import memory  # noqa: E402
-from skinny_mj.cli import build_parser, main  # noqa: E402
-from skinny_mj.config import TrainConfig  # noqa: E402
+from skinny_mj.cli.flags import RULES, check_args, check_value  # noqa: E402
+from skinny_mj.cli.parser import build_parser, main  # noqa: E402
 from skinny_mj.errors import SkinnyInputError  # noqa: E402
-from skinny_mj.flags import RULES, check_args, check_value  # noqa: E402
 from skinny_mj.preflight import cleaned_on_failure  # noqa: E402
+from skinny_mj.training.config import TrainConfig  # noqa: E402
 from skinny_mj.trajectories import Trajectory, ymca  # noqa: E402
 
 FLAGS = settings(max_examples=200, deadline=None, database=None)
@@ -175,14 +175,14 @@ def test_a_sweeps_largest_row_is_refused(capsys, tmp_path):
 def _every_study(monkeypatch) -> list[str]:
     """Every registered study's name; rl-vs-fel's build does not need its extra here."""
     from experiments import rl_vs_fel_runs
-    from skinny_mj import registry
+    from skinny_mj.engine import registry
 
     monkeypatch.setattr(rl_vs_fel_runs, "require_rl", lambda: None)
     return registry.names()
 
 
 def test_every_study_estimates_every_row_quick_and_full(monkeypatch):
-    from skinny_mj import registry
+    from skinny_mj.engine import registry
 
     names = _every_study(monkeypatch)
     assert {"paper-d", "paper-e", "dynamic"} <= set(names)

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import pytest
 
-from skinny_mj import registry
-from skinny_mj.experiment import run_sweep
+from skinny_mj.engine import registry
+from skinny_mj.engine.experiment import run_sweep
 
 PAPERS = ("paper-a", "paper-b", "paper-c", "paper-d", "paper-e")
 

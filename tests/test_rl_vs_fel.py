@@ -14,10 +14,10 @@ pytest.importorskip("gymnasium")
 
 from experiments import rl_vs_fel  # noqa: E402
 from experiments import rl_vs_fel_runs as runs  # noqa: E402
-from skinny_mj.config import TrainConfig  # noqa: E402
+from skinny_mj.engine.experiment import run_sweep  # noqa: E402
 from skinny_mj.errors import SkinnyInputError  # noqa: E402
-from skinny_mj.experiment import run_sweep  # noqa: E402
-from skinny_mj.run_parts import run_streams  # noqa: E402
+from skinny_mj.training.config import TrainConfig  # noqa: E402
+from skinny_mj.training.parts import run_streams  # noqa: E402
 
 
 def test_without_the_rl_extra_build_refuses_in_one_line(monkeypatch):
@@ -39,7 +39,7 @@ def test_rows_cover_learner_x_body_x_movement():
 def test_env_scorer_equals_the_training_paths_test(actuation):
     """An untrained ESN commands 0: its K = 0 test and the env's score of the zero
     policy on the same test seed are the same number, bit for bit."""
-    from skinny_mj import training
+    from skinny_mj.training import loop as training
 
     tc = TrainConfig().override({"actuation": actuation, "rule.epochs": 1})
     run = training.build_run(tc, [7])
@@ -53,7 +53,7 @@ def test_env_scorer_equals_the_training_paths_test(actuation):
 
 
 def test_fel_curve_ends_at_the_test_of_train():
-    from skinny_mj.training import train
+    from skinny_mj.training.loop import train
 
     tc = TrainConfig().override({"rule.epochs": 2})
     points, facts = runs.fel_curve(tc, 3)

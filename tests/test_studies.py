@@ -2,7 +2,7 @@
 builds, plans its ``--quick`` rows, executes one tiny run and writes its table and report.
 
 Registering is setting ``NAME`` in a module of ``experiments/`` (or an entry point of
-another package): every name :func:`skinny_mj.registry.names` lists is covered here, so
+another package): every name :func:`skinny_mj.engine.registry.names` lists is covered here, so
 a study that fails this cannot be registered. A study declared as data runs with its
 ``tiny`` shrink (one epoch of a small reservoir); a module of the older contract runs its
 cheapest ``--quick`` row once.
@@ -14,12 +14,12 @@ import json
 
 import pytest
 
-from skinny_mj import registry
+from skinny_mj.engine import registry
+from skinny_mj.engine.experiment import run_sweep
+from skinny_mj.engine.plan import plan
+from skinny_mj.engine.stats import load_runs
+from skinny_mj.engine.study import Study
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import run_sweep
-from skinny_mj.study import Study
-from skinny_mj.study_plan import plan
-from skinny_mj.sweep.stats import load_runs
 
 
 def _cheapest(exp):
@@ -67,7 +67,7 @@ def test_study_builds_plans_runs_one_tiny_run_and_writes_its_table(name, tmp_pat
 
 
 def test_a_study_refuses_an_option_it_does_not_take():
-    from skinny_mj.study import Row
+    from skinny_mj.engine.study import Row
 
     study = Study(name="fixed-body", rows=(Row("a"),), metrics={"x": "wall_s"},
                   takes=("movement",))

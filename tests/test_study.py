@@ -1,6 +1,6 @@
-"""A study as data (skinny_mj.study, skinny_mj.study_plan), the ad-hoc grid of
-``skinny sweep`` (skinny_mj.sweep.grid) and the run-file comparison
-(skinny_mj.sweep.compare)."""
+"""A study as data (skinny_mj.engine.study, skinny_mj.engine.plan), the ad-hoc grid of
+``skinny sweep`` (skinny_mj.engine.grid) and the run-file comparison
+(skinny_mj.engine.compare)."""
 
 from __future__ import annotations
 
@@ -8,15 +8,15 @@ import json
 
 import pytest
 
-from skinny_mj.cli import main
-from skinny_mj.config import TrainConfig
+from skinny_mj.cli.parser import main
+from skinny_mj.engine import compare
+from skinny_mj.engine.experiment import run_seed, run_sweep
+from skinny_mj.engine.grid import grid_study
+from skinny_mj.engine.plan import Results, plan, read_metric
+from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import run_seed, run_sweep
-from skinny_mj.overrides import parse_value
-from skinny_mj.study import Quick, Row, Study
-from skinny_mj.study_plan import Results, plan, read_metric
-from skinny_mj.sweep import compare
-from skinny_mj.sweep.grid import grid_study
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.overrides import parse_value
 
 
 def toy_run(config: TrainConfig, row: Row, seeds: list[int]) -> list:

@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from skinny_mj.engine import folder
+from skinny_mj.engine.experiment import Experiment, Row, run_sweep
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import Experiment, Row, run_sweep
-from skinny_mj.sweep import folder
 
 
 def _run_one(row: Row, seed: int) -> dict:
@@ -37,8 +37,8 @@ def _module() -> types.ModuleType:
 
 
 def _cli(monkeypatch, *argv: str) -> int:
-    from skinny_mj import registry
-    from skinny_mj.cli import main
+    from skinny_mj.cli.parser import main
+    from skinny_mj.engine import registry
 
     monkeypatch.setattr(registry, "get", lambda name: _module())
     return main(["experiment", "fake", "--workers", "1", *argv])

@@ -9,11 +9,11 @@ import pytest
 from absl.testing import absltest
 from dm_env import test_utils
 
-from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.ideal import MIN_MAX_SPEED_RAD_S, IdealController, max_speeds, true_commands
-from skinny_mj.plant import BatchPlant
-from skinny_mj.task import load
+from skinny_mj.plant import body
+from skinny_mj.plant.adapters import BatchPlant
+from skinny_mj.plant.ideal import MIN_MAX_SPEED_RAD_S, IdealController, max_speeds, true_commands
+from skinny_mj.plant.task import load
 
 
 @dataclass(frozen=True)

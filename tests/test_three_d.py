@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from experiments import paper_a, three_d, three_d_report
+from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.experiment import Experiment, Row, run_sweep
-from skinny_mj.sweep.stats import load_runs
 
 
 def _draw(row: Row, seed: int) -> dict:
@@ -112,7 +112,7 @@ def test_claims_side_by_side_splits_statement_from_numbers_and_counts_changes():
 
 
 def test_angle_nrmse_is_the_joint_angle_error_on_either_body():
-    from skinny_mj import body
+    from skinny_mj.plant import body
     from skinny_mj.trajectories import get
 
     q = get("ymca", 8).angles

@@ -6,8 +6,8 @@ import sys
 import numpy as np
 import pytest
 
-from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
 from skinny_mj.trajectories import (
     Trajectory,
     excerpt,

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from skinny_mj import registry
-from skinny_mj.cli import build_parser
+from skinny_mj.cli.parser import build_parser
+from skinny_mj.engine import registry
 
 ROOT = Path(__file__).resolve().parents[1]
 MARKDOWN = [ROOT / "README.md", ROOT / "models/skinny/README.md",

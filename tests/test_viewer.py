@@ -16,9 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skinny_mj import body, trajectories, viewer
 from skinny_mj import recording_layout as layout
-from skinny_mj.cli import main
+from skinny_mj import trajectories
+from skinny_mj.cli import viewer
+from skinny_mj.cli.parser import main
+from skinny_mj.plant import body
 from skinny_mj.recording import ACTUAL_RGB, DESIRED_RGB, write_recording
 
 
@@ -142,7 +144,7 @@ NEEDS_PROC_NET = pytest.mark.skipif(not Path("/proc/net/tcp").is_file(),
 def test_web_viewer_listens_on_127_0_0_1_only(run_3d):
     web, grpc = _free_port(), _free_port()
     addresses = _addresses_while_viewing(
-        [sys.executable, "-m", "skinny_mj.cli", "view", str(run_3d), "--web", "--web-port",
+        [sys.executable, "-m", "skinny_mj.cli.parser", "view", str(run_3d), "--web", "--web-port",
          str(web), "--grpc-port", str(grpc)], [web, grpc])
     assert len(addresses) >= 2 and set(addresses) == {"0100007F"}  # 127.0.0.1, nothing else
 
@@ -158,7 +160,7 @@ NEEDS_XVFB = pytest.mark.skipif(
 def test_native_viewer_listens_on_127_0_0_1_only(run_3d):
     grpc = _free_port()  # the native viewer's own gRPC server (rerun's default: 0.0.0.0)
     addresses = _addresses_while_viewing(
-        ["xvfb-run", "-a", sys.executable, "-m", "skinny_mj.cli", "view", str(run_3d),
+        ["xvfb-run", "-a", sys.executable, "-m", "skinny_mj.cli.parser", "view", str(run_3d),
          "--grpc-port", str(grpc)], [grpc])
     assert addresses and set(addresses) == {"0100007F"}  # 127.0.0.1, nothing else
 

@@ -13,7 +13,7 @@ id                                    DOF  actuation   action
 ``SkinnyMJ/Skinny3D-Torque-v0``       8    torque      normalized torque (x gear N m)
 ====================================  ===  ==========  ===================================
 
-Every other argument of :func:`skinny_mj.task.load` is a ``make`` keyword
+Every other argument of :func:`skinny_mj.plant.task.load` is a ``make`` keyword
 (``signals``, ``trajectory``, ``sensor_noise``, ``seed``, ``max_speed_rad_s``,
 ``speed_factor``). ``make_vec`` builds :class:`SkinnyVectorEnv` (the registered vector
 entry point: N robots in one MuJoCo model); ``make_vec(..., vectorization_mode="sync")``
@@ -26,8 +26,8 @@ same seed give different observations and ``check_env`` fails ("Deterministic st
 observations are not equivalent", measured with shimmy 2.0.1); it would also expose the
 observation dict as a ``Dict`` of unbounded boxes (the integer ``step`` as an int64 box,
 joint angles in rad beside normalized signals), and it has no vector counterpart to check
-the lockstep :class:`skinny_mj.plant.BatchPlant` against. A small Env over
-:func:`skinny_mj.task.load` keeps the dm_control task as the one definition of physics,
+the lockstep :class:`skinny_mj.plant.adapters.BatchPlant` against. A small Env over
+:func:`skinny_mj.plant.task.load` keeps the dm_control task as the one definition of physics,
 noise, reward and episode end, flattens the observation into one ``Box`` and makes
 ``reset(seed=s)`` mean ``load(..., seed=s)``.
 Gymnasium stays optional: ``import skinny_mj`` never imports it (``pip install -e

@@ -1,4 +1,4 @@
-"""One Skinny as a ``gymnasium.Env``: the dm_control task of :func:`skinny_mj.task.load`
+"""One Skinny as a ``gymnasium.Env``: the dm_control task of :func:`skinny_mj.plant.task.load`
 with a flat observation and Gymnasium's seeding.
 
 Observation, (3 n_signals,) float64, normalized units::
@@ -32,7 +32,7 @@ from dm_control.rl.control import PhysicsError
 from gymnasium import spaces
 from gymnasium.utils import seeding
 
-from skinny_mj.task import Setup, finite_actions, load
+from skinny_mj.plant.task import Setup, finite_actions, load
 
 RENDER_CAMERA = "front"
 
@@ -69,7 +69,7 @@ class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
     Parameters
     ----------
     dof, signals, actuation, sensor_noise, max_speed_rad_s, speed_factor :
-        as in :func:`skinny_mj.task.load`.
+        as in :func:`skinny_mj.plant.task.load`.
     trajectory : see :func:`resolve_trajectory`; default the synthesized YMCA.
     seed : seed of the noise Generator until ``reset(seed=...)`` replaces it.
     render_mode : None or "rgb_array" (needs an OpenGL backend, e.g. ``MUJOCO_GL=egl``).

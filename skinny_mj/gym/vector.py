@@ -1,5 +1,5 @@
 """N Skinnies as one ``gymnasium.vector.VectorEnv`` over the lockstep
-:class:`skinny_mj.plant.BatchPlant`: N robots in one MuJoCo model, one ``mj_step`` for
+:class:`skinny_mj.plant.adapters.BatchPlant`: N robots in one MuJoCo model, one ``mj_step`` for
 all, and the work around the physics vectorized over N.
 
 Sub-environment i is :class:`skinny_mj.gym.env.SkinnyEnv` with noise seed ``seeds[i]``:
@@ -47,8 +47,8 @@ from skinny_mj.gym.env import (
     observation_space,
     resolve_trajectory,
 )
-from skinny_mj.plant import BatchPlant
-from skinny_mj.task import finite_actions
+from skinny_mj.plant.adapters import BatchPlant
+from skinny_mj.plant.task import finite_actions
 
 
 class SkinnyVectorEnv(VectorEnv):

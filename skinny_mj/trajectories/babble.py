@@ -24,8 +24,8 @@ import math
 
 import numpy as np
 
-from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
 from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory
 
 __all__ = ["babble", "bridge", "min_jerk", "parse_babble_name", "BABBLE_KEYS"]

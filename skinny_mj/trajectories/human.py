@@ -46,7 +46,7 @@ import functools
 
 import numpy as np
 
-from skinny_mj import body
+from skinny_mj.plant import body
 from skinny_mj.trajectories.retarget import solve_ik
 from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory
 from skinny_mj.trajectories.ymca import (
@@ -86,7 +86,7 @@ def _schedule(rng: np.random.Generator) -> list[tuple[str, int, int]]:
 
 def performance_angles(seed: int = DEFAULT_SEED) -> np.ndarray:
     """The person's joint angles (T_capture, 8) rad at CAPTURE_HZ (3D convention of
-    ``skinny_mj.body``): jittered letters, minimum-jerk moves, drift on top."""
+    ``skinny_mj.plant.body``): jittered letters, minimum-jerk moves, drift on top."""
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 12]))
     poses = {k: v + np.deg2rad(POSE_JITTER_DEG) * rng.standard_normal(v.shape)
              for k, v in key_poses(8).items()}

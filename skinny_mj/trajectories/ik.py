@@ -5,7 +5,7 @@ The thesis's true commands came from an inverse kinematics of the recorded posit
 solve_ik`): the analytic solution of :func:`~skinny_mj.trajectories.retarget.solve_angles`
 (the frontal-plane angles in 2D, the closed form of the 3D shoulder and elbow), made
 continuous and clipped into the joint ranges, then refined by :func:`refine`: damped least
-squares on ``skinny_mj.body``'s Cartesian signals with the joint limits enforced by
+squares on ``skinny_mj.plant.body``'s Cartesian signals with the joint limits enforced by
 projection. Where the target is reachable the analytic solution is already exact and the
 refinement leaves it; where it is not (a segment out of the frontal plane in 2D, a pose
 beyond a joint limit in 3D) it moves to the nearest reachable signals.
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinny_mj import body
+from skinny_mj.plant import body
 
 #: Damping lambda (signal units per radian) and iterations of the least-squares refinement.
 DLS_DAMPING = 0.05

@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
 from skinny_mj.trajectories import patterns
 from skinny_mj.trajectories.babble import babble, bridge, parse_babble_name
 from skinny_mj.trajectories.retarget import RetargetReport, clip_report, range_excess

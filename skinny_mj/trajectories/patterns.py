@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from skinny_mj import body
+from skinny_mj.plant import body
 from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory
 
 PREFIX = "bimanual-"

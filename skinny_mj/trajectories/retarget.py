@@ -38,8 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
 from skinny_mj.trajectories import ik
 from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory
 

@@ -1,7 +1,7 @@
 """The :class:`Trajectory` value: joint angles over time, and its file formats.
 
 A trajectory is what Skinny is asked to imitate: ``angles`` (T, n_dof) in radians at a
-fixed step ``dt`` (0.02 s = 50 Hz), columns in :func:`skinny_mj.body.dof_names` order.
+fixed step ``dt`` (0.02 s = 50 Hz), columns in :func:`skinny_mj.plant.body.dof_names` order.
 It is immutable; every operation returns a new one.
 
 Optional explicit desired signals: ``desired = {"cartesian": (T, n_sig)}``,
@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
-from skinny_mj import body
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path, atomic_write_text
+from skinny_mj.plant import body
 
 DEFAULT_DT_S = body.CONTROL_DT_S  # movements are sampled at the control rate
 #: Largest |angle| a movement may hold, rad (joint ranges are within +-pi; a larger

@@ -2,7 +2,7 @@
 
 The thesis' recording (Pro Reflex, 313 steps at 50 Hz) is not public, so the letters are
 built from anatomically plausible key poses (SPEC §2). Angle conventions are
-``skinny_mj.body``'s: 0 = arm hanging down, abduction pi/2 = horizontal, pi = straight
+``skinny_mj.plant.body``'s: 0 = arm hanging down, abduction pi/2 = horizontal, pi = straight
 up; elbow flexion 0 = straight, positive folds the forearm on in the abduction
 direction (over towards the head when the arm is raised). Both arms use the same
 angles for a mirror-symmetric pose (body.py mirrors the left arm's axes).
@@ -74,7 +74,7 @@ def min_jerk(n: int) -> np.ndarray:
 
 def key_poses(dof: int) -> dict[str, np.ndarray]:
     """Key poses {name: (n_dof,) rad} for dof 4 or 8."""
-    from skinny_mj.body import check_dof
+    from skinny_mj.plant.body import check_dof
 
     table = {4: POSES_2D_DEG, 8: POSES_3D_DEG}[check_dof(dof)]
     return {k: np.deg2rad(np.array(v, dtype=float)) for k, v in table.items()}

@@ -1,0 +1,374 @@
+"""``skinny bench``: where the time goes, as ratios measured within one process.
+
+Every figure times both of its sides in the same process, interleaved (A, B, A, B, ...,
+best of each), so a machine shared with other work shifts both sides alike; the load
+average at the start and end is recorded with the figures. Goals:
+
+| figure | goal |
+|---|---|
+| ``esn_run_vs_reservoirpy`` N = 200 / 1000 (our steps/s over theirs) | >= 2 / >= 3 |
+| ``control_step_over_physics`` (R = 20 lockstep step over bare C physics) | <= 3 |
+| ``lockstep_speedup`` (20 runs one at a time over the same 20 in lockstep) | >= 3 |
+| ``fast_vs_naive`` (naive run-step cost over the fast path's) | >= 6 |
+| ``paper_e_full_s`` (complete paper-E table, 2 cores) | <= 20 s |
+| ``mackey_glass`` N = 1000, log10 NRMSE_84 | <= -4.5 |
+
+The speed figures are here; the accuracy one (Mackey-Glass) is in
+:mod:`skinny_mj.cli.bench_mackey_glass`.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skinny_mj.cli.bench_mackey_glass import mackey_glass
+
+GOALS = {
+    "esn_run_vs_reservoirpy_N200": (">=", 2.0),
+    "esn_run_vs_reservoirpy_N1000": (">=", 3.0),
+    "control_step_over_physics": ("<=", 3.0),
+    "lockstep_speedup": (">=", 3.0),
+    "fast_vs_naive": (">=", 6.0),
+    "paper_e_full_s": ("<=", 20.0),
+    "mackey_glass_log10_nrmse84": ("<=", -4.5),
+}
+N_RUNS = 20  # R of the lockstep figures
+
+
+def interleaved(fns: dict[str, Callable[[], Any]], repeats: int) -> dict[str, float]:
+    """Best wall time (s) of each callable over ``repeats`` interleaved rounds."""
+    best = {k: np.inf for k in fns}
+    for _ in range(repeats):
+        for key, fn in fns.items():
+            start = time.perf_counter()
+            fn()
+            best[key] = min(best[key], time.perf_counter() - start)
+    return best
+
+
+def _movement(n_steps: int):
+    from skinny_mj.trajectories import excerpt, get
+
+    traj = get("ymca", 4)
+    return excerpt(traj, 0.0, n_steps * traj.dt) if n_steps < len(traj) - 1 else traj
+
+
+# -- figures --------------------------------------------------------------------------
+def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict:
+    """Our ESN's state loop (``ESN.run``, one run) vs reservoirpy 0.4's ``Reservoir.run``:
+    same weights, same input (T, 16), float64; checks the two produce the same states.
+    Also our R = 20 lockstep throughput (run-steps/s), the rate a sweep sees."""
+    from controllers.esn import ESN, ESNConfig
+
+    try:
+        import reservoirpy
+        from reservoirpy.nodes import Reservoir
+    except ImportError:
+        return {"skipped": "reservoirpy not installed: pip install 'skinny-mj[bench]'"}
+    n_in = 16
+    esn = ESN(ESNConfig(n_inputs=n_in, n_outputs=4, n_reservoir=n_reservoir), seed=0)
+    # reservoirpy builds its W as CSR; ours keeps CSC (a faster SciPy kernel)
+    w = esn.W[0] if esn.sparse_reservoir is None else esn.sparse_reservoir.tocsr()
+    theirs = Reservoir(units=n_reservoir, lr=1.0, W=w, Win=esn.W_in[0, :, :-1],
+                       bias=esn.W_in[0, :, -1] * esn.cfg.bias, input_dim=n_in)
+    theirs.initialize(np.zeros((1, n_in)))
+    inputs = np.random.default_rng(1).uniform(-1, 1, (n_steps, n_in))
+
+    def ours() -> np.ndarray:
+        esn.reset()
+        return esn.run(inputs[None], noise=False)[1][0, :, :n_reservoir]
+
+    def rpy() -> np.ndarray:
+        theirs.reset()
+        return theirs.run(inputs)
+
+    lockstep = ESN(esn.cfg, n_runs=N_RUNS, seed=0)
+    batch_inputs = np.broadcast_to(inputs, (N_RUNS, *inputs.shape))
+
+    def ours_lockstep() -> None:
+        lockstep.reset()
+        lockstep.run(batch_inputs, noise=False)
+
+    max_diff = float(np.max(np.abs(ours() - rpy())))
+    best = interleaved({"ours": ours, "reservoirpy": rpy, "lockstep": ours_lockstep}, repeats)
+    return {"N": n_reservoir, "steps": n_steps, "ours_steps_s": n_steps / best["ours"],
+            "reservoirpy_steps_s": n_steps / best["reservoirpy"],
+            "ratio": best["reservoirpy"] / best["ours"], "max_state_diff": max_diff,
+            "ours_lockstep_R20_run_steps_s": N_RUNS * n_steps / best["lockstep"],
+            "lockstep_ratio": N_RUNS * best["reservoirpy"] / best["lockstep"],
+            "reservoirpy_version": reservoirpy.__version__}
+
+
+def _lockstep_parts(n_runs: int, n_steps: int, seed: int = 0):
+    from controllers.esn import ESN
+    from skinny_mj.plant.adapters import BatchPlant
+    from skinny_mj.plant.ideal import max_speeds
+    from skinny_mj.training.loop import TrainConfig
+
+    traj = _movement(n_steps)
+    speed = max_speeds(traj.angles, traj.dt)
+    desired = traj.position_signals("cartesian")
+    cfg = TrainConfig()  # paper E exp. 5: desired next + sensed in, one command per DOF out
+    esn = ESN(cfg.esn_config(2 * desired.shape[1], cfg.plant.dof), n_runs=n_runs, seed=seed)
+    plant = BatchPlant(4, "cartesian", traj, n_runs=n_runs, seeds=range(n_runs),
+                       max_speed_rad_s=speed)
+    return traj, speed, desired, esn, plant
+
+
+def control_step_over_physics(n_steps: int, repeats: int) -> dict:
+    """One full control step of R = 20 runs in lockstep (physics + ESN N = 200 +
+    feedback + FEL bookkeeping, ``fel.rollout``) vs the bare physics of that step,
+    stepped in C by ``mujoco.rollout`` with no Python in between, two ways:
+
+    - ``physics_step_us`` (the goal's floor): R ``MjData`` of the one-robot model;
+    - ``batch_physics_step_us``: the R-robot model the fast path actually steps
+      (:func:`skinny_mj.plant.model.load_batch_model`), cheaper per robot, so a stricter floor.
+
+    Both start at the movement's first pose and hold it (zero servo ctrl; no joint
+    limit is active, as in the control loop)."""
+    import mujoco
+    from mujoco import rollout as mj_rollout
+
+    from controllers import fel
+    from skinny_mj.plant.model import load_model
+
+    _, _, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
+    plant.reset()
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    steps = (len(desired) - 1) * plant.n_substeps
+    one = load_model(4)
+    datas = [mujoco.MjData(one) for _ in range(N_RUNS)]
+    single_state = np.empty((N_RUNS, mujoco.mj_stateSize(one, spec)))
+    for r, d in enumerate(datas):
+        plant.layout.set_joint_angles(d, plant.setup.start_rad)
+        mujoco.mj_forward(one, d)
+        mujoco.mj_getState(one, d, single_state[r], spec)
+    batch, batch_data = plant.model, mujoco.MjData(plant.model)
+    batch_state = np.empty((1, mujoco.mj_stateSize(batch, spec)))
+    mujoco.mj_getState(batch, plant.data, batch_state[0], spec)
+    runner = mj_rollout.Rollout(nthread=0)
+    buf: dict = {}  # the rollout arrays, reused as fel.train does
+    best = interleaved({
+        "control": lambda: fel.rollout(esn, plant, desired, 0.5, noise=True, buffers=buf),
+        "physics": lambda: runner.rollout([one] * N_RUNS, datas[0], single_state,
+                                          np.zeros((N_RUNS, steps, one.nu)), nstep=steps),
+        "batch_physics": lambda: runner.rollout([batch], batch_data, batch_state,
+                                                np.zeros((1, steps, batch.nu)), nstep=steps),
+    }, repeats)
+    runner.close()
+    per = {k: v / (len(desired) - 1) for k, v in best.items()}
+    return {"R": N_RUNS, "substeps": plant.n_substeps, "control_step_us": per["control"] * 1e6,
+            "physics_step_us": per["physics"] * 1e6,
+            "batch_physics_step_us": per["batch_physics"] * 1e6,
+            "ratio": per["control"] / per["physics"],
+            "ratio_vs_batch_physics": per["control"] / per["batch_physics"]}
+
+
+def lockstep_speedup(epochs: int, repeats: int) -> dict:
+    """R = 20 paper-E exp-5 trainings (``epochs`` epochs) + tests in lockstep
+    (``train_batch``) vs the same 20 one at a time (``train``); checks identical results."""
+    from skinny_mj.training.loop import TrainConfig, train, train_batch
+
+    cfg = TrainConfig().override({"rule.epochs": epochs})
+    seeds = list(range(N_RUNS))
+    out: dict[str, list] = {}
+    best = interleaved({
+        "lockstep": lambda: out.__setitem__("batch", train_batch(cfg, seeds)),
+        "one_at_a_time": lambda: out.__setitem__("single", [train(cfg, s) for s in seeds]),
+    }, repeats)
+    identical = all(a.metrics["test"] == b.metrics["test"]
+                    and a.metrics["train"] == b.metrics["train"]
+                    for a, b in zip(out["batch"], out["single"], strict=True))
+    return {"R": N_RUNS, "epochs": epochs, "lockstep_s": best["lockstep"],
+            "one_at_a_time_s": best["one_at_a_time"],
+            "ratio": best["one_at_a_time"] / best["lockstep"], "identical": identical}
+
+
+def fast_vs_naive(n_steps: int, repeats: int) -> dict:
+    """Per run-step cost: the naive path (dm_control ``env.step`` through ``EnvPlant``
+    and a one-run Python ESN, ``fel.rollout``) vs the fast path (R = 20 lockstep)."""
+    from controllers import fel
+    from controllers.esn import ESN
+    from skinny_mj.plant.adapters import EnvPlant
+    from skinny_mj.plant.task import load
+
+    traj, speed, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
+    env_plant = EnvPlant(load(4, "cartesian", traj, max_speed_rad_s=speed, seed=0))
+    one = ESN(esn.cfg, n_runs=1, seed=0)
+    bufs: tuple[dict, dict] = ({}, {})  # rollout arrays reused, as fel.train does
+    best = interleaved({
+        "fast": lambda: fel.rollout(esn, plant, desired, 0.5, noise=True, buffers=bufs[0]),
+        "naive": lambda: fel.rollout(one, env_plant, desired, 0.5, noise=True,
+                                     buffers=bufs[1]),
+    }, repeats)
+    steps = len(desired) - 1
+    fast, naive = best["fast"] / (steps * N_RUNS), best["naive"] / steps
+    return {"R": N_RUNS, "fast_run_step_us": fast * 1e6, "naive_run_step_us": naive * 1e6,
+            "ratio": naive / fast}
+
+
+def paper_e_full_s(workers: int | None = None, quick: bool = False,
+                   out_dir: Path | None = None, only: tuple[str, ...] | None = None) -> dict:
+    """Wall time of the complete paper-E table (Table 1 rows 1-6, the paper's 20 runs
+    each = 120 runs; ``only`` picks other rows) on ``workers`` processes (default: all
+    cores) through the engine's fast path, with the peak resident memory of this
+    process and of the largest worker. ``quick`` runs ``build(quick=True)`` instead (a
+    smoke test of this figure, not the figure)."""
+    from skinny_mj.engine import registry
+    from skinny_mj.engine.experiment import default_workers, run_sweep
+
+    module = registry.get("paper-e")
+    if only is None:
+        only = tuple(getattr(module, "TABLE_1", {"1": 0, "2": 0, "3": 0, "4": 0, "5": 0,
+                                                 "6": 0}))
+
+    workers = default_workers(workers)
+    exp = module.build(quick=quick)
+    with tempfile.TemporaryDirectory(prefix="skinny-bench-") as tmp:
+        out = Path(out_dir or tmp)
+        start = time.perf_counter()
+        results = run_sweep(exp, out, rows=list(only), workers=workers, progress=False)
+        wall = time.perf_counter() - start
+        n_runs = len(list((out / "runs").glob("*.json")))
+    n_rows = sum(1 for row in results["rows"] if row["n"] + row["n_error"] > 0)
+    return {"wall_s": wall, "workers": workers, "quick": quick, "rows": n_rows,
+            "runs": n_runs, **peak_memory_mib()}
+
+
+def peak_memory_mib() -> dict:
+    """Peak resident memory (MiB): this process, and the largest of its worker
+    processes (still-running joblib workers read from /proc, finished ones from
+    ``getrusage``)."""
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    child = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    for pid in _descendants(os.getpid()):
+        try:
+            text = Path(f"/proc/{pid}/status").read_text()
+        except OSError:
+            continue
+        for line in text.splitlines():
+            if line.startswith("VmHWM:"):
+                child = max(child, int(line.split()[1]) / 1024)
+    return {"peak_rss_self_mib": own, "peak_rss_worker_mib": child}
+
+
+def _descendants(root: int) -> list[int]:
+    parents: dict[int, list[int]] = {}
+    for entry in Path("/proc").glob("[0-9]*"):
+        try:
+            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        parents.setdefault(int(fields[1]), []).append(int(entry.name))
+    out, todo = [], [root]
+    while todo:
+        kids = parents.get(todo.pop(), [])
+        out += kids
+        todo += kids
+    return out
+
+
+# -- the command ------------------------------------------------------------------------
+#: The figures :func:`run` measures, in order (its ``progress`` is called with each).
+RUN_STEPS = ("esn_run_vs_reservoirpy", "control_step_over_physics", "lockstep_speedup",
+             "fast_vs_naive", "mackey_glass", "paper_e_full_s")
+
+
+def run(quick: bool = False, workers: int | None = None,
+        progress: Callable[[str], None] | None = None) -> dict:
+    """Every figure; ``quick`` = shorter timings, fewer trials, no ``paper_e_full_s``.
+    ``progress(name)`` is called before each of :data:`RUN_STEPS` (for a bar)."""
+    tick = progress or (lambda name: None)
+    reps = 2 if quick else 5
+    steps = 100 if quick else 312
+    figures: dict[str, Any] = {"load_avg_start": os.getloadavg()}
+    tick(RUN_STEPS[0])
+    figures["esn_run_vs_reservoirpy"] = [
+        esn_run_vs_reservoirpy(n, 300 if quick else 1000, reps) for n in (200, 1000)]
+    tick(RUN_STEPS[1])
+    figures["control_step_over_physics"] = control_step_over_physics(steps, reps)
+    tick(RUN_STEPS[2])
+    figures["lockstep_speedup"] = lockstep_speedup(1, 1 if quick else 2)
+    tick(RUN_STEPS[3])
+    figures["fast_vs_naive"] = fast_vs_naive(steps, reps)
+    tick(RUN_STEPS[4])
+    figures["mackey_glass"] = mackey_glass(1000, 2 if quick else 10)
+    tick(RUN_STEPS[5])
+    figures["paper_e_full_s"] = ({"skipped": "--quick"} if quick
+                                 else paper_e_full_s(workers))
+    figures["load_avg_end"] = os.getloadavg()
+    figures["cpu_count"] = os.cpu_count()
+    figures["summary"] = summary(figures)
+    return figures
+
+
+def run_with_bar(quick: bool = False, workers: int | None = None, show: bool = True) -> dict:
+    """:func:`run` with a tqdm bar over :data:`RUN_STEPS` on stderr (``show``)."""
+    import sys
+
+    from tqdm import tqdm
+
+    with tqdm(total=len(RUN_STEPS), desc="bench", unit="figure", file=sys.stderr,
+              disable=not show, leave=False) as bar:
+        def tick(name: str) -> None:
+            bar.set_postfix_str(name)  # the steps before ``name`` are done
+            bar.update(RUN_STEPS.index(name) - bar.n)
+
+        return run(quick=quick, workers=workers, progress=tick)
+
+
+def summary(figures: dict) -> dict[str, dict]:
+    """Each goal's measured value and whether it is met (None: skipped)."""
+    def get(path: list) -> float | None:
+        node: Any = figures
+        for key in path:
+            if isinstance(node, dict) and key in node:
+                node = node[key]
+            elif isinstance(node, list) and isinstance(key, int) and key < len(node):
+                node = node[key]
+            else:
+                return None
+        return float(node) if isinstance(node, int | float) else None
+
+    values = {
+        "esn_run_vs_reservoirpy_N200": get(["esn_run_vs_reservoirpy", 0, "ratio"]),
+        "esn_run_vs_reservoirpy_N1000": get(["esn_run_vs_reservoirpy", 1, "ratio"]),
+        "control_step_over_physics": get(["control_step_over_physics", "ratio"]),
+        "lockstep_speedup": get(["lockstep_speedup", "ratio"]),
+        "fast_vs_naive": get(["fast_vs_naive", "ratio"]),
+        "paper_e_full_s": get(["paper_e_full_s", "wall_s"]),
+        "mackey_glass_log10_nrmse84": get(["mackey_glass", "ours_log10_nrmse84"]),
+    }
+    out = {}
+    for key, value in values.items():
+        op, goal = GOALS[key]
+        met = None if value is None else (value >= goal if op == ">=" else value <= goal)
+        out[key] = {"value": value, "goal": f"{op} {goal:g}", "met": met}
+    return out
+
+
+def table(figures: dict) -> str:
+    """The summary as a plain-text table, with the machine load."""
+    lines = [f"{'figure':<30} {'measured':>10} {'goal':>8}  met",
+             "-" * 56]
+    for key, row in figures["summary"].items():
+        value = "skipped" if row["value"] is None else f"{row['value']:.3g}"
+        met = {True: "yes", False: "NO", None: "-"}[row["met"]]
+        lines.append(f"{key:<30} {value:>10} {row['goal']:>8}  {met}")
+    strict = figures.get("control_step_over_physics", {}).get("ratio_vs_batch_physics")
+    if strict is not None:
+        lines.append(f"{'  same, over batch-model physics':<30} {strict:>10.3g} {'-':>8}  "
+                     "(the R-robot model the fast path steps: a stricter floor)")
+    start, end = figures["load_avg_start"], figures["load_avg_end"]
+    lines.append(f"load average (1 min) {start[0]:.2f} -> {end[0]:.2f} on "
+                 f"{figures['cpu_count']} CPUs: ratios are timed interleaved, "
+                 "absolute times shift with load")
+    return "\n".join(lines)

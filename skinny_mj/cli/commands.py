@@ -1,0 +1,466 @@
+"""The handlers behind ``skinny``'s sub-commands (the parser lives in :mod:`skinny_mj.cli.parser`).
+
+Every command computes first and writes last, each file atomically, so a command that
+fails on bad input leaves nothing half-written in ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skinny_mj.cli.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.io import atomic_write_json
+from skinny_mj.memory import check_export, check_train
+from skinny_mj.preflight import check_writable, check_writable_file, cleaned_on_failure
+from skinny_mj.progress import Progress as _Progress
+from skinny_mj.progress import progress_on as _progress_on
+from skinny_mj.training.config import Movement
+
+DEFAULT_RESULTS = Path("results")
+
+
+def _timestamped(kind: str) -> Path:
+    from datetime import datetime
+
+    return DEFAULT_RESULTS / kind / datetime.now().strftime("%Y%m%d-%H%M%S")
+
+
+def _out_dir(args: argparse.Namespace, kind: str) -> Path:
+    """``--out`` (default ``results/<kind>/<time>``), checked writable before the work
+    (a read-only, full or file-blocked folder is an environment error, exit 1)."""
+    return check_writable(Path(args.out) if args.out is not None else _timestamped(kind))
+
+
+def _flag_config(args: argparse.Namespace, groups, base=None):
+    """``base`` (default ``TrainConfig()``) with the config flags of ``groups`` given in
+    ``args`` (:mod:`skinny_mj.cli.config_flags`)."""
+    from skinny_mj.cli.config_flags import changes, flag_names, given
+    from skinny_mj.training.config import TrainConfig
+
+    base = TrainConfig() if base is None else base
+    return base.override(changes(base, given(args, groups), flag_names(groups)))
+
+
+def _load_movement(mv, dof: int, check=None):
+    """The movement ``mv`` (a :class:`skinny_mj.training.config.Movement`); ``check(steps, cause)``
+    first sees its length x reps (one repetition loaded), so a run too big for the
+    memory is refused before it is."""
+    from skinny_mj.memory import steps_cause
+    from skinny_mj.trajectories import load_movement
+
+    kw = {"asf": mv.asf, "speed": mv.speed, "retarget": mv.retarget}
+    if check is not None:
+        one, report = load_movement(mv.trajectory, dof, reps=1, **kw)
+        check(len(one) * mv.reps, steps_cause(one.name, len(one), mv.reps))
+        if mv.reps == 1:
+            return one, report
+    return load_movement(mv.trajectory, dof, reps=mv.reps, **kw)
+
+
+def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_angles, commands,
+               desired_signals, actual_signals, sensed_signals=None, title: str = "",
+               metadata: dict | None = None, curves: dict | None = None,
+               torques: dict | None = None) -> Path:
+    from skinny_mj.plant import body
+    from skinny_mj.recording import write_recording
+
+    return write_recording(
+        path, dt=body.CONTROL_DT_S, dof=dof, dof_names=list(body.dof_names(dof)),
+        signal_names=list(body.signal_names(dof, signals)), desired_angles=desired_angles,
+        actual_angles=actual_angles, commands=commands, desired_signals=desired_signals,
+        actual_signals=actual_signals, sensed_signals=sensed_signals, title=title,
+        metadata=metadata, curves=curves, torques=torques,
+    )
+
+
+# -- track ------------------------------------------------------------------------------
+def cmd_track(args: argparse.Namespace) -> int:
+    from controllers.metrics import position_nrmse
+    from skinny_mj import memory
+    from skinny_mj.cli.config_flags import TRACK_FLAGS
+    from skinny_mj.plant import body
+    from skinny_mj.plant.ideal import IdealController
+    from skinny_mj.plant.task import load
+
+    cfg = _flag_config(args, TRACK_FLAGS)
+    dof, signals, mv = cfg.plant.dof, cfg.plant.signals, cfg.movement
+    out = _out_dir(args, "track")
+    traj, report = _load_movement(
+        mv, dof, memory.check_track(dof, body.n_signals(dof, signals)))
+    env = load(dof, signals, traj, sensor_noise=cfg.plant.sensor_noise, seed=args.seed)
+    ctrl = IdealController(traj.angles, env.task.max_speed_rad_s, traj.dt)
+    ts = env.reset()
+    angles, true_sig = [env.physics.joint_angles()], [env.physics.position_signals(signals)]
+    sensed, commands = [ts.observation["sensed"]], []
+    while not ts.last():
+        command = ctrl.command(int(ts.observation["step"]), ts.observation["joint_angles"])
+        ts = env.step(command)
+        commands.append(command)
+        angles.append(env.physics.joint_angles())
+        true_sig.append(env.physics.position_signals(signals))
+        sensed.append(ts.observation["sensed"])
+    desired = traj.position_signals(signals)
+    true_sig = np.array(true_sig)
+    nrmse = float(position_nrmse(true_sig[None], desired)[0])
+    metrics = {
+        "position_nrmse": nrmse, "steps": len(traj), "dof": dof, "signals": signals,
+        "trajectory": str(mv.trajectory), "speed": mv.speed, "reps": mv.reps,
+        "seed": args.seed, "sensor_noise": cfg.plant.sensor_noise,
+        "max_speed_rad_s": [float(v) for v in env.task.max_speed_rad_s],
+        "clipped_samples": int(report.clipped_samples), "retarget": report.to_dict(),
+    }
+    with cleaned_on_failure(out):
+        _recording(out / "run.rrd", dof=dof, signals=signals,
+                   desired_angles=traj.angles, actual_angles=np.array(angles),
+                   commands=np.array(commands), desired_signals=desired,
+                   actual_signals=true_sig, sensed_signals=np.array(sensed),
+                   title=f"ideal controller on {traj.name}", metadata=metrics)
+        atomic_write_json(out / "metrics.json", metrics)
+    print(f"track {traj.name}: {dof} DOF, {len(traj)} steps, position NRMSE {nrmse:.2e}, "
+          f"clipped samples {report.clipped_samples} -> {out}")
+    return 0
+
+
+# -- train / demo / test ----------------------------------------------------------------
+def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> None:
+    """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png; for a
+    failed (diverged) run only metrics.json, which says why. The model's metadata says
+    what it was trained on (``training``: movement, its pieces, steps, seconds, preset)."""
+    from skinny_mj.plots import learning_curve_png
+    from skinny_mj.recording import record_test
+
+    if outcome.failed:
+        atomic_write_json(out / "metrics.json", outcome.metrics)
+        return
+    cfg = outcome.config
+    train_curve = outcome.metrics["train"].get("position_nrmse")
+    if isinstance(train_curve, list) and train_curve:  # FEL: one value per epoch
+        curve = np.array([np.nan if v is None else v for v in train_curve], dtype=float)
+        learning_curve_png(out / "learning_curve.png", {"position NRMSE (evaluation cycle)": curve},
+                           "position NRMSE", title=title, log_y=True,
+                           xlabel="epoch (feedback gain K falls linearly from 1 to 0 in the last)")
+    record_test(out / "run.rrd", outcome, title)
+    outcome.esn.save(out / "model.npz", metadata={
+        "dof": cfg.plant.dof, "signals": cfg.plant.signals,
+        "sensor_noise": cfg.plant.sensor_noise, "actuation": cfg.actuation.kind,
+        "max_speed_rad_s": [float(v) for v in outcome.max_speed_rad_s],
+        "trained_on": cfg.movement.trajectory, "config": outcome.metrics["config"],
+        "training": _training_metadata(outcome, preset),
+    })
+    atomic_write_json(out / "metrics.json", outcome.metrics)
+
+
+def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
+    """What a model was trained on: the movement, its pieces (a ``set:``),
+    steps and seconds per cycle, repetitions, the seed and the preset."""
+    from skinny_mj.trajectories.library import SET_PREFIX, set_pieces
+
+    mv, steps = outcome.config.movement, int(outcome.metrics["steps_per_cycle"])
+    name = str(mv.trajectory)
+    pieces = set_pieces(name) if name.lower().startswith(SET_PREFIX) else [name]
+    return {"movement": name, "pieces": pieces, "asf": mv.asf, "speed": mv.speed,
+            "reps": mv.reps, "steps_per_cycle": steps,
+            "seconds_per_cycle": steps * outcome.test.trajectory.dt,
+            "seed": int(outcome.seed), "preset": preset}
+
+
+def _train_and_write(cfg, seed: int, out: Path, title: str, quiet: bool = False,
+                     preset: str | None = None):
+    from skinny_mj.training.loop import train
+
+    bar = _Progress(title, quiet)
+    try:
+        outcome = train(cfg, seed, progress=bar)
+    finally:
+        bar.close()
+    with cleaned_on_failure(out):
+        _write_run(out, outcome, title, preset)
+    return outcome
+
+
+def _fmt(v: float | None) -> str:
+    return "failed" if v is None else f"{v:.4f}"
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from skinny_mj.cli.config_files import train_config
+
+    cfg, seed = train_config(args)
+    out = _out_dir(args, "train")
+    check_train(cfg)
+    outcome = _train_and_write(cfg, seed, out, f"{cfg.method} on {cfg.movement.trajectory}",
+                               quiet=args.quiet, preset=getattr(args, "preset", None))
+    m = outcome.metrics
+    if outcome.failed:
+        print(f"skinny train: run failed: {m.get('fail_reason')} (details in {out}/metrics.json)",
+              file=sys.stderr)
+        return 1
+    print(f"test position NRMSE {_fmt(m['test']['position_nrmse'])}, motor NRMSE "
+          f"{_fmt(m['test']['motor_nrmse'])}, {m['wall_s']:.1f} s -> {out}")
+    return 0
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    from skinny_mj.engine import registry
+    from skinny_mj.training.loop import TrainConfig
+
+    cfg = TrainConfig()  # paper E, experiment 5
+    out = _out_dir(args, "demo")
+    check_train(cfg, "the demo")
+    print("Training an ESN inverse model (N = 200) to make 2D Skinny dance YMCA:")
+    print("paper E experiment 5 - new method, beta = 0.1, 3 learning cycles x 10 epochs, "
+          "feedback gain K 1 -> 0, then a test with the feedback controller off.")
+    start = time.perf_counter()
+    outcome = _train_and_write(cfg, args.seed, out, "demo: paper E exp. 5", quiet=args.quiet)
+    wall = time.perf_counter() - start
+    m = outcome.metrics
+    paper = registry.get("paper-e").row("5").paper
+    rows = [
+        ("test position NRMSE", _fmt(m["test"]["position_nrmse"]),
+         f"{paper['position_nrmse']:.4f}"),
+        ("test motor NRMSE", _fmt(m["test"]["motor_nrmse"]), f"{paper['motor_nrmse']:.4f}"),
+        ("wall time (s)", f"{wall:.1f}", "-"),
+    ]
+    ours_head = f"ours (seed {args.seed})"
+    print(f"\n| {'':22} | {ours_head:>14} | {'paper (mean of 20)':>18} |")
+    print(f"|{'-' * 24}|{'-' * 16}|{'-' * 20}|")
+    for name, ours, theirs in rows:
+        print(f"| {name:22} | {ours:>14} | {theirs:>18} |")
+    print(f"\nRecording: {out / 'run.rrd'}  (open it with: rerun {out / 'run.rrd'})")
+    print(f"Also: {out / 'metrics.json'}, {out / 'learning_curve.png'}, {out / 'model.npz'}")
+    if outcome.failed:
+        print(f"the run failed: {m.get('fail_reason')}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def cmd_test(args: argparse.Namespace) -> int:
+    from controllers.esn import ESN, read_metadata
+    from skinny_mj.cli.config_flags import TEST_FLAGS
+    from skinny_mj.training.loop import TrainConfig, evaluate, run_of, run_streams
+
+    path = Path(args.model)
+    if not path.is_file():
+        raise SkinnyInputError("no such model file", path=path)
+    try:
+        meta = read_metadata(path)
+        esn = ESN.load(path)
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as err:  # BadZipFile: "PK.."
+        raise SkinnyInputError(f"not a model written by `skinny train` ({err})",
+                               path=path) from None
+    if not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
+        raise SkinnyInputError("model has no Skinny metadata (dof, signals, max speed)", path=path)
+    dof, signals = int(meta["dof"]), str(meta["signals"])
+    from skinny_mj import memory
+    from skinny_mj.plant import body
+
+    asked = _flag_config(args, TEST_FLAGS)  # the test's movement and sensor noise
+    out = _out_dir(args, "test")
+    traj, report = _load_movement(asked.movement, dof,
+                                  memory.check_test(esn.cfg, dof, body.n_signals(dof, signals)))
+    saved = meta.get("config") if isinstance(meta.get("config"), dict) else {}
+    try:
+        cfg = TrainConfig.from_dict(saved).override({
+            "plant.dof": dof, "plant.signals": signals,
+            "plant.sensor_noise": asked.plant.sensor_noise})
+    except SkinnyInputError as err:
+        raise SkinnyInputError(f"model metadata holds a bad config ({err})", path=path) from None
+    run = run_of(cfg, esn, np.asarray(meta["max_speed_rad_s"], dtype=float), traj,
+                 [run_streams(args.seed).plant_seed])
+    (test,) = evaluate(run)
+    metrics: dict[str, Any] = {
+        "model": str(path), "trained_on": meta.get("trained_on"),
+        "trajectory": str(asked.movement.trajectory),
+        "dof": dof, "signals": signals, "steps": len(traj), "seed": args.seed,
+        "clipped_samples": int(report.clipped_samples), "failed": test.failed,
+        "fail_reason": test.fail_reason,
+        "test": {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse},
+    }
+    if test.torque is not None:  # torque body: limits, |torque|, work, MuJoCo warnings
+        metrics["test"]["torque"] = test.torque["metrics"]
+    if not test.failed and cfg.torque is None:  # DTW, within 5°, lag
+        from skinny_mj.training.imitation import imitation_metrics, saturation
+
+        # beside "test" (which stays the train command's own test dict, key for key)
+        metrics["imitation"] = {**imitation_metrics(test, dof),
+                                "saturated": saturation(traj.angles, traj.dt, run.max_speed_rad_s)}
+    ro = test.rollout
+    with cleaned_on_failure(out):
+        _recording(out / "run.rrd", dof=dof, signals=signals, desired_angles=traj.angles,
+                   actual_angles=ro.angles[0], commands=ro.commands[0],
+                   desired_signals=test.desired, actual_signals=ro.true_signals[0],
+                   sensed_signals=ro.sensed[0], title=f"test on {traj.name}",
+                   metadata=metrics,
+                   torques=None if test.torque is None else test.torque["series"])
+        atomic_write_json(out / "metrics.json", metrics)
+    if test.failed:
+        print(f"skinny test: the network diverged: {test.fail_reason}", file=sys.stderr)
+        return 1
+    print(f"test on {traj.name}: position NRMSE {_fmt(test.position_nrmse)}, motor NRMSE "
+          f"{_fmt(test.motor_nrmse)} -> {out}")
+    extra = metrics.get("imitation", {})
+    if extra:
+        dtw = extra.get("dtw_nrmse")
+        print(f"  DTW NRMSE {'n/a (pip install dtaidistance)' if dtw is None else f'{dtw:.4f}'}"
+              f", within 5°: {100 * extra['within5']:.1f} % of steps, lag {extra['lag_s']:+.2f}"
+              f" s, commands beyond full scale: {100 * extra['saturated']:.1f} %")
+    return 0
+
+
+# -- trajectory / render ----------------------------------------------------------------
+def cmd_trajectory(args: argparse.Namespace) -> int:
+    from skinny_mj.trajectories import get, names
+
+    if args.action == "list":
+        for name in names():
+            traj = get(name, 4)
+            print(f"{name:14} {len(traj):5d} steps  {traj.duration_s:6.2f} s")
+        print("speed variants: NAME@0.5, NAME@1.5 (or --speed); repetitions: --reps N")
+        return 0
+    if args.action == "show":
+        from skinny_mj.training.imitation import movement_stats
+
+        traj, _ = _load_movement(Movement(args.name, asf=args.asf, retarget=args.retarget),
+                                 args.dof)
+        print(f"{traj.name} (dof {args.dof}, explicit desired signals: "
+              f"{sorted(traj.desired) if traj.desired else 'none'})")
+        for key, value in movement_stats(traj).items():
+            print(f"  {key:32} {value:.4g}")
+        if getattr(args, "actuation", "velocity") == "torque":
+            from skinny_mj.training import torque as torque_training
+
+            print("torque twin: inverse-dynamics torques of the movement against the limits")
+            for line in torque_training.feasibility_report(args.dof, traj):
+                print(line)
+        return 0
+    traj, _ = _load_movement(Movement(args.name, asf=args.asf, speed=args.speed,
+                                      reps=args.reps), args.dof,
+                             check_export(args.dof, args.out))
+    out = Path(args.out)
+    traj.save(out)
+    print(f"wrote {traj.name}: {len(traj)} steps, {args.dof} DOF -> {out}")
+    return 0
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    from skinny_mj.plant.render import render_png
+
+    check_writable_file(args.out)
+    angles = None
+    if args.trajectory is not None:
+        traj, _ = _load_movement(Movement(args.trajectory), args.dof)
+        if not 0 <= args.frame < len(traj):
+            raise SkinnyInputError(f"--frame must be in [0, {len(traj) - 1}], got {args.frame}")
+        angles = traj.angles[args.frame]
+    path = render_png(args.dof, args.out, width=args.width, height=args.height, angles=angles)
+    print(f"wrote {path}")
+    return 0
+
+
+# -- experiment -------------------------------------------------------------------------
+def cmd_experiment(args: argparse.Namespace) -> int:
+    """Build the experiment with the CLI's options (each None = the paper's default), run
+    the selected rows, write table/claims/report; exit 1 if any run errored (a bug)."""
+    from skinny_mj.engine import registry
+
+    if args.name == "list":
+        from skinny_mj.cli.study_help import list_text
+
+        print(list_text())
+        return 0
+    module = registry.get(args.name)
+    rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
+    options = {"quick": bool(args.quick), "movement": args.movement,
+               "asf": None if args.asf is None else str(args.asf), "dof": args.dof,
+               "signals": args.signals}
+    from skinny_mj.cli import config_files as cf  # --config: the file's options, rows, runs
+
+    options, rows, runs, invocation = cf.apply_sweep_config(args, options, rows)
+    exp = module.build(**options)
+    cf.check_experiment(invocation, exp)
+    return _sweep_and_report(args, module, exp, rows, runs, options, invocation)
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """``skinny sweep KEY=V1,V2 ...``: a grid over config keys (:mod:`skinny_mj.engine.grid`)
+    on the experiment engine, from TrainConfig's defaults or a study's row."""
+    from skinny_mj.engine import registry
+    from skinny_mj.engine.grid import grid_study
+    from skinny_mj.engine.study import Study
+
+    study = None
+    if args.study is not None:
+        study = registry.get(args.study)
+        if not isinstance(study, Study):
+            raise SkinnyInputError(
+                f"--study {args.study}: not a study declared as data "
+                "(a skinny_mj.engine.study.Study), so it has no row to sweep from"
+            )
+    grid = grid_study(args.axes, study=study, row=args.row, runs=args.runs or 10)
+    rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
+    options = {"axes": list(args.axes), "study": args.study, "row": args.row}
+    return _sweep_and_report(args, grid, grid.build(), rows, None, options, None)
+
+
+def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any, runs: Any,
+                      options: dict[str, Any], invocation: Any) -> int:
+    """Run ``exp`` into ``--out`` (checked first), then its report; exit 1 on errored runs."""
+    from skinny_mj.cli import config_files as cf
+    from skinny_mj.engine import folder
+    from skinny_mj.engine.experiment import default_out_dir, run_sweep
+    from skinny_mj.io import atomic_write_text
+    from skinny_mj.memory import check_sweep
+
+    overwrite = bool(getattr(args, "overwrite", False))
+    out = folder.choose_out_dir(args.out, default_out_dir(exp.name), resume=args.resume,
+                                overwrite=overwrite)  # nothing lost in silence
+    check_writable(out)  # before the sweep, not after its first run
+    folder.check_unlocked(out)
+    check_sweep(module, exp, rows, runs, args.workers, args.scheduler)
+    start = time.perf_counter()
+    with folder.sweep_lock(out):  # held until the report is written
+        if overwrite:
+            folder.clear_sweep(out)
+        results = run_sweep(exp, out, rows=rows, runs=runs, workers=args.workers,
+                            resume=args.resume, scheduler=args.scheduler,
+                            progress=_progress_on(args.quiet), options=options)
+        cf.warn_if_rebuilt_differs(invocation, out)
+        wall = time.perf_counter() - start
+        claims = (exp.report or module.report)(results, out)
+        summary = (out / "table.md").read_text()
+        if claims:  # a study without a report has no claims
+            summary += f"\n## Claims\n{claims}\n"
+            atomic_write_text(out / "claims.md", f"## Claims\n{claims}\n")
+        summary += f"\nwall time {wall:.1f} s\n"
+    print(summary)
+    n_error = int(results.get("n_error", 0))
+    if n_error:
+        print(f"{n_error} run(s) errored (bugs, not data): see {out / 'runs'}/*.json")
+    print(f"results: {out}")
+    return 1 if n_error else 0
+
+
+# -- bench ------------------------------------------------------------------------------
+def cmd_bench(args: argparse.Namespace) -> int:
+    from skinny_mj.cli import bench
+
+    if args.out is not None:  # before the bench, not after it
+        check_writable_file(args.out)
+    from skinny_mj.memory import check_bench
+
+    check_bench(args.workers, args.quick)
+    figures = bench.run_with_bar(quick=args.quick, workers=args.workers,
+                                 show=_progress_on(args.quiet))
+    print(bench.table(figures))
+    if args.out is not None:
+        atomic_write_json(Path(args.out), figures)
+        print(f"wrote {args.out}")
+    return 0

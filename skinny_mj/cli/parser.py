@@ -1,0 +1,293 @@
+"""The ``skinny`` command line.
+
+Every sub-command imports what it needs when it runs, so ``skinny --help`` is quick.
+User errors (bad files, names, parameters) end with one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from skinny_mj.errors import SkinnyInputError
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a usage error in one line with a pointer to ``--help``
+    (exit code 2), instead of the whole usage block before it; a sub-command's
+    training-config flags (``config_flags``: a group name in
+    :mod:`skinny_mj.cli.config_flags`) are added when it is first used, so that ``skinny
+    --help`` does not import the config."""
+
+    config_flags: str | None = None
+
+    def _complete(self) -> None:
+        name, self.config_flags = self.config_flags, None
+        if name is not None:
+            from skinny_mj.cli import config_flags
+
+            config_flags.add_flags(self, getattr(config_flags, name))
+
+    def format_usage(self) -> str:
+        self._complete()
+        return super().format_usage()
+
+    def format_help(self) -> str:
+        self._complete()
+        return super().format_help()
+
+    def error(self, message: str):  # noqa: ANN201 (argparse's signature; never returns)
+        self.exit(2, f"{self.prog}: error: {_one_line(message)} "
+                     f"(see `{self.prog} --help`)\n")
+
+    def parse_known_args(self, args=None, namespace=None):  # noqa: ANN001, ANN201
+        """A sub-command (prog "skinny NAME") names its own unknown arguments, so the
+        hint points at its help, not at the top-level one."""
+        self._complete()
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras and " " in self.prog:
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return namespace, extras
+
+
+class _ExperimentHelp(argparse.Action):
+    """``skinny experiment NAME --help``: that study's description, rows, groups, runs,
+    options and cost; without a NAME (or with ``list``), the command's own help."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs):  # noqa: ANN001
+        super().__init__(option_strings, dest=dest, default=argparse.SUPPRESS, nargs=0,
+                         **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):  # noqa: ANN001
+        name = getattr(namespace, "name", None)
+        if name in (None, "list"):
+            parser.print_help()
+            parser.exit()
+        os.environ.setdefault("MUJOCO_GL", "disabled")  # before a study imports mujoco
+        from skinny_mj.cli.study_help import study_help
+
+        try:
+            text = study_help(name)
+        except SkinnyInputError as err:
+            parser.exit(2, f"{parser.prog}: error: {_one_line(err)}\n")
+        print(text, end="")
+        parser.exit()
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text}")
+    return value
+
+
+_UNSET = object()
+
+
+def given_options(argv: Sequence[str]) -> set[str]:
+    """The option dests ``argv`` sets explicitly (not by default): ``--config`` fills
+    only the others from its file, so a default never overrides a file's field.
+
+    ``argv`` is parsed again with every sub-command's defaults set to a sentinel
+    (``set_defaults``): the dests that do not hold it were on the command line.
+    """
+    dests = set(vars(build_parser().parse_args(argv)))
+    parser = build_parser()
+    for sub in parser.subcommands.values():
+        sub.set_defaults(**dict.fromkeys(dests, _UNSET))
+    return {k for k, v in vars(parser.parse_args(argv)).items() if v is not _UNSET}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="skinny",
+        description="Skinny-MJ: echo state networks learn to make a MuJoCo torso imitate YMCA.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("demo", help="train with the defaults (paper E, exp. 5) and show the result")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, help="output folder (default: results/demo/<time>)")
+
+    p = sub.add_parser("track", help="run the analytic ideal controller through the task")
+    p.config_flags = "TRACK_FLAGS"
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, help="output folder (default: results/track/<time>)")
+
+    p = sub.add_parser("train", help="train an ESN inverse model (FEL or true target)",
+                       description="Train an ESN inverse model. Settings: TrainConfig's "
+                       "defaults (paper E exp. 5), then --preset, then --config FILE, then the "
+                       "flags and KEY=VALUE overrides given (any dotted config key, e.g. "
+                       "esn.spectral_radius=0.9 rule=original rule.epochs=2; a metrics.json's "
+                       "\"config\" lists them all).")
+    p.add_argument("overrides", nargs="*", metavar="KEY=VALUE",
+                   help="set any config key (dotted), e.g. esn.leak_rate=0.5")
+    p.config_flags = "TRAIN_FLAGS"
+    p.add_argument("--seed", type=int, default=argparse.SUPPRESS, help="the run's seed "
+                   "(default: the --config file's, else 0)")
+    p.add_argument("--out", type=Path, help="output folder (default: results/train/<time>)")
+    p.add_argument("--config", type=Path, help="repeat a run: its metrics.json (or a bare "
+                   "config JSON of dotted keys); flags given as well override its settings")
+    p.add_argument("--preset", choices=("general",), help="a named configuration; flags "
+                   "given as well override its settings. general: the inverse model for "
+                   "unseen movements: 2D, joint-angle signals, 15 s of motor babbling "
+                   "(random minimum-jerk moves over every joint's whole range, 1-8 rad/s), "
+                   "full scale 4x its fastest speed, paper E exp. 5 schedule; of 12 training "
+                   "sets in `skinny experiment generalization` it had the lowest error on "
+                   "real dance it never saw (position NRMSE 0.009 on CMU md_02, 10 seeds). "
+                   "Then: skinny test --model M --trajectory CLIP.amc --asf SKELETON.asf. "
+                   "With --actuation torque: the torque twin's general, 15 s of babbling at "
+                   "0.5-4 rad/s (within the torque limits), the inertia-scaled PD teacher "
+                   "and the forgetting readout")
+
+    p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
+    p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny train`")
+    p.config_flags = "TEST_FLAGS"
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, help="output folder (default: results/test/<time>)")
+
+    p = sub.add_parser("trajectory", help="list or export movements")
+    tsub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    tsub.add_parser("list", help="list the built-in movements")
+    w = tsub.add_parser("show", help="a movement's statistics (still steps, peak speeds, "
+                        "unreachable targets, tremor band)")
+    w.add_argument("name")
+    w.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    w.add_argument("--asf", type=Path)
+    w.add_argument("--retarget", choices=("angles", "positions"), default="angles")
+    w.add_argument("--actuation", choices=("velocity", "torque"), default="velocity",
+                   help="torque: also the torques the movement needs on the torque twin")
+    e = tsub.add_parser("export", help="write a movement to .npz or .csv")
+    e.add_argument("name")
+    e.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    e.add_argument("--asf", type=Path)
+    e.add_argument("--speed", type=float, default=1.0)
+    e.add_argument("--reps", type=_positive_int, default=1)
+    e.add_argument("--out", type=Path, required=True, help="FILE.npz or FILE.csv")
+
+    p = sub.add_parser("experiment", help="reproduce a paper's table and figures (a sweep)",
+                       add_help=False)
+    p.add_argument("-h", "--help", action=_ExperimentHelp, help="this help; after a NAME: "
+                   "that study's rows, groups, runs, options and cost")
+    p.add_argument("name", help="experiment name (`skinny experiment list` shows them), "
+                   "or `list`")
+    p.add_argument("--runs", type=_positive_int, help="runs per row (default: the paper's)")
+    p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
+    p.add_argument("--out", type=Path, help="output folder (default: results/<name>/<time>)")
+    p.add_argument("--resume", action="store_true", help="continue the sweep in --out: skip "
+                   "its ok and failed runs, rerun errored ones (rows may differ)")
+    p.add_argument("--overwrite", action="store_true", help="replace the sweep already in "
+                   "--out (without it, a non-empty --out is refused)")
+    p.add_argument("--quick", action="store_true", help="a smoke test: few runs, few epochs")
+    p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
+    p.add_argument("--movement", help="train/test every row on another movement (name or "
+                   "file; default: the paper's); recorded in config.json, the name stays")
+    p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc --movement")
+    p.add_argument("--dof", type=int, choices=(4, 8), help="2D (4) or 3D (8) Skinny "
+                   "(default: the paper's)")
+    p.add_argument("--signals", choices=("joint", "cartesian"),
+                   help="the networks' position signals (default: the paper's)")
+    p.add_argument("--rows", help="comma-separated row ids and groups to run (default: all); "
+                   "seeds are the full sweep's")
+    p.add_argument("--config", type=Path, help="repeat a sweep: its config.json (options, "
+                   "rows, runs); flags given as well override them")
+
+    p = sub.add_parser("sweep", help="a grid over any config keys on the experiment engine: "
+                       "skinny sweep esn.spectral_radius=0.5,0.9 --runs 20")
+    p.add_argument("axes", nargs="+", metavar="KEY=V1,V2", help="a config key and its values "
+                   "(quote a value holding a comma: KEY='a,b',c); rows are the product of the "
+                   "keys with several values, a key with one value changes every row")
+    p.add_argument("--runs", type=_positive_int, help="runs per row (default 10)")
+    p.add_argument("--study", help="start from a study's row (with --row): its config, "
+                   "metrics and run (default: paper E exp. 5, TrainConfig's defaults)")
+    p.add_argument("--row", help="the --study row to start from")
+    p.add_argument("--rows", help="comma-separated row ids to run (default: all)")
+    p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
+    p.add_argument("--out", type=Path, help="output folder (default: results/sweep/<time>)")
+    p.add_argument("--resume", action="store_true", help="continue the sweep in --out")
+    p.add_argument("--overwrite", action="store_true", help="replace the sweep in --out")
+    p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
+
+    p = sub.add_parser("bench", help="measure the fast path: ratios vs reservoirpy, physics, "
+                       "the naive loop (prints a table)")
+    p.add_argument("--quick", action="store_true", help="short timings; no full paper-E sweep")
+    p.add_argument("--out", type=Path, help="write every figure to FILE.json")
+    p.add_argument("--workers", type=_positive_int,
+                   help="processes for paper_e_full_s (default: all cores)")
+
+    p = sub.add_parser("render", help="render Skinny to a PNG (needs MUJOCO_GL=egl)")
+    p.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    p.add_argument("--trajectory", help="pose Skinny at a movement's frame (default: rest pose)")
+    p.add_argument("--frame", type=int, default=0)
+    p.add_argument("--width", type=_positive_int, default=640)
+    p.add_argument("--height", type=_positive_int, default=480)
+    p.add_argument("--out", type=Path, required=True)
+
+    p = sub.add_parser("view", help="open a recording (or a results folder's) in the rerun "
+                       "viewer; headless, print the command")
+    p.add_argument("path", type=Path, help="a .rrd file or a folder holding some")
+    p.add_argument("--web", action="store_true",
+                   help="serve the web viewer (on --bind: 127.0.0.1, this machine only)")
+    p.add_argument("--web-port", type=_positive_int, default=9090, help="HTTP port for --web")
+    p.add_argument("--grpc-port", type=_positive_int, default=9876,
+                   help="port of the viewer's gRPC server (the web viewer reads its data there)")
+    p.add_argument("--bind", default="127.0.0.1",
+                   help="address the viewer listens on (default 127.0.0.1: this machine only; "
+                   "0.0.0.0: every interface)")
+    p.add_argument("--dry-run", action="store_true", help="print the viewer command only")
+
+    for name in ("demo", "train", "experiment", "sweep", "bench"):  # the long commands
+        sub.choices[name].add_argument(
+            "--quiet", "-q", action="store_true",
+            help="no progress bar (also off when stderr is not a terminal)")
+    parser.subcommands = sub.choices  # name -> sub-command parser (for given_options)
+    return parser
+
+
+def _one_line(err: BaseException) -> str:
+    return " ".join(str(err).split()) or type(err).__name__
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = parser.parse_args(argv)
+    if args.command == "experiment" and args.config is not None:
+        args.given = given_options(argv)  # which flags override the file
+    # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
+    os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
+    from skinny_mj.cli import commands
+
+    handler = getattr(commands, f"cmd_{args.command}")
+    try:
+        from skinny_mj.preflight import check_gl
+        from skinny_mj.threads import one_blas_thread
+
+        check_gl()  # a MUJOCO_GL mujoco refuses would fail at its import, as a traceback
+        from skinny_mj.cli.flags import check_args
+
+        check_args(args)  # every numeric flag in its range (seed >= 0, ...), before any work
+        with one_blas_thread():  # same bits whatever the machine's BLAS threads
+            code = int(handler(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, not as exit 120 at shutdown
+        return code
+    except SkinnyInputError as err:
+        print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # the reader stopped reading (`skinny experiment list | head`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit
+        return 0
+    except OSError as err:  # the machine, not the input: unwritable or full disk, no GL,
+        # no model folder, an unreachable scheduler, a worker killed (SkinnyEnvironmentError)
+        print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

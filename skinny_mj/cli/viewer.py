@@ -1,0 +1,272 @@
+"""``skinny view``: open recordings in the rerun viewer (native, or the web viewer).
+
+The viewer is rerun's own ``rerun`` executable (shipped in the ``rerun-sdk`` wheel); this
+module only finds the recordings, builds its command line and decides whether it can be
+shown here. Without a display (no ``DISPLAY`` / ``WAYLAND_DISPLAY`` on Linux) the native
+viewer cannot open, so the command is printed for the user to run where there is one.
+The native viewer's gRPC server, and the web viewer with its gRPC data server, are bound
+to 127.0.0.1 (rerun's own default is 0.0.0.0, every interface): only this machine can
+connect unless the user tunnels a port or asks for another address (``--bind``).
+
+:func:`screenshot` drives a native viewer through rerun's viewer-control API: it waits
+until the recording has loaded, pauses the time cursor at a given time and saves the
+first frame that no longer changes.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import os
+import shlex
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
+from skinny_mj.io import atomic_write_bytes
+
+__all__ = ["find_recordings", "has_display", "viewer_command", "view", "cmd_view",
+           "screenshot"]
+
+#: Address the viewers and their gRPC servers listen on unless ``bind`` says otherwise.
+BIND_ADDRESS = "127.0.0.1"
+DEFAULT_WEB_PORT = 9090
+DEFAULT_GRPC_PORT = 9876
+
+
+def find_recordings(path: str | Path) -> list[Path]:
+    """The ``.rrd`` files ``path`` names: the file itself, or every recording under a
+    folder (a run's ``run.rrd``, a sweep's ``*.rrd``), sorted, hidden files (atomic-write
+    leftovers) left out.
+
+    Raises
+    ------
+    SkinnyInputError
+        ``path`` does not exist, is not an ``.rrd`` file, or holds no recording.
+    """
+    path = Path(path)
+    if path.is_file():
+        if path.suffix.lower() != ".rrd":
+            raise SkinnyInputError("not a rerun recording (.rrd)", path=path)
+        return [path]
+    if not path.is_dir():
+        raise SkinnyInputError("no such recording or results folder", path=path)
+    found = sorted(p for p in path.rglob("*.rrd")
+                   if p.is_file() and not any(part.startswith(".")
+                                              for part in p.relative_to(path).parts))
+    if not found:
+        raise SkinnyInputError("holds no .rrd recording", path=path)
+    return found
+
+
+def has_display(environ: Mapping[str, str] | None = None) -> bool:
+    """Whether a native window can open: always on macOS and Windows; on Linux and
+    other X11/Wayland systems only with ``DISPLAY`` or ``WAYLAND_DISPLAY`` set."""
+    env = os.environ if environ is None else environ
+    if sys.platform in ("darwin", "win32"):
+        return True
+    return bool(env.get("DISPLAY") or env.get("WAYLAND_DISPLAY"))
+
+
+def _rerun_executable() -> list[str]:
+    # The wheel's console script may be off PATH (a venv not activated): its module works.
+    return ["rerun"] if shutil.which("rerun") else [sys.executable, "-m", "rerun"]
+
+
+def check_bind(address: str) -> str:
+    """``address`` if it is an IPv4 or IPv6 address, else :class:`SkinnyInputError`."""
+    try:
+        return str(ipaddress.ip_address(address))
+    except ValueError:
+        raise SkinnyInputError(f"--bind must be an IP address such as 127.0.0.1 or 0.0.0.0, "
+                               f"got {address!r}") from None
+
+
+def viewer_command(recordings: Sequence[Path], *, web: bool = False,
+                   web_port: int = DEFAULT_WEB_PORT, grpc_port: int = DEFAULT_GRPC_PORT,
+                   bind: str = BIND_ADDRESS,
+                   executable: Sequence[str] | None = None) -> list[str]:
+    """The ``rerun`` command line that opens ``recordings``.
+
+    Parameters
+    ----------
+    recordings : the ``.rrd`` files to open.
+    web : serve the web viewer (HTTP on ``web_port``, data over gRPC on ``grpc_port``)
+        instead of opening a native window.
+    web_port : HTTP port for ``web``.
+    grpc_port : the viewer's gRPC server (native or web); a native viewer already
+        listening there is handed the recordings instead (rerun's own behaviour).
+    bind : address the servers listen on.
+    executable : the viewer program (default: ``rerun`` on PATH, else ``python -m rerun``).
+    """
+    cmd = list(executable) if executable is not None else _rerun_executable()
+    cmd += ["--bind", check_bind(bind), "--port", str(grpc_port)]
+    if web:
+        cmd += ["--web-viewer", "--web-viewer-port", str(web_port)]
+    return cmd + [str(p) for p in recordings]
+
+
+def view(path: str | Path, *, web: bool = False, web_port: int = DEFAULT_WEB_PORT,
+         grpc_port: int = DEFAULT_GRPC_PORT, bind: str = BIND_ADDRESS,
+         dry_run: bool = False) -> int:
+    """Open the recordings under ``path`` (see :func:`find_recordings`) and wait for the
+    viewer to close; headless (and not ``web``) or with ``dry_run``, print the command
+    instead. Returns the exit code for ``skinny view``."""
+    recordings = find_recordings(path)
+    cmd = viewer_command(recordings, web=web, web_port=web_port, grpc_port=grpc_port,
+                         bind=bind)
+    line = shlex.join(cmd)
+    if dry_run:
+        print(line)
+        return 0
+    if not web and not has_display():
+        print(f"no display here (DISPLAY is not set): on a machine with one, run\n  {line}\n"
+              f"or serve the web viewer from here with: skinny view {shlex.quote(str(path))}"
+              " --web")
+        return 0
+    if web:
+        ip = ipaddress.ip_address(bind)
+        host = BIND_ADDRESS if ip.is_unspecified else f"[{ip}]" if ip.version == 6 else bind
+        scope = "this machine only" if ip.is_loopback else "other machines can connect"
+        print(f"serving {len(recordings)} recording(s) at http://{host}:{web_port} "
+              f"({scope}; Ctrl-C stops)", file=sys.stderr)
+    try:
+        return subprocess.run(cmd, stdin=subprocess.DEVNULL).returncode
+    except OSError as err:  # the wheel's viewer binary is missing: an environment fault
+        print(f"skinny view: error: cannot start the rerun viewer ({err})", file=sys.stderr)
+        return 1
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind((BIND_ADDRESS, 0))
+        return s.getsockname()[1]
+
+
+def _until(deadline: float, what: str, proc: subprocess.Popen, probe):
+    """Call ``probe()`` until it returns something other than None (its failures and
+    rerun's 15 s control timeouts retried) or ``deadline``; the viewer must keep running."""
+    last: Exception | None = None
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            raise SkinnyEnvironmentError(f"the rerun viewer exited ({proc.returncode}) "
+                                         f"while {what}")
+        try:
+            found = probe()
+        except (OSError, RuntimeError, ValueError) as exc:  # not up yet / busy: retry
+            found, last = None, exc
+        if found is not None:
+            return found
+        time.sleep(0.5)
+    raise SkinnyEnvironmentError(f"timed out {what}" + (f" ({last})" if last else ""))
+
+
+def screenshot(recording: str | Path, png: str | Path, *, at_s: float,
+               views: Sequence[str] = (), window: str = "1600x1000",
+               timeout_s: float = 300.0) -> dict[str, Path]:
+    """Save a screenshot of the native viewer showing ``recording`` at ``at_s`` seconds
+    (and one of each view named in ``views``).
+
+    ``rerun --screenshot-to`` takes its picture ten frames after start, whatever has
+    loaded by then, with the time cursor wherever playback (or following the data still
+    arriving) has put it. Here a fresh viewer (on a free port of 127.0.0.1; under
+    ``xvfb-run`` when there is no display) is driven through rerun's viewer-control API:
+    open the file, wait until nothing is loading and the ``time`` timeline is known,
+    pause the cursor at ``at_s``, then take screenshots until two in a row are identical
+    (every chunk the views need has arrived and been drawn).
+
+    Returns ``{"window": png, view name: png's name + "-<i>" for the i-th of views}``.
+    """
+    recording, png = Path(recording).resolve(), Path(png)
+    port = _free_port()
+    cmd = _rerun_executable() + ["--bind", BIND_ADDRESS, "--port", str(port),
+                                 "--window-size", window, "--hide-welcome-screen"]
+    if not has_display():
+        if shutil.which("xvfb-run") is None:
+            raise SkinnyEnvironmentError("no display and no xvfb-run (Debian package xvfb)")
+        cmd = ["xvfb-run", "-a"] + cmd
+    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    deadline = time.monotonic() + timeout_s
+    try:
+        client = _until(deadline, "starting the viewer", proc, lambda: _connected(port))
+        client.open(str(recording))
+
+        def loaded():
+            state = client.get_state()
+            recs = [r for r in state.recordings if r.store_id == state.active_recording]
+            ends = [t.end for r in recs for t in r.timelines if t.name == "time"]
+            return True if not state.loading and ends and ends[0] is not None else None
+
+        _until(deadline, f"loading {recording}", proc, loaded)
+        client.set_time("time", duration=at_s, play_state="paused")
+        at_ns, shots = round(at_s * 1e9), []
+
+        def stable():
+            state = client.get_state()
+            cursor = [r.current_time for r in state.recordings
+                      if r.store_id == state.active_recording]
+            if cursor != [at_ns]:
+                raise RuntimeError(f"time cursor at {cursor} ns, not {at_ns}")
+            scratch = png.with_name(f".{png.stem}.{len(shots)}.png")
+            shots.append(_saved_screenshot(client, scratch, deadline, proc))
+            return shots[-1] if len(shots) > 1 and shots[-1] == shots[-2] else None
+
+        images = {"window": _until(deadline, "waiting for a frame that stops changing",
+                                   proc, stable)}
+        ids = {v.name: v.view_id for v in client.get_state().views}
+        for name in views:
+            if name not in ids:
+                raise SkinnyInputError(f"no view {name!r} (views: {sorted(ids)})")
+            images[name] = _saved_screenshot(client, png.with_name(f".{png.stem}.v.png"),
+                                             deadline, proc, ids[name])
+    finally:
+        os.killpg(proc.pid, signal.SIGTERM)
+        proc.wait(timeout=30)
+    png.parent.mkdir(parents=True, exist_ok=True)
+    names = {"window": png} | {v: png.with_name(f"{png.stem}-{i}{png.suffix}")
+                               for i, v in enumerate(views)}
+    return {k: atomic_write_bytes(names[k], image) for k, image in images.items()}
+
+
+def _saved_screenshot(client, path: Path, deadline: float, proc: subprocess.Popen,
+                      view_id: str | None = None) -> bytes:
+    """One screenshot through ``path`` (then removed). On a slow software renderer a frame
+    can take longer than the 15 s rerun's control calls wait for; the viewer still saves
+    it, so a timed-out request is followed by waiting for the file."""
+    from PIL import Image
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        client.save_screenshot(str(path.resolve()), view_id=view_id)
+    except TimeoutError:
+        pass
+
+    def whole():
+        with Image.open(path) as img:  # raises until the viewer has written all of it
+            img.load()
+        return path.read_bytes()
+
+    try:
+        return _until(deadline, "waiting for the screenshot file", proc, whole)
+    finally:
+        path.unlink(missing_ok=True)
+
+
+def _connected(port: int):
+    from rerun.experimental import ViewerClient
+
+    client = ViewerClient.connect(f"rerun+http://{BIND_ADDRESS}:{port}/proxy")
+    client.get_state()  # raises until the viewer answers
+    return client
+
+
+def cmd_view(args) -> int:
+    """The ``skinny view`` handler (:mod:`skinny_mj.cli.parser` parses its arguments)."""
+    return view(args.path, web=args.web, web_port=args.web_port, grpc_port=args.grpc_port,
+                bind=getattr(args, "bind", BIND_ADDRESS), dry_run=args.dry_run)

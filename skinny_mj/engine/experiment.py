@@ -1,0 +1,397 @@
+"""The experiment engine shared by every paper: a sweep of (row, seed) runs.
+
+A paper module describes an :class:`Experiment`; :func:`run_sweep` runs it in parallel
+(joblib/loky here, or a Dask cluster), writing one JSON file per finished run to
+``out/runs/<row>-<seed>.json``; :func:`aggregate` rebuilds ``results.json`` from those
+files only and :func:`markdown_table` sets our numbers beside the paper's.
+
+A study declared as data (:class:`skinny_mj.engine.study.Study`: a base config, rows of
+overrides) is turned into an :class:`Experiment` by :mod:`skinny_mj.engine.plan`; the
+contract below is the execution layer under it, and what a study module of the older
+form implements by hand.
+
+The contract
+------------
+**A paper module** (``experiments/paper_*.py``) exposes ``NAME``, ``report(results,
+out_dir) -> str`` (figures + claims, run after the sweep on whatever is on disk) and::
+
+    build(*, quick=False, movement=None, asf=None, dof=None, signals=None) -> Experiment
+
+each None meaning the paper's default. ``skinny experiment`` passes exactly these
+(``--quick --movement --asf --dof --signals``). ``build`` puts every one of them that
+changes the runs into ``Experiment.config`` (so ``config.json`` records it and
+``--resume`` refuses a different one), and never into the name: the name is ``NAME``
+whatever the movement, so the default output folder stays ``results/<NAME>/<time>``.
+
+**An Experiment holds ALL its rows**, always; ``build`` never filters them. Selection
+is the engine's: ``run_sweep(..., rows=["5", "fig4"])`` takes row ids and group names
+(``Experiment.groups``: group name -> row ids, e.g. ``{"table": ("1", ..., "6")}``).
+A run's seed is ``run_seed(base_seed, row_index, run_index)``, ``row_index`` the row's
+(or its ``Row.seeds_of`` row's) place in the full ``Experiment.rows``, so ``--rows``
+reproduces the full sweep's files bit for bit. An unknown entry raises
+:class:`SkinnyInputError` naming the known ids and groups.
+
+**A run** is ``run_one(row, seed) -> Mapping`` of metrics (numbers are aggregated; other
+JSON-able values are kept in the run file only). It is shipped to worker processes with
+cloudpickle: bind the config with ``functools.partial``. Its outcome is one of:
+
+- it returns the metrics: status ``"ok"``;
+- it raises :class:`RunFailed` (the network diverged): status ``"failed"``. A diverged
+  run is data: it counts in ``failed / n`` and is left out of the means;
+- anything else raised (or a return value that is not a mapping of JSON-able values)
+  is a bug, not data: status ``"error"`` with the full traceback; the sweep finishes
+  the other runs, ``--resume`` runs it again, and ``skinny experiment`` exits 1.
+
+``run_batch(row, seeds) -> list`` (optional, the lockstep fast path) returns per seed
+the metrics mapping or a :class:`RunFailed` instance (any other exception instance
+there is that seed's error). If ``run_batch`` itself raises (or returns the wrong
+number of results), the engine runs that batch's seeds one by one with ``run_one`` and
+each of those records carries ``"fallback": "<ExcType>: <message> (batch of N seeds)"``
+and ``"fallback_traceback"``. Batched or not, the run files are the same.
+
+**A run file** ``runs/<row>-<seed>.json`` (:func:`skinny_mj.engine.stats.load_run`
+validates it; a damaged file is an error naming it, hidden ``.*.tmp`` leftovers of
+atomic writes are ignored)::
+
+    {"experiment", "row", "row_index", "run_index", "seed", "params", "paper",
+     "status": "ok" | "failed" | "error",
+     "metrics": {...} ({} unless ok), "nonfinite_metrics": [names stored as null] (ok),
+     "fail_reason": str | None (failed), "error": "ExcType: message" | None (error),
+     "traceback": str (error only), "fallback", "fallback_traceback" (fell back only),
+     "wall_s", "finished_at"}
+
+**config.json** records ``experiment``, ``config``, every row (``rows``: row, params,
+paper[, runs]), ``groups``, ``runs``, ``base_seed``, ``selection`` (``{"requested":
+[entries] | None, "rows": [ids run]}``), ``options`` (the CLI's quick, movement, asf,
+dof, signals), ``started_at``, versions, and ``resumes`` (one ``{"at", "runs",
+"selection", "options"}`` per ``--resume``). ``--resume`` needs the same experiment,
+config, rows and base_seed; the selection and ``--runs`` may differ. It reruns
+errored runs and runs missing ones, never an ok or failed one.
+
+**results.json** (:func:`aggregate`, from the run files on disk only)::
+
+    {"experiment", "n_runs", "n_ok", "n_failed", "n_error",
+     "rows": [{"row", "row_index", "params", "paper", "n", "n_ok", "n_failed",
+               "n_error", "n_fallback", "failures": [{"seed", "fail_reason"}],
+               "errors": [{"seed", "error"}], "seeds",
+               "metrics": {name: {mean, variance, sd, median, min, max, n}},
+               "wall_s": {"mean", "total"}}]}
+
+with ``n = n_ok + n_failed`` (the runs that are data) and metric statistics over the ok
+runs only. ``table.md`` shows ``failed / n`` per row (``1 / 20 (+1 error)``) and says
+under the table that the means exclude failed runs.
+
+While a sweep runs, ``out/sweep.lock`` (its pid, host and start time) keeps a second
+sweep out of the folder (:mod:`skinny_mj.engine.folder`; a lock whose process died on
+this host is taken over, with a line on stderr).
+
+Output layout::
+
+    results/<experiment>/<timestamp>/{config.json, runs/*.json, results.json, table.md}
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import functools
+import os
+import re
+import sys
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skinny_mj.engine.folder import prepare_out_dir, sweep_lock
+from skinny_mj.engine.stats import aggregate, load_run, markdown_table
+from skinny_mj.engine.sweep import RunFailed, execute_batch, execute_run, iter_dask, iter_joblib
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.io import atomic_write_json, atomic_write_text
+
+__all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "select_rows",
+           "run_sweep", "aggregate", "markdown_table", "execute_run", "execute_batch",
+           "default_out_dir", "default_workers", "default_batch_size"]
+
+_SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+=-]*$")  # no "..", no hidden file
+
+
+@dataclass(frozen=True)
+class Row:
+    """One row of a paper's table: its id, the parameters that differ, the paper's values.
+
+    ``runs``: this row's run count if not the experiment's (``--runs N`` caps it at N);
+    ``seeds_of``: a row whose seeds this row takes (a paired comparison), None its own.
+    """
+
+    row_id: str
+    params: Mapping[str, Any] = field(default_factory=dict)
+    paper: Mapping[str, float] = field(default_factory=dict)
+    runs: int | None = None
+    seeds_of: str | None = None
+
+    def __post_init__(self) -> None:
+        if not _SAFE_NAME.match(self.row_id):
+            raise SkinnyInputError(f"row id {self.row_id!r} must be a plain file-name word")
+        if self.runs is not None and self.runs < 1:
+            raise SkinnyInputError(f"row {self.row_id!r}: runs must be >= 1, got {self.runs}")
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """A sweep description: ALL the paper's rows (see the module docstring's contract).
+
+    ``config`` is a frozen dataclass (or a mapping) recorded in ``config.json``;
+    ``groups`` names sets of rows for ``run_sweep(rows=...)`` (group name -> row ids;
+    a group's name may not be a row id).
+    """
+
+    name: str
+    rows: tuple[Row, ...]
+    run_one: Callable[[Row, int], Mapping[str, Any]]
+    config: Any = None
+    runs: int = 10
+    base_seed: int = 0
+    table_columns: tuple[str, ...] | Mapping[str, str] | None = None
+    #: optional ``run_batch(row, seeds) -> list`` running one row's seeds in lockstep
+    #: (the fast path); element k is seed k's metrics dict, or a RunFailed for a run
+    #: that diverged. Must give the same metrics as ``run_one`` seed by seed.
+    run_batch: Callable[[Row, list[int]], list[Any]] | None = None
+    #: optional ``cost(row) -> float``: one run's relative cost (e.g. its control steps).
+    #: Only the schedule uses it: the costliest jobs start first (longest processing
+    #: time first), so a long row does not start last and keep the other workers idle.
+    cost: Callable[[Row], float] | None = None
+    groups: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    #: rows that cannot run on this machine -> why (an optional package missing): left out
+    #: of a sweep of every row (with a line saying so), refused when named in ``rows``
+    unavailable: Mapping[str, str] = field(default_factory=dict)
+    #: optional ``report(results, out_dir) -> str`` run after the sweep (a study's,
+    #: :mod:`skinny_mj.engine.plan`); None: the module's ``report``
+    report: Callable[[Mapping[str, Any], Path], str] | None = None
+
+    def __post_init__(self) -> None:
+        if not _SAFE_NAME.match(self.name):
+            raise SkinnyInputError(f"experiment name {self.name!r} must be a plain word")
+        ids = [r.row_id for r in self.rows]
+        if not ids or len(set(ids)) != len(ids):
+            raise SkinnyInputError(f"experiment {self.name!r} needs unique row ids, got {ids}")
+        if bad := [r.row_id for r in self.rows if r.seeds_of not in (None, *ids)]:
+            raise SkinnyInputError(f"experiment {self.name!r}: rows {bad}: seeds_of no row")
+        groups = {str(g): (m,) if isinstance(m, str) else tuple(m)
+                  for g, m in self.groups.items()}
+        for group, members in groups.items():
+            unknown = [m for m in members if m not in ids]
+            if group in ids or not members or unknown:
+                raise SkinnyInputError(
+                    f"experiment {self.name!r}: group {group!r} must name existing rows "
+                    f"and not be a row id itself (members {list(members)}, rows {ids})")
+        object.__setattr__(self, "rows", tuple(self.rows))
+        object.__setattr__(self, "groups", groups)
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One (row, run) pair with its derived seed; ``row_index`` is the row's place in
+    the experiment's full ``rows``."""
+
+    row: Row
+    row_index: int
+    run_index: int
+    seed: int
+
+    @property
+    def filename(self) -> str:
+        return f"{self.row.row_id}-{self.seed}.json"
+
+
+def run_seed(base_seed: int, row_index: int, run_index: int) -> int:
+    """Seed of one run: a 32-bit int drawn from ``SeedSequence([base, row, run])``."""
+    seq = np.random.SeedSequence([int(base_seed), int(row_index), int(run_index)])
+    return int(seq.generate_state(1, dtype=np.uint32)[0])
+
+
+def _entries(rows: Sequence[str] | str) -> list[str]:
+    parts = rows.split(",") if isinstance(rows, str) else rows
+    return [e.strip() for e in parts if e.strip()]
+
+
+def select_rows(experiment: Experiment, rows: Sequence[str] | str | None = None
+                ) -> tuple[Row, ...]:
+    """The rows named by ``rows`` (row ids and group names; a string is split at commas),
+    in experiment order; None selects every row."""
+    if rows is None:
+        return tuple(r for r in experiment.rows if r.row_id not in experiment.unavailable)
+    entries = _entries(rows)
+    ids = [r.row_id for r in experiment.rows]
+    unknown = [e for e in entries if e not in ids and e not in experiment.groups]
+    if unknown or not entries:
+        what = f"no row or group {', '.join(map(repr, unknown))}" if unknown else "no rows"
+        raise SkinnyInputError(
+            f"experiment {experiment.name!r} has {what}; groups: "
+            f"{', '.join(experiment.groups) or '(none)'}; row ids: {', '.join(ids)}")
+    chosen = {m for e in entries for m in experiment.groups.get(e, (e,))}
+    missing = sorted(chosen & set(experiment.unavailable))
+    if missing:
+        raise SkinnyInputError(f"experiment {experiment.name!r}: row {missing[0]!r} "
+                               f"{experiment.unavailable[missing[0]]}")
+    return tuple(r for r in experiment.rows if r.row_id in chosen)
+
+
+def default_workers(workers: int | None = None) -> int:
+    """``workers``, or by default every core this process may use."""
+    if workers is not None:
+        return workers
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+def default_batch_size(n_rows: int, runs: int, workers: int) -> int:
+    """Seeds per lockstep batch: as many as possible (a step's Python overhead is
+    shared by the whole batch: ~55 us + ~5 us per run at N = 200), cutting each row
+    into the fewest equal chunks that give every worker the same number of jobs."""
+    splits = 1
+    while (n_rows * splits) % workers and splits < runs:
+        splits += 1
+    return max(1, -(-runs // splits))
+
+
+def _batches(specs: list[RunSpec], size: int) -> list[list[RunSpec]]:
+    """Group specs by row, then cut each row's seeds into chunks of at most ``size``."""
+    by_row: dict[str, list[RunSpec]] = {}
+    for spec in specs:
+        by_row.setdefault(spec.row.row_id, []).append(spec)
+    return [group[i:i + size] for group in by_row.values() for i in range(0, len(group), size)]
+
+
+def default_out_dir(experiment_name: str, root: str | Path = "results") -> Path:
+    """``results/<experiment>/<UTC timestamp>``."""
+    return Path(root) / experiment_name / _dt.datetime.now(_dt.UTC).strftime("%Y%m%d-%H%M%S")
+
+
+def _key(job: RunSpec | list[RunSpec]) -> str:
+    return job.filename if isinstance(job, RunSpec) else "+".join(s.filename for s in job)
+
+
+def _run_specs(experiment: Experiment, runs: int, selected: Sequence[Row]) -> list[RunSpec]:
+    chosen, pos = {r.row_id for r in selected}, {r.row_id: i for i, r in enumerate(experiment.rows)}
+    return [RunSpec(row, i, k, run_seed(experiment.base_seed, pos[row.seeds_of or row.row_id], k))
+            for k in range(runs) for i, row in enumerate(experiment.rows)
+            if row.row_id in chosen and (row.runs is None or k < row.runs)]
+
+
+def _report(bar: Any, records: list[dict[str, Any]]) -> None:
+    """One line per batch that fell back, per errored run and per failed run."""
+    if records and records[0].get("fallback"):
+        bar.write(f"row {records[0]['row']}: run_batch raised {records[0]['fallback']}; "
+                  "ran its seeds one by one", file=sys.stderr)
+    for rec in records:
+        name = f"{rec['row']}-{rec['seed']}.json"
+        if rec["status"] == "error":
+            bar.write(f"run {name} errored (a bug, not data): {rec['error']}", file=sys.stderr)
+        elif rec["status"] == "failed":
+            bar.write(f"run {name} failed (diverged): {rec['fail_reason']}", file=sys.stderr)
+
+
+def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
+              rows: Sequence[str] | str | None = None, runs: int | None = None,
+              workers: int | None = None, resume: bool = False, scheduler: str | None = None,
+              progress: bool = True, batch_size: int | None = None,
+              options: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Run the (row, seed) runs of ``experiment`` and write its results.
+
+    Parameters
+    ----------
+    experiment : the sweep (all its rows).
+    out_dir : output folder; default ``results/<name>/<timestamp>``.
+    rows : row ids and group names to run (default: all); seeds do not depend on it.
+    runs : runs per row (default ``experiment.runs``).
+    workers : parallel processes (default: all cores); 1 runs in this process.
+    resume : skip runs whose ok or failed file is already in ``out_dir/runs``
+        (errored runs run again).
+    scheduler : None (joblib), ``"local"`` (a Dask LocalCluster on 127.0.0.1) or a
+        Dask scheduler address ``tcp://host:port``. Same run files either way.
+    progress : tqdm bar over runs (with ETA) on stderr.
+    batch_size : with ``experiment.run_batch``, the most seeds of one row a worker runs
+        in lockstep; default :func:`default_batch_size` (whole rows when the rows
+        share out evenly over the workers). 0 disables the fast path (every run
+        through ``run_one``).
+    options : recorded in ``config.json`` (the CLI's quick, movement, asf, dof, signals).
+
+    Returns
+    -------
+    The results dict also written to ``out_dir/results.json`` (see :func:`aggregate`;
+    ``n_error`` counts errored runs on disk); ``table.md`` is written beside it.
+    """
+    selected = select_rows(experiment, rows)
+    if rows is None and experiment.unavailable:
+        for row_id, why in experiment.unavailable.items():
+            print(f"{experiment.name}: row {row_id} left out: it {why}", file=sys.stderr)
+    runs = experiment.runs if runs is None else int(runs)
+    if runs < 1:
+        raise SkinnyInputError(f"runs must be >= 1, got {runs}")
+    workers = default_workers(workers)
+    if workers < 1:
+        raise SkinnyInputError(f"workers must be >= 1, got {workers}")
+    if out_dir is None:
+        if resume:
+            raise SkinnyInputError("--resume needs the --out folder of the sweep to resume")
+        out_dir = default_out_dir(experiment.name)
+    out_dir = Path(out_dir)
+    invocation = {"runs": runs, "options": dict(options or {}), "selection": {
+        "requested": None if rows is None else _entries(rows),
+        "rows": [r.row_id for r in selected]}}
+    with sweep_lock(out_dir):  # one sweep at a time in a folder
+        prepare_out_dir(experiment, out_dir, runs, resume, invocation)
+        return _sweep(experiment, out_dir, selected, runs, workers, resume, scheduler,
+                      progress, batch_size)
+
+
+def _sweep(experiment: Experiment, out_dir: Path, selected: Sequence[Row], runs: int,
+           workers: int, resume: bool, scheduler: str | None, progress: bool,
+           batch_size: int | None) -> dict[str, Any]:
+    from tqdm import tqdm
+
+    runs_dir = out_dir / "runs"
+    runs_dir.mkdir(parents=True, exist_ok=True)
+
+    specs = _run_specs(experiment, runs, selected)
+    if resume:  # an errored run (a bug) runs again; ok and failed runs are data
+        specs = [s for s in specs if not (runs_dir / s.filename).is_file()
+                 or load_run(runs_dir / s.filename)["status"] == "error"]
+    jobs: list = specs
+    fn: Callable[[Any], Any] = functools.partial(
+        execute_run, experiment.run_one, experiment_name=experiment.name)
+    if experiment.run_batch is not None and batch_size != 0 and specs:
+        size = batch_size or default_batch_size(len(selected), runs, workers)
+        jobs = _batches(specs, size)
+        fn = functools.partial(execute_batch, experiment.run_batch, experiment.run_one,
+                               experiment_name=experiment.name)
+    if experiment.cost is not None:
+        cost = experiment.cost
+        jobs = sorted(jobs, key=lambda job: -sum(
+            cost(spec.row) for spec in (job if isinstance(job, list) else [job])))
+    results_iter: Iterable[Any]
+    if not jobs:
+        results_iter = ()
+    elif scheduler is not None:
+        results_iter = iter_dask(fn, jobs, workers, scheduler, [_key(j) for j in jobs])
+    elif workers == 1:
+        results_iter = (fn(job) for job in jobs)
+    else:
+        results_iter = iter_joblib(fn, jobs, min(workers, len(jobs)))
+    with tqdm(total=len(specs), desc=experiment.name, unit="run", file=sys.stderr,
+              disable=not progress, dynamic_ncols=True) as bar:
+        for result in results_iter:
+            records = result if isinstance(result, list) else [result]
+            for record in records:
+                # The parent writes every file, so remote Dask workers need no shared disk.
+                atomic_write_json(runs_dir / f"{record['row']}-{record['seed']}.json", record)
+                bar.update(1)
+            _report(bar, records)
+
+    results = aggregate(out_dir)
+    atomic_write_text(out_dir / "table.md",
+                      markdown_table(results, experiment.table_columns) + "\n")
+    return results

@@ -1,0 +1,94 @@
+"""``skinny sweep key=a,b key2=c``: an ad-hoc grid over any config key, as a study.
+
+Each ``KEY=V1,V2,...`` names a configuration key and its values (a value holding a
+comma is quoted: ``trajectory='md_02.amc@start=3,duration=6.26',ymca``); the rows are the
+cartesian product of the keys with more than one value, in the order given, and a key
+with one value changes the base of every row. A value is read as the key's field type
+(:func:`skinny_mj.training.overrides.parse_value`: ``int``, ``float``, ``bool`` true/false,
+none/null where the field allows it, else text); the configuration checks the result.
+A row's id is its values, ``esn.spectral_radius=0.5`` (keys joined by ``+``), as a
+plain file-name word.
+
+The base is :class:`~skinny_mj.training.config.TrainConfig`'s defaults (paper E exp. 5), or a
+study's row (``--study NAME --row ID``: its configuration, metrics, columns and run).
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import re
+from collections.abc import Sequence
+from typing import Any
+
+from skinny_mj.engine.study import Row, Study
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.overrides import parse_value
+
+__all__ = ["NAME", "METRICS", "parse_assignment", "grid_study"]
+
+NAME = "sweep"
+#: What a grid reports without a ``--study``: the test of every run, and its wall time.
+METRICS = {"position_nrmse": "test.position_nrmse", "motor_nrmse": "test.motor_nrmse",
+           "train_wall_s": "wall_s"}
+_UNSAFE = re.compile(r"[^A-Za-z0-9_.+=-]")
+
+
+def parse_assignment(item: str, base: Any) -> tuple[str, list[Any], list[str]]:
+    """``KEY=V1,V2`` -> (key, typed values, their texts)."""
+    key, sep, values = item.partition("=")
+    key = key.strip()
+    if not sep or not key or not values.strip():
+        raise SkinnyInputError(f"a sweep axis is KEY=VALUE[,VALUE...], got {item!r}")
+    texts = [t.strip() for t in next(csv.reader([values], quotechar="'",
+                                                skipinitialspace=True))]
+    if any(not t for t in texts) or len(set(texts)) != len(texts):
+        raise SkinnyInputError(f"{key}: values must be given once each, got {values!r}")
+    return key, [parse_value(base, key, t) for t in texts], texts
+
+
+def _row_id(pairs: Sequence[tuple[str, str]]) -> str:
+    return "+".join(_UNSAFE.sub("_", f"{k}={t}") for k, t in pairs)
+
+
+def grid_study(items: Sequence[str], *, study: Study | None = None, row: str | None = None,
+               runs: int = 10) -> Study:
+    """The study of ``skinny sweep ITEMS`` (see the module docstring)."""
+    if (study is None) != (row is None):
+        raise SkinnyInputError("--study and --row go together: the study's row is the base")
+    base_row = study.row(row) if study is not None else None
+    base = study.config(row) if study is not None else TrainConfig()
+    if not items:
+        raise SkinnyInputError("give at least one KEY=VALUE[,VALUE...] to sweep")
+    probe, parsed = base, {}
+    for i, item in sorted(enumerate(items), key=lambda p: "," in p[1].partition("=")[2]):
+        parsed[i] = parse_assignment(item, probe)  # one-value keys first: a type chosen
+        if len(parsed[i][1]) == 1:  # (actuation=torque) makes its settings parseable
+            probe = probe.override({parsed[i][0]: parsed[i][1][0]}, check=False)
+    axes = [parsed[i] for i in range(len(items))]
+    if len({k for k, _, _ in axes}) != len(axes):
+        raise SkinnyInputError("each key may be swept once")
+    fixed = {k: v[0] for k, v, _ in axes if len(v) == 1}
+    swept = [a for a in axes if len(a[1]) > 1] or axes
+    if fixed:
+        base = base.override(fixed)
+    rows = []
+    for combo in itertools.product(*[list(zip(v, t, strict=True)) for _, v, t in swept]):
+        keys = [k for k, _, _ in swept]
+        overrides = {k: value for k, (value, _) in zip(keys, combo, strict=True)}
+        rid = _row_id([(k, text) for k, (_, text) in zip(keys, combo, strict=True)])
+        rows.append(Row(rid, overrides))
+    if len({r.id for r in rows}) != len(rows):
+        rows = [Row(f"{i}-{r.id}", r.overrides) for i, r in enumerate(rows)]
+    for r in rows:  # every row's configuration is checked now, before any run
+        base.override(dict(r.overrides))
+    what = " ".join(items) + (f" on {study.name} row {row}" if study is not None else "")
+    if study is None:
+        return Study(name=NAME, description=f"skinny sweep {what}", base=base, rows=tuple(rows),
+                     metrics=METRICS, runs=runs, takes=())
+    return Study(name=NAME, description=f"skinny sweep {what}", base=base,
+                 rows=tuple(Row(r.id, r.overrides, params=base_row.params,
+                                run_batch=base_row.run_batch) for r in rows),
+                 metrics=study.metrics, columns=study.columns, runs=runs, takes=(),
+                 params=study.params, run_batch=study.run_batch, trainings=study.trainings)

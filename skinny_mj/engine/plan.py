@@ -1,0 +1,238 @@
+"""What the engine derives from a :class:`~skinny_mj.engine.study.Study`: a :class:`Plan` (every
+kept row with its training configuration) and from it the engine's
+:class:`~skinny_mj.engine.experiment.Experiment` (rows, groups, the lockstep run, one run,
+cost, table columns, the report).
+
+A row's configuration is ``study.base`` with, in order, the options of ``skinny
+experiment`` (``--movement`` -> trajectory + asf, ``--dof``, ``--signals``: those the
+study ``takes``, any other refused in one line), the row's overrides (and, under
+``--quick``, the row's ``quick`` ones), then the overrides after every row's
+(``Quick.overrides``; the contract test's ``tiny``). A quick sweep keeps
+``Quick.rows`` (default: every row) in the study's order, a full sweep every row but the
+``quick_only`` ones, and a run's seed is
+``run_seed(base_seed, row_index, run_index)`` over the rows the sweep has.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from skinny_mj.engine.experiment import Experiment, RunFailed
+from skinny_mj.engine.experiment import Row as EngineRow
+from skinny_mj.engine.options import OPTION_KEYS, movement_changes
+from skinny_mj.engine.sweep import one_of_batch
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.training import overrides
+from skinny_mj.training.config import TrainConfig, relative_cost
+
+if TYPE_CHECKING:  # (the study module imports this one when a study is built)
+    from skinny_mj.engine.study import Metric, Row, RunBatch, Study
+
+__all__ = ["Plan", "Results", "plan", "train_metrics", "read_metric"]
+
+
+def read_metric(metrics: Mapping[str, Any], where: Metric) -> Any:
+    """One metric of a training's metrics: a dotted path (``"test.position_nrmse"``; a
+    missing key is None) or a function of the metrics."""
+    if callable(where):
+        return where(metrics)
+    value: Any = metrics
+    for part in where.split("."):
+        value = value.get(part) if isinstance(value, Mapping) else None
+    return value
+
+
+def train_metrics(config: TrainConfig, seeds: list[int],
+                  metrics: Mapping[str, Metric]) -> list[Any]:
+    """The default run of a row: ``train_batch(config, seeds)``, per seed ``metrics`` read
+    off its outcome, or a :class:`RunFailed` where the network diverged."""
+    from skinny_mj.training.loop import train_batch
+
+    return [RunFailed(o.metrics.get("fail_reason") or "diverged") if o.metrics["failed"]
+            else {name: read_metric(o.metrics, where) for name, where in metrics.items()}
+            for o in train_batch(config, seeds)]
+
+
+@dataclass(frozen=True)
+class _Runner:
+    """The Experiment's ``run_batch`` (shipped to worker processes): per row id its
+    config, its row (params with the study's) and its custom run, if any."""
+
+    metrics: Mapping[str, Metric]
+    rows: Mapping[str, tuple[TrainConfig, Row, RunBatch | None]]
+
+    def __call__(self, row: EngineRow, seeds: list[int]) -> list[Any]:
+        config, study_row, custom = self.rows[row.row_id]
+        if custom is not None:
+            return list(custom(config, study_row, list(seeds)))
+        return train_metrics(config, list(seeds), self.metrics)
+
+
+def _cost(costs: Mapping[str, float], row: EngineRow) -> float:
+    return costs[row.row_id]
+
+
+class Results(dict):
+    """The sweep's results (the dict :func:`skinny_mj.engine.stats.aggregate` wrote), with
+    the run files at hand: :meth:`runs` and :meth:`values`."""
+
+    def __init__(self, summary: Mapping[str, Any], out_dir: str | Path) -> None:
+        super().__init__(summary)
+        self.out_dir = Path(out_dir)
+
+    def runs(self, row_id: str | None = None, status: str | None = "ok") -> list[dict]:
+        """The run records of ``row_id`` (None: every row) with ``status`` (None: any)."""
+        from skinny_mj.engine.stats import load_runs
+
+        return [r for r in load_runs(self.out_dir) if row_id in (None, r["row"])
+                and status in (None, r["status"])]
+
+    def values(self, row_id: str, metric: str) -> list[float]:
+        """``metric`` of every ok run of ``row_id`` that has a number for it."""
+        return [r["metrics"][metric] for r in self.runs(row_id)
+                if isinstance(r["metrics"].get(metric), int | float)]
+
+
+@dataclass(frozen=True)
+class PlannedRow:
+    """A kept row (``--quick`` applied), its params (with the study's) and its config."""
+
+    row: Row
+    params: Mapping[str, Any]
+    config: TrainConfig
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """A study planned for one sweep: the base (options applied), the overrides after
+    every row's, and every kept row with its configuration."""
+
+    study: Study
+    base: TrainConfig
+    after: Mapping[str, Any]
+    quick: bool
+    rows: tuple[PlannedRow, ...]
+
+    def row(self, row_id: str) -> PlannedRow:
+        for p in self.rows:
+            if p.row.id == row_id:
+                return p
+        raise SkinnyInputError(f"study {self.study.name!r}: no row {row_id!r} in this "
+                               f"sweep; rows: {', '.join(p.row.id for p in self.rows)}")
+
+    def config(self, row_id: str) -> TrainConfig:
+        """Row ``row_id``'s training configuration."""
+        return self.row(row_id).config
+
+    @property
+    def params(self) -> Mapping[str, Any]:
+        """The study-wide parameters of its custom runs."""
+        return dict(self.study.params)
+
+    def trainings(self, row_id: str) -> dict[str, TrainConfig]:
+        """What one run of the row trains: ``study.trainings`` or the row's config."""
+        p = self.row(row_id)
+        if self.study.trainings is None:
+            return {"run": p.config}
+        return dict(self.study.trainings(p.config, self._run_row(p)))
+
+    def to_dict(self) -> dict[str, Any]:
+        """What ``config.json`` records as ``config`` (``--resume`` needs it the same)."""
+        return {"study": self.study.name, "base": self.base.to_dict(),
+                "after_rows": dict(self.after), "params": dict(self.study.params),
+                "quick": self.quick}
+
+    def groups(self) -> dict[str, tuple[str, ...]]:
+        """The rows' groups, then the study's (whose members may name groups), over the
+        kept rows; a group left without rows is dropped."""
+        kept = [p.row.id for p in self.rows]
+        out: dict[str, list[str]] = {}
+        for p in self.rows:
+            if p.row.group is not None:
+                out.setdefault(p.row.group, []).append(p.row.id)
+        for name, members in self.study.groups.items():
+            out[name] = [i for m in members for i in out.get(m, [m]) if i in kept]
+        return {g: tuple(m) for g, m in out.items() if m}
+
+    @staticmethod
+    def _run_row(p: PlannedRow) -> Row:
+        return dataclasses.replace(p.row, params=p.params, quick={})
+
+    def experiment(self) -> Experiment:
+        """The engine's Experiment of this plan."""
+        study = self.study
+        quick = study.quick
+        runs = quick.runs if self.quick else study.runs
+
+        def row_runs(r: Row) -> int | None:
+            return r.runs if r.runs is None or not self.quick else min(r.runs, quick.runs)
+
+        engine_rows = tuple(
+            EngineRow(p.row.id, {**p.row.overrides, **p.row.params}, p.row.paper,
+                      row_runs(p.row), p.row.seeds_of) for p in self.rows)
+        runner = _Runner(dict(study.metrics), {
+            p.row.id: (p.config, self._run_row(p), p.row.run_batch or study.run_batch)
+            for p in self.rows})
+        costs = {p.row.id: relative_cost(p.config) for p in self.rows}
+        columns = study.columns if study.columns is not None else tuple(study.metrics)
+        return Experiment(
+            name=study.name, rows=engine_rows, run_one=functools.partial(one_of_batch, runner),
+            config=self, runs=runs, base_seed=study.base_seed, table_columns=columns or None,
+            run_batch=runner, cost=functools.partial(_cost, costs), groups=self.groups(),
+            report=functools.partial(_report, self))
+
+
+def _report(plan: Plan, results: Mapping[str, Any], out_dir: str | Path) -> str:
+    if plan.study.report is None:
+        return ""
+    return plan.study.report(Results(results, out_dir), plan, Path(out_dir))
+
+
+def _expand(study: Study, entries: Iterable[str]) -> set[str]:
+    """Row ids named by ``entries`` (ids, the rows' groups, the study's groups)."""
+    by_group: dict[str, list[str]] = {}
+    for r in study.rows:
+        if r.group is not None:
+            by_group.setdefault(r.group, []).append(r.id)
+    ids = {r.id for r in study.rows}
+    out: set[str] = set()
+    for e in entries:
+        members = study.groups.get(e, by_group.get(e, [e]))
+        for m in members:
+            out |= set(by_group.get(m, [m]))
+    if unknown := sorted(out - ids):
+        raise SkinnyInputError(f"study {study.name!r}: quick rows {unknown} name no row")
+    return out
+
+
+def plan(study: Study, *, quick: bool = False, tiny: bool = False,
+         movement: str | None = None, asf: Any = None, dof: int | None = None,
+         signals: str | None = None) -> Plan:
+    """Plan ``study`` for one sweep (see the module docstring); ``tiny``: also apply the
+    study's ``tiny`` shrink (the contract test's)."""
+    given = {"movement": movement, "dof": dof, "signals": signals}
+    if refused := [k for k, v in given.items() if v is not None and k not in study.takes]:
+        takes = ", ".join(f"--{k}" for k in study.takes) or "none of them"
+        raise SkinnyInputError(f"study {study.name!r} takes no --{refused[0]} (it takes "
+                               f"{takes})")
+    changes = movement_changes(movement, asf, dof, signals, OPTION_KEYS)
+    base = study.base.override(changes) if changes else study.base
+    after = dict(study.quick.overrides if quick else {})
+    kept: Sequence[Row] = [r for r in study.rows if quick or not r.quick_only]
+    if quick and study.quick.rows is not None:
+        chosen = _expand(study, study.quick.rows)
+        kept = [r for r in study.rows if r.id in chosen]
+    planned = []
+    for r in kept:
+        r = r.shrunk() if quick else r
+        config = base.override({**r.overrides, **after})
+        if tiny:  # the contract test's shrink: of its keys, those this row's config has
+            have = set(overrides.keys(config))
+            config = config.override({k: v for k, v in study.tiny.items() if k in have})
+        planned.append(PlannedRow(r, {**study.params, **r.params}, config))
+    return Plan(study, base, after, quick, tuple(planned))

@@ -1,0 +1,179 @@
+"""A study is data: a base training configuration, rows of overrides, the paper's numbers.
+
+A study module under ``experiments/`` (or any package, see :mod:`skinny_mj.engine.registry`)
+declares one :class:`Study`::
+
+    STUDY = Study(
+        name="sr-sweep", description="Spectral radius 0.5 vs 0.9 on paper E exp. 5.",
+        rows=(Row("sr0.5", {"esn.spectral_radius": 0.5}),
+              Row("sr0.9", {"esn.spectral_radius": 0.9})),
+        metrics={"position_nrmse": "test.position_nrmse"}, runs=20)
+
+and the engine (:mod:`skinny_mj.engine.plan`) derives the rest: the sweep of (row, seed)
+runs, each run's training configuration (``base``, then ``--movement/--dof/--signals``,
+then the row's overrides, then ``--quick``'s), the lockstep run (train the row's seeds
+with :func:`skinny_mj.training.loop.train_batch`, read ``metrics`` off each outcome; a diverged
+run is a failed run), its cost, its groups and its table.
+
+A row's run that is not "train, then read metrics" supplies ``run_batch(config, row,
+seeds) -> list`` (per seed a metrics dict, or a :class:`~skinny_mj.engine.experiment.RunFailed`),
+for the whole study or for one row (:attr:`Row.run_batch`); ``config`` is the row's
+training configuration and ``row.params`` its study-specific parameters.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from skinny_mj.engine.options import OPTION_KEYS
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.training.config import TrainConfig
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from skinny_mj.engine.plan import Plan, Results
+
+__all__ = ["Study", "Row", "Quick", "OPTIONS", "TINY"]
+
+#: ``skinny experiment``'s options a study may take (the config keys each sets:
+#: :data:`skinny_mj.engine.options.OPTION_KEYS`).
+OPTIONS = tuple(OPTION_KEYS)
+#: The contract test's shrink (after ``--quick``'s): one epoch of a small reservoir (each
+#: row takes the keys its config has: a true-target row has no epochs).
+TINY = {"rule.epochs": 1, "esn.n_reservoir": 20}
+
+#: A metric: a dotted path into :func:`skinny_mj.training.loop.train_batch`'s metrics
+#: (``"test.position_nrmse"``), or a function of those metrics.
+Metric = str | Callable[[Mapping[str, Any]], Any]
+RunBatch = Callable[[TrainConfig, "Row", list[int]], list[Any]]
+
+
+def _frozen(mapping: Mapping[str, Any] | None) -> dict[str, Any]:
+    return dict(mapping or {})
+
+
+@dataclass(frozen=True)
+class Row:
+    """One row: its id (a plain file-name word), the config keys it changes, the paper's
+    numbers (``<metric>`` and ``<metric>_var``), optionally its own run count
+    (``runs``), the row whose seeds it takes (``seeds_of``, a paired comparison), its
+    group (``--rows GROUP``), study-specific ``params`` (read by a custom run), what
+    ``--quick`` changes of this row (``quick``: overrides or params keys), and its own
+    ``run_batch``; ``quick_only``: a row only ``--quick`` sweeps have (a smoke test's
+    smaller grid)."""
+
+    id: str
+    overrides: Mapping[str, Any] = field(default_factory=dict)
+    paper: Mapping[str, float] = field(default_factory=dict)
+    runs: int | None = None
+    seeds_of: str | None = None
+    group: str | None = None
+    params: Mapping[str, Any] = field(default_factory=dict)
+    quick: Mapping[str, Any] = field(default_factory=dict)
+    run_batch: RunBatch | None = None
+    quick_only: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ("overrides", "paper", "params", "quick"):
+            object.__setattr__(self, name, _frozen(getattr(self, name)))
+        if both := sorted(set(self.overrides) & set(self.params)):
+            raise SkinnyInputError(f"row {self.id!r}: {both} both a config override and a "
+                                   "study parameter")
+
+    def shrunk(self) -> Row:
+        """This row under ``--quick``: its ``quick`` keys replace params or overrides."""
+        params = {**self.params, **{k: v for k, v in self.quick.items() if k in self.params}}
+        over = {**self.overrides, **{k: v for k, v in self.quick.items()
+                                     if k not in self.params}}
+        return Row(self.id, over, self.paper, self.runs, self.seeds_of, self.group, params,
+                   {}, self.run_batch, self.quick_only)
+
+
+@dataclass(frozen=True)
+class Quick:
+    """What ``--quick`` (a smoke test, not a reproduction) shrinks: ``overrides`` applied
+    after every row's, the runs per row, and the rows kept (ids or groups; None: all)."""
+
+    overrides: Mapping[str, Any] = field(default_factory=dict)
+    runs: int = 2
+    rows: tuple[str, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Study:
+    """A sweep as data (see the module docstring).
+
+    ``metrics``: name -> where in ``train_batch``'s metrics (or a function of them);
+    ``columns``: the table's metric columns (names, or name -> header; default every
+    metric); ``groups``: extra groups (name -> row ids or groups) beside the rows' own;
+    ``params``: study-wide parameters of a custom run (a row's ``params`` add to them);
+    ``trainings(config, row) -> {name: TrainConfig}``: what one run of a custom
+    ``run_batch`` trains, where that is not the row's config alone (the memory check);
+    ``takes``: the options of ``OPTIONS`` it accepts (any other is refused in one line);
+    ``report(results, plan, out_dir) -> str``: figures and claims after the sweep;
+    ``tiny``: the contract test's shrink (default :data:`TINY`).
+    """
+
+    name: str
+    rows: tuple[Row, ...]
+    description: str = ""
+    base: TrainConfig = field(default_factory=TrainConfig)
+    metrics: Mapping[str, Metric] = field(default_factory=dict)
+    columns: Sequence[str] | Mapping[str, str] | None = None
+    runs: int = 10
+    quick: Quick = field(default_factory=Quick)
+    groups: Mapping[str, Sequence[str]] = field(default_factory=dict)
+    params: Mapping[str, Any] = field(default_factory=dict)
+    run_batch: RunBatch | None = None
+    trainings: Callable[[TrainConfig, Row], Mapping[str, TrainConfig]] | None = None
+    report: Callable[[Results, Plan, Path], str] | None = None
+    takes: tuple[str, ...] = OPTIONS
+    tiny: Mapping[str, Any] = field(default_factory=lambda: dict(TINY))
+    base_seed: int = 0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "rows", tuple(self.rows))
+        ids = [r.id for r in self.rows]
+        if not ids or len(set(ids)) != len(ids):
+            raise SkinnyInputError(f"study {self.name!r} needs unique row ids, got {ids}")
+        known = {*ids, *(r.group for r in self.rows if r.group), *self.groups}
+        if bad := sorted({m for ms in self.groups.values() for m in ms} - known):
+            raise SkinnyInputError(f"study {self.name!r}: groups name no row or group {bad}")
+        if bad := sorted(set(self.takes) - set(OPTIONS)):
+            raise SkinnyInputError(f"study {self.name!r}: takes {bad}; options are "
+                                   f"{', '.join(OPTIONS)}")
+        if not self.metrics and self.run_batch is None \
+                and any(r.run_batch is None for r in self.rows):
+            raise SkinnyInputError(f"study {self.name!r} declares no metrics and no run_batch")
+
+    def row(self, row_id: str) -> Row:
+        """The row ``row_id`` (a SkinnyInputError naming the ids if there is none)."""
+        for r in self.rows:
+            if r.id == row_id:
+                return r
+        raise SkinnyInputError(f"study {self.name!r} has no row {row_id!r}; rows: "
+                               f"{', '.join(r.id for r in self.rows)}")
+
+    def config(self, row_id: str, **options: Any) -> TrainConfig:
+        """The training configuration of row ``row_id`` (full, not quick), with the
+        options of ``skinny experiment`` (``movement``, ``asf``, ``dof``, ``signals``)."""
+        from skinny_mj.engine.plan import plan
+
+        return plan(self, **options).config(row_id)
+
+    # -- the module contract of skinny_mj.engine.experiment, so every caller takes a Study too --
+    def build(self, quick: bool = False, movement: str | None = None, asf: Any = None,
+              dof: int | None = None, signals: str | None = None) -> Any:
+        """The :class:`~skinny_mj.engine.experiment.Experiment` of ``skinny experiment NAME``."""
+        from skinny_mj.engine.plan import plan
+
+        return plan(self, quick=quick, movement=movement, asf=asf, dof=dof,
+                    signals=signals).experiment()
+
+    def train_configs(self, config: Any, row: Any) -> dict[str, TrainConfig]:
+        """The training configurations one run of ``row`` trains (for the memory check):
+        ``config`` is the built Experiment's config (its :class:`Plan`)."""
+        return config.trainings(row.row_id)

@@ -1,0 +1,258 @@
+"""Where Skinny's MJCF files live and how to load them (velocity servo or torque twin).
+
+The XML in ``models/skinny/`` is the single body description; it ships inside the wheel
+as the package data ``skinny_mj.models``. The torque twin is
+made from the same XML with :class:`mujoco.MjSpec` (:func:`load_spec`): the velocity
+actuators become ``<motor>`` actuators of the same names, and the arm becomes a physical
+one: gravity acts (no gravity compensation), segment masses, centres of mass and
+inertias come from de Leva's (1996) anthropometric table scaled to Skinny's segment
+lengths (:func:`segment_inertias`), torques are limited to conservative human strength
+(:data:`TORQUE_GEAR_NM`), and the physics step and integrator are the ones
+``benchmarks/torque_step_check.py`` measured. The numbers and their sources are in
+``models/skinny/README.md``.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from importlib.resources import files
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
+from skinny_mj.plant import body
+
+MODELS_ENV_VAR = "SKINNY_MJ_MODELS"
+ACTUATIONS = ("velocity", "torque")
+# -- the torque twin: a physical arm (sources and measurements: models/skinny/README.md)
+# Peak joint torque (N m): the motor's gear (ctrl in [-1, 1] times gear) and the joint's
+# actuatorfrcrange. Conservative adult-male strength: set by the weaker direction of each
+# pair (abduction < adduction, flexion < extension, external < internal rotation, elbow
+# extension < flexion) and below its peak mean, e.g. shoulder flexion 89.9 N m isometric
+# at 0 deg, 68.6 at 45 deg; elbow 0.67 (extension) / 0.78 (flexion) N m per kg body mass
+# concentric, 47 / 55 N m at 70 kg. Sources per DOF: models/skinny/README.md.
+TORQUE_GEAR_NM = {
+    "shoulder_abduction": 50.0,
+    "shoulder_flexion": 60.0,
+    "shoulder_rotation": 30.0,
+    "elbow_flexion": 45.0,
+}
+# Physics step and integrator, chosen by benchmarks/torque_step_check.py (its table is
+# in the model card): the cheapest candidate within 1e-4 rad of a 0.1 ms RK4 reference
+# over a 2 s free swing, 1e-3 rad over 1 s of random torques, 1e-3 relative energy drift
+# over 5 s undamped, and stable under 2 s of full random torques, on both arms. RK4 at
+# 5 ms (4 substeps per 20 ms control step; swing error 6e-8 rad) is; Euler and
+# implicitfast are first order (5e-3 rad at 2 ms, and the undamped 3D arm's energy
+# grows 60 % at 2 ms, diverges at 4 ms), RK4 at 10 ms misses the random-torque bound
+# on the 3D arm (4e-3 rad) and RK4 at 20 ms diverges there.
+TORQUE_TIMESTEP_S = 0.005
+TORQUE_INTEGRATOR = mujoco.mjtIntegrator.mjINT_RK4
+# Passive joint viscosity (N m s/rad), the shared default of skinny_defaults.xml kept:
+# between passive tissue damping in arm models (0.05) and the viscosity of intentional
+# elbow movement (~8 N m s/rad); a free-swinging forearm's damping ratio is ~0.56. The
+# controllers add the active impedance.
+TORQUE_JOINT_DAMPING = 0.5
+# Rotor inertia (kg m^2): a human joint has none; the 2D arm and the elbows need none.
+TORQUE_ARMATURE = 0.0
+# ... except the 3D arm's three shoulder hinges (benchmarks/torque_stability_check.py):
+# flexion pressed past its soft limit toward 90 deg aligns the abduction and rotation
+# axes, M turns singular and RK4 diverges (MuJoCo's BADQACC/BADQVEL) under saturated
+# torques at any step (1 ms too); 5e-4 still fails 12-18 of 20 bang-bang runs, 1e-3 none of 40.
+# The value is the reflected inertia of a humanoid-arm motor at these torques: Unitree
+# G1's 5020 (25 N m), rotor J (0.139, 0.017, 0.169)e-4 kg m^2 through a 16:1 two-stage
+# planetary gear, J1 (N1 N2)^2 + J2 N2^2 + J3 = 0.00361 kg m^2.
+TORQUE_ARMATURE_3D_SHOULDER = 0.0036
+# Joint limits of the torque twin (solref: time constant s, damping ratio): MuJoCo's
+# default 20 ms, as the velocity servos. A stiffer 10 ms (two physics steps, MuJoCo's
+# bound) halves the overshoot under full bang-bang torques (0.93 -> 0.51 rad in 2D,
+# 1.13 -> 0.52 rad in 3D; benchmarks/torque_stability_check.py --limits) but does not
+# hold the limits (the arm reaches 100-150 rad/s), and it made FEL learn the 3D YMCA
+# worse (position NRMSE 0.0107 / 0.0073 -> 0.0292 / 0.0155, seeds 0 and 1: the movement
+# passes 0.06-0.14 rad from the limits, and a learning arm touches them): not adopted.
+TORQUE_LIMIT_SOLREF = (0.02, 1.0)
+BODY_MASS_KG = 70.0  # the stated body whose arm the twin is (ICRP reference man)
+# de Leva (1996, J Biomech 29:1223, Table 4), males: mass / body mass, CoM distance from
+# the proximal end / segment length, radii of gyration / length about the sagittal
+# (antero-posterior, y), transverse (medio-lateral, x) and longitudinal (z) axes.
+# Segments: shoulder-elbow joint centres, elbow-wrist joint centres, wrist joint centre
+# to the tip of the middle finger (Skinny's hand reaches the fingertip).
+DE_LEVA_MALE = {
+    "upper_arm": (0.0271, 0.5772, 0.285, 0.269, 0.158),
+    "forearm": (0.0162, 0.4574, 0.276, 0.265, 0.121),
+    "hand": (0.0061, 0.3624, 0.288, 0.235, 0.184),
+}
+SEGMENT_LENGTH_M = {"upper_arm": body.UPPER_ARM_LENGTH_M, "forearm": body.FOREARM_LENGTH_M,
+                    "hand": body.HAND_LENGTH_M}
+_VARIANT = {4: "2d", 8: "3d"}
+
+
+def models_dir() -> Path:
+    """The folder holding Skinny's XML: ``$SKINNY_MJ_MODELS``, else the installed package
+    data ``skinny_mj.models`` (the repo's top-level ``models/``, mapped in pyproject):
+    ``<repo>/models/skinny`` in an editable install, inside site-packages otherwise."""
+    override = os.environ.get(MODELS_ENV_VAR)
+    if override:
+        return Path(override)
+    try:
+        return Path(str(files("skinny_mj.models").joinpath("skinny")))
+    except ModuleNotFoundError:  # an install from before the models were package data
+        raise SkinnyEnvironmentError(f"skinny_mj.models is not installed: reinstall the "
+                                     f"package (pip install -e .) or set {MODELS_ENV_VAR}"
+                                     ) from None
+
+
+def _check(dof: int, actuation: str = "velocity") -> None:
+    if dof not in _VARIANT:
+        raise SkinnyInputError(f"dof must be 4 (2D) or 8 (3D), got {dof!r}")
+    if actuation not in ACTUATIONS:
+        raise SkinnyInputError(f"actuation must be one of {ACTUATIONS}, got {actuation!r}")
+
+
+def xml_path(dof: int, scene: bool = True) -> Path:
+    """Path of ``scene_{2d,3d}.xml`` (floor, light, camera) or, with ``scene=False``,
+    of the robot alone (``skinny_{2d,3d}.xml``)."""
+    _check(dof)
+    name = f"{'scene' if scene else 'skinny'}_{_VARIANT[dof]}.xml"
+    path = models_dir() / name
+    if not path.is_file():
+        # a missing model is the installation's fault (or $SKINNY_MJ_MODELS'), not the
+        # user's input: an environment error, exit 1
+        raise SkinnyEnvironmentError(
+            f"{path}: model file not found (set {MODELS_ENV_VAR} to the models/skinny folder)")
+    return path
+
+
+def load_spec(dof: int, actuation: str = "velocity", scene: bool = True) -> mujoco.MjSpec:
+    """The scene (``scene=False``: the robot alone) as an editable
+    :class:`mujoco.MjSpec`; ``actuation="torque"`` makes the torque twin: every
+    velocity actuator becomes a motor of the same name and joint, gear = peak torque
+    (:data:`TORQUE_GEAR_NM`, N m; ctrlrange and forcerange [-1, 1], the joint's
+    actuatorfrcrange +-gear), gravity compensation off, the arm bodies' inertials from
+    :func:`segment_inertias`, joint damping :data:`TORQUE_JOINT_DAMPING` and armature
+    :data:`TORQUE_ARMATURE` (the 3D shoulder hinges :data:`TORQUE_ARMATURE_3D_SHOULDER`),
+    :data:`TORQUE_INTEGRATOR` at :data:`TORQUE_TIMESTEP_S`. The
+    joints keep their limits (soft MuJoCo constraints). The velocity servo is the XML
+    as it is."""
+    _check(dof, actuation)
+    spec = mujoco.MjSpec.from_file(str(xml_path(dof, scene)))
+    if actuation == "torque":
+        _make_physical(spec, dof)
+    return spec
+
+
+@dataclass(frozen=True)
+class SegmentInertia:
+    """One rigid segment: mass (kg), CoM distance from its proximal joint along the
+    segment (m), and principal moments of inertia about the CoM (3,) kg m^2 about the
+    body's x (medio-lateral), y (antero-posterior) and z (long) axes."""
+
+    mass_kg: float
+    com_m: float
+    inertia_kg_m2: tuple[float, float, float]
+
+
+def segment_inertias(body_mass_kg: float = BODY_MASS_KG) -> dict[str, SegmentInertia]:
+    """de Leva's male table (:data:`DE_LEVA_MALE`) scaled to Skinny's segment lengths:
+    masses are fractions of ``body_mass_kg``, CoM positions and radii of gyration
+    fractions of each segment's length. Keys "upper_arm", "forearm", "hand"."""
+    out = {}
+    for name, (m_frac, com_frac, r_ap, r_ml, r_long) in DE_LEVA_MALE.items():
+        length, mass = SEGMENT_LENGTH_M[name], m_frac * body_mass_kg
+        inertia = tuple(mass * (r * length) ** 2 for r in (r_ml, r_ap, r_long))
+        out[name] = SegmentInertia(mass, com_frac * length, inertia)
+    return out
+
+
+def forearm_hand_inertia(body_mass_kg: float = BODY_MASS_KG) -> SegmentInertia:
+    """Forearm and hand as the one rigid body they are (no wrist joint): total mass, CoM
+    distance from the elbow, and inertia about the combined CoM (parallel-axis theorem:
+    each part's own inertia plus m d^2 about the two axes across the segment)."""
+    seg = segment_inertias(body_mass_kg)
+    fore, hand = seg["forearm"], seg["hand"]
+    d_fore, d_hand = fore.com_m, body.FOREARM_LENGTH_M + hand.com_m  # from the elbow
+    mass = fore.mass_kg + hand.mass_kg
+    com = (fore.mass_kg * d_fore + hand.mass_kg * d_hand) / mass
+    shift = fore.mass_kg * (d_fore - com) ** 2 + hand.mass_kg * (d_hand - com) ** 2
+    own = np.add(fore.inertia_kg_m2, hand.inertia_kg_m2)
+    return SegmentInertia(mass, com, (float(own[0] + shift), float(own[1] + shift),
+                                      float(own[2])))
+
+
+def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
+    """Edit Skinny's spec into the torque twin (see the module docstring)."""
+    spec.option.timestep = TORQUE_TIMESTEP_S
+    spec.option.integrator = TORQUE_INTEGRATOR
+    # No solver warm start: warm-started, the constraint solver's iterations at a joint
+    # limit depend on every copy of a lockstep batch (1e-13 rad apart after 6 s); cold,
+    # each copy is bit for bit one robot alone (tests/test_dynamic.py)
+    spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_WARMSTART)
+    for side in body.SIDES:
+        for name, seg in segment_inertias().items():
+            b = spec.body(f"{side}_{name}")
+            b.gravcomp = 0.0
+            b.explicitinertial = True  # these numbers, not the capsules' volumes
+            b.mass = seg.mass_kg
+            b.ipos = [0.0, 0.0, -seg.com_m]  # every segment points down its -z at q = 0
+            b.iquat = [1.0, 0.0, 0.0, 0.0]
+            b.inertia = list(seg.inertia_kg_m2)
+    for name in body.dof_names(dof):
+        limit = TORQUE_GEAR_NM[name.split("_", 1)[1]]
+        joint = spec.joint(name)
+        joint.damping[0] = TORQUE_JOINT_DAMPING
+        joint.armature = TORQUE_ARMATURE_3D_SHOULDER if dof == 8 and "shoulder" in name \
+            else TORQUE_ARMATURE
+        joint.solref_limit = list(TORQUE_LIMIT_SOLREF)
+        joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        joint.actfrcrange = [-limit, limit]
+        act = spec.actuator(name)
+        act.set_to_motor()
+        act.gear[0] = limit
+        act.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        act.ctrlrange = [-1.0, 1.0]
+        act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE  # actuator units: gain 1
+        act.forcerange = [-1.0, 1.0]
+
+
+def load_model(dof: int, actuation: str = "velocity") -> mujoco.MjModel:
+    """Compile Skinny's scene: ``dof`` 4 (2D) or 8 (3D), velocity servo or torque twin."""
+    _check(dof, actuation)
+    if actuation == "velocity":
+        return mujoco.MjModel.from_xml_path(str(xml_path(dof)))
+    return load_spec(dof, actuation).compile()
+
+
+BATCH_PREFIX = "r{}/"  # names of copy r in :func:`load_batch_model`
+
+
+def load_batch_model(dof: int, copies: int, actuation: str = "velocity",
+                     edit: Callable[[mujoco.MjSpec], None] | None = None) -> mujoco.MjModel:
+    """``copies`` independent Skinnies (no scene) in one model, for stepping many runs
+    with one ``mj_step``; ``edit`` (optional) changes each copy's spec before it is
+    attached (a variant of the body, e.g. :func:`skinny_mj.plant.perturb.lengthen_forearm`).
+
+    Copy r's elements are named ``r{r}/<name>`` and laid out as contiguous blocks in
+    copy order (bodies after the world body, joints, dofs, qpos, sites, actuators), so
+    ``data.qpos.reshape(copies, -1)`` etc. are per-copy views. Skinny's geoms never
+    collide and the copies share nothing, so each copy computes bit for bit what a
+    one-robot model computes (``tests/test_plant.py`` checks it).
+    """
+    _check(dof, actuation)
+    if copies < 1:
+        raise SkinnyInputError(f"copies must be >= 1, got {copies}")
+    parent = mujoco.MjSpec()
+    one = load_spec(dof, actuation, scene=False)
+    for name in dir(one.option):  # the robot's physics options, field by field
+        if not name.startswith("_"):
+            setattr(parent.option, name, getattr(one.option, name))
+    parent.compiler.degree = one.compiler.degree
+    parent.compiler.autolimits = one.compiler.autolimits
+    for r in range(copies):
+        robot = load_spec(dof, actuation, scene=False)
+        if edit is not None:
+            edit(robot)
+        parent.attach(robot, prefix=BATCH_PREFIX.format(r), frame=parent.worldbody.add_frame())
+    return parent.compile()

@@ -1,0 +1,105 @@
+"""Offscreen pictures of Skinny from the ``front`` camera (used by ``skinny render``).
+
+Rendering needs an OpenGL backend chosen before mujoco is imported: this module sets
+``MUJOCO_GL=egl`` unless the caller chose one. Run it in a fresh process
+(``python -m skinny_mj.plant.render --dof 4 --out skinny_2d.png``) if mujoco may already be
+imported with ``MUJOCO_GL=disabled`` (as in the test suite).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
+from skinny_mj.io import atomic_path
+
+# A pose that shows every DOF: right arm raised and bent, left arm half raised.
+_SHOW_POSE = {
+    4: [2.3, 0.9, 1.2, 0.4],
+    8: [2.3, 0.3, 0.4, 0.9, 1.2, -0.3, -0.4, 0.4],
+}
+
+
+def _no_backend(exc: Exception) -> SkinnyEnvironmentError:
+    return SkinnyEnvironmentError(
+        f"no OpenGL rendering backend (MUJOCO_GL={os.environ.get('MUJOCO_GL')!r}: "
+        f"{type(exc).__name__}: {exc}); install EGL or OSMesa (Debian: libegl1, "
+        "libosmesa6) and set MUJOCO_GL=egl or osmesa")
+
+
+def render_png(
+    dof: int,
+    path: str | Path,
+    width: int = 640,
+    height: int = 480,
+    angles: np.ndarray | None = None,
+) -> Path:
+    """Render Skinny (``dof`` 4 or 8) from the ``front`` camera to a PNG file.
+
+    Parameters
+    ----------
+    dof : 4 (2D) or 8 (3D).
+    path : output .png (written atomically).
+    width, height : image size in pixels, at most 640 x 480 (the offscreen buffer).
+    angles : (dof,) joint angles, rad; default a pose that shows every DOF.
+
+    Returns
+    -------
+    The path written.
+    """
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    import matplotlib.image
+
+    try:  # the GL backend is loaded at import: osmesa without libOSMesa fails here
+        with warnings.catch_warnings():  # glfw warns without a display; the error says so
+            warnings.simplefilter("ignore")
+            import mujoco
+    except Exception as exc:
+        raise _no_backend(exc) from None
+
+    from skinny_mj.plant.model import load_model
+    from skinny_mj.plant.physics import Layout
+
+    if not (0 < width <= 640 and 0 < height <= 480):
+        raise SkinnyInputError(f"image size must be within 640 x 480, got {width} x {height}")
+    model = load_model(dof)
+    data = mujoco.MjData(model)
+    q = np.asarray(_SHOW_POSE[dof] if angles is None else angles, dtype=float)
+    if q.shape != (dof,) or not np.all(np.isfinite(q)):
+        raise SkinnyInputError(f"angles must be {dof} finite numbers (rad), got {q.shape}")
+    Layout(model).set_joint_angles(data, q)
+    mujoco.mj_forward(model, data)
+    try:
+        with warnings.catch_warnings():  # glfw warns per failed call; the error says it all
+            warnings.simplefilter("ignore")
+            renderer = mujoco.Renderer(model, height=height, width=width)
+    except Exception as exc:  # each backend fails its own way (FatalError, AttributeError..)
+        raise _no_backend(exc) from None
+    try:
+        renderer.update_scene(data, camera="front")
+        pixels = renderer.render()
+    finally:
+        renderer.close()
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        matplotlib.image.imsave(tmp, pixels, format="png")
+    return path
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description="Render Skinny from the front camera.")
+    parser.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    parser.add_argument("--out", type=Path, required=True, help="output .png")
+    parser.add_argument("--width", type=int, default=640)
+    parser.add_argument("--height", type=int, default=480)
+    args = parser.parse_args(argv)
+    print(render_png(args.dof, args.out, args.width, args.height))
+
+
+if __name__ == "__main__":
+    main()

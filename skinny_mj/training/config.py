@@ -1,0 +1,513 @@
+"""The one run configuration every experiment and command configures.
+
+:class:`TrainConfig` says everything one training run of an ESN inverse model needs, as
+a composition of the parts' own configurations:
+
+- ``plant`` (:class:`Plant`): the body (``dof`` 4 = 2D, 8 = 3D), its ``signals`` (joint
+  angles or Cartesian segment vectors), ``sensor_noise``, the sensory ``delay`` of the
+  internal models' sensed input (paper A), paper B's forced ``leading_arm`` and the
+  simulation ``backend`` (the lockstep MuJoCo batch, or the dm_control env);
+- ``actuation``: :class:`Velocity` (the servo) or :class:`Torque` (the torque twin, with
+  its feedback teacher, poles, gravity feed-forward, velocity inputs and the test
+  plant's payload and mass scale: settings that exist only on the torque body);
+- ``movement`` (:class:`Movement`): trajectory, speed, repetitions, full scale;
+- ``esn``: :class:`controllers.reservoir.ESNConfig` as it is (its sizes come from the
+  plant; ``noise_level`` None: the learning rule's default);
+- ``rule``, the learning rule: :class:`Original` or :class:`New` (feedback-error
+  learning, with its schedule), :class:`TrueTarget`, or :class:`NoLearning` (the
+  feedback controller alone);
+- ``forward``: :class:`NoForward` or a :class:`Forward` model (paper A);
+- ``test`` (:class:`TestSetup`): the feedback gain, washout and reservoir noise at test;
+- ``inputs``: what the inverse model sees (desired + sensed, or sensed only, paper B).
+
+Every setting has a dotted key (``esn.spectral_radius``, ``rule.beta``); a type is chosen
+by its name (``rule=original``, ``actuation=torque``). :meth:`TrainConfig.override` takes
+such keys (from the command line, a config file or a study's row);
+:meth:`TrainConfig.to_dict` writes them flat, and :meth:`TrainConfig.from_dict` reads
+them back, and also reads the flat files of earlier versions (``"method": "new",
+"reservoir": 200, ...``, see :data:`LEGACY_KEYS`). The defaults are paper E's
+experiment 5.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import dataclasses
+import math
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from controllers.reservoir import ESNConfig
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant.body import ACTUATIONS, SIGNALS, check_actuation, check_dof, check_signals
+from skinny_mj.training import fits, overrides
+from skinny_mj.training.legacy import LEGACY_KEYS, from_legacy, is_legacy
+
+__all__ = ["TrainConfig", "Plant", "Velocity", "Torque", "Movement", "Original", "New",
+           "TrueTarget", "NoLearning", "NoForward", "Forward", "TestSetup", "relative_cost",
+           "check_dof", "check_signals", "check_actuation", "METHODS", "SIGNALS",
+           "ACTUATIONS", "DEFAULT_NOISE", "PAPER_CYCLES_FOR_BETA", "ARM_LAWS", "LEGACY_KEYS"]
+
+METHODS = ("original", "new", "true-target", "none")
+#: Laws of controllers.torque_arm (inertia-scaled pole placement), by feedback name:
+#: three controllers alone, and FEL's teacher "inertia-pd"
+ARM_LAWS = {"ct": "ct", "id-pd": "id-pd", "pd-gravity": "pd-g", "inertia-pd": "fel"}
+FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS)
+INPUTS = ("desired+sensed", "sensed")
+FORWARD_INPUTS = ("sensed", "chained")
+FORWARD_SHARING = ("none", "predictions", "commands")
+GAIN_SCHEDULES = ("linear", "multiplicative", "fixed")
+ARMS = ("right", "left")
+RETARGETS = ("angles", "positions")
+BACKENDS = ("batch", "env")
+#: Learning cycles per epoch the paper derived from its Figure 3 (paper E, Table 1).
+PAPER_CYCLES_FOR_BETA = {0.3: 2, 0.1: 3, 0.05: 6}
+#: Reservoir noise the paper chose per method (paper E, Fig. 5).
+DEFAULT_NOISE = {"original": 0.03, "new": 0.2, "true-target": 0.2, "none": 0.0}
+
+
+def _at_least(value: float, low: float) -> bool:
+    return isinstance(value, int | float) and math.isfinite(value) and value >= low
+
+
+def _check(checks: list[tuple[bool, str]]) -> None:
+    for ok, message in checks:
+        if not ok:
+            raise SkinnyInputError(message)
+
+
+@dataclass(frozen=True)
+class Plant:
+    """The body and its sensors."""
+
+    dof: int = 4
+    signals: str = "cartesian"
+    sensor_noise: float = 0.01
+    delay: int = 0  # steps by which the internal models' sensed input lags (paper A)
+    leading_arm: str | None = None  # paper B: this arm is forced, the ESN drives the other
+    backend: str = "batch"  # "batch" (MjData stepped directly) or "env" (dm_control)
+
+    def __post_init__(self) -> None:
+        check_dof(self.dof)
+        check_signals(self.signals)
+        _check([
+            (_at_least(self.sensor_noise, 0),
+             f"sensor noise must be >= 0, got {self.sensor_noise}"),
+            (isinstance(self.delay, int) and self.delay >= 0,
+             f"delay must be >= 0 steps, got {self.delay}"),
+            (self.leading_arm is None or self.leading_arm in ARMS,
+             f"leading arm must be none or one of {ARMS}, got {self.leading_arm!r}"),
+            (self.backend in BACKENDS, f"backend must be one of {BACKENDS}, got {self.backend!r}"),
+        ])
+
+
+@dataclass(frozen=True)
+class Velocity:
+    """The velocity servo (the thesis's kinematic plant): no settings of its own."""
+
+    kind: str = "velocity"
+
+
+@dataclass(frozen=True)
+class Torque:
+    """The torque twin: mass, gravity, torque limits, and how it is taught and tested."""
+
+    kind: str = "torque"
+    feedback: str = "pd"  # FEL's teacher; "computed-torque", "ct", ...: a controller alone
+    omega: float | None = None  # poles of ARM_LAWS, rad/s (None: the law's default)
+    zeta: float = 1.0  # ARM_LAWS' damping ratio
+    gravity_feedforward: bool = False  # add qfrc_bias / limit to the command (not learned)
+    velocity_inputs: bool = True  # [qd_d(t+1); qd(t)] / v_max as extra inputs
+    test_payload_kg: float = 0.0  # point mass at the right hand's CoM in the test plant
+    test_mass_scale: float = 1.0  # every arm link's mass and inertia x this at test
+
+    def __post_init__(self) -> None:
+        _check([
+            (self.feedback in FEEDBACKS, f"feedback must be one of {FEEDBACKS}, "
+                                         f"got {self.feedback!r}"),
+            (self.omega is None or _at_least(self.omega, 0),
+             f"feedback omega must be >= 0 rad/s, got {self.omega}"),
+            (_at_least(self.zeta, 0), f"feedback zeta must be >= 0, got {self.zeta}"),
+            (_at_least(self.test_payload_kg, 0),
+             f"test payload must be >= 0 kg, got {self.test_payload_kg}"),
+            (_at_least(self.test_mass_scale, 0) and self.test_mass_scale > 0,
+             f"test mass scale must be > 0, got {self.test_mass_scale}"),
+        ])
+
+
+@dataclass(frozen=True)
+class Movement:
+    """What is imitated, how fast and how often."""
+
+    trajectory: str = "ymca"
+    asf: str | None = None  # skeleton of an .amc trajectory
+    speed: float = 1.0
+    reps: int = 1
+    max_speed_from: str | None = None  # movement whose speeds set full scale (None: this)
+    full_scale_factor: float = 2.0  # full scale = this x the fastest speed per DOF
+    retarget: str = "angles"  # motion capture: by joint angles, or "positions"
+
+    def __post_init__(self) -> None:
+        _check([
+            (_at_least(self.speed, 0) and 0 < self.speed <= 10,
+             f"speed must be in (0, 10], got {self.speed}"),
+            (isinstance(self.reps, int) and self.reps >= 1, f"reps must be >= 1, got {self.reps}"),
+            (_at_least(self.full_scale_factor, 0) and self.full_scale_factor > 0,
+             f"full scale factor must be > 0, got {self.full_scale_factor}"),
+            (self.retarget in RETARGETS,
+             f"retarget must be one of {RETARGETS}, got {self.retarget!r}"),
+        ])
+
+
+@dataclass(frozen=True)
+class _FEL:
+    """Feedback-error learning's schedule, shared by its two methods."""
+
+    epochs: int = 10
+    gain_schedule: str = "linear"  # K per epoch: linear 1 -> 0, multiplicative, fixed
+    gain_factor: float = 0.9  # multiplicative: K = factor ** epoch (paper C)
+    gain_value: float = 0.65  # fixed: K (paper A)
+    u_error_gain: float = 1.0  # scalar on the feedback controller's u_error (unstated)
+    #: the readout fits: each cycle alone ("cycle"), lambda chosen per fit on a validation
+    #: cycle ("ridge-select"), or remembering earlier cycles ("forgetting", "rls")
+    fit: str = "cycle"
+    forgetting: float = 0.8  # "forgetting"/"rls": old cycles' weight per learning cycle
+    #: learning cycles per epoch; None: 1 for the original method, paper E's Table 1 for
+    #: the new one
+    cycles: int | None = None
+
+    def __post_init__(self) -> None:
+        _check([
+            (isinstance(self.epochs, int) and self.epochs >= 1,
+             f"epochs must be >= 1, got {self.epochs}"),
+            (self.gain_schedule in GAIN_SCHEDULES,
+             f"gain schedule must be one of {GAIN_SCHEDULES}, got {self.gain_schedule!r}"),
+            (_at_least(self.gain_factor, 0) and 0 < self.gain_factor <= 1,
+             f"gain factor must be in (0, 1], got {self.gain_factor}"),
+            (_at_least(self.gain_value, 0), f"feedback gain must be >= 0, got {self.gain_value}"),
+            (_at_least(self.u_error_gain, 0) and self.u_error_gain > 0,
+             f"u_error gain must be > 0, got {self.u_error_gain}"),
+            (self.fit in fits.FITS, f"fit must be one of {tuple(fits.FITS)}, got {self.fit!r}"),
+            (_at_least(self.forgetting, 0) and self.forgetting <= 1,
+             f"forgetting must be in [0, 1], got {self.forgetting}"),
+            (self.cycles is None or (isinstance(self.cycles, int) and self.cycles >= 1),
+             f"cycles must be >= 1, got {self.cycles}"),
+        ])
+
+
+@dataclass(frozen=True)
+class Original(_FEL):
+    """FEL's original method: the readout fitted to y_ESN + u_error (one learning cycle
+    an epoch unless ``cycles`` says more, as paper A)."""
+
+    kind: str = "original"
+    beta: ClassVar[float] = 1.0
+
+
+@dataclass(frozen=True)
+class New(_FEL):
+    """FEL's new method (paper E): the target blended, β (y_ESN + u_error) + (1 − β) y_ESN,
+    over ``cycles`` learning cycles an epoch (None: paper E's Table 1 for its β)."""
+
+    kind: str = "new"
+    beta: float = 0.1
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check([(_at_least(self.beta, 0) and 0 < self.beta <= 1,
+                 f"beta must be in (0, 1], got {self.beta}")])
+
+
+@dataclass(frozen=True)
+class TrueTarget:
+    """The true-target architecture (paper D): teacher-forced fits to the analytic
+    commands, ``cycles`` of them blended with ``beta`` (β = 1: one fit)."""
+
+    kind: str = "true-target"
+    beta: float = 0.1
+    cycles: int = 50
+    input_noise: float = 0.0  # Gaussian SD on the teacher-forced inputs
+
+    def __post_init__(self) -> None:
+        _check([
+            (_at_least(self.beta, 0) and 0 < self.beta <= 1,
+             f"beta must be in (0, 1], got {self.beta}"),
+            (isinstance(self.cycles, int) and self.cycles >= 1,
+             f"true-target cycles must be >= 1, got {self.cycles}"),
+            (_at_least(self.input_noise, 0), f"input noise must be >= 0, got {self.input_noise}"),
+        ])
+
+
+@dataclass(frozen=True)
+class NoLearning:
+    """Nothing learned: the test is the feedback controller alone (test.gain > 0)."""
+
+    kind: str = "none"
+
+
+@dataclass(frozen=True)
+class NoForward:
+    """No forward model."""
+
+    kind: str = "none"
+
+
+@dataclass(frozen=True)
+class Forward:
+    """A forward model beside the inverse one (paper A): ``parallel``, ``serial`` or
+    ``hybrid``; its position input the (delayed) sensed one or its own ``chained``
+    prediction; paper B's per-arm ``sharing`` (None: one model for the body)."""
+
+    KINDS: ClassVar[tuple[str, ...]] = ("parallel", "serial", "hybrid")
+    kind: str = "parallel"
+    reservoir: int = 100
+    input: str = "sensed"
+    sharing: str | None = None
+
+    def __post_init__(self) -> None:
+        _check([
+            (self.kind in self.KINDS, f"forward must be one of {self.KINDS}, got {self.kind!r}"),
+            (isinstance(self.reservoir, int) and self.reservoir >= 1,
+             f"forward reservoir must be >= 1, got {self.reservoir}"),
+            (self.input in FORWARD_INPUTS,
+             f"forward input must be one of {FORWARD_INPUTS}, got {self.input!r}"),
+            (self.sharing is None or self.sharing in FORWARD_SHARING,
+             f"forward sharing must be none or one of {FORWARD_SHARING}, got {self.sharing!r}"),
+        ])
+
+
+@dataclass(frozen=True)
+class TestSetup:
+    """The scored test after training."""
+
+    __test__: ClassVar[bool] = False  # not a pytest test class
+    gain: float = 0.0  # K at test: 0 = the ESN alone, > 0 = the feedback left on
+    washout_cycles: int = 0  # unscored cycles before the scored one (papers B, C)
+    noise: bool = False  # reservoir noise during the test (the thesis's toolbox: on)
+
+    def __post_init__(self) -> None:
+        _check([
+            (_at_least(self.gain, 0), f"test gain must be >= 0, got {self.gain}"),
+            (isinstance(self.washout_cycles, int) and self.washout_cycles >= 0,
+             f"test washout cycles must be >= 0, got {self.washout_cycles}"),
+        ])
+
+
+_CROSS_CHECKS_OFF: contextvars.ContextVar[bool] = contextvars.ContextVar(
+    "cross_checks_off", default=False)
+
+
+@contextlib.contextmanager
+def _unchecked() -> Iterator[None]:
+    """TrainConfig's cross-field checks off inside (see :meth:`TrainConfig.override`)."""
+    token = _CROSS_CHECKS_OFF.set(True)
+    try:
+        yield
+    finally:
+        _CROSS_CHECKS_OFF.reset(token)
+
+
+#: The ESN of a training run: sizes from the plant, noise from the rule (paper E, exp. 5).
+DEFAULT_ESN = ESNConfig(n_reservoir=200, spectral_radius=0.5, noise_level=None)
+Actuation = Velocity | Torque
+Rule = Original | New | TrueTarget | NoLearning
+ForwardModel = NoForward | Forward
+FEL_RULES = (Original, New)
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """One training run, composed of its parts' configurations (see the module
+    docstring). Defaults: paper E experiment 5 (2D, Cartesian, N = 200, spectral radius
+    0.5, reservoir noise 0.2, β = 0.1 with 3 learning cycles per epoch, 10 epochs, K 1 → 0
+    linearly, sensor noise 0.01)."""
+
+    plant: Plant = field(default_factory=Plant)
+    actuation: Actuation = field(default_factory=Velocity)
+    movement: Movement = field(default_factory=Movement)
+    esn: ESNConfig = DEFAULT_ESN
+    rule: Rule = field(default_factory=New)
+    forward: ForwardModel = field(default_factory=NoForward)
+    test: TestSetup = field(default_factory=TestSetup)
+    inputs: str = "desired+sensed"
+
+    def __post_init__(self) -> None:
+        if _CROSS_CHECKS_OFF.get():
+            return
+        fel, torque, fwd = isinstance(self.rule, FEL_RULES), self.torque, self.forward
+        sharing = getattr(fwd, "sharing", None)
+        _check(
+            [
+                (
+                    self.esn.n_inputs is None and self.esn.n_outputs is None,
+                    "esn.n_inputs and esn.n_outputs are set by the plant and the inputs",
+                ),
+                (self.inputs in INPUTS, f"inputs must be one of {INPUTS}, got {self.inputs!r}"),
+                (
+                    not fel or self.rule.fit != "ridge-select" or self.esn.readout == "ridge",
+                    "rule.fit=ridge-select chooses the ridge lambda of FEL fits on a validation "
+                    "cycle: it needs esn.readout=ridge",
+                ),  # (its body: the fit's own, skinny_mj.training.fits)
+                (
+                    not fel or self.actuation.kind in fits.FITS[self.rule.fit].bodies,
+                    f"rule.fit={getattr(self.rule, 'fit', '')} runs on actuation="
+                    f"{' or '.join(fits.FITS[self.rule.fit].bodies) if fel else ''}",
+                ),
+                (
+                    sharing is None
+                    or (
+                        self.plant.leading_arm is not None
+                        and fwd.kind == "parallel"
+                        and self.plant.signals == "joint"
+                    ),
+                    "forward.sharing needs a leading arm, forward=parallel and joint signals",
+                ),
+                (
+                    not isinstance(self.rule, TrueTarget)
+                    or (
+                        isinstance(fwd, NoForward)
+                        and self.plant.delay == 0
+                        and self.plant.leading_arm is None
+                    ),
+                    "the true-target architecture takes no forward model, delay or leading arm",
+                ),
+                (
+                    not isinstance(self.rule, NoLearning) or self.test.gain > 0,
+                    "rule=none tests the feedback controller alone: it needs test.gain > 0",
+                ),
+                (
+                    torque is None
+                    or torque.feedback in ("pd", "inertia-pd")
+                    or isinstance(self.rule, NoLearning),
+                    f"the {getattr(torque, 'feedback', '')} controller runs alone (rule=none); "
+                    "FEL's teacher is 'pd' or 'inertia-pd'",
+                ),
+                (
+                    torque is None
+                    or torque.feedback != "inertia-pd"
+                    or not isinstance(self.rule, TrueTarget),
+                    "the 'inertia-pd' teacher goes with feedback-error learning or runs alone",
+                ),
+                (
+                    torque is None or not torque.gravity_feedforward or fel,
+                    "gravity feed-forward goes with feedback-error learning (original or new)",
+                ),
+                (
+                    torque is None
+                    or (
+                        isinstance(fwd, NoForward)
+                        and self.plant.delay == 0
+                        and self.plant.leading_arm is None
+                        and self.inputs == "desired+sensed"
+                    ),
+                    "the torque body runs without a forward model, delay, leading arm or "
+                    "sensed-only inputs",
+                ),
+                (
+                    self.plant.backend != "env"
+                    or (self.plant.leading_arm is None and isinstance(fwd, NoForward)),
+                    "the dm_control plant (plant.backend=env) runs neither paper B's "
+                    "forced arm nor a forward model; use plant.backend=batch",
+                ),
+            ]
+        )
+        try:  # the ESN's own checks, with the sizes it will get
+            dataclasses.replace(self.esn, n_inputs=1, n_outputs=1, noise_level=self.noise_level)
+        except ValueError as err:
+            raise SkinnyInputError(f"esn: {err}") from None
+
+    # -- derived settings ---------------------------------------------------------------
+    @property
+    def method(self) -> str:
+        """The rule's name: original, new, true-target or none."""
+        return self.rule.kind
+
+    @property
+    def torque(self) -> Torque | None:
+        """The torque body's settings, None on the velocity servo."""
+        return self.actuation if isinstance(self.actuation, Torque) else None
+
+    @property
+    def learns_by_fel(self) -> bool:
+        return isinstance(self.rule, FEL_RULES)
+
+    @property
+    def noise_level(self) -> float:
+        """Reservoir noise: ``esn.noise_level``, or by default the rule's (paper E Fig. 5)."""
+        return DEFAULT_NOISE[self.rule.kind] if self.esn.noise_level is None \
+            else self.esn.noise_level
+
+    @property
+    def uses_velocity_inputs(self) -> bool:
+        return self.torque is not None and self.torque.velocity_inputs
+
+    @property
+    def learning_cycles(self) -> int:
+        """Learning cycles per epoch: the FEL rule's ``cycles``; by default 1 for the
+        original method, and for the new method paper E's Table 1 where it has β, else
+        enough cycles for (1 − β)^n to fall below 5 % over all epochs (which reproduces
+        the table for β = 0.1 and 0.05)."""
+        rule = self.rule
+        if not isinstance(rule, FEL_RULES):
+            return 1
+        if rule.cycles is not None:
+            return rule.cycles
+        if not isinstance(rule, New):
+            return 1
+        for beta, cycles in PAPER_CYCLES_FOR_BETA.items():
+            if abs(rule.beta - beta) < 1e-12:
+                return cycles
+        if rule.beta >= 1:
+            return 1
+        total = math.ceil(math.log(0.05) / math.log(1.0 - rule.beta))
+        return max(1, math.ceil(total / rule.epochs))
+
+    def esn_config(self, n_inputs: int, n_outputs: int, n_reservoir: int | None = None
+                   ) -> ESNConfig:
+        """The controllers' ESN config with the sizes and the noise filled in."""
+        return dataclasses.replace(
+            self.esn, n_inputs=n_inputs, n_outputs=n_outputs, noise_level=self.noise_level,
+            n_reservoir=self.esn.n_reservoir if n_reservoir is None else n_reservoir)
+
+    # -- overrides and files ------------------------------------------------------------
+    def override(self, changes: Mapping[str, Any] | None = None, /, *, check: bool = True,
+                 **kw: Any) -> TrainConfig:
+        """This config with dotted keys set (``{"esn.spectral_radius": 0.9}``); keyword
+        arguments take ``__`` for the dot (``esn__spectral_radius=0.9``). ``check=False``
+        skips the cross-field checks (each part still checks its own settings): a
+        probe of which keys the chosen types have, never a config to run."""
+        merged = {**(changes or {}), **{k.replace("__", "."): v for k, v in kw.items()}}
+        if check:
+            return overrides.override(self, merged)
+        with _unchecked():
+            return overrides.override(self, merged)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Flat dotted keys (JSON-ready), with the derived ``learning_cycles`` and
+        ``noise_level``."""
+        return {**overrides.flatten(self), "learning_cycles": self.learning_cycles,
+                "noise_level": self.noise_level}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> TrainConfig:
+        """From :meth:`to_dict` (derived keys ignored), or from an earlier version's flat
+        file (:data:`LEGACY_KEYS`)."""
+        d = {k: v for k, v in d.items() if k not in DERIVED}
+        if is_legacy(d):
+            return from_legacy(d, cls())
+        return cls().override(d)
+
+
+DERIVED = ("learning_cycles", "noise_level")
+
+def relative_cost(cfg: TrainConfig) -> float:
+    """A training's size, for scheduling sweeps (longest first): its cycles through the
+    movement (FEL: epochs x (learning cycles + washout + evaluation); true target: its
+    cycles; x reps; + the test), x N / 200 for reservoirs above 200 units."""
+    rule = cfg.rule
+    cycles = rule.cycles if isinstance(rule, TrueTarget) else \
+        rule.epochs * (cfg.learning_cycles + 2) if isinstance(rule, FEL_RULES) else 0
+    return (cycles * cfg.movement.reps + 1 + cfg.test.washout_cycles) \
+        * max(1.0, cfg.esn.n_reservoir / 200)

@@ -1,0 +1,77 @@
+"""FEL's readout fits by name: the value of the key ``rule.fit`` -> how a training builds
+its learning rule (:class:`controllers.learning.LearningRule`).
+
+The package's own: ``cycle`` (each learning cycle alone, the thesis's pinv or ridge fit),
+``ridge-select`` (λ chosen per fit on a validation cycle; the velocity body),
+``forgetting`` and ``rls`` (remembering earlier cycles; the torque body). A new rule is
+one class in controllers plus one :func:`register_fit` line; then
+``TrainConfig().override({"rule.fit": NAME})``, ``skinny train rule.fit=NAME`` and
+``skinny sweep rule.fit=cycle,NAME`` choose it (see the docs page "Adding a learning
+rule").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from skinny_mj.errors import SkinnyInputError
+
+if TYPE_CHECKING:
+    from skinny_mj.training.config import TrainConfig
+
+__all__ = ["Fit", "FITS", "register_fit", "make_rule"]
+
+#: ``make(cfg, esn, steps)`` -> the rule for one training (None: the loop's default,
+#: each cycle alone); ``steps``: the samples of one learning cycle.
+Make = Callable[["TrainConfig", Any, int], Any]
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A readout fit: how to build it, and the bodies (actuation kinds) it runs on."""
+
+    make: Make
+    bodies: tuple[str, ...] = ("velocity", "torque")
+
+
+def _cycle(cfg: TrainConfig, esn: Any, steps: int) -> None:
+    return None
+
+
+def _ridge_select(cfg: TrainConfig, esn: Any, steps: int) -> Any:
+    from controllers.ridge_select import RidgeSelector
+
+    return RidgeSelector(esn, cfg.rule.epochs)
+
+
+def _remembering(cfg: TrainConfig, esn: Any, steps: int) -> Any:
+    from skinny_mj.training.torque import readout_fitter
+
+    return readout_fitter(cfg, esn, steps)
+
+
+FITS: dict[str, Fit] = {
+    "cycle": Fit(_cycle),
+    "ridge-select": Fit(_ridge_select, ("velocity",)),
+    "forgetting": Fit(_remembering, ("torque",)),
+    "rls": Fit(_remembering, ("torque",)),
+}
+
+
+def register_fit(name: str, make: Make, *, bodies: tuple[str, ...] = ("velocity", "torque"),
+                 replace: bool = False) -> None:
+    """Make ``name`` a value of ``rule.fit``: ``make(cfg, esn, steps)`` builds its rule.
+    A name already taken is refused unless ``replace``."""
+    if not name or not isinstance(name, str):
+        raise SkinnyInputError(f"a fit's name is a non-empty string, got {name!r}")
+    if name in FITS and not replace:
+        raise SkinnyInputError(f"fit {name!r} is registered already (replace=True to "
+                               "change it)")
+    FITS[name] = Fit(make, tuple(bodies))
+
+
+def make_rule(cfg: TrainConfig, esn: Any, steps: int) -> Any:
+    """The learning rule of ``cfg``'s FEL training (None: the default per-cycle fit)."""
+    return FITS[cfg.rule.fit].make(cfg, esn, steps)  # (the module's FITS, as registered)

@@ -1,0 +1,398 @@
+"""The one training path: build a run's parts from a :class:`TrainConfig`, train, test.
+
+Every experiment and command goes through these functions:
+
+- :func:`build_run` (``cfg``, R seeds) -> :class:`Run`: the movement, the full-scale
+  speeds, the seed streams, the ESN inverse model (R networks in lockstep), the
+  optional forward model, the desired signals and true commands, and the plant
+  (built when first used: one :class:`skinny_mj.plant.adapters.BatchPlant` for all R runs,
+  paper B's :class:`skinny_mj.plant.bimanual.BimanualPlant`, or the dm_control env);
+- :func:`train_run`: forward-model pre-training (:meth:`ForwardModel.pretrain`), then
+  feedback-error learning (:func:`controllers.fel.train`, original or β) or the
+  true-target architecture (:func:`controllers.true_target.train_true_target`);
+- :func:`evaluate`: the test (:func:`controllers.fel.evaluate`, K = 0) on any movement;
+- :func:`train_batch` / :func:`train`: the three together with the standard metrics
+  (papers D, E and the ``skinny train`` command).
+
+Seeds: a run's seed s spawns three streams, ``SeedSequence(s).spawn(3)``: the inverse
+ESN's Generator (weights, then reservoir noise), the plant's sensor-noise seed, and the
+forward ESN's Generator (weights, pre-training sensor noise, reservoir noise). So a
+run is reproduced from (config, seed) alone, whichever plant path and batch runs it.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from controllers import fel
+from controllers.esn import ESN
+from controllers.forward_model import ForwardModel
+from controllers.true_target import TrueTargetConfig, train_true_target
+from skinny_mj.plant import ideal
+from skinny_mj.threads import single_threaded
+from skinny_mj.training import protocol, torque
+from skinny_mj.training.config import (  # noqa: F401  (re-exported: the training API in one place)
+    DEFAULT_NOISE,
+    METHODS,
+    PAPER_CYCLES_FOR_BETA,
+    Forward,
+    NoLearning,
+    Torque,
+    TrainConfig,
+    TrueTarget,
+    relative_cost,
+)
+from skinny_mj.training.fits import make_rule
+from skinny_mj.training.parts import (  # noqa: F401  (re-exported)
+    RunStreams,
+    arm_forward_models,
+    controlled_dofs,
+    full_scale_speeds,
+    lagging_arm,
+    load_trajectory,
+    make_plant,
+    network_sizes,
+    run_streams,
+    true_commands_of,
+)
+
+
+@dataclass
+class Run:
+    """The parts of R runs of one config, built by :func:`build_run`.
+
+    trajectory : one repetition (the test movement by default); training : the
+    repeated movement the training cycles run; desired (T, n_sig) / true_commands
+    (T-1, n_out) of ``training``; max_speed_rad_s (n_dof,) full scale; esn : R
+    inverse networks; forward : R forward networks or None; plant_seeds : (R,).
+    """
+
+    cfg: TrainConfig
+    seeds: list[int]
+    trajectory: Any
+    training: Any
+    report: Any
+    max_speed_rad_s: np.ndarray
+    esn: ESN
+    forward: ForwardModel | None
+    plant_seeds: list[int]
+    desired: np.ndarray
+    true_commands: np.ndarray
+
+    @functools.cached_property
+    def plant(self):
+        """The training plant (built on first use: Fig. 3-style runs never need it)."""
+        return make_plant(self.cfg, self.training, self.plant_seeds, self.max_speed_rad_s)
+
+    @property
+    def scored(self) -> np.ndarray | None:
+        """Signals the position metrics score: all (None), or paper B's lagging arm's."""
+        body = self.cfg.plant
+        if body.leading_arm is None:
+            return None
+        from skinny_mj.plant.bimanual import arm_signals
+
+        return arm_signals(body.dof, body.signals, lagging_arm(self.cfg))
+
+    def fel_config(self) -> fel.FELConfig:
+        """The FEL rule's schedule as :class:`controllers.fel.FELConfig`."""
+        cfg, rule = self.cfg, self.cfg.rule
+        return fel.FELConfig(method=rule.kind, beta=rule.beta,
+                             learning_cycles=cfg.learning_cycles, epochs=rule.epochs,
+                             gain_schedule=rule.gain_schedule, gain_factor=rule.gain_factor,
+                             gain_value=rule.gain_value, delay_steps=cfg.plant.delay,
+                             inputs=cfg.inputs)
+
+
+@single_threaded
+def build_run(cfg: TrainConfig, seeds: Sequence[int]) -> Run:
+    """The parts of ``len(seeds)`` runs of ``cfg`` in lockstep (see :class:`Run`)."""
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise ValueError("build_run needs at least one seed")
+    trajectory, report = load_trajectory(cfg)
+    reps, fwd = cfg.movement.reps, cfg.forward
+    training = trajectory.repeat(reps) if reps > 1 else trajectory
+    max_speed = full_scale_speeds(cfg, trajectory)
+    streams = [run_streams(s) for s in seeds]
+    n_sig, n_out, n_in = network_sizes(cfg)
+    esn = ESN(cfg.esn_config(n_in, n_out), n_runs=len(seeds), rngs=[s.esn for s in streams])
+    forward = None
+    if isinstance(fwd, Forward) and fwd.sharing is not None:  # one per arm (paper B)
+        forward = arm_forward_models(cfg, [s.forward for s in streams])
+    elif isinstance(fwd, Forward):
+        fm_cfg = cfg.esn_config(n_sig + n_out, n_sig, fwd.reservoir)
+        forward = ForwardModel(ESN(fm_cfg, n_runs=len(seeds), rngs=[s.forward for s in streams]),
+                               fwd.kind, chained=fwd.input == "chained")
+    return Run(cfg=cfg, seeds=seeds, trajectory=trajectory, training=training, report=report,
+               max_speed_rad_s=max_speed, esn=esn, forward=forward,
+               plant_seeds=[s.plant_seed for s in streams],
+               desired=training.position_signals(cfg.plant.signals),
+               true_commands=true_commands_of(cfg, training, max_speed))
+
+
+def run_of(cfg: TrainConfig, esn: ESN, max_speed_rad_s: np.ndarray, trajectory,
+           plant_seeds: Sequence[int]) -> Run:
+    """A :class:`Run` around networks trained elsewhere (e.g. a saved ``model.npz``),
+    to :func:`evaluate` them on ``trajectory`` with the full scale they were trained with."""
+    max_speed = np.asarray(max_speed_rad_s, float)
+    return Run(cfg=cfg, seeds=[0] * esn.n_runs, trajectory=trajectory, training=trajectory,
+               report=None, max_speed_rad_s=max_speed, esn=esn, forward=None,
+               plant_seeds=[int(s) for s in plant_seeds],
+               desired=trajectory.position_signals(cfg.plant.signals),
+               true_commands=true_commands_of(cfg, trajectory, max_speed))
+
+
+@dataclass
+class Training:
+    """What :func:`train_run` measured. fel : the FEL curve and failures (None for the
+    true-target architecture); true_target : the TT fit's errors (None for FEL);
+    pretrain_prediction_nrmse : (R,) the forward model's pre-training error or None."""
+
+    fel: fel.TrainResult | None = None
+    true_target: Any = None
+    pretrain_prediction_nrmse: np.ndarray | None = None
+    ridge_lambda: np.ndarray | None = None  # (R, E) lambda chosen per epoch (ridge-select)
+    feedback_share: Any = None  # torque body: torque_training.ShareRecorder
+
+
+@single_threaded
+def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
+              observe: Callable[..., None] | None = None) -> Training:
+    """Train ``run``'s networks in place. ``progress(done, total)`` after every cycle;
+    ``observe``: FEL's optional per-cycle diagnostics callback (:func:`controllers.fel.train`,
+    e.g. paper E §5.1's y_est / y_used per epoch; ignored by the true-target architecture)."""
+    cfg, rule, out = run.cfg, run.cfg.rule, Training()
+    fwd, body, is_torque = cfg.forward, cfg.plant, isinstance(cfg.actuation, Torque)
+    if run.forward is not None and fwd.kind in ("serial", "hybrid"):
+        out.pretrain_prediction_nrmse = run.forward.pretrain(
+            run.trajectory.position_signals(body.signals),
+            true_commands_of(cfg, run.trajectory, run.max_speed_rad_s),  # chained: one step
+            0 if fwd.input == "chained" else body.delay, sensor_noise=body.sensor_noise)
+    if isinstance(rule, NoLearning):  # the feedback controller alone: nothing to learn
+        return out
+    if isinstance(rule, TrueTarget):
+        tt = TrueTargetConfig(method="original" if rule.beta >= 1 else "new", beta=rule.beta,
+                              cycles=rule.cycles, noise=cfg.noise_level > 0,
+                              input_noise=rule.input_noise)
+        out.true_target = train_true_target(
+            run.esn, run.desired, run.true_commands, tt,
+            one_step=None if is_torque else  # (kinematic one-step map)
+            ideal.one_step_positions(run.training, body.signals, run.max_speed_rad_s),
+            extra_inputs=torque.teacher_inputs(cfg, run.training, run.max_speed_rad_s)
+            if is_torque else None,
+            input_rngs=[protocol.tt_input_rng(s) for s in run.seeds])
+        _report(progress, 1, 1)
+        return out
+    fcfg = run.fel_config()
+    per_epoch = fcfg.learning_cycles + 2
+    total = rule.epochs * per_epoch
+
+    def tick(epoch: int, cycle: int) -> None:
+        _report(progress, epoch * per_epoch + cycle + 1, total)
+
+    selector = make_rule(cfg, run.esn, len(run.desired) - 1)  # rule.fit (skinny_mj.training.fits)
+    if is_torque:  # the torque body: the feedback's share of the command
+        out.feedback_share = torque.ShareRecorder(fcfg.gains(), run.esn.n_runs,
+                                                  fcfg.learning_cycles)
+        observe = out.feedback_share if observe is None else _both(observe, out.feedback_share)
+    out.fel = fel.train(run.esn, run.plant, run.desired, fcfg, true_commands=run.true_commands,
+                        progress=tick, forward=run.forward, scored=run.scored,
+                        feedback=protocol.feedback_of(rule.u_error_gain),
+                        hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s, run.plant),
+                        rule=selector, observe=observe)
+    if rule.fit == "ridge-select":
+        out.ridge_lambda = selector.chosen
+    return out
+
+
+@dataclass
+class TestOutcome:
+    """A closed-loop test (K = 0) of a trained network on one movement."""
+
+    position_nrmse: float | None
+    motor_nrmse: float | None
+    failed: bool
+    fail_reason: str | None
+    rollout: fel.Rollout = field(repr=False)
+    trajectory: Any = field(repr=False)
+    desired: np.ndarray = field(repr=False)
+    true_commands: np.ndarray = field(repr=False)
+    #: torque body: per-run torque figures and series (:func:`torque_training.test_torques`)
+    torque: dict | None = field(default=None, repr=False)
+
+
+@single_threaded
+def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = None,
+             plant=None) -> list[TestOutcome]:
+    """Test the R trained networks of ``run`` (K = ``test.gain``, no learning, reservoir
+    noise only with ``test.noise``) on ``trajectory`` (default: one repetition of the
+    training movement), after ``test.washout_cycles`` unscored cycles, with ``run``'s
+    full-scale speeds.
+
+    The plant is a fresh one whose sensor noise restarts from ``plant_seeds``
+    (default: the runs' own plant seeds), or ``plant`` as given (e.g. ``run.plant``,
+    whose noise stream then continues from training)."""
+    cfg, test = run.cfg, run.cfg.test
+    trajectory = run.trajectory if trajectory is None else trajectory
+    if plant is None:
+        seeds = run.plant_seeds if plant_seeds is None else plant_seeds
+        plant = make_plant(cfg, trajectory, seeds, run.max_speed_rad_s)
+        if cfg.torque is not None:  # the torque body's robustness test
+            torque.perturb(plant, cfg.torque.test_payload_kg, cfg.torque.test_mass_scale)
+    desired = trajectory.position_signals(cfg.plant.signals)
+    hook = torque.hook_for(cfg, trajectory, run.max_speed_rad_s, plant)
+    commands = true_commands_of(cfg, trajectory, run.max_speed_rad_s)
+    ev = fel.evaluate(run.esn, plant, desired, commands, cfg.plant.delay, run.forward,
+                      inputs=cfg.inputs, washout_cycles=test.washout_cycles,
+                      scored=run.scored, noise=test.noise, gain=test.gain, hook=hook)
+    return [TestOutcome(
+        position_nrmse=None if ev.failed[r] else float(ev.position_nrmse[r]),
+        motor_nrmse=None if ev.failed[r] else float(ev.motor_nrmse[r]),
+        failed=bool(ev.failed[r]), fail_reason=ev.fail_reason[r],
+        rollout=ev.rollout.select(r), trajectory=trajectory, desired=desired,
+        true_commands=commands,
+        torque=None if hook is None else torque.test_torques(hook, ev.rollout, plant, r),
+    ) for r in range(run.esn.n_runs)]
+
+
+@dataclass
+class TrainOutcome:
+    """Everything one run produced: metrics (JSON-ready), the network, the test."""
+
+    config: TrainConfig
+    seed: int
+    metrics: dict
+    esn: ESN = field(repr=False)
+    test: TestOutcome = field(repr=False)
+    max_speed_rad_s: np.ndarray = field(repr=False)
+
+    @property
+    def failed(self) -> bool:
+        return bool(self.metrics["failed"])
+
+
+def train(cfg: TrainConfig, seed: int = 0,
+          progress: Callable[[int, int], None] | None = None) -> TrainOutcome:
+    """Train one ESN inverse model with ``cfg`` and test it on one repetition.
+
+    ``progress(done, total)`` is called after every cycle (for a progress bar).
+    """
+    return train_batch(cfg, [seed], progress)[0]
+
+
+@single_threaded
+def train_batch(cfg: TrainConfig, seeds: Sequence[int],
+                progress: Callable[[int, int], None] | None = None) -> list[TrainOutcome]:
+    """Train R = len(seeds) runs of ``cfg`` in lockstep; run r equals ``train(cfg, seeds[r])``.
+
+    ``metrics["wall_s"]`` is the batch's wall time divided by R (and
+    ``metrics["lockstep_runs"]`` = R). With ``plant.backend == "env"`` (dm_control, one
+    run per environment) the runs are trained one after another.
+    """
+    seeds = [int(s) for s in seeds]
+    if cfg.plant.backend == "env" and len(seeds) > 1:
+        return [o for s in seeds for o in train_batch(cfg, [s], progress)]
+    if not seeds:
+        return []
+    start = time.perf_counter()
+    run = build_run(cfg, seeds)
+    trained = train_run(run, progress)
+    tests = evaluate(run)
+    if len(seeds) > 1 and physics_warnings(run, tests[0]):
+        # the lockstep runs share one MjData, which MuJoCo resets whole when one run
+        # diverges: the batch no longer equals its runs alone, so run them alone
+        raise PhysicsBatchError(f"MuJoCo warnings in a lockstep batch of {len(seeds)} runs")
+    return [_outcome(run, trained, r, test, (time.perf_counter() - start) / len(seeds))
+            for r, test in enumerate(tests)]
+
+
+def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
+             wall_share: float) -> TrainOutcome:
+    """Run r's :class:`TrainOutcome` with the standard metrics."""
+    metrics: dict[str, Any] = {}
+    if trained.true_target is not None:
+        tt = trained.true_target
+        metrics["train"] = {"motor_nrmse": float(tt.motor_nrmse[r]),
+                            "position_nrmse": None if tt.position_nrmse is None
+                            else float(tt.position_nrmse[r])}
+    elif trained.fel is None:  # rule=none: nothing was trained
+        metrics["train"] = {}
+    else:
+        result = trained.fel
+        curve = result.to_dict()
+        metrics["train"] = {"gains": curve["gains"], "position_nrmse": curve["position_nrmse"][r],
+                            "motor_nrmse": curve["motor_nrmse"][r]}
+        if trained.feedback_share is not None:
+            metrics["train"]["feedback_share"] = [float(v) for v in
+                                                  trained.feedback_share.share[r]]
+            metrics["train"]["error_signal_share"] = [
+                float(v) for v in trained.feedback_share.error_signal[r]]
+        if trained.ridge_lambda is not None:
+            metrics["train"]["ridge_lambda"] = [None if not np.isfinite(v) else float(v)
+                                                for v in trained.ridge_lambda[r]]
+        if result.failed[r]:
+            metrics.update(failed=True, fail_reason=result.fail_reason[r],
+                           fail_epoch=result.fail_epoch[r])
+    if not metrics.get("failed") and test.failed:
+        metrics.update(failed=True, fail_reason=f"test: {test.fail_reason}")
+    metrics.setdefault("failed", False)
+    if metrics["failed"]:  # a diverged network has no test result, only its reason
+        metrics["test"] = {"position_nrmse": None, "motor_nrmse": None}
+    else:
+        metrics["test"] = {"position_nrmse": test.position_nrmse,
+                           "motor_nrmse": test.motor_nrmse}
+    if test.torque is not None:
+        metrics["test"]["torque"] = test.torque["metrics"]
+        metrics["train_warnings"] = torque.train_warnings(run)
+        n_warnings = physics_warnings(run, test)
+        if n_warnings and not metrics["failed"]:  # MuJoCo reset a diverged simulation
+            metrics.update(failed=True, fail_reason=f"physics diverged: {n_warnings} MuJoCo "
+                           "warning(s) in training or test")
+            metrics["test"].update(position_nrmse=None, motor_nrmse=None)
+    if trained.pretrain_prediction_nrmse is not None:
+        metrics["pretrain_prediction_nrmse"] = float(trained.pretrain_prediction_nrmse[r])
+    metrics.update(
+        config=run.cfg.to_dict(), seed=run.seeds[r], steps_per_cycle=len(run.desired),
+        max_speed_rad_s=[float(v) for v in run.max_speed_rad_s],
+        clipped_samples=int(run.report.clipped_samples), wall_s=wall_share,
+        lockstep_runs=len(run.seeds),
+    )
+    return TrainOutcome(run.cfg, run.seeds[r], metrics, esn_run(run.esn, r), test,
+                        run.max_speed_rad_s)
+
+
+def physics_warnings(run: Run, test: TestOutcome) -> int:
+    """MuJoCo warnings of the torque body's training and test plants (0 for the velocity
+    servo); counted over a lockstep batch's shared simulation."""
+    if test.torque is None:
+        return 0
+    return (torque.train_warnings(run) or 0) + int(test.torque["metrics"]["warnings"])
+
+
+class PhysicsBatchError(RuntimeError):
+    """A lockstep batch whose shared simulation diverged (the engine then runs its seeds
+    one at a time, each failing or not on its own)."""
+
+
+def esn_run(esn: ESN, r: int) -> ESN:
+    """Run ``r`` of a lockstep ESN as a one-run ESN (weights, state, noise stream)."""
+    return esn if esn.n_runs == 1 else esn.select([r])
+
+
+def _both(first: Callable[..., None], second: Callable[..., None]) -> Callable[..., None]:
+    def both(*args) -> None:
+        first(*args)
+        second(*args)
+    return both
+
+
+def _report(progress: Callable[[int, int], None] | None, done: int, total: int) -> None:
+    if progress is not None:
+        progress(done, total)

@@ -1,0 +1,141 @@
+"""The parts every run is built from: seed streams, the movement and its full scale, the
+plant, the ESN's shape, the true commands. :func:`skinny_mj.training.loop.build_run` assembles
+them (and re-exports these names: the training API stays in one place).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
+
+from skinny_mj.training import torque
+from skinny_mj.training.config import TrainConfig
+
+
+class RunStreams(NamedTuple):
+    """The random streams of one run (see the module docstring)."""
+
+    esn: np.random.Generator
+    plant_seed: int
+    forward: np.random.Generator
+
+
+def run_streams(seed: int) -> RunStreams:
+    """The inverse ESN's Generator, the plant's sensor-noise seed and the forward
+    ESN's Generator for run ``seed``."""
+    esn_ss, plant_ss, fm_ss = np.random.SeedSequence(int(seed)).spawn(3)
+    return RunStreams(np.random.default_rng(esn_ss),
+                      int(plant_ss.generate_state(1, np.uint64)[0]),
+                      np.random.default_rng(fm_ss))
+
+
+def load_trajectory(cfg: TrainConfig):
+    """The movement of one repetition (at cfg.movement.speed) and its retarget report."""
+    from skinny_mj.trajectories import load_movement
+
+    mv = cfg.movement
+    kw = {} if mv.retarget == "angles" else {"retarget": mv.retarget}  # today's call
+    return load_movement(mv.trajectory, cfg.plant.dof, asf=mv.asf, speed=mv.speed, **kw)
+
+
+def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
+    """(n_dof,) rad/s: ``movement.full_scale_factor`` (default 2) x the fastest speed per
+    DOF of ``trajectory`` (one repetition) or of the movement named by
+    ``movement.max_speed_from``,
+    so that networks trained on different movements share one command scale (paper C)."""
+    from skinny_mj.plant.ideal import max_speeds
+    from skinny_mj.trajectories import load_movement
+
+    mv = cfg.movement
+    if mv.max_speed_from is not None:
+        trajectory, _ = load_movement(mv.max_speed_from, cfg.plant.dof, asf=mv.asf)
+    return max_speeds(trajectory.angles, trajectory.dt, speed_factor=mv.full_scale_factor)
+
+
+def make_plant(cfg: TrainConfig, trajectory, plant_seeds: Sequence[int],
+               max_speed_rad_s: np.ndarray):
+    """The plant of ``cfg`` imitating ``trajectory``, one run per plant seed."""
+    from skinny_mj.plant.adapters import BatchPlant, EnvPlant
+
+    seeds, body = [int(s) for s in plant_seeds], cfg.plant
+    common = dict(n_runs=len(seeds), seeds=seeds, sensor_noise=body.sensor_noise,
+                  actuation=cfg.actuation.kind, max_speed_rad_s=max_speed_rad_s)
+    if body.leading_arm is not None:
+        from skinny_mj.plant.bimanual import BimanualPlant
+
+        return BimanualPlant(body.dof, body.signals, trajectory, body.leading_arm, **common)
+    if body.backend == "env":
+        from skinny_mj.plant.task import load
+
+        if len(seeds) != 1:
+            raise ValueError("the dm_control path steps one run per environment")
+        env = load(body.dof, body.signals, trajectory, actuation=cfg.actuation.kind,
+                   sensor_noise=body.sensor_noise, seed=seeds[0],
+                   max_speed_rad_s=max_speed_rad_s)
+        return EnvPlant(env)
+    return BatchPlant(body.dof, body.signals, trajectory, **common)
+
+
+def controlled_dofs(cfg: TrainConfig) -> np.ndarray | None:
+    """Body DOFs the ESN drives: None for all, paper B's lagging arm's otherwise."""
+    if cfg.plant.leading_arm is None:
+        return None
+    from skinny_mj.plant.bimanual import arm_dofs
+
+    return arm_dofs(cfg.plant.dof, lagging_arm(cfg))
+
+
+def network_sizes(cfg: TrainConfig) -> tuple[int, int, int]:
+    """(n_sig, n_out, n_in): the position signals, the inverse ESN's outputs (the DOFs
+    it drives) and its inputs (desired and sensed signals, the forward model's
+    prediction, the torque loop's velocity inputs)."""
+    from skinny_mj.plant import body
+
+    n_sig = body.n_signals(cfg.plant.dof, cfg.plant.signals)
+    dofs = controlled_dofs(cfg)
+    n_out = cfg.plant.dof if dofs is None else len(dofs)
+    n_in = (n_sig if cfg.inputs == "desired+sensed" else 0) + n_sig \
+        + (0 if cfg.forward.kind == "none" else n_sig) + torque.n_extra_inputs(cfg)
+    return n_sig, n_out, n_in
+
+
+def lagging_arm(cfg: TrainConfig) -> str:
+    """Paper B's arm the ESN drives: the one that is not ``plant.leading_arm``."""
+    return "left" if cfg.plant.leading_arm == "right" else "right"
+
+
+def true_commands_of(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) -> np.ndarray:
+    """(T-1, n_controlled) the analytic commands of ``trajectory`` for the ESN's DOFs
+    (torque body: the normalized inverse-dynamics torques)."""
+    if cfg.torque is not None:
+        return torque.true_torques(cfg.plant.dof, trajectory)
+    from skinny_mj.plant.ideal import true_commands
+
+    commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
+    dofs = controlled_dofs(cfg)
+    return commands if dofs is None else commands[:, dofs]
+
+
+def arm_forward_models(cfg: TrainConfig, rngs: Sequence[np.random.Generator]):
+    """Paper B's per-arm forward models (:class:`controllers.arm_forward.ArmForwardModels`,
+    ``forward.sharing``): the lagging arm's network from each run's forward stream,
+    the leading arm's (shared predictions only) from a child of that stream."""
+    from controllers.arm_forward import ArmForwardModels
+    from controllers.esn import ESN
+    from skinny_mj.plant.bimanual import arm_signals
+
+    body, sharing = cfg.plant, cfg.forward.sharing
+    lag_sig, lead_sig = (arm_signals(body.dof, body.signals, s)
+                         for s in (lagging_arm(cfg), body.leading_arm))
+    n_arm = len(controlled_dofs(cfg))
+
+    def nets(n_sig: int, streams):
+        fm_cfg = cfg.esn_config(n_sig + n_arm, n_sig, cfg.forward.reservoir)
+        return ESN(fm_cfg, n_runs=len(streams), rngs=streams)
+
+    lag = nets(len(lag_sig), list(rngs))
+    lead = nets(len(lead_sig), [g.spawn(1)[0] for g in rngs]) \
+        if sharing == "predictions" else None
+    return ArmForwardModels(lag, lead, lag_sig, lead_sig, sharing)

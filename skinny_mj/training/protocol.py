@@ -1,0 +1,27 @@
+"""The thesis toolbox's protocol options, as the training path applies them.
+
+Each is a :class:`skinny_mj.training.config.TrainConfig` setting whose default is the thesis
+code's behaviour bit for bit: ``test.noise`` (reservoir noise during the K = 0 test),
+``rule.u_error_gain`` (FEL: a scalar on the feedback controller's u_error, which the
+thesis leaves unstated) and ``rule.input_noise`` (true target: noise on the
+teacher-forced inputs).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controllers.feedback import FeedbackController
+
+
+def tt_input_rng(seed: int) -> np.random.Generator:
+    """The Generator of the true-target's teacher-forcing input noise for run ``seed``:
+    the fourth child of ``SeedSequence(seed)`` (the first three are
+    :func:`skinny_mj.training.loop.run_streams`'s, which stay as they were)."""
+    return np.random.default_rng(np.random.SeedSequence(int(seed)).spawn(4)[3])
+
+
+def feedback_of(u_error_gain: float) -> FeedbackController | None:
+    """The FEL feedback controller: None (fel's default one) unless ``u_error_gain``
+    scales its u_error."""
+    return None if u_error_gain == 1.0 else FeedbackController(gain=u_error_gain)

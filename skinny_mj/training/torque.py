@@ -1,0 +1,243 @@
+"""The torque body in the one training path: what ``actuation=torque`` adds.
+
+:mod:`skinny_mj.training.loop` calls these when ``cfg.actuation`` is a
+:class:`skinny_mj.training.config.Torque`:
+
+- :func:`hook_for`: the :class:`controllers.torque_fel.TorqueLoop` of a movement (the
+  rollout hook: velocity inputs, the PD teacher, the gravity feed-forward);
+- :func:`true_torques`: the inverse model's true target, the torques of
+  ``mj_inverse`` along the desired motion (:meth:`skinny_mj.plant.dynamics.Dynamics.
+  trajectory_torques_nm`), normalized by the limits (T-1, n_dof);
+- :func:`teacher_inputs`: the true-target architecture's extra teacher-forced inputs
+  [qd_d(t+1); qd_d(t)] / v_max, as the rollout's [qd_d(t+1); qd(t)] / v_max;
+- :func:`perturb` (:func:`skinny_mj.plant.perturb.perturb`): the robustness test plant
+  (payload, link masses);
+- :func:`controller`: the PD teacher with gains scaled to the limits;
+- :func:`hook_for` with an arm law (``actuation.feedback`` in
+  :data:`skinny_mj.training.config.ARM_LAWS`):
+  an :class:`controllers.torque_arm_loop.ArmLoop` fed by
+  :class:`skinny_mj.plant.dynamics.BatchArmState`, its gains :func:`arm_gains`, the movement
+  :func:`desired_motion`; :func:`readout_fitter` (FEL fits that remember) and
+  :class:`ShareRecorder` (the feedback share per epoch); :func:`feasibility`.
+
+The feedback teacher (:class:`controllers.torque_feedback.TorqueFeedbackController`):
+gains :meth:`TorqueGains.from_limits` (0.1 rad asks for 50 % of the limit, critically
+damped, capped at omega dt = 0.5 with each joint's smallest own inertia over its range,
+dt = 20 ms), joint-space error for joint signals, the damped Jacobian otherwise.
+Desired velocities are those of the clamped cubic spline that
+``trajectory_torques_nm`` differentiates (so the PD's velocity reference and the
+true target describe one motion). Velocity inputs and the PD's velocity are the
+plant's noise-free joint velocities (sensor noise is on the positions only).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from controllers.torque_arm import ArmGains, DesiredMotion
+from controllers.torque_arm_loop import ArmLoop
+from controllers.torque_feedback import TorqueFeedbackController, TorqueGains
+from controllers.torque_fel import TorqueLoop
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
+from skinny_mj.plant.perturb import perturb  # noqa: F401  (re-exported: the robustness test plant)
+from skinny_mj.training.config import ARM_LAWS, Torque, TrainConfig
+
+#: Default pole placement omega (rad/s) per law, zeta 1 (critically damped): computed
+#: torque and PD + gravity at 15 rad/s (omega dt = 0.3 at the 20 ms hold), the ID
+#: feed-forward's low-gain PD and FEL's teacher at 5 rad/s.
+#: Ridge of the remembering readout fits when the ESN's readout is not "ridge".
+MEMORY_RIDGE = 1e-2
+ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0}
+
+@functools.lru_cache(maxsize=4)
+def _dynamics(dof: int):
+    from skinny_mj.plant.dynamics import Dynamics
+    from skinny_mj.plant.model import load_model
+
+    return Dynamics(load_model(dof, "torque"))
+
+
+@functools.lru_cache(maxsize=8)
+def controller(dof: int, signals: str) -> TorqueFeedbackController:
+    """The PD teacher of the torque body (see the module docstring)."""
+    dyn = _dynamics(dof)
+    inertia_min, _ = dyn.inertia_range()
+    gains = TorqueGains.from_limits(dyn.torque_limits_nm(), inertia_min, dt=body.CONTROL_DT_S)
+    if signals == "joint":
+        lo, hi = body.joint_ranges(dof).T
+        return TorqueFeedbackController(gains, mode="joint",
+                                        signal_per_rad=tuple((2.0 / (hi - lo)).tolist()))
+    return TorqueFeedbackController(gains)
+
+
+def torque_limits_nm(dof: int) -> np.ndarray:
+    """(n_dof,) peak torques, N m (what a normalized command of 1 means)."""
+    return _dynamics(dof).torque_limits_nm()
+
+
+def desired_velocities_rad_s(angles: np.ndarray, dt: float) -> np.ndarray:
+    """(T, n_dof) joint velocities, rad/s, of the clamped cubic spline through ``angles``
+    (T, n_dof) rad (at rest at both ends, as ``trajectory_torques_nm`` assumes)."""
+    angles = np.asarray(angles, float)
+    t = dt * np.arange(len(angles))
+    return CubicSpline(t, angles, axis=0, bc_type="clamped")(t, 1)
+
+
+def true_torques(dof: int, trajectory) -> np.ndarray:
+    """(T-1, n_dof) the zero-order-hold inverse-dynamics torques of ``trajectory``
+    divided by the limits (normalized torque; can exceed 1 where the movement asks
+    more than the motors have)."""
+    dyn = _dynamics(dof)
+    return dyn.normalize(dyn.trajectory_torques_nm(trajectory.angles, trajectory.dt))
+
+
+def teacher_inputs(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) -> np.ndarray | None:
+    """(T-1, 2 n_dof) [qd_d(t+1); qd_d(t)] / v_max, or None without velocity inputs."""
+    if not cfg.uses_velocity_inputs:
+        return None
+    v = desired_velocities_rad_s(trajectory.angles, trajectory.dt) / max_speed_rad_s
+    return np.concatenate([v[1:], v[:-1]], axis=1)
+
+
+def n_extra_inputs(cfg: TrainConfig) -> int:
+    """ESN inputs the torque loop appends (2 n_dof with velocity inputs, else 0)."""
+    return 2 * cfg.plant.dof if cfg.uses_velocity_inputs else 0
+
+
+def desired_motion(dof: int, trajectory, with_id: bool = False) -> DesiredMotion:
+    """The :class:`DesiredMotion` of ``trajectory`` for a held-torque loop: the clamped
+    cubic spline's states, mid-step samples and (``with_id``) held inverse dynamics."""
+    angles, dt = np.asarray(trajectory.angles, float), trajectory.dt
+    t = dt * np.arange(len(angles))
+    spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
+    mid = t[:-1] + 0.5 * dt
+    tau = _dynamics(dof).trajectory_torques_nm(angles, dt) if with_id else None
+    return DesiredMotion.from_samples(angles, spline(t, 1), dt, spline(mid), spline(mid, 1),
+                                      tau)
+
+
+def arm_gains(act: Torque) -> ArmGains:
+    """The pole placement of ``act.feedback``'s law (:data:`ARM_OMEGA` unless set)."""
+    omega = ARM_OMEGA[act.feedback] if act.omega is None else act.omega
+    return ArmGains(omega, act.zeta)
+
+
+def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
+             plant=None) -> TorqueLoop | None:
+    """The torque loop of ``trajectory`` (None for the velocity servo); the laws of
+    :mod:`controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant)."""
+    act, dof, signals = cfg.torque, cfg.plant.dof, cfg.plant.signals
+    if act is None:
+        return None
+    if act.feedback in ARM_LAWS:
+        from skinny_mj.plant.dynamics import BatchArmState
+
+        law = ARM_LAWS[act.feedback]
+        if plant is None or not hasattr(plant, "model"):
+            raise SkinnyInputError(f"feedback {act.feedback!r} needs the lockstep plant "
+                                   "(plant.backend=batch)")
+        return ArmLoop(controller(dof, signals),
+                       desired_velocities_rad_s(trajectory.angles, trajectory.dt),
+                       np.asarray(max_speed_rad_s, float),
+                       velocity_inputs=act.velocity_inputs,
+                       gravity_feedforward=act.gravity_feedforward, law=law,
+                       gains=arm_gains(act),
+                       motion=desired_motion(dof, trajectory, law == "id-pd"),
+                       state_of=BatchArmState(plant, gravity=law == "pd-g",
+                                              nominal=perturbed(act)),
+                       dt=trajectory.dt)
+    ff = true_torques(dof, trajectory) if act.feedback == "computed-torque" else None
+    return TorqueLoop(controller(dof, signals),
+                      desired_velocities_rad_s(trajectory.angles, trajectory.dt),
+                      np.asarray(max_speed_rad_s, float),
+                      velocity_inputs=act.velocity_inputs,
+                      gravity_feedforward=act.gravity_feedforward, inverse_dynamics=ff)
+
+
+def perturbed(act: Torque) -> bool:
+    """Does the test plant of ``act`` differ from the nominal twin (the controllers'
+    model)?"""
+    return act.test_payload_kg != 0 or act.test_mass_scale != 1
+
+
+def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
+    """Run r's torque figures of the test cycle that ``hook`` saw last.
+
+    Returns ``{"metrics": {...}, "series": {...}}``: metrics (JSON-ready) as
+    :meth:`TorqueLoop.metrics` plus ``warnings`` (MuJoCo ``data.warning`` counts of the
+    test plant, summed over mjtWarning and over its lockstep runs, which share one
+    MjData) and ``within_limits`` (commanded and applied |torque| <= limit, 1e-9
+    slack); series (for recordings): ``commanded_nm`` (T-1, n_dof) = command x limit,
+    ``applied_nm`` (T-1, n_dof) ``actuator_force``, ``gravity_nm`` (T, n_dof) the bias
+    torque ``qfrc_bias`` of each state, ``limit_nm`` (n_dof,).
+    """
+    limit = hook.controller.gains.limit
+    figures = hook.metrics(rollout.commands, plant.dt)
+    metrics = {k: float(v[r]) for k, v in figures.items()}
+    metrics["warnings"] = int(plant.warning_count())
+    metrics["within_limits"] = bool(max(metrics["max_commanded_ratio"],
+                                        metrics["max_applied_ratio"]) <= 1 + 1e-9)
+    series = {"commanded_nm": rollout.commands[r] * limit,
+              "applied_nm": hook.applied_nm[:, r].copy(),
+              "gravity_nm": hook.bias_nm[:, r].copy(), "limit_nm": limit.copy()}
+    return {"metrics": metrics, "series": series}
+
+
+def train_warnings(run) -> int | None:
+    """MuJoCo warnings of ``run``'s training plant (None if it never built one)."""
+    plant = run.__dict__.get("plant")  # the cached property, if it was ever used
+    return None if plant is None or not hasattr(plant, "warning_count") \
+        else int(plant.warning_count())
+
+
+def feasibility(dof: int, trajectory) -> dict[str, np.ndarray]:
+    """:meth:`skinny_mj.plant.dynamics.Dynamics.feasibility` of ``trajectory`` on the torque
+    twin."""
+    return _dynamics(dof).feasibility(trajectory.angles, trajectory.dt)
+
+
+def feasibility_report(dof: int, trajectory) -> list[str]:
+    """The feasibility of ``trajectory`` as text lines (``skinny trajectory show
+    --actuation torque``)."""
+    from skinny_mj.plant.dynamics import feasibility_lines
+
+    return feasibility_lines(feasibility(dof, trajectory), list(body.dof_names(dof)))
+
+
+def readout_fitter(cfg: TrainConfig, esn, steps: int):
+    """FEL's readout fit for ``rule.fit`` (None: each cycle alone, ``esn.fit``): the
+    normal equations with forgetting, or RLS, remembering ``rule.forgetting`` of the
+    statistics per learning cycle of ``steps`` samples; ridge ``esn.ridge_lambda`` with a
+    ridge readout, else :data:`MEMORY_RIDGE`."""
+    from controllers.torque_readout import ForgettingReadout, RLSReadout
+
+    rule = cfg.rule
+    ridge = cfg.esn.ridge_lambda if cfg.esn.readout == "ridge" else MEMORY_RIDGE
+    if rule.fit == "forgetting":
+        return ForgettingReadout(esn, rule.forgetting, ridge)
+    if rule.fit == "rls":
+        return RLSReadout(esn, steps, rule.forgetting, ridge)
+    return None
+
+
+class ShareRecorder:
+    """FEL's ``observe`` callback: per epoch, on its evaluation cycle (the ESN with the
+    epoch's K), the feedback share mean |K u_fb| / mean |u| of the command and the
+    teacher's error signal mean |u_fb| / mean |u| (each (R, E))."""
+
+    def __init__(self, gains: np.ndarray, n_runs: int, cycles: int):
+        self.gains, self.eval_cycle = np.asarray(gains, float), cycles + 1
+        self.share = np.full((n_runs, len(gains)), np.nan)
+        self.error_signal = np.full((n_runs, len(gains)), np.nan)
+
+    def __call__(self, epoch: int, cycle: int, ro, y_used) -> None:
+        if cycle != self.eval_cycle:
+            return
+        u = np.abs(ro.commands).mean(axis=(1, 2))
+        fb = np.abs(ro.u_error[:, :-1]).mean(axis=(1, 2))
+        self.error_signal[:, epoch] = fb / np.maximum(u, 1e-12)
+        self.share[:, epoch] = self.gains[epoch] * self.error_signal[:, epoch]
