@@ -19,9 +19,8 @@ import argparse
 import time
 
 import numpy as np
-
-from controllers.esn import ESN, ESNConfig, run_generators
-from controllers.mackey_glass import mackey_glass
+from skinny_mj.controllers.esn import ESN, ESNConfig, run_generators
+from skinny_mj.controllers.mackey_glass import mackey_glass
 
 HORIZON = 84
 

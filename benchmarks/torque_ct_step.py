@@ -19,8 +19,8 @@ import time
 os.environ.setdefault("MUJOCO_GL", "disabled")
 
 import mujoco  # noqa: E402
+from skinny_mj.experiments.dynamic import joint_nrmse  # noqa: E402
 
-from experiments.dynamic import joint_nrmse  # noqa: E402
 from skinny_mj.plant import model as skinny_model  # noqa: E402
 from skinny_mj.training.loop import TrainConfig, train  # noqa: E402
 

@@ -7,9 +7,9 @@ state of the other arm, the control system of one arm could have access to the
 prediction made by the other arm's forward model"; and (§4.1) "we would consider
 sharing motor commands instead of position".
 
-:class:`ArmForwardModels` speaks :class:`controllers.forward_model.ForwardModel`'s verbs
+:class:`ArmForwardModels` speaks :class:`skinny_mj.controllers.forward_model.ForwardModel`'s verbs
 (``begin``, ``step``, ``fit_rollout``, ``esn.reset``), so the one rollout
-(:func:`controllers.rollout.rollout`) drives it unchanged. Its step returns a vector
+(:func:`skinny_mj.controllers.rollout.rollout`) drives it unchanged. Its step returns a vector
 laid out like the body's signals (R, n_sig), which the rollout appends to the lagging
 arm's inverse-model input as it appends paper A's prediction p(t):
 
@@ -30,8 +30,7 @@ sensed position.
 from __future__ import annotations
 
 import numpy as np
-
-from controllers.esn import ESN
+from skinny_mj.controllers.esn import ESN
 
 SHARING = ("none", "predictions", "commands")
 
@@ -127,7 +126,7 @@ class ArmForwardModels:
 
     def prediction_nrmse(self, ro) -> np.ndarray:
         """(R,) the lagging arm's prediction NRMSE against its noise-free positions."""
-        from controllers.metrics import nrmse
+        from skinny_mj.controllers.metrics import nrmse
 
         return nrmse(ro.predictions[:, 1:, self.lag_signals],
                      ro.true_signals[:, 1:, self.lag_signals])

@@ -25,13 +25,12 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse
+from skinny_mj.controllers._io import atomic_path
+from skinny_mj.controllers.readout import PinvFactors, solve_readout
+from skinny_mj.controllers.reservoir import ESNConfig, draw_weights, run_generators, spectral_radius
 
-from controllers._io import atomic_path
-from controllers.readout import PinvFactors, solve_readout
-from controllers.reservoir import ESNConfig, draw_weights, run_generators, spectral_radius
-
-# The hyper-parameters and the weight draw live in controllers.reservoir, the readout
-# solvers in controllers.readout; these names stay importable from here.
+# The hyper-parameters and the weight draw live in skinny_mj.controllers.reservoir, the readout
+# solvers in skinny_mj.controllers.readout; these names stay importable from here.
 __all__ = ["ESN", "ESNConfig", "read_metadata", "run_generators", "spectral_radius"]
 
 try:  # SciPy's CSC matrix-vector kernel (what csc_array @ vector calls)

@@ -10,7 +10,7 @@ Testing: reset, one cycle with K = 0, no noise, no learning.
 Step t (t = 0 .. T-2): sense s(t); ESN input [d(t+1); s_in(t)] (+ the forward model's
 prediction p(t)); u_error(t) from (d(t), s(t)); command = clip(y_ESN + K u_error, -1, 1);
 step the plant. After the cycle: y_est(t) = command(t) + u_error(t+1), and the learning
-rule (:mod:`controllers.learning`; default the thesis's fit of each cycle alone) fits the
+rule (:mod:`skinny_mj.controllers.learning`; default the thesis's fit of each cycle alone) fits the
 readout to y_used = beta y_est + (1 - beta) y_ESN (beta = 1: the original method).
 ``s_in`` is the sensed signal delayed by ``delay_steps`` (paper A); the feedback
 controller always sees the undelayed s(t). With ``inputs="sensed"`` (paper B) the
@@ -27,18 +27,17 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-
-from controllers.esn import ESN
-from controllers.feedback import (
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.feedback import (
     FeedbackController,
     fixed_gain,
     linear_gain,
     multiplicative_gain,
 )
-from controllers.learning import Cycle, CycleFit, LearningRule, beta_target
-from controllers.metrics import motor_nrmse, position_nrmse
-from controllers.plant import Plant
-from controllers.rollout import INPUTS, Rollout, rollout, run_mean
+from skinny_mj.controllers.learning import Cycle, CycleFit, LearningRule, beta_target
+from skinny_mj.controllers.metrics import motor_nrmse, position_nrmse
+from skinny_mj.controllers.plant import Plant
+from skinny_mj.controllers.rollout import INPUTS, Rollout, rollout, run_mean
 
 __all__ = ["FELConfig", "INPUTS", "Rollout", "rollout", "run_mean", "health", "train",
            "TrainResult", "evaluate", "EvalResult", "beta_target"]
@@ -169,18 +168,18 @@ def train(
     scored : indices of the signals the position curve scores (default all; paper B
         scores the lagging arm's only).
     hook : optional rollout hook (:func:`rollout`), e.g. the torque loop.
-    rule : the learning rule (:class:`controllers.learning.LearningRule`; default
-        :class:`~controllers.learning.CycleFit`, each learning cycle's fit alone by
-        ``esn.fit``, the thesis's). It gets a :class:`~controllers.learning.Cycle`
+    rule : the learning rule (:class:`skinny_mj.controllers.learning.LearningRule`; default
+        :class:`~skinny_mj.controllers.learning.CycleFit`, each learning cycle's fit alone by
+        ``esn.fit``, the thesis's). It gets a :class:`~skinny_mj.controllers.learning.Cycle`
         (states, y_used, y_est, y_ESN, the runs alive, the epoch) through
         ``rule.washout(esn, cycle)`` after each washout cycle and ``rule.fit(esn,
         cycle)`` after each learning cycle; an online rule (``rule.online``) is also the
         learning cycles' per-step ``online`` learner (:func:`rollout`; its per-step
         target is blended with its own beta). Others:
-        :class:`controllers.ridge_select.RidgeSelector` (lambda per run on a validation
-        cycle), :class:`controllers.torque_readout.ForgettingReadout` and
-        :class:`~controllers.torque_readout.RLSReadout` (fits that remember earlier
-        cycles), :class:`controllers.online.OnlineRLS` (RLS at every step).
+        :class:`skinny_mj.controllers.ridge_select.RidgeSelector` (lambda per run on a validation
+        cycle), :class:`skinny_mj.controllers.torque_readout.ForgettingReadout` and
+        :class:`~skinny_mj.controllers.torque_readout.RLSReadout` (fits that remember earlier
+        cycles), :class:`skinny_mj.controllers.online.OnlineRLS` (RLS at every step).
     observe : optional diagnostics callback (paper E §5.1), called after every cycle as
         ``observe(epoch, cycle, ro, y_used)`` (cycle numbered as for ``progress``);
         ``y_used`` (R, T-1, n_dof) is the target the readout was fitted to on a learning

@@ -12,9 +12,8 @@ predictions), and pre-training fits the one-step map [d(t); c(t)] -> d(t+1).
 from __future__ import annotations
 
 import numpy as np
-
-from controllers.esn import ESN
-from controllers.metrics import nrmse
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.metrics import nrmse
 
 MODES = ("parallel", "serial", "hybrid")
 
@@ -36,7 +35,8 @@ class ForwardModel:
 
     def begin(self, plant) -> None:
         """Called by the rollout before each cycle with the plant it drives (a model
-        that reads a forced arm's command, :class:`controllers.arm_forward.ArmForwardModels`,
+        that reads a forced arm's command,
+        :class:`skinny_mj.controllers.arm_forward.ArmForwardModels`,
         binds it here); this one needs nothing from the plant."""
 
     def step(self, sensed: np.ndarray, command: np.ndarray, noise: bool = True) -> np.ndarray:

@@ -8,14 +8,14 @@ d (R, T, n_out):
 - :func:`fit_ordinary`: one teacher-forced pass (step t sees d(t-1) fed back), states
   after ``washout`` regressed on d (Jaeger 2001);
 - :func:`fit_beta`: ``cycles`` passes, each from a reset, fitting the blend
-  y_used = β d + (1 − β) y_ESN, as :mod:`controllers.true_target` does with the true
+  y_used = β d + (1 − β) y_ESN, as :mod:`skinny_mj.controllers.true_target` does with the true
   commands. ``feedback="teacher"``: the fed-back value is d (then, without reservoir
   noise, the states repeat each cycle and the readout after n cycles is exactly
   (1 − (1 − β)^n) times the ordinary one: the blend only shrinks it);
   ``feedback="blend"``: the fed-back value is the same blend of d and the network's own
   last output, so the network's own output enters its training as in FEL;
 - :func:`fit_force`: teacher forcing through the washout, then the network's own
-  output fed back while RLS (:class:`controllers.readout.RLS`) pulls it to d every step
+  output fed back while RLS (:class:`skinny_mj.controllers.readout.RLS`) pulls it to d every step
   and the updated output is what is fed back (Sussillo & Abbott 2009);
 - :func:`free_run`: the network alone, its own output fed back.
 """
@@ -23,10 +23,9 @@ d (R, T, n_out):
 from __future__ import annotations
 
 import numpy as np
-
-from controllers.esn import ESN
-from controllers.learning import beta_target
-from controllers.readout import RLS
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.learning import beta_target
+from skinny_mj.controllers.readout import RLS
 
 FEEDBACKS = ("teacher", "blend")
 

@@ -1,8 +1,9 @@
 """The seam for learning: the β target, what a cycle hands a learning rule, and the rule.
 
 A learning rule changes the readouts W_out (R, n_out, D) of R lockstep networks
-(:class:`controllers.esn.ESN`) from what the closed loop produced. The loop
-(:func:`controllers.fel.train`, :func:`controllers.true_target.train_true_target`)
+(:class:`skinny_mj.controllers.esn.ESN`) from what the closed loop produced. The loop
+(:func:`skinny_mj.controllers.fel.train`,
+:func:`skinny_mj.controllers.true_target.train_true_target`)
 calls it at three points:
 
 - :meth:`LearningRule.washout` after a cycle that learns nothing (each epoch's washout
@@ -12,15 +13,16 @@ calls it at three points:
   theirs);
 - :meth:`LearningRule.update` at every control step of a learning cycle, for a rule whose
   :attr:`~LearningRule.online` is True (the loop passes it as
-  :func:`controllers.rollout.rollout`'s ``online``): the step before's extended state,
+  :func:`skinny_mj.controllers.rollout.rollout`'s ``online``): the step before's extended state,
   ESN output and FEL target, one step late because u_error(t) completes y_est(t-1).
 
 The target a rule fits is FEL's blend (paper E's new method), :func:`beta_target`:
 y_used = β y_est + (1 − β) y_ESN, β = 1 the original method. Implementations:
 :class:`CycleFit` (each cycle alone, pinv or ridge: the thesis's),
-:class:`controllers.ridge_select.RidgeSelector`,
-:class:`controllers.torque_readout.ForgettingReadout` and
-:class:`~controllers.torque_readout.RLSReadout`, :class:`controllers.online.OnlineRLS`.
+:class:`skinny_mj.controllers.ridge_select.RidgeSelector`,
+:class:`skinny_mj.controllers.torque_readout.ForgettingReadout` and
+:class:`~skinny_mj.controllers.torque_readout.RLSReadout`,
+:class:`skinny_mj.controllers.online.OnlineRLS`.
 """
 
 from __future__ import annotations
@@ -28,9 +30,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from controllers.esn import ESN
-from controllers.readout import PinvFactors
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.readout import PinvFactors
 
 __all__ = ["beta_target", "Cycle", "LearningRule", "CycleFit"]
 
@@ -90,7 +91,7 @@ class LearningRule:
 
 class CycleFit(LearningRule):
     """FEL's fit (the thesis's): each learning cycle alone, by the ESN's own solver
-    (:meth:`controllers.esn.ESN.fit`: pinv, or ridge with its λ).
+    (:meth:`skinny_mj.controllers.esn.ESN.fit`: pinv, or ridge with its λ).
 
     reuse_factors : keep the pinv factorization while the states repeat bit for bit
         (teacher forcing without noise: from the second cycle on, the initial state's

@@ -1,24 +1,24 @@
 """Online learning inside the closed loop: an RLS (FORCE-style) readout update per
-control step, an online learning rule (:class:`controllers.learning.LearningRule`) for
-:func:`controllers.fel.train`'s ``rule`` or :func:`controllers.fel.rollout`'s ``online``.
+control step, an online learning rule (:class:`skinny_mj.controllers.learning.LearningRule`) for
+:func:`skinny_mj.controllers.fel.train`'s ``rule`` or :func:`skinny_mj.controllers.fel.rollout`'s
+``online``.
 
 At step t the rollout knows u_error(t), so FEL's estimated target of the step before,
 y_est(t-1) = command(t-1) + u_error(t), is available one step late; :class:`OnlineRLS`
 then updates every run's readout with (extended state(t-1), beta y_est(t-1) +
 (1 - beta) y_ESN(t-1)), the new method's blend (beta = 1: FEL's plain target), through
 atanh for a tanh readout as the batch fit does. The next step's output already uses the
-updated readout. R runs update in lockstep (:class:`controllers.readout.RLS`). In
-:func:`controllers.fel.train` it learns at every step of the learning cycles, the runs
+updated readout. R runs update in lockstep (:class:`skinny_mj.controllers.readout.RLS`). In
+:func:`skinny_mj.controllers.fel.train` it learns at every step of the learning cycles, the runs
 that learn following the training's healthy runs, and fits nothing between cycles.
 """
 
 from __future__ import annotations
 
 import numpy as np
-
-from controllers.esn import ESN
-from controllers.learning import Cycle, LearningRule, beta_target
-from controllers.readout import RLS, linear_targets
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.learning import Cycle, LearningRule, beta_target
+from skinny_mj.controllers.readout import RLS, linear_targets
 
 
 class OnlineRLS(LearningRule):
@@ -33,9 +33,9 @@ class OnlineRLS(LearningRule):
         lambda I)^-1, so the online updates continue that fit instead of starting from a
         prior that trusts the trained readout as much as lambda says.
     beta : blend of the target with the network's own output (1: y_est alone), the
-        per-step target's (:func:`controllers.learning.beta_target`).
+        per-step target's (:func:`skinny_mj.controllers.learning.beta_target`).
     runs : (R,) bool, the runs that learn (default all; e.g. the healthy ones); in
-        :func:`controllers.fel.train`, each cycle's healthy runs.
+        :func:`skinny_mj.controllers.fel.train`, each cycle's healthy runs.
     """
 
     online = True

@@ -1,4 +1,4 @@
-"""Readout solvers of the ESN (:class:`controllers.esn.ESN`): the Moore-Penrose
+"""Readout solvers of the ESN (:class:`skinny_mj.controllers.esn.ESN`): the Moore-Penrose
 pseudo-inverse (the thesis) and ridge regression, each of stacked runs.
 
 The readout W_out of run r solves  M_r W_out^T = S_r  for extended states M (R, T, D)
@@ -10,7 +10,7 @@ and targets S (R, T, n_out), D = N + n_in + 1:
   the QR of M^T (:func:`pinv_solve_wide`);
 - :class:`PinvFactors`: the same factorization kept for many fits on the same states;
 - :func:`ridge_solve`: (M^T M + lambda I) W = M^T S by Cholesky;
-- :func:`solve_readout`: the one an :class:`~controllers.reservoir.ESNConfig` asks for,
+- :func:`solve_readout`: the one an :class:`~skinny_mj.controllers.reservoir.ESNConfig` asks for,
   targets through atanh for a tanh readout.
 """
 
@@ -20,8 +20,7 @@ from collections.abc import Callable
 
 import numpy as np
 import scipy.linalg
-
-from controllers.reservoir import ESNConfig
+from skinny_mj.controllers.reservoir import ESNConfig
 
 PINV_RCOND = 1e-15  # singular values below this x the largest count as zero (NumPy's)
 # Below this estimated (1-norm) condition number of R_M no singular value is anywhere

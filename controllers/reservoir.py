@@ -1,4 +1,4 @@
-"""The reservoir an ESN (:class:`controllers.esn.ESN`) is made of: its hyper-parameters
+"""The reservoir an ESN (:class:`skinny_mj.controllers.esn.ESN`) is made of: its hyper-parameters
 (:class:`ESNConfig`, defaults from Jaeger's toolbox) and the random weights they describe,
 drawn per run from that run's own ``Generator`` (:func:`run_generators`,
 :func:`draw_weights`, :func:`spectral_radius`).

@@ -1,7 +1,7 @@
 """Ridge readout with lambda chosen per run and per fit on a validation cycle.
 
-A learning rule (:class:`controllers.learning.LearningRule`) for FEL
-(:func:`controllers.fel.train`'s ``rule``): every learning cycle's fit
+A learning rule (:class:`skinny_mj.controllers.learning.LearningRule`) for FEL
+(:func:`skinny_mj.controllers.fel.train`'s ``rule``): every learning cycle's fit
 takes, per run, the lambda of a log grid whose readout, fitted on this cycle's
 (states, targets), best predicts the targets of the cycle before it (the epoch's
 washout cycle, or the previous learning cycle): the same controller, another draw of
@@ -15,10 +15,9 @@ M^T S, S^T S), so neither cycle's states need to outlive the rollout buffers.
 from __future__ import annotations
 
 import numpy as np
-
-from controllers.esn import ESN
-from controllers.learning import Cycle, LearningRule
-from controllers.readout import linear_targets
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.learning import Cycle, LearningRule
+from skinny_mj.controllers.readout import linear_targets
 
 #: The default grid: 10^-8 ... 10^1 (10 values; the thesis's pinv is lambda -> 0).
 RIDGE_GRID: tuple[float, ...] = tuple(float(10.0 ** k) for k in range(-8, 2))

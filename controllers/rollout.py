@@ -5,7 +5,7 @@ prediction p(t), + a hook's extra inputs); u_error(t) from (d(t), s(t)); command
 clip(y_ESN + K u_error, -1, 1); step the plant. ``s_in`` is the sensed signal delayed by
 ``delay_steps`` (paper A); the feedback controller always sees the undelayed s(t). With
 ``inputs="sensed"`` (paper B) the desired position is left out of the ESN's input.
-:mod:`controllers.fel` builds the training and the test from these cycles.
+:mod:`skinny_mj.controllers.fel` builds the training and the test from these cycles.
 """
 
 from __future__ import annotations
@@ -13,10 +13,9 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 import numpy as np
-
-from controllers.esn import ESN
-from controllers.feedback import FeedbackController
-from controllers.plant import Plant
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.feedback import FeedbackController
+from skinny_mj.controllers.plant import Plant
 
 #: What the inverse model sees besides the forward model's prediction: the desired next
 #: position and the sensed one (papers A, C, D, E), or the sensed one only (paper B).
@@ -101,7 +100,7 @@ def rollout(
     desired : (T, n_sig) desired position signals, normalized.
     gain : K, scalar or (R,).
     noise : reservoir noise on (washout/learning) or off (evaluation/test).
-    forward : optional :class:`controllers.forward_model.ForwardModel`, whose
+    forward : optional :class:`skinny_mj.controllers.forward_model.ForwardModel`, whose
         prediction p(t) is appended to the inverse model's input.
     inputs : "desired+sensed" (ESN input [d(t+1); s_in(t)]) or "sensed" ([s_in(t)]);
         the forward model's p(t) is appended in both cases.
@@ -109,11 +108,11 @@ def rollout(
         with the same dict (fresh pages of a few MB per rollout cost about as much as
         the control step); the returned Rollout's arrays are then views that the next
         such call overwrites. :func:`train` passes one per training.
-    hook : optional :class:`controllers.torque_fel.RolloutHook` (the torque loop): extra
+    hook : optional :class:`skinny_mj.controllers.torque_fel.RolloutHook` (the torque loop): extra
         ESN inputs after all others, the motor error instead of ``feedback``'s, a
         feed-forward added before the clip, a call after each step. None: the plain loop.
-    online : optional online learning rule (:class:`controllers.learning.LearningRule`,
-        e.g. :class:`controllers.online.OnlineRLS`) updated inside the loop: at step
+    online : optional online learning rule (:class:`skinny_mj.controllers.learning.LearningRule`,
+        e.g. :class:`skinny_mj.controllers.online.OnlineRLS`) updated inside the loop: at step
         t >= 1, once u_error(t) is known, ``online.update(state(t-1), y_ESN(t-1),
         y_est(t-1))``. None: no online learning.
     """

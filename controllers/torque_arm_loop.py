@@ -1,5 +1,5 @@
-"""The rollout hook of :mod:`controllers.torque_arm`'s laws (a
-:class:`controllers.torque_fel.TorqueLoop` whose motor error is one of those laws).
+"""The rollout hook of :mod:`skinny_mj.controllers.torque_arm`'s laws (a
+:class:`skinny_mj.controllers.torque_fel.TorqueLoop` whose motor error is one of those laws).
 
 For a textbook controller alone (``method="none"``, K = 1) the motor error is the law's
 whole torque / limit; for feedback-error learning (law ``"fel"``) it is the
@@ -16,16 +16,15 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-
-from controllers.torque_arm import ArmGains, ArmState, DesiredMotion, arm_torque
-from controllers.torque_fel import TorqueLoop
+from skinny_mj.controllers.torque_arm import ArmGains, ArmState, DesiredMotion, arm_torque
+from skinny_mj.controllers.torque_fel import TorqueLoop
 
 
 @dataclass
 class ArmLoop(TorqueLoop):
-    """:class:`TorqueLoop` plus a law of :mod:`controllers.torque_arm`.
+    """:class:`TorqueLoop` plus a law of :mod:`skinny_mj.controllers.torque_arm`.
 
-    law : one of :data:`controllers.torque_arm.LAWS`. gains : its pole placement.
+    law : one of :data:`skinny_mj.controllers.torque_arm.LAWS`. gains : its pole placement.
     motion : the cycle's :class:`DesiredMotion`. state_of : plant side,
     ``state_of(sensed) -> ArmState`` of the current step (R arms). dt : control step, s.
     """

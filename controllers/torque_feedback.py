@@ -31,8 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from controllers.feedback import check_error_mode, jacobian_error
+from skinny_mj.controllers.feedback import check_error_mode, jacobian_error
 
 
 @dataclass(frozen=True)
@@ -133,7 +132,7 @@ def computed_torque(q_error_rad: np.ndarray, qd_error_rad_s: np.ndarray,
 class TorqueFeedbackController:
     """Position errors -> motor errors in normalized torque, for a torque plant.
 
-    The torque counterpart of :class:`controllers.feedback.FeedbackController`, with the
+    The torque counterpart of :class:`skinny_mj.controllers.feedback.FeedbackController`, with the
     same ``u_error(desired, sensed, plant)``, so feedback-error learning can use either.
     The joint-space position error comes from the signals as there: ``mode`` "joint"
     divides by ``signal_per_rad`` (joint-angle signals), "jacobian" solves the plant's

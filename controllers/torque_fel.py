@@ -1,6 +1,6 @@
-"""The torque loop: what :func:`controllers.fel.rollout` adds on a torque plant.
+"""The torque loop: what :func:`skinny_mj.controllers.fel.rollout` adds on a torque plant.
 
-:func:`controllers.fel.rollout` takes an optional ``hook`` (:class:`RolloutHook`): the
+:func:`skinny_mj.controllers.fel.rollout` takes an optional ``hook`` (:class:`RolloutHook`): the
 smallest set of calls that turns the velocity-servo loop into a torque loop without a
 second training loop. Per step t it asks the hook for
 
@@ -27,12 +27,11 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
-
-from controllers.torque_feedback import TorqueFeedbackController
+from skinny_mj.controllers.torque_feedback import TorqueFeedbackController
 
 
 class RolloutHook(Protocol):
-    """What :func:`controllers.fel.rollout` calls when given a ``hook``."""
+    """What :func:`skinny_mj.controllers.fel.rollout` calls when given a ``hook``."""
 
     n_inputs: int  # extra ESN inputs per step
 

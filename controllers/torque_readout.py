@@ -1,12 +1,13 @@
 """Readout fits that remember earlier cycles: learning rules
-(:class:`controllers.learning.LearningRule`) for :func:`controllers.fel.train`'s ``rule``.
+(:class:`skinny_mj.controllers.learning.LearningRule`) for
+:func:`skinny_mj.controllers.fel.train`'s ``rule``.
 
 - :class:`ForgettingReadout`: the normal equations accumulated over the learning
   cycles, each cycle's old statistics weighted by a forgetting factor g per cycle,
   A <- g A + M^T M, B <- g B + M^T S, then W^T = (A + lambda I)^-1 B. With g = 0 it is
   the ridge fit of the last cycle alone (what ``esn.fit`` does with a ridge readout).
 - :class:`RLSReadout`: recursive least squares through the cycle's samples in time
-  order (:class:`controllers.readout.RLS`), the readout carried on from cycle to cycle,
+  order (:class:`skinny_mj.controllers.readout.RLS`), the readout carried on from cycle to cycle,
   with the forgetting per sample that gives the same memory per cycle, g^(1/T).
 
 Targets go through atanh (clipped) for a tanh readout, as every fit of the ESN does.
@@ -15,10 +16,9 @@ Targets go through atanh (clipped) for a tanh readout, as every fit of the ESN d
 from __future__ import annotations
 
 import numpy as np
-
-from controllers.esn import ESN
-from controllers.learning import Cycle, LearningRule
-from controllers.readout import RLS, linear_targets
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.learning import Cycle, LearningRule
+from skinny_mj.controllers.readout import RLS, linear_targets
 
 
 class ForgettingReadout(LearningRule):

@@ -3,9 +3,9 @@
 Targets are the true commands (from an analytic inverse, computed elsewhere and
 passed in as an array). Teacher forcing: the inverse model's "current position"
 input is the desired position d(t), so the plant is not needed for training; it is
-used only in testing (closed loop, K = 0: :func:`controllers.fel.evaluate`).
+used only in testing (closed loop, K = 0: :func:`skinny_mj.controllers.fel.evaluate`).
 Original method: one fitted cycle. New method: ``cycles`` cycles, each fitting
-y_used = beta y_true + (1 - beta) y_ESN (:func:`controllers.learning.beta_target`) by a
+y_used = beta y_true + (1 - beta) y_ESN (:func:`skinny_mj.controllers.learning.beta_target`) by a
 learning rule (default the pinv or ridge fit of each cycle alone). Every run starts
 with a reset and one washout cycle; the state carries over between cycles.
 """
@@ -16,10 +16,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-
-from controllers.esn import ESN
-from controllers.learning import Cycle, CycleFit, LearningRule, beta_target
-from controllers.metrics import nrmse
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.learning import Cycle, CycleFit, LearningRule, beta_target
+from skinny_mj.controllers.metrics import nrmse
 
 
 @dataclass(frozen=True)
@@ -82,11 +81,11 @@ def train_true_target(
     input_rngs : one Generator per run for ``cfg.input_noise`` (needed when it is > 0).
     extra_inputs : optional (T-1, n_extra) teacher-forced inputs appended after
         [d(t+1); d(t)], as a rollout hook appends its own (the torque loop's desired
-        velocities, :mod:`controllers.torque_fel`).
-    rule : the learning rule (:class:`controllers.learning.LearningRule`): ``washout``
+        velocities, :mod:`skinny_mj.controllers.torque_fel`).
+    rule : the learning rule (:class:`skinny_mj.controllers.learning.LearningRule`): ``washout``
         after the washout cycle, ``fit`` after each cycle, with the blended true target
-        (``y_est`` of its :class:`~controllers.learning.Cycle`: the true commands).
-        Default: :class:`~controllers.learning.CycleFit` reusing the pinv factorization
+        (``y_est`` of its :class:`~skinny_mj.controllers.learning.Cycle`: the true commands).
+        Default: :class:`~skinny_mj.controllers.learning.CycleFit` reusing the pinv factorization
         while the teacher-forced states repeat.
     """
     forced = teacher_forced_inputs(desired)

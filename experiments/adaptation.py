@@ -27,9 +27,10 @@ Learners (rows ``<change>-<learner>``):
 
 - ``frozen``: the trained readout, unchanged;
 - ``fel``: after every cycle, one FEL fit of the new method (β = 0.1) on that cycle,
-  as in training (:meth:`controllers.esn.ESN.fit`);
+  as in training (:meth:`skinny_mj.controllers.esn.ESN.fit`);
 - ``rls``: an RLS readout update every control step inside the loop
-  (:class:`controllers.online.OnlineRLS` through :func:`controllers.fel.rollout`'s
+  (:class:`skinny_mj.controllers.online.OnlineRLS` through
+  :func:`skinny_mj.controllers.fel.rollout`'s
   ``online`` hook; target y_est(t−1), forgetting ``forgetting``, P_0 from the last
   training evaluation cycle's states with λ = ``rls_lambda``);
 - ``fel-noise`` (rows ``gain-fel-noise``, ``none-fel``, ``none-fel-noise``; ``none``:
@@ -54,8 +55,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments.claims import claim_lines
 
-from experiments.claims import claim_lines
 from skinny_mj.engine.experiment import Experiment, Row, RunFailed
 from skinny_mj.engine.sweep import one_of_batch
 from skinny_mj.training.config import TrainConfig
@@ -119,9 +120,10 @@ def train_configs(cfg: Config, row: Row) -> dict[str, TrainConfig]:
 
 
 def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
-    from controllers import fel
-    from controllers.metrics import position_nrmse
-    from controllers.online import OnlineRLS
+    from skinny_mj.controllers import fel
+    from skinny_mj.controllers.metrics import position_nrmse
+    from skinny_mj.controllers.online import OnlineRLS
+
     from skinny_mj.plant import body
     from skinny_mj.plant.perturb import PerturbedPlant
     from skinny_mj.training import torque
@@ -212,7 +214,8 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
 def forearm_floor(cfg: Config) -> float:
     """Position NRMSE of the long-forearm arm moving exactly along the desired angles:
     the part of the ``forearm`` rows' error that no joint motion can remove."""
-    from controllers.metrics import position_nrmse
+    from skinny_mj.controllers.metrics import position_nrmse
+
     from skinny_mj.plant.perturb import forearm_rows
     from skinny_mj.training.parts import load_trajectory
 

@@ -17,7 +17,7 @@ Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` 
   centre of mass (``payload1``) or every arm link's mass and inertia x 1.2 / x 0.8
   (``mass+20``, ``mass-20``); tested at K = 0 (``-k0``) and with the teacher left on
   at K = 1 (``-k1``).
-- ``arm-table``, ``arm-robust``: the arm's own dynamics (:mod:`controllers.torque_arm`,
+- ``arm-table``, ``arm-robust``: the arm's own dynamics (:mod:`skinny_mj.controllers.torque_arm`,
   poles placed in inertia-scaled coordinates): ``arm-ct`` computed torque (omega 15
   rad/s), ``arm-idpd`` inverse-dynamics feed-forward + PD (omega 5), ``arm-pdg`` PD +
   gravity compensation (omega 15), ``arm-pd`` the inertia-scaled PD alone (omega 5, the
@@ -62,7 +62,7 @@ CONTROLLERS = {
     "fel-new-gff": {"rule": "new", "rule.beta": 0.1, "actuation.gravity_feedforward": True},
     "tt": {"rule": "true-target", "rule.beta": 0.1},
 }
-#: The arm's own dynamics (controllers.torque_arm): the textbook controllers alone
+#: The arm's own dynamics (skinny_mj.controllers.torque_arm): the textbook controllers alone
 #: (K = 1) and FEL with the inertia-scaled PD teacher (beta = 1, 3 learning cycles per
 #: epoch, 15 epochs of K 1 -> 0; readout on the normal equations with forgetting 0.8,
 #: ridge 1e-2, or on each cycle alone, or by RLS)
@@ -217,7 +217,8 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
 def joint_nrmse(outcome) -> float:
     """Test joint-angle NRMSE (each angle normalized to [-1, 1] over its range) of a
     :class:`skinny_mj.training.loop.TrainOutcome` against its movement's angles."""
-    from controllers.metrics import position_nrmse
+    from skinny_mj.controllers.metrics import position_nrmse
+
     from skinny_mj.plant.body import normalize_angles
 
     dof = outcome.config.plant.dof
@@ -285,7 +286,7 @@ def feasibility_table(movements: tuple[str, ...], bodies: tuple[str, ...]) -> li
 def report(results: dict, out_dir: Path) -> str:
     """The movements' feasibility, the goals, the torque limits and warnings, and the
     wall-time ratio, from the run files on disk."""
-    from experiments.claims import values
+    from skinny_mj.experiments.claims import values
 
     out_dir = Path(out_dir)
     cfg = Config.from_dict(json.loads((out_dir / "config.json").read_text())["config"])
@@ -343,7 +344,8 @@ def arm_report(out_dir: Path, cfg: Config) -> list[str]:
     """The goals of the arm-dynamics rows, from the run files."""
     import statistics
 
-    from experiments.claims import values
+    from skinny_mj.experiments.claims import values
+
     from skinny_mj.training.torque import feasibility
 
     def mean(row: str, metric: str) -> float | None:

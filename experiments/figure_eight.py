@@ -3,9 +3,10 @@ beat the ordinary teacher-forced fit, FORCE and reservoirpy?
 
 One ESN (N = 200, spectral radius 0.8, input scaling 0.5 on the bias, output feedback
 scaling 1, identity readout, uniform state noise 1e-3, pinv) learns the 1:2 Lissajous
-figure eight (period 100 steps, amplitude 0.5, :func:`controllers.generation.figure_eight`)
+figure eight (period 100 steps, amplitude 0.5,
+:func:`skinny_mj.controllers.generation.figure_eight`)
 from 12 periods (2 of washout), then runs free for 20 periods. Rows and metrics:
-:mod:`experiments.generation_runs`; FORCE: P_0 = I / 1e-4, no forgetting; reservoirpy:
+:mod:`skinny_mj.experiments.generation_runs`; FORCE: P_0 = I / 1e-4, no forgetting; reservoirpy:
 ``ESN(units=200, sr=0.8, input_scaling=0.5, ridge=1e-6, feedback=True)`` with a
 constant input 1 (its bias), the same teacher. The hyper-parameters were set on pilot
 seeds 1001–1003 (outside the sweep's) so that the ordinary fit and FORCE work at all;
@@ -25,10 +26,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.controllers.esn import ESNConfig
+from skinny_mj.controllers.generation import figure_eight
+from skinny_mj.experiments import generation_runs as common
 
-from controllers.esn import ESNConfig
-from controllers.generation import figure_eight
-from experiments import generation_runs as common
 from skinny_mj.engine.experiment import Experiment, Row
 
 NAME = "figure-eight"
@@ -124,7 +125,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
 
 
 def report(results: dict, out_dir: Path) -> str:
-    from experiments.claims import claim_lines
+    from skinny_mj.experiments.claims import claim_lines
 
     short = claim_lines(Path(out_dir), [
         ("figure-eight, short training sequence: the new β method run to convergence runs "

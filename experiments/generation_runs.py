@@ -3,9 +3,9 @@ output feedback), lockstep runs of all seeds, the free-run metrics, the report.
 
 Rows (``method`` in a row's params):
 
-- ``ordinary``: one teacher-forced fit (:func:`controllers.generation.fit_ordinary`);
+- ``ordinary``: one teacher-forced fit (:func:`skinny_mj.controllers.generation.fit_ordinary`);
 - ``new``: paper E's β method, β = 0.1 over 30 cycles (Table 1's 3 per epoch x 10),
-  teacher fed back, blended target (:func:`controllers.generation.fit_beta`);
+  teacher fed back, blended target (:func:`skinny_mj.controllers.generation.fit_beta`);
 - ``new-conv``: the β method run to convergence instead of a fixed count: β = 0.1,
   each run stops at the first pass whose output error is not at least 1 % below the
   previous pass's (:data:`MIN_IMPROVEMENT`; cap :data:`MAX_CYCLES`); the cycles it took
@@ -30,10 +30,10 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.controllers import generation as gen
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.experiments.claims import claim_lines
 
-from controllers import generation as gen
-from controllers.esn import ESN, ESNConfig
-from experiments.claims import claim_lines
 from skinny_mj.engine.experiment import Row
 
 #: Row order fixes each row's seeds (the engine's per-row seeds): new rows go last.

@@ -4,8 +4,8 @@ method beat the ordinary teacher-forced fit and reservoirpy?
 Jaeger & Haas (2004)'s task and network (:func:`skinny_mj.cli.bench_mackey_glass.esn_config`:
 leak 0.6, spectral radius 0.95, bias 0.2, feedback scaling 0.56, state noise 1e-8,
 pinv), N = 400: teacher-forced through 1000 washout + 2000 training samples of a series
-of its own (:func:`controllers.mackey_glass.mackey_glass`, one per seed), then free for
-500 steps. Rows: :mod:`experiments.generation_runs` (no FORCE row); reservoirpy: its own
+of its own (:func:`skinny_mj.controllers.mackey_glass.mackey_glass`, one per seed), then free for
+500 steps. Rows: :mod:`skinny_mj.experiments.generation_runs` (no FORCE row); reservoirpy: its own
 way (:func:`skinny_mj.cli.bench_mackey_glass.mackey_glass_reservoirpy`: d(t) -> d(t + 1),
 ridge 1e-10, closed loop). Metrics: Jaeger & Haas's NRMSE_84 of each run (|y(84) −
 d(84)| / std(d), and log10), the free-run NRMSE over the first 84 steps, the horizon
@@ -21,9 +21,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.controllers.mackey_glass import mackey_glass
+from skinny_mj.experiments import generation_runs as common
 
-from controllers.mackey_glass import mackey_glass
-from experiments import generation_runs as common
 from skinny_mj.engine.experiment import Experiment, Row
 
 NAME = "mackey-glass"

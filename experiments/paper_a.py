@@ -27,8 +27,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.controllers.fel import run_mean
 
-from controllers.fel import run_mean
 from skinny_mj.engine.experiment import Experiment, Row, RunFailed
 from skinny_mj.engine.options import OPTION_KEYS, movement_changes
 from skinny_mj.engine.sweep import one_of_batch
@@ -126,7 +126,8 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     """
     import time
 
-    from controllers.forward_model import rollout_prediction_error
+    from skinny_mj.controllers.forward_model import rollout_prediction_error
+
     from skinny_mj.training.loop import build_run, evaluate, train_run
 
     start = time.perf_counter()
@@ -194,7 +195,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
 # -- report -------------------------------------------------------------------------
 def _by_delay(out_dir: Path, metric: str) -> tuple[list[int], dict[str, dict[int, list]]]:
     """Delays present and arch -> delay -> values of ``metric`` over ok runs."""
-    from experiments.claims import values
+    from skinny_mj.experiments.claims import values
 
     found: dict[str, dict[int, list]] = {}
     for arch in ARCHITECTURES:

@@ -174,7 +174,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
 
 # -- report: figures and claims -------------------------------------------------------
 def _stat(out_dir: Path, row: str, metric: str, stat=np.median) -> float | None:
-    from experiments.claims import values
+    from skinny_mj.experiments.claims import values
 
     v = values(out_dir, row, metric)
     return float(stat(v)) if v else None
@@ -287,7 +287,7 @@ def report(results: dict, out_dir: Path) -> str:
         if run["row"] not in done and "traces" in run["metrics"]:
             _fig3(out_dir / f"fig3_{run['row']}.png", run["row"], run["metrics"]["traces"])
             done.add(run["row"])
-    from experiments.claims import values
+    from skinny_mj.experiments.claims import values
 
     groups = {f"{r} {_tag(s)}": values(out_dir, r, f"relative_error_{_tag(s)}")
               for r in PAPER_SAYS for s in SPEEDS}

@@ -228,7 +228,7 @@ CLAIMS = [
 
 
 def _relative_gain(out_dir: Path, metric: str, better: str, worse: str) -> float | None:
-    from experiments.claims import values
+    from skinny_mj.experiments.claims import values
 
     a, b = values(out_dir, better, metric), values(out_dir, worse, metric)
     if not a or not b:
@@ -238,7 +238,8 @@ def _relative_gain(out_dir: Path, metric: str, better: str, worse: str) -> float
 
 def report(results: dict, plan: Any, out_dir: Path) -> str:
     """Figure 3 (box plots beside the paper's means), Figure 4 and the paper's claims."""
-    from experiments.claims import claim_lines, values
+    from skinny_mj.experiments.claims import claim_lines, values
+
     from skinny_mj.plots import boxplot_png
 
     out_dir = Path(out_dir)

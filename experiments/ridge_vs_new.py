@@ -4,13 +4,15 @@ the original FEL method match paper E's new β method?
 Rows, on each of two movements (``ymca-*``: the YMCA of paper E; ``md02-*``: CMU
 modern dance md_02, seconds 3 to 9.26, the length of one YMCA):
 
-- ``<mv>-1`` ... ``<mv>-6``: paper E's Table 1 rows (:data:`experiments.paper_e.TABLE_1`,
-  their overrides in :data:`experiments.paper_e.ROWS`): original method with 1, 5, 10
+- ``<mv>-1`` ... ``<mv>-6``: paper E's Table 1 rows
+  (:data:`skinny_mj.experiments.paper_e.study.TABLE_1`,
+  their overrides in :data:`skinny_mj.experiments.paper_e.study.ROWS`): original method with 1, 5,
+  10
   repetitions, new method with β = 0.3, 0.1, 0.05;
 - ``<mv>-ridge1``, ``-ridge5``, ``-ridge10``: rows 1–3 (original method, reservoir noise
   0.03) with ``esn.readout=ridge`` and ``rule.fit=ridge-select``: each fit's lambda from the
-  grid 1e-8 ... 10 (:data:`controllers.ridge_select.RIDGE_GRID`) that best predicts the
-  targets of the cycle before it (:class:`controllers.ridge_select.RidgeSelector`);
+  grid 1e-8 ... 10 (:data:`skinny_mj.controllers.ridge_select.RIDGE_GRID`) that best predicts the
+  targets of the cycle before it (:class:`skinny_mj.controllers.ridge_select.RidgeSelector`);
 - ``<mv>-ridge-new``: row 5 (new method, β = 0.1) with the same ridge selection.
 
 20 runs per row, tested with the feedback controller off (K = 0) on one repetition:
@@ -24,9 +26,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments.claims import claim_lines
+from skinny_mj.experiments.paper_e import study as paper_e
 
-from experiments import paper_e
-from experiments.claims import claim_lines
 from skinny_mj.engine.study import Quick, Row, Study
 
 NAME = "ridge-vs-new"

@@ -10,10 +10,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from skinny_mj.plant import headless
-
 __version__ = "0.1.0"
-headless.install()  # no display, no MUJOCO_GL: dm_control skips GLFW without a warning
 
 _LAZY = {
     "load": ("skinny_mj.plant.task", "load"),

@@ -7,7 +7,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from controllers._io import atomic_path as _atomic_path
+from skinny_mj.controllers._io import atomic_path as _atomic_path
 
 # One implementation for the whole project: controllers/ may not import skinny_mj,
 # so the context manager lives there and is re-exported here.

@@ -217,7 +217,7 @@ def track_estimate(dof: int, n_sig: int, steps: int, steps_cause: str) -> Estima
 def generation_estimate(n_res: int, n_in: int, n_out: int, steps: int, free_steps: int,
                         runs: int = 1, rls: bool = False, cycles: int = 1) -> Estimate:
     """Bytes one lockstep batch of ``runs`` ESNs with output feedback and no plant needs
-    (:mod:`controllers.generation`): the weights, the series and inputs of ``steps``
+    (:mod:`skinny_mj.controllers.generation`): the weights, the series and inputs of ``steps``
     teacher steps + ``free_steps`` free ones, a teacher-forced pass's outputs and extended
     states (two at once when ``cycles`` > 1: a pass's are made before the last one's are
     freed), the readout's float64 copy and one run's QR of them; ``rls``: FORCE's

@@ -7,8 +7,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from skinny_mj.experiments import adaptation
 
-from experiments import adaptation
 from skinny_mj.plant import body
 from skinny_mj.plant.adapters import BatchPlant
 from skinny_mj.plant.perturb import PerturbedPlant, forearm_rows

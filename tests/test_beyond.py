@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from skinny_mj.controllers import fel, generation
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.controllers.learning import Cycle
+from skinny_mj.controllers.online import OnlineRLS
+from skinny_mj.controllers.plant import ToyPlant
+from skinny_mj.controllers.readout import RLS, ridge_solve, rls_solve
+from skinny_mj.controllers.ridge_select import RidgeSelector, ridge_path, validation_errors
 
-from controllers import fel, generation
-from controllers.esn import ESN, ESNConfig
-from controllers.learning import Cycle
-from controllers.online import OnlineRLS
-from controllers.plant import ToyPlant
-from controllers.readout import RLS, ridge_solve, rls_solve
-from controllers.ridge_select import RidgeSelector, ridge_path, validation_errors
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant.perturb import PerturbedPlant
 from skinny_mj.training.config import TrainConfig

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from skinny_mj.controllers import fel
+from skinny_mj.controllers.arm_forward import ArmForwardModels
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.experiments.bimanual_delay import report as bdr
+from skinny_mj.experiments.bimanual_delay import study as bd
 
-from controllers import fel
-from controllers.arm_forward import ArmForwardModels
-from controllers.esn import ESN, ESNConfig
-from experiments import bimanual_delay as bd
-from experiments import bimanual_delay_report as bdr
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import bimanual as bm
 from skinny_mj.plant.body import position_signals

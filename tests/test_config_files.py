@@ -117,7 +117,7 @@ def test_train_repeats_an_earlier_versions_metrics_json(tmp_path):
 
 
 def test_test_runs_an_earlier_versions_model(tmp_path):
-    from controllers.esn import read_metadata
+    from skinny_mj.controllers.esn import read_metadata
 
     assert "reservoir" in read_metadata(_LEGACY / "model.npz")["config"]  # flat, old
     assert main(["test", "--model", str(_LEGACY / "model.npz"), "--out",

@@ -81,7 +81,7 @@ def test_true_target_learns_torques_with_velocity_inputs():
 
 
 def test_dynamic_experiment_rows():
-    from experiments import dynamic
+    from skinny_mj.experiments import dynamic
 
     exp = dynamic.build(quick=True)
     ids = {r.row_id for r in exp.rows}

@@ -1,17 +1,17 @@
-"""The arm's own dynamics: the textbook laws of ``controllers.torque_arm``, the readout
-fits that remember (``controllers.torque_readout``) and their settings."""
+"""The arm's own dynamics: the textbook laws of ``skinny_mj.controllers.torque_arm``, the readout
+fits that remember (``skinny_mj.controllers.torque_readout``) and their settings."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.learning import Cycle
+from skinny_mj.controllers.readout import ridge_solve
+from skinny_mj.controllers.reservoir import ESNConfig
+from skinny_mj.controllers.torque_arm import ArmGains, ArmState, DesiredMotion, arm_torque
+from skinny_mj.controllers.torque_readout import ForgettingReadout, RLSReadout
 
-from controllers.esn import ESN
-from controllers.learning import Cycle
-from controllers.readout import ridge_solve
-from controllers.reservoir import ESNConfig
-from controllers.torque_arm import ArmGains, ArmState, DesiredMotion, arm_torque
-from controllers.torque_readout import ForgettingReadout, RLSReadout
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training import torque as torque_training
 from skinny_mj.training.loop import TrainConfig

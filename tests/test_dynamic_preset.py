@@ -48,7 +48,8 @@ def test_torque_general_babbling_is_within_the_torque_limits():
 
 @pytest.mark.slow  # the CLI end to end (imports matplotlib and rerun)
 def test_train_torque_general_records_the_preset(tmp_path):
-    from controllers.esn import read_metadata
+    from skinny_mj.controllers.esn import read_metadata
+
     from skinny_mj.cli.parser import main
 
     out = tmp_path / "train"

@@ -5,9 +5,8 @@ import copy
 
 import numpy as np
 import pytest
-
-from controllers.esn import ESN, ESNConfig, run_generators, spectral_radius
-from controllers.readout import ridge_solve
+from skinny_mj.controllers.esn import ESN, ESNConfig, run_generators, spectral_radius
+from skinny_mj.controllers.readout import ridge_solve
 
 
 def _inputs(n_runs=1, n_steps=60, n_in=3, seed=0):
@@ -265,7 +264,7 @@ def test_pinv_solve_is_numpys_pinv_including_rank_deficient(shape, deficient):
     """The QR readout solve gives pinv(M) @ S: tall, square and wide M, rank-deficient
     by a duplicated and an all-zero column, or (the wide case's own) a duplicated and
     an all-zero row, whose null space the minimum-norm solution must leave out."""
-    from controllers.readout import pinv_solve
+    from skinny_mj.controllers.readout import pinv_solve
 
     rng = np.random.default_rng(sum(shape))
     m = rng.normal(size=shape)
@@ -282,7 +281,7 @@ def test_pinv_solve_is_numpys_pinv_including_rank_deficient(shape, deficient):
 def test_pinv_solve_takes_both_branches_and_both_equal_pinv():
     """Well-conditioned M: the triangular solve; rank-deficient M (a duplicated
     column): the SVD with NumPy's cutoff. Both give pinv(M) @ S."""
-    from controllers import readout as readout_module
+    from skinny_mj.controllers import readout as readout_module
 
     rng = np.random.default_rng(7)
     m = rng.normal(size=(2, 200, 30))
@@ -321,7 +320,7 @@ def test_step_writes_the_extended_state_where_asked_and_checks_the_array():
 def test_pinv_factors_reused_equal_fresh_fits():
     """PinvFactors of fixed states solves any targets like a fresh pinv, for all runs
     or a subset, and fit(factors=...) refuses factors of other states."""
-    from controllers.readout import PinvFactors
+    from skinny_mj.controllers.readout import PinvFactors
 
     esn = ESN(ESNConfig(3, 2, n_reservoir=40), n_runs=3, seed=5)
     _, x = esn.run(np.random.default_rng(1).uniform(-1, 1, (3, 120, 3)), noise=False)

@@ -14,10 +14,10 @@ import json
 
 import numpy as np
 import pytest
+from skinny_mj.controllers import fel
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.metrics import position_nrmse
 
-from controllers import fel
-from controllers.esn import ESN
-from controllers.metrics import position_nrmse
 from skinny_mj.cli import bench
 from skinny_mj.engine.experiment import Experiment, Row, RunFailed, execute_batch, run_sweep
 from skinny_mj.plant.adapters import BatchPlant, EnvPlant

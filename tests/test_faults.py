@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import skinny_mj.controllers._io
 
-import controllers._io
 from skinny_mj.cli.parser import main
 from skinny_mj.engine.experiment import Experiment, Row, RunFailed, run_sweep
 from skinny_mj.errors import SkinnyEnvironmentError
@@ -34,7 +34,7 @@ def _one_line_error(capsys, code: int, expected: int, needle: str) -> str:
 
 
 def _fake_tempfile(error: int, spare_probe: bool = False):
-    """A tempfile module for controllers._io whose mkstemp fails with ``error``."""
+    """A tempfile module for skinny_mj.controllers._io whose mkstemp fails with ``error``."""
     import tempfile
 
     class Fake:
@@ -57,7 +57,7 @@ def test_output_under_a_file_fails_before_training(tmp_path, monkeypatch, capsys
 @pytest.mark.parametrize("error", [errno.EACCES, errno.EROFS, errno.ENOSPC])
 def test_unwritable_or_full_output_fails_before_training(error, tmp_path, monkeypatch,
                                                          capsys):
-    monkeypatch.setattr(controllers._io, "tempfile", _fake_tempfile(error))
+    monkeypatch.setattr(skinny_mj.controllers._io, "tempfile", _fake_tempfile(error))
     monkeypatch.setattr("skinny_mj.training.loop.train", _never)
     code = main(["train", "--epochs", "1", "--out", str(tmp_path / "run")])
     _one_line_error(capsys, code, 1, os.strerror(error))
@@ -66,7 +66,7 @@ def test_unwritable_or_full_output_fails_before_training(error, tmp_path, monkey
 
 def test_a_disk_that_fills_during_the_command_leaves_no_partial_file(tmp_path, monkeypatch,
                                                                      capsys):
-    monkeypatch.setattr(controllers._io, "tempfile",
+    monkeypatch.setattr(skinny_mj.controllers._io, "tempfile",
                         _fake_tempfile(errno.ENOSPC, spare_probe=True))
     out = tmp_path / "t.npz"
     code = main(["trajectory", "export", "ymca", "--out", str(out)])
@@ -181,7 +181,7 @@ def test_diverging_runs_are_failed_with_reasons_and_the_sweep_goes_on(tmp_path):
 
 
 def test_singular_readout_solves_give_finite_or_nan_never_raise():
-    from controllers.readout import pinv_solve, ridge_solve
+    from skinny_mj.controllers.readout import pinv_solve, ridge_solve
 
     targets = np.ones((1, 50, 4))
     assert np.all(pinv_solve(np.zeros((1, 50, 21)), targets) == 0.0)  # all-zero states

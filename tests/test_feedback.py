@@ -2,8 +2,7 @@
 
 import numpy as np
 import pytest
-
-from controllers.feedback import (
+from skinny_mj.controllers.feedback import (
     FeedbackController,
     fixed_gain,
     jacobian_error,
@@ -11,7 +10,7 @@ from controllers.feedback import (
     linear_gain,
     multiplicative_gain,
 )
-from controllers.plant import ToyPlant
+from skinny_mj.controllers.plant import ToyPlant
 
 LIMITS = np.tile([0.0, np.pi], (4, 1))
 SPEED = np.array([1.0, 2.0, 1.5, 0.5])

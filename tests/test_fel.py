@@ -2,12 +2,11 @@
 
 import numpy as np
 import pytest
-
-from controllers.esn import ESN, ESNConfig, run_generators
-from controllers.feedback import FeedbackController
-from controllers.fel import FELConfig, evaluate, health, rollout, train
-from controllers.metrics import nrmse, position_nrmse
-from controllers.plant import ToyPlant, toy_movement
+from skinny_mj.controllers.esn import ESN, ESNConfig, run_generators
+from skinny_mj.controllers.feedback import FeedbackController
+from skinny_mj.controllers.fel import FELConfig, evaluate, health, rollout, train
+from skinny_mj.controllers.metrics import nrmse, position_nrmse
+from skinny_mj.controllers.plant import ToyPlant, toy_movement
 
 LIMITS = np.tile([0.0, np.pi], (4, 1))
 

@@ -3,12 +3,12 @@ the toolbox's protocol options (each default = today's behaviour)."""
 
 import numpy as np
 import pytest
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.controllers.feedback import FeedbackController
+from skinny_mj.controllers.fel import FELConfig, evaluate, train
+from skinny_mj.controllers.plant import ToyPlant, toy_movement
+from skinny_mj.controllers.true_target import TrueTargetConfig, train_true_target
 
-from controllers.esn import ESN, ESNConfig
-from controllers.feedback import FeedbackController
-from controllers.fel import FELConfig, evaluate, train
-from controllers.plant import ToyPlant, toy_movement
-from controllers.true_target import TrueTargetConfig, train_true_target
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig

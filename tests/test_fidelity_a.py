@@ -7,8 +7,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from skinny_mj.experiments import paper_a
+from skinny_mj.experiments.fidelity_a import study as fidelity_a
 
-from experiments import fidelity_a, paper_a
 from skinny_mj.engine.experiment import Row
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import pytest
+import skinny_mj.experiments as experiments
+from skinny_mj.experiments import paper_d
+from skinny_mj.experiments.fidelity_d import report as fidelity_d_report
+from skinny_mj.experiments.fidelity_d import study as fidelity_d
 
-import experiments
-from experiments import fidelity_d, paper_d
 from skinny_mj.engine.experiment import run_sweep
 from skinny_mj.engine.plan import Results
 from skinny_mj.training.loop import build_run, train_run
@@ -71,7 +73,7 @@ def test_quick_stage_1_runs_and_reports(quick_sweep):
         if row["n_ok"]:
             assert {"tt_position_train", "tt_position_test", "tt_motor_test"} <= set(
                 row["metrics"])
-    text = fidelity_d.report(Results(results, out), exp.config, out)
+    text = fidelity_d_report.report(Results(results, out), exp.config, out)
     assert "Stage 1" in text and "Stage 2" not in text  # stage 2 not run yet
     assert (out / "fig_train_error.png").stat().st_size > 0
     assert (out / "fig_test_error.png").stat().st_size > 0

@@ -2,12 +2,11 @@
 
 import numpy as np
 import pytest
-
-from controllers.esn import ESN, ESNConfig
-from controllers.fel import FELConfig, rollout, train
-from controllers.forward_model import ForwardModel, rollout_prediction_error
-from controllers.metrics import nrmse
-from controllers.plant import ToyPlant, toy_movement
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.controllers.fel import FELConfig, rollout, train
+from skinny_mj.controllers.forward_model import ForwardModel, rollout_prediction_error
+from skinny_mj.controllers.metrics import nrmse
+from skinny_mj.controllers.plant import ToyPlant, toy_movement
 
 LIMITS = np.tile([0.0, np.pi], (4, 1))
 

@@ -8,8 +8,8 @@ import json
 
 import numpy as np
 import pytest
+from skinny_mj.controllers.metrics import fraction_within, rmse_per_signal, timing_lag
 
-from controllers.metrics import fraction_within, rmse_per_signal, timing_lag
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.trajectories import get, load_movement
@@ -107,7 +107,7 @@ def test_imitation_metrics_on_known_signals():
 
 def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
     pytest.importorskip("dtaidistance")
-    from experiments import generalization as g
+    from skinny_mj.experiments.generalization import study as g
 
     exp = g.STUDY.build(quick=True)
     assert {r.row_id for r in exp.rows} == {f"j2-{s}" for s in g.QUICK_SETS}
@@ -140,7 +140,7 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
 
 
 def test_clipped_ideal_is_exact_within_full_scale_and_pays_beyond():
-    from experiments.generalization import clipped_ideal_nrmse, saturation
+    from skinny_mj.experiments.generalization.study import clipped_ideal_nrmse, saturation
 
     traj = get("ymca", 4)
     wide = 2 * traj.max_speed_rad_s()
@@ -169,7 +169,8 @@ def test_preset_general_sets_its_fields_and_flags_given_override_them():
 @pytest.mark.slow  # the CLI end to end (imports matplotlib and rerun: ~10 s)
 def test_train_preset_general_records_its_training_and_tests_on_a_clip(tmp_path):
     pytest.importorskip("dtaidistance")
-    from controllers.esn import read_metadata
+    from skinny_mj.controllers.esn import read_metadata
+
     from skinny_mj.cli.parser import main
 
     out = tmp_path / "train"

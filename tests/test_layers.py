@@ -21,109 +21,104 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-LAYERS = ("skinny_mj", "controllers", "experiments")
+LAYERS = ("skinny_mj", "controllers", "experiments")  # the folders read
 # Private names that are public API despite the underscore (namedtuple's).
 PUBLIC_UNDERSCORE = {"_replace", "_fields", "_asdict", "_make", "_field_defaults"}
 # Cross-module private reads allowed (none: each got a public accessor).
 KNOWN_PRIVATE_READS: set[str] = set()
 
-# -- the parts of skinny_mj, as module-name prefixes ------------------------------------
+# -- the parts, as module-name prefixes ---------------------------------------------------
+# The learning and the studies keep their folders at the top of the repository and install
+# under skinny_mj (pyproject's package-dir): controllers/esn.py is skinny_mj.controllers.esn.
+MAPPED = {folder: name for name, folder in tomllib.loads((ROOT / "pyproject.toml").read_text())[
+    "tool"]["setuptools"]["package-dir"].items()}
+CONTROLLERS = ("skinny_mj.controllers",)
+EXPERIMENTS = ("skinny_mj.experiments",)
 # The body and its MuJoCo model, the dm_control task, the plant adapters and the Gymnasium
 # envs over them, the analytic ideal controller, changes of the body, pictures.
-PLANT = (
-    "skinny_mj.plant.body",
-    "skinny_mj.plant.model",
-    "skinny_mj.plant.physics",
-    "skinny_mj.plant.task",
-    "skinny_mj.plant.adapters",
-    "skinny_mj.plant.dynamics",
-    "skinny_mj.plant.perturb",
-    "skinny_mj.plant.bimanual",
-    "skinny_mj.plant.ideal",
-    "skinny_mj.plant.render",
-    "skinny_mj.plant.headless",
-    "skinny_mj.gym",
-)
+PLANT = ("skinny_mj.plant", "skinny_mj.gym")
 # What Skinny imitates (pure NumPy/SciPy: no mujoco, no dm_control).
 MOVEMENTS = ("skinny_mj.trajectories",)
 # One run: its configuration (dotted overrides, earlier versions' flat configs, presets),
-# its parts, the training path, the torque additions, the toolbox's protocol options, the
-# imitation metrics.
-TRAINING = (
-    "skinny_mj.training.config",
-    "skinny_mj.training.overrides",
-    "skinny_mj.training.legacy",
-    "skinny_mj.training.presets",
-    "skinny_mj.training.parts",
-    "skinny_mj.training.loop",
-    "skinny_mj.training.torque",
-    "skinny_mj.training.protocol",
-    "skinny_mj.training.imitation",
-    "skinny_mj.training.fits",
-)
+# its parts, the training path, the torque additions, the learning rules' registry, the
+# toolbox's protocol options, the imitation metrics.
+TRAINING = ("skinny_mj.training",)
 # Many runs: the experiment engine, its sweep helpers, the registry of studies.
-ENGINE = ("skinny_mj.engine.experiment", "skinny_mj.engine.sweep", "skinny_mj.engine.folder",
-          "skinny_mj.engine.options", "skinny_mj.engine.stats", "skinny_mj.engine.registry",
-          "skinny_mj.engine.study", "skinny_mj.engine.plan", "skinny_mj.engine.grid",
-          "skinny_mj.engine.compare")
+ENGINE = ("skinny_mj.engine",)
 # The `skinny` command: parser, handlers, flags (the configuration's flags; a run repeated
 # from its files with --config), help texts, bench, viewer.
-COMMAND_LINE = (
-    "skinny_mj.cli.parser",
-    "skinny_mj.cli.commands",
-    "skinny_mj.cli.flags",
-    "skinny_mj.cli.config_flags",
-    "skinny_mj.cli.config_files",
-    "skinny_mj.cli.study_help",
-    "skinny_mj.cli.bench",
-    "skinny_mj.cli.bench_mackey_glass",
-    "skinny_mj.cli.viewer",
-)
-# Not listed, shared by every part: errors, io, threads, progress, preflight, memory
-# (its generic check; its run and sweep estimates import training and the engine inside
-# functions), dtw, plots, recording, recording_layout.
+COMMAND_LINE = ("skinny_mj.cli",)
+# Shared by every part: errors, io, threads, progress, preflight, memory (its generic
+# check; its run and sweep estimates import training and the engine inside functions), dtw,
+# plots, recording, recording_layout.
+SHARED = ("skinny_mj.errors", "skinny_mj.io", "skinny_mj.threads", "skinny_mj.progress",
+          "skinny_mj.preflight", "skinny_mj.memory", "skinny_mj.training.dtw",
+          "skinny_mj.plots", "skinny_mj.recording", "skinny_mj.recording_layout",
+          "skinny_mj.models")
+PARTS = {"controllers": CONTROLLERS, "experiments": EXPERIMENTS, "plant": PLANT,
+         "movements": MOVEMENTS, "training": TRAINING, "engine": ENGINE,
+         "command line": COMMAND_LINE, "shared": SHARED}
+PACKAGE_PARTS = ("plant", "movements", "training", "engine", "command line", "shared")
 HEAVY = ("mujoco", "dm_control", "rerun")
-# (who, what it must not import, why): module-name prefixes.
+BARE = ("controllers", "experiments")  # the folders' names, never import names
+# (parts, what they must not import, why): a part may always import itself.
 RULES = (
-    (("controllers",), ("skinny_mj", "experiments", *HEAVY),
+    (("controllers",), ("skinny_mj", *BARE, *HEAVY),
      "the learning is pure NumPy/SciPy, testable without the plant"),
-    (("skinny_mj",), ("experiments",), "studies are found through entry points"),
-    (MOVEMENTS, ("controllers", *HEAVY, *TRAINING, *ENGINE, *COMMAND_LINE),
+    (PACKAGE_PARTS, (*EXPERIMENTS, *BARE), "studies are found by the registry, and the "
+     "learning is imported as skinny_mj.controllers"),
+    (("experiments",), BARE, "the learning is imported as skinny_mj.controllers"),
+    (("movements",), (*CONTROLLERS, *HEAVY, *TRAINING, *ENGINE, *COMMAND_LINE),
      "a movement is data, usable without a controller or a simulator"),
-    (PLANT, (*TRAINING, *ENGINE, *COMMAND_LINE), "the plant knows nothing of training"),
-    (TRAINING, (*ENGINE, *COMMAND_LINE), "one run knows nothing of sweeps or the CLI"),
-    (ENGINE, COMMAND_LINE, "the engine runs without the command line"),
+    (("plant",), (*TRAINING, *ENGINE, *COMMAND_LINE), "the plant knows nothing of training"),
+    (("training",), (*ENGINE, *COMMAND_LINE), "one run knows nothing of sweeps or the CLI"),
+    (("engine",), COMMAND_LINE, "the engine runs without the command line"),
 )
+
+
+def _under(name: str, prefixes) -> bool:
+    return any(name == p or name.startswith(p + ".") for p in prefixes)
+
+
+def part_of(module: str) -> str | None:
+    """The part a module belongs to: its longest prefix among :data:`PARTS`."""
+    best = max(((len(p), part) for part, prefixes in PARTS.items() for p in prefixes
+                if _under(module, (p,))), default=None)
+    return best[1] if best else None
 
 
 def _imported_in_subprocess(code: str, tmp_path: Path) -> set[str]:
-    """Top-level names in ``sys.modules`` after running ``code`` in a fresh interpreter
-    (started outside the repo, so the installed package is what it imports)."""
+    """The names in ``sys.modules`` after running ``code`` in a fresh interpreter (started
+    outside the repo, so the installed package is what it imports)."""
     env = {**os.environ, "MUJOCO_GL": "disabled"}
     script = f"{code}\nimport json, sys\nprint(json.dumps(sorted(sys.modules)))\n"
     done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
-    return {name.split(".")[0] for name in json.loads(done.stdout.splitlines()[-1])}
+    return set(json.loads(done.stdout.splitlines()[-1]))
 
 
 def test_controllers_import_no_plant_package_or_experiment(tmp_path):
-    modules = ["controllers", "controllers.esn", "controllers.fel", "controllers.feedback",
-               "controllers.forward_model", "controllers.true_target", "controllers.plant"]
-    code = ("import importlib, pkgutil, controllers\n"
+    modules = ["skinny_mj.controllers", "skinny_mj.controllers.esn", "skinny_mj.controllers.fel",
+               "skinny_mj.controllers.feedback", "skinny_mj.controllers.forward_model",
+               "skinny_mj.controllers.true_target", "skinny_mj.controllers.plant"]
+    code = ("import importlib, pkgutil, skinny_mj.controllers as c\n"
             f"names = {modules!r}\n"
-            "names += [m.name for m in pkgutil.walk_packages(controllers.__path__, "
-            "'controllers.')]\n"
+            "names += [m.name for m in pkgutil.walk_packages(c.__path__, "
+            "'skinny_mj.controllers.')]\n"
             "for name in names:\n    importlib.import_module(name)\n")
     loaded = _imported_in_subprocess(code, tmp_path)
-    assert "controllers" in loaded
-    assert not loaded & {"mujoco", "dm_control", "skinny_mj", "experiments"}
+    assert "skinny_mj.controllers.esn" in loaded
+    ours = {n for n in loaded if _under(n, ("skinny_mj", *BARE))}
+    assert ours - {"skinny_mj"} == {n for n in ours if _under(n, CONTROLLERS)}, (
+        "the learning loads no other module of the package")
+    assert not {n.split(".")[0] for n in loaded} & {"mujoco", "dm_control", "rerun", *BARE}
 
 
 def test_no_skinny_mj_module_imports_experiments(tmp_path):
     """Every module of the package (walked with pkgutil, none skipped but a ``__main__``,
     which runs a program; plus the mapped skinny_mj.models), and listing the registry,
-    leave ``experiments`` unimported."""
+    leave the studies unimported."""
     code = ("import importlib, pkgutil, skinny_mj\n"
             "def fail(name):\n    raise ImportError(name)\n"
             "names = [m.name for m in pkgutil.walk_packages(skinny_mj.__path__, 'skinny_mj.',"
@@ -133,11 +128,14 @@ def test_no_skinny_mj_module_imports_experiments(tmp_path):
             "import skinny_mj.engine.registry as registry\n"
             "assert 'paper-e' in registry.names()\n")
     loaded = _imported_in_subprocess(code, tmp_path)
-    assert "skinny_mj" in loaded and "experiments" not in loaded
+    assert "skinny_mj.engine.registry" in loaded
+    assert not {n for n in loaded if _under(n, (*EXPERIMENTS, *BARE))}
 
 
 def _module_name(path: Path, root: Path) -> str:
-    parts = path.relative_to(root).with_suffix("").parts
+    parts = list(path.relative_to(root).with_suffix("").parts)
+    if parts[0] in MAPPED:
+        parts[:1] = MAPPED[parts[0]].split(".")
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
@@ -180,20 +178,17 @@ def imported_names(path: Path, root: Path = ROOT) -> set[str]:
         f"{base}.{name}" for name in names)]}
 
 
-def _under(name: str, prefixes) -> bool:
-    return any(name == p or name.startswith(p + ".") for p in prefixes)
-
-
 def layer_violations(root: Path = ROOT) -> set[str]:
     """``path imports name (why)`` for every import that breaks one of :data:`RULES`."""
     found: set[str] = set()
     for layer in LAYERS:
         for path in sorted((root / layer).rglob("*.py")):
             module, names = _module_name(path, root), imported_names(path, root)
+            part = part_of(module)
             for who, banned, why in RULES:
-                if _under(module, who):
+                if part in who:
                     found |= {f"{path.relative_to(root).as_posix()} imports {n} ({why})"
-                              for n in names if _under(n, banned) and not _under(n, who)}
+                              for n in names if _under(n, banned) and part_of(n) != part}
     return found
 
 
@@ -230,20 +225,21 @@ def test_the_import_scan_reads_every_import_and_finds_a_planted_violation(tmp_pa
         "skinny_mj.training.torque",
         "skinny_mj.plant.perturb",
     )
-    assert parts in TRAINING and torque in TRAINING and perturb in PLANT
+    assert part_of(parts) == part_of(torque) == "training" and part_of(perturb) == "plant"
     up = "." * (MOVEMENTS[0].count(".") + 1) + parts.removeprefix("skinny_mj.")  # relative
     package, _, leaf = torque.rpartition(".")
     a = _plant(tmp_path, movement, f"import numpy as np\nfrom . import b\n"
-               f"def f():\n    from {up} import train\n    import controllers.metrics\n")
+               f"def f():\n    from {up} import train\n    import skinny_mj.controllers.metrics\n")
     _plant(tmp_path, sibling, f"def g():\n    from {MOVEMENTS[0]} import a\n")
     p = _plant(tmp_path, perturb,
                f"class P:\n    def m(self):\n        from {package} import {leaf}\n")
-    c = _plant(tmp_path, "controllers.esn", "def f():\n    import mujoco\n")
+    c = _plant(tmp_path, "skinny_mj.controllers.esn", "def f():\n    import mujoco\n")
     assert imported_names(tmp_path / a, tmp_path) == {
-        "numpy", MOVEMENTS[0], sibling, parts, f"{parts}.train", "controllers.metrics"}
+        "numpy", MOVEMENTS[0], sibling, parts, f"{parts}.train", "skinny_mj.controllers.metrics"}
     assert {v.split(" (")[0] for v in layer_violations(tmp_path)} == {
-        f"{a} imports {parts}", f"{a} imports {parts}.train", f"{a} imports controllers.metrics",
-        f"{p} imports {torque}", f"{c} imports mujoco"}
+        f"{a} imports {parts}", f"{a} imports {parts}.train",
+        f"{a} imports skinny_mj.controllers.metrics",
+        f"{p} imports {package}", f"{p} imports {torque}", f"{c} imports mujoco"}
     assert import_circles("skinny_mj", tmp_path) == [(movement, sibling)]
 
 
@@ -261,25 +257,12 @@ def test_every_import_keeps_the_layering_rules():
 
 
 def test_every_module_is_placed_in_a_part_or_is_shared():
-    """A new module of skinny_mj must be placed in :data:`RULES`' parts or named shared (a
-    package is placed by the modules in it)."""
-    shared = (
-        "skinny_mj.errors",
-        "skinny_mj.io",
-        "skinny_mj.threads",
-        "skinny_mj.progress",
-        "skinny_mj.preflight",
-        "skinny_mj.memory",
-        "skinny_mj.training.dtw",
-        "skinny_mj.plots",
-        "skinny_mj.recording",
-        "skinny_mj.recording_layout",
-    )
-    parts = (*PLANT, *MOVEMENTS, *TRAINING, *ENGINE, *COMMAND_LINE, *shared)
+    """A new module at the top of skinny_mj must be placed in a part of :data:`PARTS` (named
+    shared, or moved into a part's package)."""
     modules = {_module_name(p, ROOT) for p in (ROOT / "skinny_mj").rglob("*.py")
                if p.name != "__main__.py"}  # a package's program, placed with its package
     packages = {m for m in modules if any(n.startswith(m + ".") for n in modules)}
-    assert {m for m in modules - packages if not _under(m, parts)} == set()
+    assert {m for m in modules - packages if part_of(m) is None} == set()
 
 
 @pytest.mark.parametrize("layer", ["skinny_mj", "controllers"])
@@ -289,15 +272,15 @@ def test_no_two_modules_import_each_other(layer):
 
 # Study/report pairs of experiments/ that import each other, counted when this test was
 # written; the count may only fall (the xfail below flips when it reaches 0).
-EXPERIMENT_CIRCLES = 9
+EXPERIMENT_CIRCLES = 3
 
 
 def test_experiment_import_circles_do_not_grow():
     assert len(import_circles("experiments")) <= EXPERIMENT_CIRCLES
 
 
-@pytest.mark.xfail(strict=True, reason="experiments/ has 9 study/report import circles "
-                   "(a study and its report import each other)")
+@pytest.mark.xfail(strict=True, reason="experiments/ has 3 study/report import circles "
+                   "(old-form studies whose module imports its report)")
 def test_no_two_experiment_modules_import_each_other():
     assert import_circles("experiments") == []
 
@@ -358,12 +341,13 @@ def private_reads(root: Path = ROOT) -> set[str]:
 def test_the_private_read_scan_finds_what_it_should(tmp_path):
     (tmp_path / "skinny_mj").mkdir()
     (tmp_path / "skinny_mj" / "a.py").write_text(
-        "from controllers.esn import _hidden\n"
+        "from skinny_mj.controllers.esn import _hidden\n"
         "class A:\n    _kind = 1\n    def __init__(self, esn):\n        self._mine = 1\n"
         "        esn._sparse\n        other = A(esn)\n        other._mine, other._kind\n"
         "        self._mine, super()._x, esn.cfg._replace(), esn.__dict__\n")
-    assert private_reads(tmp_path) == {"skinny_mj/a.py: esn._sparse",
-                                       "skinny_mj/a.py: from controllers.esn import _hidden"}
+    assert private_reads(tmp_path) == {
+        "skinny_mj/a.py: esn._sparse",
+        "skinny_mj/a.py: from skinny_mj.controllers.esn import _hidden"}
 
 
 def test_no_new_private_reads_of_other_modules():
@@ -384,8 +368,8 @@ def test_every_package_folder_is_listed_in_pyproject():
     """pyproject lists its packages (so ``models/`` can ship as skinny_mj.models): a new
     package folder must be added there, or a non-editable install leaves it out."""
     listed = set(_setuptools()["packages"])
-    found = {".".join(p.parent.relative_to(ROOT).parts)
-             for layer in LAYERS for p in (ROOT / layer).rglob("__init__.py")}
+    found = {_module_name(p, ROOT) for layer in LAYERS for p in (ROOT / layer).rglob(
+        "__init__.py")}
     assert found <= listed, f"add to [tool.setuptools] packages: {sorted(found - listed)}"
 
 
@@ -406,20 +390,25 @@ def test_models_and_sample_clips_are_package_data():
 
 
 def test_studies_are_found_from_the_package():
-    """Every module of ``experiments`` that sets NAME is a study (none is listed twice in
-    pyproject); ``experiments.get`` is the registry's."""
-    import experiments
+    """Every module of ``experiments/`` (or ``experiments/<folder>/study.py``) that sets
+    NAME is a study (none is listed twice in pyproject); ``experiments.get`` is the
+    registry's."""
+    import skinny_mj.experiments as experiments
+
     from skinny_mj.engine import registry
     from skinny_mj.errors import SkinnyInputError
 
-    modules = {p.stem for p in (ROOT / "experiments").glob("*.py")
+    modules = {p.stem if p.stem != "study" else p.parent.name
+               for p in [*(ROOT / "experiments").glob("*.py"),
+                         *(ROOT / "experiments").glob("*/study.py")]
                if registry.declared_name(p) is not None}
     assert len(modules) == len(registry.names()) and "paper_e" in modules
     declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"].get(
         "entry-points", {}).get(registry.GROUP, {})
     assert not set(declared) & set(registry.names())
     study = registry.get("paper-e")
-    assert study is sys.modules["experiments.paper_e"].STUDY and experiments.get("paper-e") is study
+    assert study is sys.modules["skinny_mj.experiments.paper_e.study"].STUDY
+    assert experiments.get("paper-e") is study
     assert registry.describe("paper-e") == experiments.describe("paper-e") != ""
     with pytest.raises(SkinnyInputError, match="paper-a, paper-b"):
         registry.get("paper-z")

@@ -1,19 +1,18 @@
-"""The learning seam (controllers.learning): the β target, the default rule equal to the
+"""The learning seam (skinny_mj.controllers.learning): the β target, the default rule equal to the
 inline fit it replaced, the contract every batch rule keeps, an online rule in FEL."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from controllers import fel
-from controllers.esn import ESN, ESNConfig
-from controllers.learning import Cycle, CycleFit, beta_target
-from controllers.metrics import position_nrmse
-from controllers.online import OnlineRLS
-from controllers.plant import ToyPlant, toy_movement
-from controllers.ridge_select import RidgeSelector
-from controllers.torque_readout import ForgettingReadout, RLSReadout
+from skinny_mj.controllers import fel
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.controllers.learning import Cycle, CycleFit, beta_target
+from skinny_mj.controllers.metrics import position_nrmse
+from skinny_mj.controllers.online import OnlineRLS
+from skinny_mj.controllers.plant import ToyPlant, toy_movement
+from skinny_mj.controllers.ridge_select import RidgeSelector
+from skinny_mj.controllers.torque_readout import ForgettingReadout, RLSReadout
 
 LIMITS = np.tile([0.0, np.pi], (4, 1))
 

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.controllers.fel import Rollout
+from skinny_mj.controllers.forward_model import ForwardModel
+from skinny_mj.controllers.metrics import nrmse
+from skinny_mj.experiments import get, paper_a
 
-from controllers.esn import ESN, ESNConfig
-from controllers.fel import Rollout
-from controllers.forward_model import ForwardModel
-from controllers.metrics import nrmse
-from experiments import get, paper_a
 from skinny_mj.engine.experiment import Experiment, Row, run_sweep
 
 TINY = paper_a.Config(model=paper_a.quick_config().model.override({"rule.epochs": 1,

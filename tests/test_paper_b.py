@@ -6,11 +6,11 @@ import json
 
 import numpy as np
 import pytest
+from skinny_mj.controllers import fel
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.controllers.plant import Plant
+from skinny_mj.experiments import paper_b
 
-from controllers import fel
-from controllers.esn import ESN, ESNConfig
-from controllers.plant import Plant
-from experiments import paper_b
 from skinny_mj.engine.experiment import Row
 from skinny_mj.plant import bimanual as bm
 from skinny_mj.plant.body import position_signals
@@ -127,7 +127,8 @@ def test_lockstep_batch_equals_each_seed_alone():
 
 @pytest.mark.parametrize("workers", [1])
 def test_quick_sweep_end_to_end(tmp_path, workers):
-    from experiments import get
+    from skinny_mj.experiments import get
+
     from skinny_mj.engine.experiment import run_sweep
 
     module = get("paper-b")
@@ -150,7 +151,8 @@ def test_quick_sweep_end_to_end(tmp_path, workers):
 
 
 def test_build_rejects_a_movement():
-    from experiments.paper_b import build
+    from skinny_mj.experiments.paper_b import build
+
     from skinny_mj.errors import SkinnyInputError
 
     with pytest.raises(SkinnyInputError):

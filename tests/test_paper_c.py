@@ -7,8 +7,9 @@ import json
 
 import numpy as np
 import pytest
+from skinny_mj.experiments.paper_c import report as paper_c_report
+from skinny_mj.experiments.paper_c import study as paper_c
 
-from experiments import paper_c, paper_c_report
 from skinny_mj.engine.experiment import run_sweep
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant.ideal import max_speeds
@@ -142,7 +143,7 @@ def test_lockstep_batch_equals_runs_one_at_a_time():
 
 
 def test_lag_steps_finds_a_shift_of_the_output():
-    from experiments.paper_c_report import lag_steps
+    from skinny_mj.experiments.paper_c.report import lag_steps
 
     t = np.linspace(0, 4 * np.pi, 300)
     desired = np.stack([np.sin(t), np.cos(t), np.zeros_like(t)], axis=1)

@@ -6,9 +6,9 @@ import json
 
 import numpy as np
 import pytest
+import skinny_mj.experiments as experiments
+from skinny_mj.experiments import paper_d
 
-import experiments
-from experiments import paper_d
 from skinny_mj.engine.experiment import run_sweep
 from skinny_mj.engine.stats import load_runs, summarize
 

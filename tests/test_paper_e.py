@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 import pytest
+from skinny_mj.experiments.paper_e import study as paper_e
 
-from experiments import paper_e
 from skinny_mj.engine.experiment import Experiment, Row, aggregate, run_sweep, select_rows
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.errors import SkinnyInputError

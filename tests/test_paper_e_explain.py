@@ -8,8 +8,8 @@ import dataclasses
 
 import numpy as np
 import pytest
+from skinny_mj.experiments.paper_e_explain import study as pee
 
-from experiments import paper_e_explain as pee
 from skinny_mj.engine.experiment import Experiment, run_seed, run_sweep
 from skinny_mj.engine.study import Quick
 from skinny_mj.training.loop import build_run, evaluate, train_batch, train_run
@@ -95,7 +95,7 @@ def _record(row: str, k: int, **series) -> dict:
 
 
 def test_claims_pair_runs_of_the_same_network():
-    from experiments.paper_e_explain_report import claims, table
+    from skinny_mj.experiments.paper_e_explain.report import claims, table
 
     # run 0: y_used smoother than y_est; run 1: not; run 2 of exp 5 has no partner
     by_row = {"1": [], "2": [], "5": [

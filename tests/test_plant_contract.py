@@ -1,4 +1,4 @@
-"""One contract over every :class:`controllers.plant.Plant` (as dm_control's suite_test
+"""One contract over every :class:`skinny_mj.controllers.plant.Plant` (as dm_control's suite_test
 runs one over every task): the pure-NumPy ToyPlant, EnvPlant (dm_control), BatchPlant
 (velocity servo and torque twin) and paper B's BimanualPlant, each at 4 and 8 DOF with
 joint and Cartesian signals.
@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from skinny_mj.controllers.plant import Plant, ToyPlant
 
-from controllers.plant import Plant, ToyPlant
 from skinny_mj.plant import body
 from skinny_mj.plant.ideal import max_speeds
 from skinny_mj.trajectories import Trajectory

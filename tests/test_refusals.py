@@ -174,7 +174,8 @@ def test_a_sweeps_largest_row_is_refused(capsys, tmp_path):
 
 def _every_study(monkeypatch) -> list[str]:
     """Every registered study's name; rl-vs-fel's build does not need its extra here."""
-    from experiments import rl_vs_fel_runs
+    from skinny_mj.experiments.rl_vs_fel import runs as rl_vs_fel_runs
+
     from skinny_mj.engine import registry
 
     monkeypatch.setattr(rl_vs_fel_runs, "require_rl", lambda: None)

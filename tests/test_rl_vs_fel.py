@@ -12,8 +12,9 @@ import pytest
 
 pytest.importorskip("gymnasium")
 
-from experiments import rl_vs_fel  # noqa: E402
-from experiments import rl_vs_fel_runs as runs  # noqa: E402
+from skinny_mj.experiments.rl_vs_fel import runs  # noqa: E402
+from skinny_mj.experiments.rl_vs_fel import study as rl_vs_fel  # noqa: E402
+
 from skinny_mj.engine.experiment import run_sweep  # noqa: E402
 from skinny_mj.errors import SkinnyInputError  # noqa: E402
 from skinny_mj.training.config import TrainConfig  # noqa: E402

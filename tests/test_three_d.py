@@ -8,8 +8,10 @@ import json
 
 import numpy as np
 import pytest
+from skinny_mj.experiments import paper_a
+from skinny_mj.experiments.three_d import report as three_d_report
+from skinny_mj.experiments.three_d import study as three_d
 
-from experiments import paper_a, three_d, three_d_report
 from skinny_mj.engine.experiment import Experiment, Row, run_sweep
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.errors import SkinnyInputError

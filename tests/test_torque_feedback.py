@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from controllers.torque_feedback import (
+from skinny_mj.controllers.torque_feedback import (
     TorqueFeedbackController,
     TorqueGains,
     computed_torque,

@@ -2,11 +2,10 @@
 
 import numpy as np
 import pytest
-
-from controllers.esn import ESN, ESNConfig
-from controllers.fel import evaluate
-from controllers.plant import ToyPlant, toy_movement
-from controllers.true_target import (
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.controllers.fel import evaluate
+from skinny_mj.controllers.plant import ToyPlant, toy_movement
+from skinny_mj.controllers.true_target import (
     TrueTargetConfig,
     convergence_curve,
     cycles_to_converge,

@@ -66,7 +66,7 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
     """Our ESN's state loop (``ESN.run``, one run) vs reservoirpy 0.4's ``Reservoir.run``:
     same weights, same input (T, 16), float64; checks the two produce the same states.
     Also our R = 20 lockstep throughput (run-steps/s), the rate a sweep sees."""
-    from controllers.esn import ESN, ESNConfig
+    from skinny_mj.controllers.esn import ESN, ESNConfig
 
     try:
         import reservoirpy
@@ -108,7 +108,7 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
 
 
 def _lockstep_parts(n_runs: int, n_steps: int, seed: int = 0):
-    from controllers.esn import ESN
+    from skinny_mj.controllers.esn import ESN
     from skinny_mj.plant.adapters import BatchPlant
     from skinny_mj.plant.ideal import max_speeds
     from skinny_mj.training.loop import TrainConfig
@@ -137,7 +137,7 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
     import mujoco
     from mujoco import rollout as mj_rollout
 
-    from controllers import fel
+    from skinny_mj.controllers import fel
     from skinny_mj.plant.model import load_model
 
     _, _, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
@@ -195,8 +195,8 @@ def lockstep_speedup(epochs: int, repeats: int) -> dict:
 def fast_vs_naive(n_steps: int, repeats: int) -> dict:
     """Per run-step cost: the naive path (dm_control ``env.step`` through ``EnvPlant``
     and a one-run Python ESN, ``fel.rollout``) vs the fast path (R = 20 lockstep)."""
-    from controllers import fel
-    from controllers.esn import ESN
+    from skinny_mj.controllers import fel
+    from skinny_mj.controllers.esn import ESN
     from skinny_mj.plant.adapters import EnvPlant
     from skinny_mj.plant.task import load
 

@@ -83,9 +83,9 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
 
 # -- track ------------------------------------------------------------------------------
 def cmd_track(args: argparse.Namespace) -> int:
-    from controllers.metrics import position_nrmse
     from skinny_mj import memory
     from skinny_mj.cli.config_flags import TRACK_FLAGS
+    from skinny_mj.controllers.metrics import position_nrmse
     from skinny_mj.plant import body
     from skinny_mj.plant.ideal import IdealController
     from skinny_mj.plant.task import load
@@ -243,8 +243,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_test(args: argparse.Namespace) -> int:
-    from controllers.esn import ESN, read_metadata
     from skinny_mj.cli.config_flags import TEST_FLAGS
+    from skinny_mj.controllers.esn import ESN, read_metadata
     from skinny_mj.training.loop import TrainConfig, evaluate, run_of, run_streams
 
     path = Path(args.model)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import importlib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -188,9 +189,13 @@ class Plan:
 
 
 def _report(plan: Plan, results: Mapping[str, Any], out_dir: str | Path) -> str:
-    if plan.study.report is None:
+    report = plan.study.report
+    if report is None:
         return ""
-    return plan.study.report(Results(results, out_dir), plan, Path(out_dir))
+    if isinstance(report, str):
+        module, _, name = report.partition(":")
+        report = getattr(importlib.import_module(module), name or "report")
+    return report(Results(results, out_dir), plan, Path(out_dir))
 
 
 def _expand(study: Study, entries: Iterable[str]) -> set[str]:

@@ -29,7 +29,7 @@ from typing import Any
 from skinny_mj.errors import SkinnyInputError
 
 GROUP = "skinny_mj.experiments"
-PACKAGE = "experiments"
+PACKAGE = "skinny_mj.experiments"
 
 
 def declared_name(path: Path) -> str | None:
@@ -47,15 +47,19 @@ def declared_name(path: Path) -> str | None:
 
 
 def _package_studies() -> dict[str, str]:
-    """name -> "experiments.<module>" of the package's studies (none imported)."""
+    """name -> module of the package's studies (none imported): a module
+    ``experiments/<name>.py``, or ``experiments/<folder>/study.py`` for a study kept in one
+    folder with its report."""
     spec = importlib.util.find_spec(PACKAGE)
     if spec is None or not spec.submodule_search_locations:
         return {}
     found = {}
     for folder in spec.submodule_search_locations:
-        for path in sorted(Path(folder).glob("*.py")):
-            if not path.name.startswith("_") and (name := declared_name(path)):
-                found[name] = f"{PACKAGE}.{path.stem}"
+        for path in sorted([*Path(folder).glob("*.py"), *Path(folder).glob("*/study.py")]):
+            if path.name.startswith("_") or not (name := declared_name(path)):
+                continue
+            rel = path.relative_to(folder).with_suffix("")
+            found[name] = ".".join((PACKAGE, *rel.parts))
     return found
 
 

@@ -113,7 +113,9 @@ class Study:
     ``trainings(config, row) -> {name: TrainConfig}``: what one run of a custom
     ``run_batch`` trains, where that is not the row's config alone (the memory check);
     ``takes``: the options of ``OPTIONS`` it accepts (any other is refused in one line);
-    ``report(results, plan, out_dir) -> str``: figures and claims after the sweep;
+    ``report(results, plan, out_dir) -> str``: figures and claims after the sweep, or the
+    ``"module:function"`` that has it (a study kept in one folder with its report names
+    its report so: the report imports the study, never the other way round);
     ``tiny``: the contract test's shrink (default :data:`TINY`).
     """
 
@@ -129,7 +131,7 @@ class Study:
     params: Mapping[str, Any] = field(default_factory=dict)
     run_batch: RunBatch | None = None
     trainings: Callable[[TrainConfig, Row], Mapping[str, TrainConfig]] | None = None
-    report: Callable[[Results, Plan, Path], str] | None = None
+    report: Callable[[Results, Plan, Path], str] | str | None = None
     takes: tuple[str, ...] = OPTIONS
     tiny: Mapping[str, Any] = field(default_factory=lambda: dict(TINY))
     base_seed: int = 0

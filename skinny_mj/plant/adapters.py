@@ -18,7 +18,7 @@ import dm_env
 import mujoco
 import numpy as np
 
-from controllers.plant import Plant as _Plant
+from skinny_mj.controllers.plant import Plant as _Plant
 from skinny_mj.plant import body
 from skinny_mj.plant.model import BATCH_PREFIX, load_batch_model, load_model
 from skinny_mj.plant.physics import Layout, segment_jacobian, segment_signals, servo_ctrl
@@ -73,7 +73,7 @@ class EnvPlant:
         jac = self.physics.signal_jacobian(self.signals)
         return (jac * (self.max_speed_rad_s * self.dt))[None]
 
-    # -- torque loop (controllers.torque_fel): (1, n_dof) each, as BatchPlant's
+    # -- torque loop (skinny_mj.controllers.torque_fel): (1, n_dof) each, as BatchPlant's
     def joint_velocities(self) -> np.ndarray:
         return self.physics.data.qvel[self.physics.layout.dof_adr][None].copy()
 
@@ -190,7 +190,7 @@ class BatchPlant:
         out += self._true()  # true + noise, as the task adds them
         return out
 
-    # -- torque loop (controllers.torque_fel) ------------------------------------------
+    # -- torque loop (skinny_mj.controllers.torque_fel) ------------------------------------------
     def joint_velocities(self) -> np.ndarray:
         """(R, n_dof) joint velocities, rad/s (noise-free: a tachometer)."""
         return self._qvel[:, self._dof_sel].copy()

@@ -12,7 +12,7 @@ movement of the leading arm is forced. The input to the system is the current st
 so the inverse model sees no desired position ("the desired next state is implicit in
 the state of the leading arm": ``TrainConfig(inputs="sensed")``); the lagging arm's
 desired trajectory is used only by the feedback controller and, through it, by FEL.
-The training itself is the one FEL loop (:func:`controllers.fel.train`) on this plant;
+The training itself is the one FEL loop (:func:`skinny_mj.controllers.fel.train`) on this plant;
 the movements are :mod:`skinny_mj.trajectories.patterns`.
 """
 

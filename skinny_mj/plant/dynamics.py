@@ -163,9 +163,9 @@ class Dynamics:
 
 
 class BatchArmState:
-    """The plant side of :mod:`controllers.torque_arm` for a lockstep
+    """The plant side of :mod:`skinny_mj.controllers.torque_arm` for a lockstep
     :class:`skinny_mj.plant.adapters.BatchPlant` of the torque twin: each call returns the
-    :class:`controllers.torque_arm.ArmState` of the current step.
+    :class:`skinny_mj.controllers.torque_arm.ArmState` of the current step.
 
     M(q) is read from the batch's own ``qM`` (``mj_fullM``, each robot's diagonal block);
     the bias ``qfrc_bias``; the gravity torque (``gravity=True`` only) from a scratch
@@ -198,7 +198,7 @@ class BatchArmState:
 
     def sensed_angles(self, sensed: np.ndarray) -> np.ndarray:
         """(R, n) joint angles as the position sensors see them, rad."""
-        from controllers.feedback import jacobian_error
+        from skinny_mj.controllers.feedback import jacobian_error
 
         plant = self.plant
         noise = np.asarray(sensed, float) - plant.true_signals()
@@ -238,7 +238,7 @@ class BatchArmState:
         return sd.qfrc_bias.reshape(self.n_runs, -1)[:, self.adr].copy()
 
     def __call__(self, sensed: np.ndarray):
-        from controllers.torque_arm import ArmState
+        from skinny_mj.controllers.torque_arm import ArmState
 
         plant, d = self.plant, self._data()
         bias = plant.bias_torque_nm() if self._own is None else \

@@ -1,6 +1,6 @@
 """A lasting change of the plant during performance.
 
-:class:`PerturbedPlant` wraps any :class:`controllers.plant.Plant` (e.g. a
+:class:`PerturbedPlant` wraps any :class:`skinny_mj.controllers.plant.Plant` (e.g. a
 :class:`skinny_mj.plant.adapters.BatchPlant`) and changes what a command does, per DOF:
 
     command sent to the servo = clip(gain * command, -1, 1) + offset

@@ -11,7 +11,7 @@ a composition of the parts' own configurations:
   its feedback teacher, poles, gravity feed-forward, velocity inputs and the test
   plant's payload and mass scale: settings that exist only on the torque body);
 - ``movement`` (:class:`Movement`): trajectory, speed, repetitions, full scale;
-- ``esn``: :class:`controllers.reservoir.ESNConfig` as it is (its sizes come from the
+- ``esn``: :class:`skinny_mj.controllers.reservoir.ESNConfig` as it is (its sizes come from the
   plant; ``noise_level`` None: the learning rule's default);
 - ``rule``, the learning rule: :class:`Original` or :class:`New` (feedback-error
   learning, with its schedule), :class:`TrueTarget`, or :class:`NoLearning` (the
@@ -39,7 +39,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from controllers.reservoir import ESNConfig
+from skinny_mj.controllers.reservoir import ESNConfig
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant.body import ACTUATIONS, SIGNALS, check_actuation, check_dof, check_signals
 from skinny_mj.training import fits, overrides
@@ -51,7 +51,7 @@ __all__ = ["TrainConfig", "Plant", "Velocity", "Torque", "Movement", "Original",
            "ACTUATIONS", "DEFAULT_NOISE", "PAPER_CYCLES_FOR_BETA", "ARM_LAWS", "LEGACY_KEYS"]
 
 METHODS = ("original", "new", "true-target", "none")
-#: Laws of controllers.torque_arm (inertia-scaled pole placement), by feedback name:
+#: Laws of skinny_mj.controllers.torque_arm (inertia-scaled pole placement), by feedback name:
 #: three controllers alone, and FEL's teacher "inertia-pd"
 ARM_LAWS = {"ct": "ct", "id-pd": "id-pd", "pd-gravity": "pd-g", "inertia-pd": "fel"}
 FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS)

@@ -1,5 +1,5 @@
 """FEL's readout fits by name: the value of the key ``rule.fit`` -> how a training builds
-its learning rule (:class:`controllers.learning.LearningRule`).
+its learning rule (:class:`skinny_mj.controllers.learning.LearningRule`).
 
 The package's own: ``cycle`` (each learning cycle alone, the thesis's pinv or ridge fit),
 ``ridge-select`` (λ chosen per fit on a validation cycle; the velocity body),
@@ -41,7 +41,7 @@ def _cycle(cfg: TrainConfig, esn: Any, steps: int) -> None:
 
 
 def _ridge_select(cfg: TrainConfig, esn: Any, steps: int) -> Any:
-    from controllers.ridge_select import RidgeSelector
+    from skinny_mj.controllers.ridge_select import RidgeSelector
 
     return RidgeSelector(esn, cfg.rule.epochs)
 

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from controllers.metrics import (
+from skinny_mj.controllers.metrics import (
     fraction_within,
     nrmse,
     position_nrmse,

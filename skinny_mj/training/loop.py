@@ -8,9 +8,9 @@ Every experiment and command goes through these functions:
   (built when first used: one :class:`skinny_mj.plant.adapters.BatchPlant` for all R runs,
   paper B's :class:`skinny_mj.plant.bimanual.BimanualPlant`, or the dm_control env);
 - :func:`train_run`: forward-model pre-training (:meth:`ForwardModel.pretrain`), then
-  feedback-error learning (:func:`controllers.fel.train`, original or β) or the
-  true-target architecture (:func:`controllers.true_target.train_true_target`);
-- :func:`evaluate`: the test (:func:`controllers.fel.evaluate`, K = 0) on any movement;
+  feedback-error learning (:func:`skinny_mj.controllers.fel.train`, original or β) or the
+  true-target architecture (:func:`skinny_mj.controllers.true_target.train_true_target`);
+- :func:`evaluate`: the test (:func:`skinny_mj.controllers.fel.evaluate`, K = 0) on any movement;
 - :func:`train_batch` / :func:`train`: the three together with the standard metrics
   (papers D, E and the ``skinny train`` command).
 
@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from controllers import fel
-from controllers.esn import ESN
-from controllers.forward_model import ForwardModel
-from controllers.true_target import TrueTargetConfig, train_true_target
+from skinny_mj.controllers import fel
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.forward_model import ForwardModel
+from skinny_mj.controllers.true_target import TrueTargetConfig, train_true_target
 from skinny_mj.plant import ideal
 from skinny_mj.threads import single_threaded
 from skinny_mj.training import protocol, torque
@@ -101,7 +101,7 @@ class Run:
         return arm_signals(body.dof, body.signals, lagging_arm(self.cfg))
 
     def fel_config(self) -> fel.FELConfig:
-        """The FEL rule's schedule as :class:`controllers.fel.FELConfig`."""
+        """The FEL rule's schedule as :class:`skinny_mj.controllers.fel.FELConfig`."""
         cfg, rule = self.cfg, self.cfg.rule
         return fel.FELConfig(method=rule.kind, beta=rule.beta,
                              learning_cycles=cfg.learning_cycles, epochs=rule.epochs,
@@ -166,7 +166,8 @@ class Training:
 def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
               observe: Callable[..., None] | None = None) -> Training:
     """Train ``run``'s networks in place. ``progress(done, total)`` after every cycle;
-    ``observe``: FEL's optional per-cycle diagnostics callback (:func:`controllers.fel.train`,
+    ``observe``: FEL's optional per-cycle diagnostics callback
+    (:func:`skinny_mj.controllers.fel.train`,
     e.g. paper E §5.1's y_est / y_used per epoch; ignored by the true-target architecture)."""
     cfg, rule, out = run.cfg, run.cfg.rule, Training()
     fwd, body, is_torque = cfg.forward, cfg.plant, isinstance(cfg.actuation, Torque)

@@ -119,11 +119,12 @@ def true_commands_of(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) 
 
 
 def arm_forward_models(cfg: TrainConfig, rngs: Sequence[np.random.Generator]):
-    """Paper B's per-arm forward models (:class:`controllers.arm_forward.ArmForwardModels`,
+    """Paper B's per-arm forward models
+    (:class:`skinny_mj.controllers.arm_forward.ArmForwardModels`,
     ``forward.sharing``): the lagging arm's network from each run's forward stream,
     the leading arm's (shared predictions only) from a child of that stream."""
-    from controllers.arm_forward import ArmForwardModels
-    from controllers.esn import ESN
+    from skinny_mj.controllers.arm_forward import ArmForwardModels
+    from skinny_mj.controllers.esn import ESN
     from skinny_mj.plant.bimanual import arm_signals
 
     body, sharing = cfg.plant, cfg.forward.sharing

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from controllers.feedback import FeedbackController
+from skinny_mj.controllers.feedback import FeedbackController
 
 
 def tt_input_rng(seed: int) -> np.random.Generator:

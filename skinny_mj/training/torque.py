@@ -3,7 +3,7 @@
 :mod:`skinny_mj.training.loop` calls these when ``cfg.actuation`` is a
 :class:`skinny_mj.training.config.Torque`:
 
-- :func:`hook_for`: the :class:`controllers.torque_fel.TorqueLoop` of a movement (the
+- :func:`hook_for`: the :class:`skinny_mj.controllers.torque_fel.TorqueLoop` of a movement (the
   rollout hook: velocity inputs, the PD teacher, the gravity feed-forward);
 - :func:`true_torques`: the inverse model's true target, the torques of
   ``mj_inverse`` along the desired motion (:meth:`skinny_mj.plant.dynamics.Dynamics.
@@ -15,12 +15,12 @@
 - :func:`controller`: the PD teacher with gains scaled to the limits;
 - :func:`hook_for` with an arm law (``actuation.feedback`` in
   :data:`skinny_mj.training.config.ARM_LAWS`):
-  an :class:`controllers.torque_arm_loop.ArmLoop` fed by
+  an :class:`skinny_mj.controllers.torque_arm_loop.ArmLoop` fed by
   :class:`skinny_mj.plant.dynamics.BatchArmState`, its gains :func:`arm_gains`, the movement
   :func:`desired_motion`; :func:`readout_fitter` (FEL fits that remember) and
   :class:`ShareRecorder` (the feedback share per epoch); :func:`feasibility`.
 
-The feedback teacher (:class:`controllers.torque_feedback.TorqueFeedbackController`):
+The feedback teacher (:class:`skinny_mj.controllers.torque_feedback.TorqueFeedbackController`):
 gains :meth:`TorqueGains.from_limits` (0.1 rad asks for 50 % of the limit, critically
 damped, capped at omega dt = 0.5 with each joint's smallest own inertia over its range,
 dt = 20 ms), joint-space error for joint signals, the damped Jacobian otherwise.
@@ -37,10 +37,10 @@ import functools
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from controllers.torque_arm import ArmGains, DesiredMotion
-from controllers.torque_arm_loop import ArmLoop
-from controllers.torque_feedback import TorqueFeedbackController, TorqueGains
-from controllers.torque_fel import TorqueLoop
+from skinny_mj.controllers.torque_arm import ArmGains, DesiredMotion
+from skinny_mj.controllers.torque_arm_loop import ArmLoop
+from skinny_mj.controllers.torque_feedback import TorqueFeedbackController, TorqueGains
+from skinny_mj.controllers.torque_fel import TorqueLoop
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.plant.perturb import perturb  # noqa: F401  (re-exported: the robustness test plant)
@@ -129,7 +129,7 @@ def arm_gains(act: Torque) -> ArmGains:
 def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
              plant=None) -> TorqueLoop | None:
     """The torque loop of ``trajectory`` (None for the velocity servo); the laws of
-    :mod:`controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant)."""
+    :mod:`skinny_mj.controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant)."""
     act, dof, signals = cfg.torque, cfg.plant.dof, cfg.plant.signals
     if act is None:
         return None
@@ -213,7 +213,7 @@ def readout_fitter(cfg: TrainConfig, esn, steps: int):
     normal equations with forgetting, or RLS, remembering ``rule.forgetting`` of the
     statistics per learning cycle of ``steps`` samples; ridge ``esn.ridge_lambda`` with a
     ridge readout, else :data:`MEMORY_RIDGE`."""
-    from controllers.torque_readout import ForgettingReadout, RLSReadout
+    from skinny_mj.controllers.torque_readout import ForgettingReadout, RLSReadout
 
     rule = cfg.rule
     ridge = cfg.esn.ridge_lambda if cfg.esn.readout == "ridge" else MEMORY_RIDGE

@@ -1,4 +1,4 @@
-"""Figures and comparisons of :mod:`experiments.bimanual_delay` from its run files.
+"""Figures and comparisons of :mod:`skinny_mj.experiments.bimanual_delay.study` from its run files.
 
 - ``delay_sweep.png``: per pattern (rows of panels) the lagging arm's position NRMSE
   at 1x, its worst relative error and its worst |timing error| over the three leader
@@ -16,8 +16,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments.bimanual_delay.study import ARCHITECTURES, row_id
 
-from experiments.bimanual_delay import ARCHITECTURES, row_id
 from skinny_mj.plant.body import CONTROL_DT_S
 
 #: metric, panel label
@@ -159,7 +159,10 @@ def comparisons(patterns: list[str], delays: list[int], by: dict) -> list[str]:
     return lines
 
 
-def report(results: dict, out_dir: Path) -> str:
+def report(results: dict, plan, out_dir: Path) -> str:
+    """Figures (metrics against delay per architecture; traces at the largest delay) and
+    the comparisons with the inverse-only network."""
+    out_dir = Path(out_dir)
     patterns, delays, by = index_runs(_records(out_dir))
     if not by:
         return "no runs"

@@ -1,4 +1,5 @@
-"""Figures and the comparison table of :mod:`experiments.rl_vs_fel`, from its run files.
+"""Figures and the comparison table of :mod:`skinny_mj.experiments.rl_vs_fel.study`, from its run
+files.
 
 ``curves_steps.png`` / ``curves_cpu.png``: one panel per body x movement, the test
 position NRMSE (log) against env steps / training CPU time (log; without the test before

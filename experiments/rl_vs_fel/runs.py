@@ -1,4 +1,4 @@
-"""The runs of :mod:`experiments.rl_vs_fel`: one learner, one seed, one curve of the
+"""The runs of :mod:`skinny_mj.experiments.rl_vs_fel.study`: one learner, one seed, one curve of the
 test position NRMSE against the env steps it has used.
 
 A curve is a list of points ``{"steps", "wall_s", "cpu_s", "position_nrmse"}``: env
@@ -8,7 +8,7 @@ the K = 0 test error then (None when the test diverged). Both kinds of learner a
 fresh plant whose sensor noise starts from the run's plant seed
 (:func:`skinny_mj.training.parts.run_streams`), one pass of the movement from its first
 pose, the controller alone, no learning and no exploration, scored by
-:func:`controllers.metrics.position_nrmse` on the noise-free signals (what
+:func:`skinny_mj.controllers.metrics.position_nrmse` on the noise-free signals (what
 :func:`skinny_mj.training.loop.evaluate` scores).
 
 - ESN + FEL (:func:`fel_curve`): the one training path (:func:`skinny_mj.training.loop.
@@ -28,8 +28,8 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from skinny_mj.controllers.metrics import position_nrmse
 
-from controllers.metrics import position_nrmse
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.parts import full_scale_speeds, load_trajectory, run_streams
@@ -122,7 +122,7 @@ def make_env(tc: TrainConfig, seed: int, velocity_inputs: bool):
 def tracking_wrapper(env, velocity_inputs: bool):
     """``env`` with, for ``velocity_inputs``, the torque ESN's extra inputs appended to
     the observation, [qd_d(t+1) / v_max; qd(t) / v_max] (desired and noise-free actual
-    joint velocities, :mod:`controllers.torque_fel`), and a diverged simulation turned
+    joint velocities, :mod:`skinny_mj.controllers.torque_fel`), and a diverged simulation turned
     into the episode's end with the worst reward for every step left
     (``info["diverged"]``), so that diverging never pays."""
     import gymnasium

@@ -1,4 +1,4 @@
-"""The stage tables and figures of :mod:`experiments.fidelity_d`."""
+"""The stage tables and figures of :mod:`skinny_mj.experiments.fidelity_d.study`."""
 
 from __future__ import annotations
 
@@ -44,8 +44,7 @@ def ordering(results: dict, cell: str, runs: list[dict] | None = None) -> dict:
     p: dict[str, float] = {}
     if runs is not None and ok:
         from scipy.stats import mannwhitneyu
-
-        from experiments.claims import values
+        from skinny_mj.experiments.claims import values
 
         v = {e: values(Path(), f"{cell}-e{e}", "tt_position_test", runs) for e in ORDER}
         worst = max(("3a", "3b", "4"), key=lambda e: med[e])
@@ -56,7 +55,7 @@ def ordering(results: dict, cell: str, runs: list[dict] | None = None) -> dict:
 
 
 def stage_1_table(results: dict, cfg) -> str:
-    from experiments.fidelity_d import THESIS_TRAIN_RANGE, cell_id, in_thesis_range
+    from skinny_mj.experiments.fidelity_d.study import THESIS_TRAIN_RANGE, cell_id, in_thesis_range
 
     lines = ["| movement | N | input noise | exp 1 pos train | exp 2 pos train | in range | "
              "exp 1 pos test | exp 2 pos test | exp 1 motor test | exp 2 motor test | "
@@ -85,7 +84,7 @@ def stage_1_table(results: dict, cfg) -> str:
 
 
 def stage_2_table(results: dict, cells: list[str], runs: list[dict] | None = None) -> str:
-    from experiments.paper_d import PAPER_TABLE_1
+    from skinny_mj.experiments.paper_d import PAPER_TABLE_1
 
     thesis = {e: PAPER_TABLE_1[e] for e in ORDER}
     head = ["cell"] + [f"exp {e}" for e in ORDER] + ["1 > 2", "2 > 3a,3b,4", "3a≈3b≈4"]
@@ -112,7 +111,7 @@ def stage_2_table(results: dict, cells: list[str], runs: list[dict] | None = Non
 
 def write_report(results: dict, out_dir: Path, cfg) -> str:
     """Write stages.md and the two figures of the grid ``cfg`` (a fidelity_d.Grid)."""
-    from experiments.fidelity_d import STAGE_2_CELLS, cells, in_thesis_range
+    from skinny_mj.experiments.fidelity_d.study import STAGE_2_CELLS, cells, in_thesis_range
 
     out_dir = Path(out_dir)
     picked = [c for c in cells(cfg) if in_thesis_range(results, c)]
@@ -138,8 +137,9 @@ def write_report(results: dict, out_dir: Path, cfg) -> str:
 
 
 def _figure(results: dict, cfg, metric: str, path: Path) -> None:
-    from experiments.fidelity_d import THESIS_TRAIN_RANGE, cell_id
-    from experiments.paper_d import PAPER_TABLE_1
+    from skinny_mj.experiments.fidelity_d.study import THESIS_TRAIN_RANGE, cell_id
+    from skinny_mj.experiments.paper_d import PAPER_TABLE_1
+
     from skinny_mj.plots import pyplot
 
     plt = pyplot()
@@ -187,3 +187,10 @@ def _figure(results: dict, cfg, metric: str, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
+
+
+def report(results: dict, plan, out_dir: Path) -> str:
+    """stage1.md / stage2.md tables and fig_train_error.png / fig_test_error.png."""
+    from skinny_mj.experiments.fidelity_d.study import grid_of
+
+    return write_report(results, Path(out_dir), grid_of(plan))

@@ -1,4 +1,4 @@
-"""The ratio table and figure of :mod:`experiments.fidelity_e`."""
+"""The ratio table and figure of :mod:`skinny_mj.experiments.fidelity_e.study`."""
 
 from __future__ import annotations
 
@@ -46,7 +46,7 @@ def ratios(results: dict, plan) -> list[dict]:
 
 
 def write_report(results: dict, out_dir: Path, plan) -> str:
-    from experiments.fidelity_e import THESIS_RATIO
+    from skinny_mj.experiments.fidelity_e.study import THESIS_RATIO
 
     rows = ratios(results, plan)
     lines = ["| movement | u_error gain | test noise | metric | exp 1 | exp 2 | exp 5 | "
@@ -91,3 +91,9 @@ def _figure(rows: list[dict], movements: list[str], path: Path, thesis: dict) ->
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
+
+
+def report(results: dict, plan, out_dir: Path) -> str:
+    """ratios.md (exp 2 / exp 5 and exp 1 / exp 5 per movement, gain, test noise) and
+    fig_ratio.png."""
+    return write_report(results, Path(out_dir), plan)

@@ -1,4 +1,5 @@
-"""Tables, claims and figures of :mod:`experiments.fidelity_a` (from the run files)."""
+"""Tables, claims and figures of :mod:`skinny_mj.experiments.fidelity_a.study` (from the run
+files)."""
 
 from __future__ import annotations
 
@@ -109,7 +110,7 @@ def prediction_table(runs: Runs) -> str:
 
 def thesis_table(runs: Runs) -> str:
     """The thesis's stated numbers (paper A §4, text) beside ours."""
-    from experiments.fidelity_a import THESIS
+    from skinny_mj.experiments.fidelity_a.study import THESIS
 
     lines = ["| quantity | thesis (paper A text) | ours |", "|---|---|---|"]
     lo, hi = THESIS["inverse_error_by_delay_4"]
@@ -352,11 +353,11 @@ def write_report(out_dir: Path, cfg, extra_dirs: tuple[Path, ...] = ()) -> str:
     return "\n".join(lines)
 
 
-if __name__ == "__main__":  # python -m experiments.fidelity_a_report OUT [MORE_SWEEPS...]
+if __name__ == "__main__":  # python -m skinny_mj.experiments.fidelity_a.report OUT [MORE_SWEEPS...]
     import json
     import sys
 
-    from experiments.fidelity_a import Config
+    from skinny_mj.experiments.fidelity_a.study import Config
 
     dirs = [Path(a) for a in sys.argv[1:]]
     config = Config.from_dict(json.loads((dirs[0] / "config.json").read_text())["config"])

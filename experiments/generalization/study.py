@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import functools
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -104,7 +103,7 @@ def clipped_ideal_nrmse(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarr
     """Position NRMSE of the exact inverse model whose commands are clipped to [-1, 1]
     (kinematic: q(t+1) = q(t) + clip(c) v_max dt, no sensor noise): what the command
     scale alone costs on ``angles`` (T, n_dof) rad, a lower bound for any network."""
-    from controllers.metrics import position_nrmse
+    from skinny_mj.controllers.metrics import position_nrmse
 
     step = np.asarray(max_speed_rad_s) * dt
     q = np.empty_like(angles)
@@ -179,13 +178,6 @@ ROWS = (*(_row(rep, ts, *TRAIN_SETS[ts]) for rep in REPRESENTATIONS for ts in TR
         *(_row(rep, ts, *TRAIN_SETS_EXTRA[ts]) for rep, ts in EXTRA_ROWS))
 
 
-def report(results: dict, plan, out_dir: Path) -> str:
-    """Matrices, figures and findings (:mod:`experiments.generalization_report`)."""
-    from experiments import generalization_report
-
-    return generalization_report.report(results, Path(out_dir))
-
-
 STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, run_batch=run_batch, runs=10,
     # paper E exp. 5's schedule (TrainConfig's defaults), 10 epochs, N = 200, one
@@ -200,5 +192,5 @@ STUDY = Study(
     quick=Quick({"esn.n_reservoir": 50, "rule.epochs": 2}, runs=2,
                 rows=tuple(f"j2-{ts}" for ts in QUICK_SETS)),
     # the rows are the training sets and their bodies (select one with --rows j2|c2|c3)
-    takes=(), report=report,
+    takes=(), report="skinny_mj.experiments.generalization.report:report",
 )

@@ -1,6 +1,6 @@
 """Paper D's fidelity: which true-target cell trains in the thesis's range, and tests how?
 
-Paper D's true-target (TT) half (``experiments.paper_d.STUDY``'s rows and ``trainings``,
+Paper D's true-target (TT) half (``skinny_mj.experiments.paper_d.STUDY``'s rows and ``trainings``,
 imported) × Gaussian input noise on the teacher-forced inputs (``rule.input_noise``, SD in
 normalized units, its own seed stream) {0, 0.01, 0.03, 0.05} × reservoir size N {100, 200,
 400} × movement {recorded-like YMCA (``ymca-recorded``: never still, marker noise),
@@ -23,10 +23,10 @@ The thesis (paper D Table 1, TT): position train NRMSE 0.0033-0.0092, position t
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
-from experiments import paper_d
+from skinny_mj.experiments import paper_d
+
 from skinny_mj.engine.plan import train_metrics
 from skinny_mj.engine.study import Quick, Row, Study
 
@@ -122,13 +122,6 @@ def in_thesis_range(results: dict, cell: str) -> bool:
     return all(v is not None and lo <= v <= hi for v in vals)
 
 
-def report(results: dict, plan, out_dir: Path) -> str:
-    """stage1.md / stage2.md tables and fig_train_error.png / fig_test_error.png."""
-    from experiments.fidelity_d_report import write_report
-
-    return write_report(results, Path(out_dir), grid_of(plan))
-
-
 _ROWS = (*_rows(Grid(), paper_d.TT_CYCLES), *_rows(QUICK_GRID, 3, quick_only=True))
 STUDY = Study(
     name=NAME, description=__doc__, runs=10, rows=_ROWS,
@@ -139,5 +132,5 @@ STUDY = Study(
             "stage2": [*STAGE_2_CELLS, *cells(QUICK_GRID)]},
     quick=Quick(runs=2, rows=cells(QUICK_GRID)),
     takes=("dof", "signals"),  # the movements are the study's
-    report=report,
+    report="skinny_mj.experiments.fidelity_d.report:report",
 )

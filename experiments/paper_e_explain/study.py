@@ -25,18 +25,16 @@ paper-e row 1's runs, seed for seed.
 A run whose network diverges keeps its diagnostics up to the failing epoch (None after
 it): the run file is status ``ok`` with ``diverged`` = 1 and no test NRMSE, because the
 training curves are this experiment's data. Figures and the table: ``report``
-(:mod:`experiments.paper_e_explain_report`).
+(:mod:`skinny_mj.experiments.paper_e_explain.report`).
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
+from skinny_mj.controllers.metrics import nrmse, position_nrmse
+from skinny_mj.controllers.rollout import Rollout
+from skinny_mj.experiments.paper_e import study as paper_e
 
-from controllers.metrics import nrmse, position_nrmse
-from controllers.rollout import Rollout
-from experiments import paper_e
 from skinny_mj.engine.experiment import run_seed
 from skinny_mj.engine.stats import to_jsonable
 from skinny_mj.engine.study import Quick, Row, Study
@@ -65,7 +63,7 @@ def roughness(y: np.ndarray) -> np.ndarray:
 
 
 class EpochDiagnostics:
-    """``observe`` callback for :func:`controllers.fel.train`: per run, epoch and learning
+    """``observe`` callback for :func:`skinny_mj.controllers.fel.train`: per run, epoch and learning
     cycle the NRMSE (vs the true commands) and roughness of y_est, y_used and y_ESN, the
     teacher-forcing position NRMSE, and the first repetition's signals of some epochs.
 
@@ -163,18 +161,12 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     return out
 
 
-def report(results, plan, out_dir: Path) -> str:
-    """explain.md (per-epoch table) and fig7_*.png … fig10_*.png."""
-    from experiments.paper_e_explain_report import write_report
-
-    return write_report(out_dir, plan)
-
-
 STUDY = Study(
     name=NAME, description=__doc__, runs=20, base_seed=BASE_SEED, run_batch=run_batch,
     rows=tuple(Row(e, paper_e.STUDY.row(e).overrides, paper_e.STUDY.row(e).paper,
                    seeds_of=None if e == EXPS[0] else EXPS[0]) for e in EXPS),
     columns=("est_rough_e1", "used_rough_e5", "esn_rough_e5", "tf_position_nrmse_e5",
              "position_nrmse", "motor_nrmse"),
-    quick=Quick({"rule.epochs": 2}, runs=2), report=report,
+    quick=Quick({"rule.epochs": 2}, runs=2),
+    report="skinny_mj.experiments.paper_e_explain.report:report",
 )

@@ -10,8 +10,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments.paper_e_explain.study import EXPS
 
-from experiments.paper_e_explain import EXPS
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.io import atomic_write_text
 
@@ -345,3 +345,8 @@ def fig10(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
     fig.suptitle(f"Teacher forcing, {_movement(plan)}: 8 position signals of the plant "
                  "during the learning cycle", fontsize=9)
     return save_figure(fig, out_dir / "fig10_teacher_forcing.png")
+
+
+def report(results: dict, plan, out_dir: Path) -> str:
+    """explain.md (per-epoch table) and fig7_*.png … fig10_*.png."""
+    return write_report(Path(out_dir), plan)

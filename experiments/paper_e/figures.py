@@ -11,9 +11,14 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments.claims import claim_lines, values
+from skinny_mj.experiments.paper_e.study import (
+    PAPER_FIG3_CYCLES,
+    PAPER_TABLE_2,
+    TABLE_1,
+    TABLE_COLUMNS,
+)
 
-from experiments.claims import claim_lines, values
-from experiments.paper_e import PAPER_FIG3_CYCLES, PAPER_TABLE_2, TABLE_1, TABLE_COLUMNS
 from skinny_mj.engine.plan import Plan
 from skinny_mj.engine.stats import load_runs, markdown_table
 from skinny_mj.io import atomic_write_text
@@ -337,3 +342,16 @@ def _record_run(path: Path, cfg: TrainConfig, row_id: str, seed: int, metrics: d
                 {"row": row_id, "config": cfg.to_dict()})
     return (outcome.metrics["test"]["position_nrmse"] == metrics.get("position_nrmse")
             and outcome.metrics["test"]["motor_nrmse"] == metrics.get("motor_nrmse"))
+
+def report(results, plan, out_dir: Path) -> str:
+    """Figures 3–6, one ``.rrd`` of the median run per Table row, the movement line in
+    table.md, the Fig. 3 cycle counts and the paper's claims, checked."""
+    write_table(results, out_dir, plan)
+    fig3(out_dir)
+    fig4(out_dir, plan)
+    fig5(out_dir, plan)
+    fig6(out_dir)
+    rrd_lines = median_recordings(out_dir, plan, [p.row.id for p in plan.rows
+                                                       if p.row.group == "table"])
+    return "\n".join([claims(out_dir), "", fig3_summary(out_dir, plan),
+                      "", *rrd_lines])

@@ -58,8 +58,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.controllers.metrics import nrmse
 
-from controllers.metrics import nrmse
 from skinny_mj.engine.experiment import Experiment, Row, RunFailed
 from skinny_mj.engine.sweep import one_of_batch
 from skinny_mj.plant import body
@@ -286,7 +286,7 @@ def cost(cfg: Config, row: Row) -> float:
 
 def report(results: dict, out_dir: Path) -> str:
     """The train x test heat maps, shoulder-vs-elbow figures, learning curves, claims
-    (:mod:`experiments.paper_c_report`)."""
-    from experiments import paper_c_report
+    (:mod:`skinny_mj.experiments.paper_c.report`)."""
+    from skinny_mj.experiments.paper_c import report as paper_c_report
 
     return paper_c_report.report(results, out_dir)

@@ -26,8 +26,6 @@ The paper's numbers are shown beside ours, labelled; never in place of ours.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from skinny_mj.engine.study import Quick, Row, Study
@@ -70,7 +68,8 @@ def run_convergence(config: TrainConfig, row: Row, seeds: list[int]) -> list[dic
     """Fig. 3: NRMSE(y_used^i, y_true) over ``cycles`` cycles with perfect targets
     and teacher forcing (true commands at full scale 2 x the fastest speed), for
     several seeds in lockstep."""
-    from controllers.true_target import convergence_curve
+    from skinny_mj.controllers.true_target import convergence_curve
+
     from skinny_mj.training.loop import build_run
 
     run = build_run(config, seeds)
@@ -121,22 +120,6 @@ ROWS = (
 )
 
 
-def report(results, plan, out_dir: Path) -> str:
-    """Figures 3–6, one ``.rrd`` of the median run per Table row, the movement line in
-    table.md, the Fig. 3 cycle counts and the paper's claims, checked."""
-    from experiments import paper_e_figures as figs
-
-    figs.write_table(results, out_dir, plan)
-    figs.fig3(out_dir)
-    figs.fig4(out_dir, plan)
-    figs.fig5(out_dir, plan)
-    figs.fig6(out_dir)
-    rrd_lines = figs.median_recordings(out_dir, plan, [p.row.id for p in plan.rows
-                                                       if p.row.group == "table"])
-    return "\n".join([figs.claims(out_dir), "", figs.fig3_summary(out_dir, plan),
-                      "", *rrd_lines])
-
-
 STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, runs=20, groups={"fig5": ("fig5a", "fig5b")},
     # the thesis's defaults are TrainConfig's: N = 200, spectral radius 0.5, sensor noise
@@ -151,5 +134,5 @@ STUDY = Study(
     quick=Quick({"rule.epochs": 2}, runs=2, rows=("table", "fig3", "fig4-n50", "fig4-n100",
                                              *(f"fig5{ab}-nu{nu}" for ab in "ab"
                                                for nu in ("0.03", "0.2")))),
-    report=report,
+    report="skinny_mj.experiments.paper_e.figures:report",
 )

@@ -8,14 +8,14 @@ one arm could have access to the prediction made by the other arm's forward mode
 
 Rows ``<pattern>-<architecture>-d<delay>``: paper B's plant and run (a forced leading
 arm, the lagging arm's ESN inverse model seeing both arms' sensed joint angles, FEL with
-K 1 -> 0, tests with the leader at 1x, 0.5x, 1.5x and K = 0: :func:`experiments.paper_b.
+K 1 -> 0, tests with the leader at 1x, 0.5x, 1.5x and K = 0: :func:`skinny_mj.experiments.paper_b.
 run_batch`) with paper A's delay (``plant.delay``: the internal models' sensed
 input lags by 0-10 steps, the feedback controller's does not) and, per architecture,
 the lagging arm's inverse model gets besides the delayed sensed state of both arms:
 
 - ``inverse``: nothing more (paper B's network, delayed);
 - ``forward``: its own forward model's prediction of its next position (paper A's
-  parallel forward model, per arm: :mod:`controllers.arm_forward`);
+  parallel forward model, per arm: :mod:`skinny_mj.controllers.arm_forward`);
 - ``share-predictions``: that, and the leading arm's forward model's prediction of the
   leader's next position (from the leader's delayed state and its forced command);
 - ``share-commands``: its own prediction and the leading arm's last motor command (an
@@ -30,9 +30,8 @@ position NRMSE at 1x.
 
 from __future__ import annotations
 
-from pathlib import Path
+from skinny_mj.experiments import paper_b
 
-from experiments import paper_b
 from skinny_mj.engine.experiment import Row as EngineRow
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
@@ -45,7 +44,7 @@ ARCHITECTURES = {"inverse": None, "forward": "none", "share-predictions": "predi
 DELAYS = (0, 2, 4, 6, 10)
 PATTERNS = ("phase0", "phase180")
 SPEEDS = paper_b.SPEEDS
-#: Paper B's run (:data:`experiments.paper_b.MODEL`: N = 100, sensed-only inputs, new
+#: Paper B's run (:data:`skinny_mj.experiments.paper_b.MODEL`: N = 100, sensed-only inputs, new
 #: method, K 1 -> 0) with a shorter schedule to fit the compute budget (our choice):
 #: β = 0.1 with 3 learning cycles per epoch and 10 epochs (paper E's experiment 5) in
 #: place of paper B's β = 0.01, 5 cycles, 50 epochs; forward networks N = 100 (paper A;
@@ -75,7 +74,7 @@ def _tag(speed: float) -> str:
 
 
 def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """Paper B's training and tests (:func:`experiments.paper_b.run_batch`) of the row's
+    """Paper B's training and tests (:func:`skinny_mj.experiments.paper_b.run_batch`) of the row's
     config, for several seeds in lockstep; adds |timing error| per speed and the worst
     over the three speeds."""
     pb = paper_b.Config(model=config)
@@ -95,14 +94,6 @@ TABLE_COLUMNS = ("position_nrmse_x1", "relative_error_x1", "worst_relative_error
                  "abs_phase_lag_deg_x1", "abs_phase_lag_deg_x0.5", "abs_phase_lag_deg_x1.5")
 
 
-def report(results: dict, plan, out_dir: Path) -> str:
-    """Figures (metrics against delay per architecture; traces at the largest delay)
-    and the comparisons with the inverse-only network: :mod:`experiments.bimanual_delay_report`."""
-    from experiments.bimanual_delay_report import report as _report
-
-    return _report(results, Path(out_dir))
-
-
 STUDY = Study(
     name=NAME, description=__doc__, base=MODEL, runs=10, run_batch=run_batch,
     rows=tuple(_row(p, a, d) for p in PATTERNS for a in ARCHITECTURES for d in DELAYS),
@@ -114,5 +105,5 @@ STUDY = Study(
                 rows=tuple(row_id("phase0", a, d) for a in ARCHITECTURES for d in (0, 4))),
     # --dof 8 runs the patterns on the 3D body; the movements are paper B's patterns and
     # the signals its joint angles (the per-arm forward models need joint signals)
-    takes=("dof",), report=report,
+    takes=("dof",), report="skinny_mj.experiments.bimanual_delay.report:report",
 )

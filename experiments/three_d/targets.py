@@ -9,7 +9,7 @@ prints per DOF the RMS of y_est − the true command beside the RMS of the true 
 the sensor noise's part of that error as a multiple of the true command, and the fraction
 of commands clipped at full scale::
 
-    MUJOCO_GL=disabled OMP_NUM_THREADS=1 python -m experiments.three_d_targets
+    MUJOCO_GL=disabled OMP_NUM_THREADS=1 python -m skinny_mj.experiments.three_d.targets
 """
 
 from __future__ import annotations
@@ -17,10 +17,10 @@ from __future__ import annotations
 import json
 
 import numpy as np
+from skinny_mj.controllers.fel import rollout
+from skinny_mj.controllers.metrics import nrmse
+from skinny_mj.experiments.paper_c import study as paper_c
 
-from controllers.fel import rollout
-from controllers.metrics import nrmse
-from experiments import paper_c
 from skinny_mj.plant import body
 
 BODIES = ((4, "joint"), (4, "cartesian"), (8, "joint"), (8, "cartesian"))

@@ -1,13 +1,14 @@
 """What moves the Y-pure network's elbows on YM (paper C: "the elbows are not used").
 
-Trains paper C's Y-pure network (its recipe, :func:`experiments.paper_c.train_config`),
+Trains paper C's Y-pure network (its recipe,
+:func:`skinny_mj.experiments.paper_c.study.train_config`),
 tests it on YM and measures, per elbow, the network's input -> command Jacobian along the
 test (one step from the previous reservoir state, tanh readout) and two closed-loop
 counterfactual tests: YM with both elbow targets held at Y pure's angle, and with the left
 one held; and the timing (cross-correlation lag, steps) of its YM and YMCA tests.
 ``--quiet`` sets sensor and reservoir noise to 0. Prints one JSON line::
 
-    MUJOCO_GL=disabled OMP_NUM_THREADS=1 python -m experiments.paper_c_elbows --seeds 0 1
+    MUJOCO_GL=disabled OMP_NUM_THREADS=1 python -m skinny_mj.experiments.paper_c.elbows --seeds 0 1
 """
 
 from __future__ import annotations
@@ -17,8 +18,8 @@ import dataclasses
 import json
 
 import numpy as np
+from skinny_mj.experiments.paper_c import study as paper_c
 
-from experiments import paper_c
 from skinny_mj.plant import body
 
 
@@ -57,7 +58,7 @@ def analyse(run, dof: int = 4) -> list[dict]:
     left_held[:, elbows[1]] = pure.angles[0, elbows[1]]
     counter = {name: evaluate(run, dataclasses.replace(ym, angles=a, name=name))
                for name, a in (("elbow targets held", held), ("left target held", left_held))}
-    from experiments.paper_c_report import lag_steps
+    from skinny_mj.experiments.paper_c.report import lag_steps
 
     ymca = paper_c.load(cfg, "ymca")
     ymca_lags = [lag_steps(t.rollout.angles[0], ymca.angles) for t in evaluate(run, ymca)]

@@ -1,6 +1,6 @@
 """Paper A's fidelity: why does our inverse-only error saturate at 8.5–9 %, not 10–20 %?
 
-Paper A's runs (``experiments.paper_a.MODEL`` / ``train_config``, imported) measured
+Paper A's runs (``skinny_mj.experiments.paper_a.MODEL`` / ``train_config``, imported) measured
 three ways at once. K is fixed (0.65) through paper A's training, so nothing in epochs
 1..E depends on E: ONE training of E epochs records, at every checkpoint epoch c <= E
 (:data:`CHECKPOINTS`), what a c-epoch run would report (``tests/test_fidelity_a.py``
@@ -35,8 +35,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments import paper_a
 
-from experiments import paper_a
 from skinny_mj.engine.experiment import Experiment, Row
 from skinny_mj.engine.options import OPTION_KEYS, movement_changes
 from skinny_mj.engine.sweep import one_of_batch
@@ -134,7 +134,7 @@ def checkpoints_of(cfg: Config, epochs: int) -> tuple[int, ...]:
 
 def _mad(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Mean |a - b| / 2 per run, (R,), for (R, T, n) and (R or T, ..., n)."""
-    from controllers.fel import run_mean
+    from skinny_mj.controllers.fel import run_mean
 
     return run_mean(np.abs(a - b)) / 2.0
 
@@ -142,7 +142,7 @@ def _mad(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def _cycle_metrics(ro, desired: np.ndarray, prefix: str) -> dict[str, np.ndarray]:
     """Per-run metrics (R,) of one closed-loop cycle ``ro`` (the feedback share and
     correction ratio only with the feedback on: in training)."""
-    from controllers.forward_model import rollout_prediction_error
+    from skinny_mj.controllers.forward_model import rollout_prediction_error
 
     out = {f"{prefix}_mad": _mad(ro.true_signals, desired)}
     if prefix == "train":
@@ -171,7 +171,7 @@ def _test_metrics(run) -> dict[str, np.ndarray]:
 
 def _stack_rollouts(ros: list):
     """One R-run Rollout from R one-run selections (the test's per-run views)."""
-    from controllers.rollout import Rollout
+    from skinny_mj.controllers.rollout import Rollout
 
     return Rollout(**{f.name: None if getattr(ros[0], f.name) is None else
                       np.concatenate([getattr(r, f.name) for r in ros])
@@ -251,7 +251,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
 
 def report(results: dict, out_dir: Path) -> str:
     """tables.md (error and prediction-error tables, the claims) and the figures."""
-    from experiments.fidelity_a_report import write_report
+    from skinny_mj.experiments.fidelity_a.report import write_report
 
     out_dir = Path(out_dir)
     cfg = Config.from_dict(json.loads((out_dir / "config.json").read_text())["config"])

@@ -1,15 +1,14 @@
 """Paper C's report: the train x test matrices, the shoulder-vs-elbow figures, the
 learning curves and the paper's claims, checked, from a sweep's run files (the sweep
-itself is :mod:`experiments.paper_c`)."""
+itself is :mod:`skinny_mj.experiments.paper_c.study`)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
-
-from controllers.metrics import nrmse
-from experiments.paper_c import (
+from skinny_mj.controllers.metrics import nrmse
+from skinny_mj.experiments.paper_c.study import (
     AS_GOOD_ABS,
     AS_GOOD_FACTOR,
     LARGE_ERROR_FACTOR,
@@ -21,6 +20,7 @@ from experiments.paper_c import (
     elbow_range,
     load,
 )
+
 from skinny_mj.plant import body
 
 

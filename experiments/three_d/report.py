@@ -1,4 +1,5 @@
-"""Three-d's report, from a sweep's run files (the sweep is :mod:`experiments.three_d`):
+"""Three-d's report, from a sweep's run files (the sweep is
+:mod:`skinny_mj.experiments.three_d.study`):
 the 2D vs 3D table, each paper's own report on each body, the papers' claims checked
 on 2D and on 3D side by side, and one figure.
 
@@ -17,9 +18,16 @@ from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments import paper_a, paper_b
+from skinny_mj.experiments.three_d.study import (
+    DIMS,
+    PAPERS,
+    module,
+    paper_experiment,
+    row_id,
+    subset,
+)
 
-from experiments import paper_a, paper_b
-from experiments.three_d import DIMS, PAPERS, module, paper_experiment, row_id, subset
 from skinny_mj.engine.stats import aggregate, load_runs
 from skinny_mj.io import atomic_write_json, atomic_write_text
 
@@ -55,7 +63,8 @@ _LINE = re.compile(r"^- \[([^\]]+)\] (.*)$")
 def angle_nrmse(produced: np.ndarray, desired: np.ndarray, dof: int) -> float | None:
     """NRMSE of normalized joint angles (produced, desired: (T, dof) rad), None if the
     lengths differ: the same measure on both bodies, whatever the signals."""
-    from controllers.metrics import nrmse
+    from skinny_mj.controllers.metrics import nrmse
+
     from skinny_mj.plant import body
 
     if produced.shape != desired.shape:
@@ -66,7 +75,7 @@ def angle_nrmse(produced: np.ndarray, desired: np.ndarray, dof: int) -> float | 
 
 def _with_angle_errors(rec: dict, paper_c_config) -> dict:
     """Paper C's run metrics plus ``<col>__angle_nrmse`` for the kept joint angles."""
-    from experiments.paper_c import MOVEMENTS, load
+    from skinny_mj.experiments.paper_c.study import MOVEMENTS, load
 
     metrics, dof = dict(rec["metrics"]), paper_c_config.dof
     for key, value in rec["metrics"].items():
@@ -109,7 +118,7 @@ def paper_claims(p: str, view: Path, dof: int) -> list[str]:
         return paper_a.claims(view)
     if p == "b":
         return paper_b.claims(view)
-    from experiments import paper_c_report
+    from skinny_mj.experiments.paper_c import report as paper_c_report
 
     ok = [r for r in load_runs(view) if r["status"] == "ok"]
     return paper_c_report.claims(ok, dof) if ok else ["- [n/a] no finished runs"]

@@ -7,7 +7,7 @@ Rows ``<paper>-<dim>-<paper row>`` (``a-2d-serial-d4``, ``b-3d-phase90``,
 copied here. ``2d`` is the paper's setting (4 DOF, joint angles); ``3d`` is ``dof=8,
 signals="cartesian"`` (``--dof`` / ``--signals`` replace it). A 3D row takes its 2D
 twin's seeds (:attr:`skinny_mj.engine.experiment.Row.seeds_of`): run k of both starts from the
-same seed. :mod:`experiments.three_d_report` writes the table (2D vs 3D, mean ± sd,
+same seed. :mod:`skinny_mj.experiments.three_d.report` writes the table (2D vs 3D, mean ± sd,
 failed / n), each paper's own figures and claims on each body, and the claims side by side.
 
 The subset (:data:`SUBSET`): the whole 2D + 3D sweep at 10 runs per row was to take
@@ -51,7 +51,8 @@ from skinny_mj.engine.experiment import Experiment, Row
 
 NAME = "three-d"
 #: paper id -> its module
-PAPERS = {"a": "experiments.paper_a", "b": "experiments.paper_b", "c": "experiments.paper_c"}
+PAPERS = {"a": "skinny_mj.experiments.paper_a", "b": "skinny_mj.experiments.paper_b",
+          "c": "skinny_mj.experiments.paper_c.study"}
 #: The paper rows run here (module docstring: what is left out and why).
 SUBSET = {"a": ("inverse-d4", "serial-d4", "inverse-d10", "serial-d10"),
           "b": ("phase0", "phase90", "phase180"),
@@ -190,7 +191,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
 
 def report(results: dict, out_dir: Path) -> str:
     """The 2D vs 3D table, each paper's figures and claims per body, the claims side by
-    side and the figure (:mod:`experiments.three_d_report`)."""
-    from experiments import three_d_report
+    side and the figure (:mod:`skinny_mj.experiments.three_d.report`)."""
+    from skinny_mj.experiments.three_d import report as three_d_report
 
     return three_d_report.report(results, Path(out_dir))

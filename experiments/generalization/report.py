@@ -1,16 +1,21 @@
 """The generalization matrix's report: per representation the train x test matrices
 (position NRMSE, DTW NRMSE, within 5°), a heat map with the seen cells marked, and a
 summary per training set (coverage, speeds, mean over unseen tests, the real clips, the
-command-scale cost), from a sweep's run files (:mod:`experiments.generalization`)."""
+command-scale cost), from a sweep's run files
+(:mod:`skinny_mj.experiments.generalization.study`)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
-
-from experiments.generalization import REPRESENTATIONS, SEEN, TESTS, TRAIN_SETS_EXTRA
-from experiments.generalization import TRAIN_SETS as _MAIN_SETS
+from skinny_mj.experiments.generalization.study import (
+    REPRESENTATIONS,
+    SEEN,
+    TESTS,
+    TRAIN_SETS_EXTRA,
+)
+from skinny_mj.experiments.generalization.study import TRAIN_SETS as _MAIN_SETS
 
 TRAIN_SETS = {**_MAIN_SETS, **TRAIN_SETS_EXTRA}  # the report shows the extra rows too
 
@@ -159,7 +164,9 @@ def _ms(v: np.ndarray) -> str:
     return f"{v.mean():.3f} ± {v.std(ddof=1) if v.size > 1 else 0.0:.3f}"
 
 
-def report(results: dict, out_dir: Path) -> str:
+def report(results: dict, plan, out_dir: Path) -> str:
+    """Matrices, figures and findings."""
+    out_dir = Path(out_dir)
     from skinny_mj.io import atomic_write_text
 
     runs = _runs(out_dir)

@@ -22,7 +22,7 @@ steps for both movements).
 Every run is tested before training and during it (FEL: after every epoch; RL: every
 ``budget / evals`` env steps, deterministic policy) on a fresh plant, K = 0, by the
 position NRMSE :func:`skinny_mj.training.loop.evaluate` computes
-(:mod:`experiments.rl_vs_fel_runs`). Metrics per run: final and best test error, env
+(:mod:`skinny_mj.experiments.rl_vs_fel.runs`). Metrics per run: final and best test error, env
 steps used, training wall and CPU time (tests excluded), and for 0.05 and 0.02 the env
 steps, wall and CPU time of the first test at or below it. Budgets per run
 (:class:`Config`; larger ones with :func:`experiment`): FEL 10 epochs = 15 600 env
@@ -38,7 +38,8 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from experiments import rl_vs_fel_runs as runs_mod
+from skinny_mj.experiments.rl_vs_fel import runs as runs_mod
+
 from skinny_mj.engine.experiment import Experiment, Row, RunFailed
 from skinny_mj.engine.options import config_from_dict
 from skinny_mj.training.config import TrainConfig
@@ -193,7 +194,7 @@ def experiment(cfg: Config) -> Experiment:
 def report(results: dict, out_dir: Path) -> str:
     """Learning curves (test NRMSE against env steps and against wall time) and the
     comparison table (``comparison.md``)."""
-    from experiments.rl_vs_fel_report import write_report
+    from skinny_mj.experiments.rl_vs_fel.report import write_report
 
     out_dir = Path(out_dir)
     cfg = Config.from_dict(json.loads((out_dir / "config.json").read_text())["config"])
