@@ -48,11 +48,11 @@ ENGINE = ("skinny_mj.engine",)
 # The `skinny` command: parser, handlers, flags (the configuration's flags; a run repeated
 # from its files with --config), help texts, bench, viewer.
 COMMAND_LINE = ("skinny_mj.cli",)
-# Shared by every part: errors, io, threads, progress, preflight, memory (its generic
-# check; its run and sweep estimates import training and the engine inside functions), dtw,
-# plots, recording, recording_layout.
-SHARED = ("skinny_mj.errors", "skinny_mj.io", "skinny_mj.threads", "skinny_mj.progress",
-          "skinny_mj.preflight", "skinny_mj.memory", "skinny_mj.training.dtw",
+# Shared by every part: errors, other packages' entry points (plugins), io, threads,
+# progress, preflight, memory (its generic check; its run and sweep estimates import training
+# and the engine inside functions), dtw, plots, recording, recording_layout.
+SHARED = ("skinny_mj.errors", "skinny_mj.plugins", "skinny_mj.io", "skinny_mj.threads",
+          "skinny_mj.progress", "skinny_mj.preflight", "skinny_mj.memory", "skinny_mj.training.dtw",
           "skinny_mj.plots", "skinny_mj.recording", "skinny_mj.recording_layout",
           "skinny_mj.models")
 PARTS = {"controllers": CONTROLLERS, "experiments": EXPERIMENTS, "plant": PLANT,

@@ -72,18 +72,22 @@ def _figure(rows: list[dict], movements: list[str], path: Path, thesis: dict) ->
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
     for ax, metric in zip(axes, ("position_nrmse", "motor_nrmse"), strict=True):
+        gains = []
         for i, m in enumerate(movements):
             for noisy, style in ((False, "o-"), (True, "s--")):
                 cell = [r for r in rows if r["movement"] == m and
-                        r["metric"] == metric and r["test_noise"] == noisy]
+                        r["metric"] == metric and r["test_noise"] == noisy
+                        and r["ratio_2_5"] is not None and np.isfinite(r["ratio_2_5"])]
                 if not cell:
                     continue
+                gains += [r["gain"] for r in cell]
                 ax.plot([r["gain"] for r in cell], [r["ratio_2_5"] for r in cell], style,
                         color=f"C{i}",
                         label=f"{m}, test noise {'on' if noisy else 'off'}")
         ax.axhline(thesis[metric], color="k", lw=1, ls=":", label="thesis")
         ax.axhline(1.0, color="grey", lw=0.5)
-        ax.set_xscale("log", base=2)
+        if gains:  # (a sweep with no exp 2 / exp 5 pair yet has nothing to put on the axis)
+            ax.set_xscale("log", base=2)
         ax.set_xlabel("u_error gain")
         ax.set_title(f"exp 2 / exp 5, test {metric.split('_')[0]} NRMSE")
     axes[0].set_ylabel("ratio of means")

@@ -15,11 +15,12 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import typing
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, NamedTuple
 
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.training import overrides
+from skinny_mj.plant.body import check_dof
+from skinny_mj.training import fits, overrides
 from skinny_mj.training.config import (
     ACTUATIONS,
     FEEDBACKS,
@@ -42,6 +43,27 @@ class Flag(NamedTuple):
     help: str
     choices: Sequence[Any] | None = None
     switch: bool = False  # a flag without a value that sets the key to true
+    valid: Callable[[str], object] | None = None  # refuses a bad value (open choices)
+
+
+def _valid_dof(text: str) -> object:
+    return check_dof(int(text))
+
+
+def _valid_fit(text: str) -> object:
+    if not fits.known(text):
+        raise SkinnyInputError(f"fit must be one of {tuple(fits.FITS)}, got {text!r}")
+    return text
+
+
+def _checked(valid: Callable[[str], object]) -> Callable[[str], str]:
+    def parse(text: str) -> str:
+        try:
+            valid(text)
+        except (SkinnyInputError, ValueError) as err:
+            raise argparse.ArgumentTypeError(str(err).splitlines()[0]) from None
+        return text
+    return parse
 
 
 MOVEMENT_FLAGS = [
@@ -54,7 +76,8 @@ MOVEMENT_FLAGS = [
          "subject's normalized segment vectors as desired positions", RETARGETS),
 ]
 _BODY = [
-    Flag("--dof", "plant.dof", "4 = 2D, 8 = 3D", (4, 8)),
+    Flag("--dof", "plant.dof", "4 = 2D, 8 = 3D (or a body another package registered)",
+         valid=_valid_dof),
     Flag("--signals", "plant.signals", "position signals the controller sees", SIGNALS),
 ]
 _SENSOR_NOISE = Flag("--sensor-noise", "plant.sensor_noise", "SD of the sensed positions' noise")
@@ -90,8 +113,9 @@ TRAIN_FLAGS: dict[str, list[Flag]] = {
         Flag("--u-error-gain", "rule.u_error_gain", "FEL: scalar on u_error"),
         Flag("--readout-fit", "rule.fit", "FEL: fit the readout on each cycle alone, with "
              "λ chosen on a validation cycle (ridge-select, velocity body), or remembering "
-             "earlier cycles: the normal equations with forgetting, or RLS (torque body)",
-             tuple(FITS)),
+             "earlier cycles: the normal equations with forgetting, or RLS (torque body); "
+             f"one of {', '.join(FITS)} or a fit another package registered",
+             valid=_valid_fit),
         Flag("--readout-forgetting", "rule.forgetting", "weight of earlier cycles per "
              "learning cycle, in [0, 1] (--readout-fit forgetting or rls)"),
         Flag("--tt-input-noise", "rule.input_noise", "SD of noise on the true target's "
@@ -160,6 +184,7 @@ def add_flags(parser: argparse.ArgumentParser, groups: Mapping[str, list[Flag]])
                 group.add_argument(f.flag, dest=f.key, default=argparse.SUPPRESS, help=text,
                                    choices=None if f.choices is None
                                    else [str(c) for c in f.choices],
+                                   type=None if f.valid is None else _checked(f.valid),
                                    metavar=None if f.choices is not None else _metavar(f.key))
 
 

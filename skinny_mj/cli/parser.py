@@ -77,6 +77,17 @@ class _ExperimentHelp(argparse.Action):
         parser.exit()
 
 
+
+def _dof(text: str) -> int:
+    """argparse type of ``--dof``: a body's dof (4, 8 or one another package registered),
+    else a one-line usage error naming the known ones."""
+    from skinny_mj.plant.body import check_dof
+
+    try:
+        return check_dof(int(text))
+    except (SkinnyInputError, ValueError) as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
 def _positive_int(text: str) -> int:
     value = int(text)
     if value < 1:
@@ -155,14 +166,14 @@ def build_parser() -> argparse.ArgumentParser:
     w = tsub.add_parser("show", help="a movement's statistics (still steps, peak speeds, "
                         "unreachable targets, tremor band)")
     w.add_argument("name")
-    w.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    w.add_argument("--dof", type=_dof, metavar="{4,8}", default=4)
     w.add_argument("--asf", type=Path)
     w.add_argument("--retarget", choices=("angles", "positions"), default="angles")
     w.add_argument("--actuation", choices=("velocity", "torque"), default="velocity",
                    help="torque: also the torques the movement needs on the torque twin")
     e = tsub.add_parser("export", help="write a movement to .npz or .csv")
     e.add_argument("name")
-    e.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    e.add_argument("--dof", type=_dof, metavar="{4,8}", default=4)
     e.add_argument("--asf", type=Path)
     e.add_argument("--speed", type=float, default=1.0)
     e.add_argument("--reps", type=_positive_int, default=1)
@@ -186,7 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--movement", help="train/test every row on another movement (name or "
                    "file; default: the paper's); recorded in config.json, the name stays")
     p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc --movement")
-    p.add_argument("--dof", type=int, choices=(4, 8), help="2D (4) or 3D (8) Skinny "
+    p.add_argument("--dof", type=_dof, metavar="{4,8}", help="2D (4) or 3D (8) Skinny "
                    "(default: the paper's)")
     p.add_argument("--signals", choices=("joint", "cartesian"),
                    help="the networks' position signals (default: the paper's)")
@@ -219,7 +230,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="processes for paper_e_full_s (default: all cores)")
 
     p = sub.add_parser("render", help="render Skinny to a PNG (needs MUJOCO_GL=egl)")
-    p.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    p.add_argument("--dof", type=_dof, metavar="{4,8}", default=4)
     p.add_argument("--trajectory", help="pose Skinny at a movement's frame (default: rest pose)")
     p.add_argument("--frame", type=int, default=0)
     p.add_argument("--width", type=_positive_int, default=640)

@@ -23,9 +23,11 @@ M = diag(-1, 1, 1), so equal joint angles give mirror-image poses.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from skinny_mj import plugins
 from skinny_mj.errors import SkinnyInputError
 
 SIDES = ("right", "left")
@@ -58,18 +60,116 @@ _ROTATION = JointSpec(
 _ELBOW_2D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, np.pi))
 _ELBOW_3D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, 5 * np.pi / 6))
 
-ARM_JOINTS = {4: (_ABDUCTION, _ELBOW_2D), 8: (_ABDUCTION, _FLEXION, _ROTATION, _ELBOW_3D)}
 SIGNALS = ("joint", "cartesian")
 ACTUATIONS = ("velocity", "torque")
 #: The control step, s (50 Hz: the thesis's 200 Hz capture, every 4th sample kept).
 CONTROL_DT_S = 0.02
+#: Entry-point group through which another package adds a body (a :class:`Body`).
+BODY_GROUP = "skinny_mj.bodies"
+
+
+@dataclass(frozen=True)
+class Body:
+    """A body Skinny-MJ trains on: two mirrored arms with these hinges, and its MJCF.
+
+    ``dof``: the number of joints of both arms, the key a user chooses the body by
+    (``--dof``, ``plant.dof``). ``arm_joints``: the right arm's hinges from the shoulder
+    out, each moving the upper arm or the forearm (the left arm mirrors them).
+    ``planar``: every hinge turns in the frontal plane, so the Cartesian signals are the
+    segments' x and z only. ``label``: how a message names it ("2D"). ``folder``: the
+    folder of its MJCF (None: Skinny's own, :func:`skinny_mj.plant.model.models_dir`),
+    holding ``robot`` (the arms and their actuators; joint, actuator and site names as
+    :func:`dof_names` and ``{side}_{shoulder,elbow,wrist}``) and ``scene`` (the robot
+    with floor, light and camera). The segment lengths are Skinny's
+    (:data:`UPPER_ARM_LENGTH_M`, :data:`FOREARM_LENGTH_M`); a test of the MJCF against
+    this spec is :func:`skinny_mj.plant.model.check_body`.
+    """
+
+    dof: int
+    arm_joints: tuple[JointSpec, ...]
+    planar: bool
+    label: str
+    robot: str
+    scene: str
+    folder: Path | None = None
+
+    def __post_init__(self) -> None:
+        if isinstance(self.dof, bool) or not isinstance(self.dof, int) or \
+                self.dof != 2 * len(self.arm_joints):
+            raise SkinnyInputError(f"a body's dof is twice its arm's joints "
+                                   f"({2 * len(self.arm_joints)}), got {self.dof!r}")
+        names = [j.name for j in self.arm_joints]
+        if len(set(names)) != len(names):
+            raise SkinnyInputError(f"a body's joints need distinct names, got {names}")
+        segments = [j.segment for j in self.arm_joints]
+        if set(segments) - {"upper_arm", "forearm"} or segments != sorted(
+                segments, key=("upper_arm", "forearm").index) or "forearm" not in segments:
+            raise SkinnyInputError("a body's hinges move the upper arm first, then the "
+                                   f"forearm (at least one), got {segments}")
+
+
+#: The bodies, by dof: Skinny's 2D and 3D, and any :func:`register_body` added.
+BODIES: dict[int, Body] = {
+    4: Body(4, (_ABDUCTION, _ELBOW_2D), planar=True, label="2D", robot="skinny_2d.xml",
+            scene="scene_2d.xml"),
+    8: Body(8, (_ABDUCTION, _FLEXION, _ROTATION, _ELBOW_3D), planar=False, label="3D",
+            robot="skinny_3d.xml", scene="scene_3d.xml"),
+}
+#: Each body's right-arm hinges, by dof (a view of :data:`BODIES`, kept in step).
+ARM_JOINTS = {dof: b.arm_joints for dof, b in BODIES.items()}
+_entry_points_read = False
+
+
+def register_body(new: Body) -> Body:
+    """Add a body, chosen from then on by its ``dof`` (``--dof``, ``plant.dof``). The same
+    body again is a no-op; another body under a taken dof is a :class:`SkinnyInputError`.
+
+    In this process only: for the command line and a sweep's worker processes, register
+    it through the entry-point group :data:`BODY_GROUP` instead (``docs/adding-a-body.md``).
+    """
+    old = BODIES.get(new.dof)
+    if old is not None and old != new:
+        raise SkinnyInputError(f"dof {new.dof} is taken by the {old.label} body")
+    BODIES[new.dof] = new
+    ARM_JOINTS[new.dof] = new.arm_joints
+    return new
+
+
+def _read_entry_points() -> None:
+    global _entry_points_read
+    if _entry_points_read:
+        return
+    _entry_points_read = True
+    for _, found in plugins.load_group(BODY_GROUP, Body, "skinny_mj.plant.body.Body"):
+        register_body(found)
+
+
+def body_of(dof: object) -> Body:
+    """The :class:`Body` chosen by ``dof``; an unknown dof is a :class:`SkinnyInputError`
+    naming the known ones."""
+    found = _lookup(dof)
+    if found is None and not isinstance(dof, bool):
+        _read_entry_points()
+        found = _lookup(dof)
+    if found is None:
+        known = " or ".join(f"{d} ({b.label})" for d, b in sorted(BODIES.items()))
+        raise SkinnyInputError(f"dof must be {known}, got {dof!r}")
+    return found
+
+
+def _lookup(dof: object) -> Body | None:
+    if isinstance(dof, bool):
+        return None
+    try:
+        return BODIES.get(dof)  # type: ignore[call-overload]
+    except TypeError:  # unhashable
+        return None
 
 
 def check_dof(dof: object) -> int:
-    """``dof`` if it is 4 (2D) or 8 (3D), else a :class:`SkinnyInputError` (a ValueError)."""
-    if isinstance(dof, bool) or dof not in ARM_JOINTS:
-        raise SkinnyInputError(f"dof must be 4 (2D) or 8 (3D), got {dof!r}")
-    return int(dof)  # type: ignore[call-overload]
+    """``dof`` if it names a body (4 = 2D, 8 = 3D, or one :func:`register_body` added),
+    else a :class:`SkinnyInputError` (a ValueError)."""
+    return body_of(dof).dof
 
 
 def check_signals(signals: object) -> str:
@@ -97,12 +197,12 @@ def joint_axis(spec: JointSpec, side: str) -> np.ndarray:
 
 def dof_names(dof: int) -> tuple[str, ...]:
     """Ordered DOF (joint and actuator) names: right arm first, then left."""
-    return tuple(f"{side}_{j.name}" for side in SIDES for j in ARM_JOINTS[_check_dof(dof)])
+    return tuple(f"{side}_{j.name}" for side in SIDES for j in body_of(dof).arm_joints)
 
 
 def joint_ranges(dof: int) -> np.ndarray:
     """Joint ranges, (n_dof, 2) radians, in :func:`dof_names` order."""
-    specs = ARM_JOINTS[_check_dof(dof)]
+    specs = body_of(dof).arm_joints
     return np.array([j.range_rad for _ in SIDES for j in specs], dtype=float)
 
 
@@ -112,7 +212,7 @@ def signal_names(dof: int, signals: str) -> tuple[str, ...]:
     (x, z in 2D; x, y, z in 3D), right arm first."""
     if check_signals(signals) == "joint":
         return dof_names(dof)
-    axes = "xz" if _check_dof(dof) == 4 else "xyz"
+    axes = "xz" if body_of(dof).planar else "xyz"
     return tuple(
         f"{side}_{point}_{a}" for side in SIDES for point in ("elbow", "wrist") for a in axes
     )
@@ -149,7 +249,7 @@ def _arm_frames(q_arm: np.ndarray, dof: int, side: str):
     q_arm: (T, n_arm) radians. Returns axes (T, n_arm, 3), R_upper (T, 3, 3),
     R_forearm (T, 3, 3).
     """
-    specs = ARM_JOINTS[dof]
+    specs = body_of(dof).arm_joints
     rot = np.broadcast_to(np.eye(3), (q_arm.shape[0], 3, 3)).copy()
     axes = np.empty((q_arm.shape[0], len(specs), 3))
     r_upper = rot
@@ -169,7 +269,7 @@ def segment_vectors(q: np.ndarray, dof: int) -> np.ndarray:
     arms right, left; segments upper arm, forearm.
     """
     q = np.asarray(q, dtype=float)
-    n_arm = len(ARM_JOINTS[_check_dof(dof)])
+    n_arm = len(body_of(dof).arm_joints)
     if q.shape[-1] != 2 * n_arm:
         raise ValueError(f"expected {2 * n_arm} joint angles for dof={dof}, got {q.shape[-1]}")
     q2 = q.reshape(-1, 2 * n_arm)
@@ -197,7 +297,7 @@ def arm_points(q: np.ndarray, dof: int) -> np.ndarray:
 
 
 def _cartesian_components(dof: int) -> list[int]:
-    return [0, 2] if dof == 4 else [0, 1, 2]
+    return [0, 2] if body_of(dof).planar else [0, 1, 2]
 
 
 def cartesian_signals(q: np.ndarray, dof: int) -> np.ndarray:
@@ -241,7 +341,7 @@ def signal_jacobian(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
         axes, r_upper, r_fore = _arm_frames(qa, dof, side)
         upper = r_upper @ _DOWN
         fore = r_fore @ _DOWN
-        for i, spec in enumerate(ARM_JOINTS[dof]):
+        for i, spec in enumerate(body_of(dof).arm_joints):
             col = k * n_arm + i
             if spec.segment == "upper_arm":
                 jac[:, k * 2 * nc : k * 2 * nc + nc, col] = np.cross(axes[:, i], upper)[:, comps]

@@ -87,7 +87,6 @@ DE_LEVA_MALE = {
 }
 SEGMENT_LENGTH_M = {"upper_arm": body.UPPER_ARM_LENGTH_M, "forearm": body.FOREARM_LENGTH_M,
                     "hand": body.HAND_LENGTH_M}
-_VARIANT = {4: "2d", 8: "3d"}
 
 
 def models_dir() -> Path:
@@ -106,18 +105,17 @@ def models_dir() -> Path:
 
 
 def _check(dof: int, actuation: str = "velocity") -> None:
-    if dof not in _VARIANT:
-        raise SkinnyInputError(f"dof must be 4 (2D) or 8 (3D), got {dof!r}")
+    body.check_dof(dof)
     if actuation not in ACTUATIONS:
         raise SkinnyInputError(f"actuation must be one of {ACTUATIONS}, got {actuation!r}")
 
 
 def xml_path(dof: int, scene: bool = True) -> Path:
-    """Path of ``scene_{2d,3d}.xml`` (floor, light, camera) or, with ``scene=False``,
-    of the robot alone (``skinny_{2d,3d}.xml``)."""
-    _check(dof)
-    name = f"{'scene' if scene else 'skinny'}_{_VARIANT[dof]}.xml"
-    path = models_dir() / name
+    """Path of the body's scene (``scene_{2d,3d}.xml``: floor, light, camera) or, with
+    ``scene=False``, of the robot alone (``skinny_{2d,3d}.xml``); a body another package
+    registered (:class:`skinny_mj.plant.body.Body`) names its own folder and files."""
+    spec = body.body_of(dof)
+    path = (spec.folder or models_dir()) / (spec.scene if scene else spec.robot)
     if not path.is_file():
         # a missing model is the installation's fault (or $SKINNY_MJ_MODELS'), not the
         # user's input: an environment error, exit 1
@@ -200,11 +198,15 @@ def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
             b.iquat = [1.0, 0.0, 0.0, 0.0]
             b.inertia = list(seg.inertia_kg_m2)
     for name in body.dof_names(dof):
-        limit = TORQUE_GEAR_NM[name.split("_", 1)[1]]
+        limit = TORQUE_GEAR_NM.get(name.split("_", 1)[1])
+        if limit is None:
+            raise SkinnyInputError(f"the torque body has no peak torque for {name!r} "
+                                   f"(skinny_mj.plant.model.TORQUE_GEAR_NM knows "
+                                   f"{', '.join(TORQUE_GEAR_NM)})")
         joint = spec.joint(name)
         joint.damping[0] = TORQUE_JOINT_DAMPING
-        joint.armature = TORQUE_ARMATURE_3D_SHOULDER if dof == 8 and "shoulder" in name \
-            else TORQUE_ARMATURE
+        joint.armature = TORQUE_ARMATURE_3D_SHOULDER if not body.body_of(dof).planar \
+            and "shoulder" in name else TORQUE_ARMATURE
         joint.solref_limit = list(TORQUE_LIMIT_SOLREF)
         joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
         joint.actfrcrange = [-limit, limit]
@@ -256,3 +258,56 @@ def load_batch_model(dof: int, copies: int, actuation: str = "velocity",
             edit(robot)
         parent.attach(robot, prefix=BATCH_PREFIX.format(r), frame=parent.worldbody.add_frame())
     return parent.compile()
+
+
+def check_body(dof: int, poses: int = 20, seed: int = 0) -> list[str]:
+    """What in a body's MJCF disagrees with its :class:`~skinny_mj.plant.body.Body` spec
+    (empty: they agree): every joint and actuator named and ordered as
+    :func:`~skinny_mj.plant.body.dof_names`, each hinge on its segment with the spec's
+    axis and limited to its range, the sites ``{side}_{shoulder,elbow,wrist}``, and the
+    sites' positions at ``poses`` random poses equal to
+    :func:`~skinny_mj.plant.body.arm_points` (1e-9 m)."""
+    model = load_model(dof)
+    problems = []
+    names = list(body.dof_names(dof))
+    joints = [model.joint(i).name for i in range(model.njnt)]
+    actuators = [model.actuator(i).name for i in range(model.nu)]
+    if joints != names:
+        problems.append(f"joints {joints}, the spec says {names}")
+    if actuators != names:
+        problems.append(f"actuators {actuators}, the spec says {names}")
+    sites = [f"{s}_{p}" for s in body.SIDES for p in ("shoulder", "elbow", "wrist")]
+    missing = [s for s in sites if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, s) < 0]
+    problems += [f"no site {s!r}" for s in missing]
+    if problems:
+        return problems
+    for side in body.SIDES:
+        for spec in body.body_of(dof).arm_joints:
+            joint = model.joint(f"{side}_{spec.name}")
+            where = model.body(joint.bodyid[0]).name
+            if where != f"{side}_{spec.segment}":
+                problems.append(f"{joint.name} moves {where}, the spec says "
+                                f"{side}_{spec.segment}")
+            if not np.allclose(joint.axis, body.joint_axis(spec, side), atol=1e-12):
+                problems.append(f"{joint.name} axis {joint.axis}, the spec says "
+                                f"{body.joint_axis(spec, side)}")
+            if not model.jnt_limited[joint.id] or not np.allclose(
+                    joint.range, spec.range_rad, atol=1e-12):
+                problems.append(f"{joint.name} range {joint.range}, the spec says "
+                                f"{spec.range_rad} (limited)")
+    if problems:
+        return problems
+    data = mujoco.MjData(model)
+    site_ids = [model.site(s).id for s in sites]
+    lo, hi = body.joint_ranges(dof).T
+    rng = np.random.default_rng(seed)
+    for _ in range(poses):
+        q = rng.uniform(lo, hi)
+        data.qpos[model.jnt_qposadr] = q
+        mujoco.mj_kinematics(model, data)
+        got = data.site_xpos[site_ids].reshape(2, 3, 3)
+        if not np.allclose(got, body.arm_points(q, dof), atol=1e-9):
+            problems.append(f"the sites' positions at q = {np.round(q, 3).tolist()} are not "
+                            "the spec's (segment lengths, shoulder positions or axes)")
+            break
+    return problems

@@ -128,12 +128,11 @@ class Layout:
 
     Parameters
     ----------
-    model : a compiled Skinny model (2D or 3D, any actuation).
+    model : a compiled Skinny model (2D, 3D or a registered body; any actuation).
     """
 
     def __init__(self, model: mujoco.MjModel):
-        flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, "right_shoulder_flexion")
-        self.dof = 8 if flex >= 0 else 4
+        self.dof = body.check_dof(model.njnt)  # Skinny's joints are the arms' hinges
         names = body.dof_names(self.dof)
         jnt = [model.joint(n).id for n in names]
         self.qpos_adr = np.array([model.jnt_qposadr[j] for j in jnt])
@@ -145,7 +144,7 @@ class Layout:
         )
         self.range_rad = model.jnt_range[jnt].copy()
         self.arm_lengths = np.array([body.UPPER_ARM_LENGTH_M, body.FOREARM_LENGTH_M])
-        self.components = [0, 2] if self.dof == 4 else [0, 1, 2]
+        self.components = [0, 2] if body.body_of(self.dof).planar else [0, 1, 2]
         self.segment_pairs = _segment_pairs(model, self.site_ids, self.dof_adr)
         self.segment_lengths = np.tile(self.arm_lengths, 2)
         self._jacp = np.zeros((3, model.nv))

@@ -7,7 +7,9 @@ The package's own: ``cycle`` (each learning cycle alone, the thesis's pinv or ri
 one class in controllers plus one :func:`register_fit` line; then
 ``TrainConfig().override({"rule.fit": NAME})``, ``skinny train rule.fit=NAME`` and
 ``skinny sweep rule.fit=cycle,NAME`` choose it (see the docs page "Adding a learning
-rule").
+rule"). :func:`register_fit` changes one Python process; for the command line and a
+sweep's worker processes, another package publishes its :class:`Fit` through the
+entry-point group :data:`FIT_GROUP`, read the first time a name is not known.
 """
 
 from __future__ import annotations
@@ -16,12 +18,17 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from skinny_mj import plugins
 from skinny_mj.errors import SkinnyInputError
 
 if TYPE_CHECKING:
     from skinny_mj.training.config import TrainConfig
 
-__all__ = ["Fit", "FITS", "register_fit", "make_rule"]
+__all__ = ["Fit", "FITS", "FIT_GROUP", "register_fit", "make_rule", "known"]
+
+#: Entry-point group through which another package adds a fit (name = the fit's name,
+#: value = a :class:`Fit`).
+FIT_GROUP = "skinny_mj.fits"
 
 #: ``make(cfg, esn, steps)`` -> the rule for one training (None: the loop's default,
 #: each cycle alone); ``steps``: the samples of one learning cycle.
@@ -75,3 +82,16 @@ def register_fit(name: str, make: Make, *, bodies: tuple[str, ...] = ("velocity"
 def make_rule(cfg: TrainConfig, esn: Any, steps: int) -> Any:
     """The learning rule of ``cfg``'s FEL training (None: the default per-cycle fit)."""
     return FITS[cfg.rule.fit].make(cfg, esn, steps)  # (the module's FITS, as registered)
+
+
+_entry_points_read = False
+
+
+def known(name: str) -> bool:
+    """Is ``name`` a registered fit? An unknown name first reads :data:`FIT_GROUP`."""
+    global _entry_points_read
+    if name not in FITS and not _entry_points_read:
+        _entry_points_read = True
+        for found, fit in plugins.load_group(FIT_GROUP, Fit, "skinny_mj.training.fits.Fit"):
+            FITS.setdefault(found, fit)
+    return name in FITS

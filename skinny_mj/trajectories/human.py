@@ -151,7 +151,7 @@ def _solved(dof: int, seed: int, unit_2d: bool) -> tuple[np.ndarray, np.ndarray]
     caller gets copies, so the cached arrays are never changed."""
     pts = markers(seed)[::DECIMATE]
     seg = np.stack([pts[:, :, 1] - pts[:, :, 0], pts[:, :, 2] - pts[:, :, 1]], axis=2)
-    if unit_2d and dof == 4:
+    if unit_2d and body.body_of(dof).planar:
         seg[..., 1] = 0.0  # the frontal projection, then normalized below
     seg = seg / np.linalg.norm(seg, axis=-1, keepdims=True)
     return solve_ik(seg[:, :, 0], seg[:, :, 1], dof)

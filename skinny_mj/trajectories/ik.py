@@ -30,7 +30,7 @@ def target_signals(upper: np.ndarray, fore: np.ndarray, dof: int) -> np.ndarray:
     """Desired Cartesian signals (T, n_sig) from unit segment directions (T, 2, 3) in the
     torso frame: 3D the x, y, z of each unit vector; 2D its frontal projection (x, z),
     whose length is below 1 where the segment leaves the frontal plane."""
-    comps = [0, 2] if body.check_dof(dof) == 4 else [0, 1, 2]
+    comps = [0, 2] if body.body_of(dof).planar else [0, 1, 2]
     seg = np.stack([upper, fore], axis=2)[..., comps]  # (T, arms, segments, comps)
     return seg.reshape(seg.shape[0], -1)
 
@@ -59,6 +59,6 @@ def residual(angles: np.ndarray, target: np.ndarray, dof: int) -> np.ndarray:
     """Per step (T,), the largest distance between a target segment signal and the one
     Skinny's ``angles`` reach (normalized units, per segment)."""
     diff = target - body.cartesian_signals(angles, dof)
-    nc = 2 if dof == 4 else 3
+    nc = 2 if body.body_of(dof).planar else 3
     return np.linalg.norm(diff.reshape(diff.shape[0], -1, nc), axis=-1).max(axis=1)
 

@@ -216,6 +216,24 @@ def clip_continuous(angles: np.ndarray, dof: int) -> tuple[np.ndarray, np.ndarra
     return out, excess
 
 
+#: The bodies :func:`solve_angles` has a closed form for: Skinny's 2D and 3D.
+_CLOSED_FORM = (4, 8)
+
+
+def _from_3d(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndarray, int]:
+    """A registered body's start for the refinement: the 3D closed form's angle of each
+    hinge named as one of Skinny's 3D hinges, 0 (clipped into range) for any other."""
+    q3d, filled = solve_angles(upper, fore, 8)
+    names3d = [j.name for j in body.body_of(8).arm_joints]
+    joints = body.body_of(dof).arm_joints
+    out = np.zeros((upper.shape[0], dof))
+    for k in range(2):
+        for i, spec in enumerate(joints):
+            if spec.name in names3d:
+                out[:, k * len(joints) + i] = q3d[:, k * len(names3d) + names3d.index(spec.name)]
+    return out, filled
+
+
 def solve_angles(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndarray, int]:
     """Skinny's joint angles (T, dof) rad from torso-frame directions (T, 2, 3).
 
@@ -226,6 +244,8 @@ def solve_angles(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndar
     forearm, the 3D rotation when the elbow is nearly straight. Those samples are
     interpolated from their neighbours; the second value returned counts them.
     """
+    if dof not in _CLOSED_FORM:
+        return _from_3d(upper, fore, dof)
     ranges = body.joint_ranges(dof)
     n_arm = dof // 2
     out = np.empty((upper.shape[0], dof))

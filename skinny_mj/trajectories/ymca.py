@@ -73,10 +73,15 @@ def min_jerk(n: int) -> np.ndarray:
 
 
 def key_poses(dof: int) -> dict[str, np.ndarray]:
-    """Key poses {name: (n_dof,) rad} for dof 4 or 8."""
-    from skinny_mj.plant.body import check_dof
+    """Key poses {name: (n_dof,) rad} for dof 4 or 8 (Skinny's own bodies)."""
+    from skinny_mj.errors import SkinnyInputError
+    from skinny_mj.plant.body import body_of
 
-    table = {4: POSES_2D_DEG, 8: POSES_3D_DEG}[check_dof(dof)]
+    table = {4: POSES_2D_DEG, 8: POSES_3D_DEG}.get(body_of(dof).dof)
+    if table is None:
+        raise SkinnyInputError(f"YMCA's key poses are written for Skinny's 2D and 3D bodies, "
+                               f"not for dof {dof}: train this body on babbling or a motion-"
+                               f"capture clip")
     return {k: np.deg2rad(np.array(v, dtype=float)) for k, v in table.items()}
 
 
