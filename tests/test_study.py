@@ -169,6 +169,45 @@ def test_skinny_sweep_runs_resumes_and_refuses_in_one_line(tmp_path, capsys):
     assert len(err.splitlines()) == 1 and "must be a number" in err
 
 
+def test_a_quick_grid_is_a_smoke_test_of_its_base_and_the_axes_keep_their_values():
+    quick = grid_study(["esn.spectral_radius=0.5,0.9"], quick=True)
+    assert (quick.base.rule.epochs, quick.runs) == (2, 2)
+    assert grid_study(["esn.spectral_radius=0.5,0.9"], quick=True, runs=3).runs == 3
+    swept = grid_study(["rule.epochs=5,6"], quick=True)  # the axis after --quick's keys
+    assert [swept.base.override(dict(r.overrides)).rule.epochs for r in swept.rows] == [5, 6]
+    tt = grid_study(["rule.cycles=2,3"], quick=True,  # a rule without epochs: left as it is
+                    base=TrainConfig().override({"rule": "true-target"}))
+    assert tt.base.rule.kind == "true-target"
+    full = grid_study(["esn.spectral_radius=0.5,0.9"], study=toy(), row="b")
+    assert (full.base.esn.n_reservoir, full.rows[0].params["k"], full.runs) == (40, 2, 10)
+    small = grid_study(["esn.spectral_radius=0.5,0.9"], study=toy(), row="b", quick=True)
+    assert (small.base.esn.n_reservoir, small.base.rule.epochs) == (35, 2)  # the study's quick
+    assert (small.rows[0].params["k"], small.runs) == (3, 2)
+    with pytest.raises(SkinnyInputError, match="two bases"):
+        grid_study(["esn.spectral_radius=0.5,0.9"], study=toy(), row="b", base=TrainConfig())
+
+
+def test_skinny_sweep_starts_from_a_config_file_and_quick_shrinks_it(tmp_path, capsys):
+    run_file = tmp_path / "metrics.json"  # what `skinny train` writes: config and seed
+    run_file.write_text(json.dumps({"config": {"movement.trajectory": "y", "rule.epochs": 7,
+                                               "esn.n_reservoir": 20}, "seed": 3}))
+    out = tmp_path / "sw"
+    assert main(["sweep", "esn.spectral_radius=0.5,0.9", "--config", str(run_file),
+                 "--quick", "--workers", "1", "--out", str(out), "-q"]) == 0
+    recorded = json.loads((out / "config.json").read_text())
+    base = recorded["config"]["base"]
+    assert (base["movement.trajectory"], base["esn.n_reservoir"], base["rule.epochs"]) == \
+        ("y", 20, 2)  # the file's, then --quick's 2 epochs
+    assert recorded["options"]["quick"] is True
+    assert recorded["options"]["config"] == str(run_file)
+    assert len(list((out / "runs").glob("*.json"))) == 4  # 2 rows x --quick's 2 runs
+    capsys.readouterr()
+    assert main(["sweep", "esn.spectral_radius=0.5,0.9", "--config",
+                 str(tmp_path / "missing.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "no such config file" in err
+
+
 # -- comparing two sweep folders ----------------------------------------------------------
 def test_compare_reports_metric_and_seed_differences_but_not_wall_time(tmp_path):
     exp = toy().build(quick=True)

@@ -391,7 +391,8 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``skinny sweep KEY=V1,V2 ...``: a grid over config keys (:mod:`skinny_mj.engine.grid`)
-    on the experiment engine, from TrainConfig's defaults or a study's row."""
+    on the experiment engine, from TrainConfig's defaults, a config file or a study's row."""
+    from skinny_mj.cli.config_files import file_config
     from skinny_mj.engine import registry
     from skinny_mj.engine.grid import grid_study
     from skinny_mj.engine.study import Study
@@ -404,9 +405,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                 f"--study {args.study}: not a study declared as data "
                 "(a skinny_mj.engine.study.Study), so it has no row to sweep from"
             )
-    grid = grid_study(args.axes, study=study, row=args.row, runs=args.runs or 10)
+    base = None if args.config is None else file_config(args.config)
+    grid = grid_study(args.axes, study=study, row=args.row, runs=args.runs,
+                      quick=args.quick, base=base)
     rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
-    options = {"axes": list(args.axes), "study": args.study, "row": args.row}
+    options = {"axes": list(args.axes), "study": args.study, "row": args.row,
+               "quick": args.quick, "config": None if args.config is None else str(args.config)}
     return _sweep_and_report(args, grid, grid.build(), rows, None, options, None)
 
 

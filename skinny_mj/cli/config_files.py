@@ -25,7 +25,7 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import DERIVED, TrainConfig
 from skinny_mj.training.legacy import is_legacy
 
-__all__ = ["read_json", "read_train_file", "train_config", "SweepInvocation",
+__all__ = ["read_json", "read_train_file", "file_config", "train_config", "SweepInvocation",
            "sweep_invocation", "apply_sweep_config", "check_experiment",
            "warn_if_rebuilt_differs"]
 
@@ -61,6 +61,13 @@ def read_train_file(path: str | Path) -> tuple[dict[str, Any], int | None]:
             raise SkinnyInputError(f"seed must be a whole number >= 0, got {seed!r}", path=path)
         return dict(data["config"]), seed
     return data, None
+
+
+def file_config(path: str | Path) -> TrainConfig:
+    """The TrainConfig a config file holds (a run's ``metrics.json`` or a bare config;
+    its seed, if any, is not part of it)."""
+    fields, _ = read_train_file(path)
+    return _make(fields, Path(path), TrainConfig())
 
 
 def _make(fields: dict[str, Any], path: Path | None, base: TrainConfig | None = None

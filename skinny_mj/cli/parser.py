@@ -211,10 +211,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("axes", nargs="+", metavar="KEY=V1,V2", help="a config key and its values "
                    "(quote a value holding a comma: KEY='a,b',c); rows are the product of the "
                    "keys with several values, a key with one value changes every row")
-    p.add_argument("--runs", type=_positive_int, help="runs per row (default 10)")
+    p.add_argument("--runs", type=_positive_int, help="runs per row (default 10; with "
+                   "--quick, the study's --quick runs or 2)")
     p.add_argument("--study", help="start from a study's row (with --row): its config, "
                    "metrics and run (default: paper E exp. 5, TrainConfig's defaults)")
     p.add_argument("--row", help="the --study row to start from")
+    p.add_argument("--config", type=Path, help="start from a config file: a run's "
+                   "metrics.json or a bare config (instead of TrainConfig's defaults)")
+    p.add_argument("--quick", action="store_true", help="a smoke test: the --study's own "
+                   "--quick for its row, else 2 epochs; 2 runs per row unless --runs")
     p.add_argument("--rows", help="comma-separated row ids to run (default: all)")
     p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
     p.add_argument("--out", type=Path, help="output folder (default: results/sweep/<time>)")
