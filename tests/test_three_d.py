@@ -98,8 +98,8 @@ def test_quick_pair_end_to_end_2d_is_the_papers_own_run(tmp_path, tiny_paper_a):
     (own,) = pa.run_batch(next(r for r in pa.rows if r.row_id == "inverse-d0"), [two["seed"]])
     assert own["performance_nrmse"] == two["metrics"]["performance_nrmse"]
     assert two["metrics"]["performance_nrmse"] != three["metrics"]["performance_nrmse"]
-    text = three_d_report.report(results, tmp_path, True, 8, "cartesian",
-                                 figures=False)  # figures: the slow test
+    text = three_d_report.write_report(results, tmp_path, True, 8, "cartesian",
+                                       figures=False)  # figures: the slow test
     assert (tmp_path / "three_d.md").read_text().strip() == text.strip()
     view = load_runs(tmp_path / "papers" / "a-3d")
     assert [(r["row"], r["experiment"], r["seed"]) for r in view] == [

@@ -343,6 +343,12 @@ def fig6(runs: Runs, path: Path) -> bool:
     return True
 
 
+def report(results, plan, out_dir: Path) -> str:
+    """The study's report: tables.md (error and prediction-error tables, the claims) and
+    the figures."""
+    return write_report(Path(out_dir))
+
+
 def write_report(out_dir: Path, extra_dirs: tuple[Path, ...] = ()) -> str:
     """tables.md and the figures in ``out_dir``, from its runs and those of ``extra_dirs``
     (sweeps of other rows of the same config, e.g. run apart); returns the claims."""

@@ -31,7 +31,6 @@ forward input and epochs as overrides.
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import numpy as np
 from skinny_mj.experiments import paper_a
@@ -168,13 +167,6 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     return outs
 
 
-def report(results, plan, out_dir: Path) -> str:
-    """tables.md (error and prediction-error tables, the claims) and the figures."""
-    from skinny_mj.experiments.fidelity_a.report import write_report
-
-    return write_report(Path(out_dir))
-
-
 def _columns(epochs: int) -> tuple[str, ...]:
     return (f"train_nrmse_e{epochs}", f"train_mad_e{epochs}", f"test_nrmse_e{epochs}",
             f"test_mad_e{epochs}", f"train_pred_nrmse_e{epochs}")
@@ -188,5 +180,5 @@ STUDY = Study(
     quick=Quick({"esn.n_reservoir": 100, "rule.cycles": 2}, runs=2,
                 rows=tuple(row_id(*k) for k in QUICK_EPOCHS),
                 params={"checkpoints": (1, 2, 3)}, columns=_columns(2)),
-    report=report,
+    report="skinny_mj.experiments.fidelity_a.report:report",
 )

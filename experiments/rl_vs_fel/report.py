@@ -130,6 +130,12 @@ def comparison_table(thresholds, rows, runs: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def report(results, plan, out_dir: Path) -> str:
+    """The study's report: learning curves (test NRMSE against env steps and against
+    CPU time) and the comparison table (``comparison.md``)."""
+    return write_report(Path(out_dir), plan.params["thresholds"], plan.experiment().rows)
+
+
 def write_report(out_dir: Path, thresholds, rows) -> str:
     """The figures and ``comparison.md`` of the sweep in ``out_dir``: ``rows`` (row_id,
     params with ``learner``, ``actuation``, ``movement``), ``thresholds`` (NRMSE)."""

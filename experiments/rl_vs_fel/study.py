@@ -35,7 +35,6 @@ FEL rows run.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 from skinny_mj.experiments.rl_vs_fel import runs as runs_mod
@@ -161,14 +160,6 @@ def _columns(thresholds: tuple[float, ...]) -> dict[str, str]:
     return cols
 
 
-def report(results, plan, out_dir: Path) -> str:
-    """Learning curves (test NRMSE against env steps and against wall time) and the
-    comparison table (``comparison.md``)."""
-    from skinny_mj.experiments.rl_vs_fel.report import write_report
-
-    return write_report(Path(out_dir), plan.params["thresholds"], plan.experiment().rows)
-
-
 def _groups() -> dict[str, list[str]]:
     out: dict[str, list[str]] = {}
     for r in ROWS:
@@ -186,5 +177,6 @@ STUDY = Study(
     # a smoke test: 1 run per row, FEL 2 epochs, PPO 256 and SAC 100 env steps
     quick=Quick({"rule.epochs": 2}, runs=1,
                 params={"ppo_steps": 256, "sac_steps": 100, "evals": 2, "quick": True}),
-    cost=cost, memory=estimate_bytes, unavailable=unavailable_rows, report=report,
+    cost=cost, memory=estimate_bytes, unavailable=unavailable_rows,
+    report="skinny_mj.experiments.rl_vs_fel.report:report",
 )

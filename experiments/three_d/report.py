@@ -243,8 +243,16 @@ def figure_png(path: Path, lines: list[dict], bodies: dict[str, str]) -> Path | 
     return save_figure(fig, path)
 
 
-def report(results: dict, out_dir: Path, quick: bool, dof: int, signals: str,
-           figures: bool = True) -> str:
+def report(results, plan, out_dir: Path) -> str:
+    """The study's report: the 2D vs 3D table, each paper's figures and claims per body,
+    the claims side by side and the figure, for the sweep's ``plan`` (its quick, its 3D
+    body)."""
+    return write_report(results, Path(out_dir), plan.params["quick"], plan.base.plant.dof,
+                        plan.base.plant.signals)
+
+
+def write_report(results: dict, out_dir: Path, quick: bool, dof: int, signals: str,
+                 figures: bool = True) -> str:
     """Views, each paper's report per body (its figures; not with ``figures=False``), the
     table, the figure and the claims; ``quick``: the sweep's, ``dof`` and ``signals``: its
     3D body."""

@@ -44,7 +44,6 @@ Where 3D needs a choice (every paper is 2D only):
 from __future__ import annotations
 
 import functools
-from pathlib import Path
 
 from skinny_mj.engine import registry
 from skinny_mj.engine.experiment import Experiment
@@ -146,15 +145,6 @@ def _row(paper: str, dim: str, paper_row: str) -> Row:
 ROWS = tuple(_row(p, dim, r) for dim in DIMS for p, ids in ORDER.items() for r in ids)
 
 
-def report(results, plan, out_dir: Path) -> str:
-    """The 2D vs 3D table, each paper's figures and claims per body, the claims side by
-    side and the figure (:mod:`skinny_mj.experiments.three_d.report`)."""
-    from skinny_mj.experiments.three_d import report as three_d_report
-
-    return three_d_report.report(results, Path(out_dir), plan.params["quick"],
-                                 plan.base.plant.dof, plan.base.plant.signals)
-
-
 STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, run_batch=run_batch, runs=10,
     # the 3D body; the 2D rows' overrides set each paper's own (--dof/--signals: the 3D one)
@@ -170,5 +160,5 @@ STUDY = Study(
                                    for p, ids in QUICK_SUBSET.items() for r in ids),
                 params={"quick": True}),
     takes=("dof", "signals"),  # the papers' own rows name their movements
-    report=report,
+    report="skinny_mj.experiments.three_d.report:report",
 )
