@@ -280,7 +280,8 @@ def report(results: dict, out_dir: Path, figures: bool = True) -> str:
                 per_dim[dim] = []
                 continue
             if figures:  # the paper's own report: its figures and claims.md
-                own = module(p).report(aggregate(view), view)
+                exp = paper_experiment(p, dim, cfg["quick"], cfg["dof"], cfg["signals"])
+                own = (exp.report or module(p).report)(aggregate(view), view)
                 atomic_write_text(view / "claims.md", f"## Claims\n{own}\n")
             per_dim[dim] = paper_claims(p, view, 4 if dim == "2d" else cfg["dof"])
         if not per_dim["2d"] and not per_dim["3d"]:

@@ -84,7 +84,9 @@ def row_id(paper: str, dim: str, paper_row: str) -> str:
 
 
 def module(paper: str):
-    return importlib.import_module(PAPERS[paper])
+    """Paper ``paper``'s study: its module's ``STUDY``, or the module (the older contract)."""
+    mod = importlib.import_module(PAPERS[paper])
+    return getattr(mod, "STUDY", mod)
 
 
 @functools.lru_cache(maxsize=16)
@@ -92,6 +94,11 @@ def paper_experiment(paper: str, dim: str, quick: bool, dof: int, signals: str) 
     """Paper ``paper``'s own sweep on ``dim``'s body (2D: the paper's default)."""
     body = {} if dim == "2d" else {"dof": dof, "signals": signals}
     return module(paper).build(quick=quick, **body)
+
+
+def _recorded(exp: Experiment) -> dict:
+    """A paper's own sweep config as its config.json records it."""
+    return exp.config.to_dict() if hasattr(exp.config, "to_dict") else asdict(exp.config)
 
 
 def _paper_of(cfg: Config, row: Row) -> tuple[Experiment, Row]:
@@ -169,7 +176,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     base = Config(quick=quick, dof=8 if dof is None else int(dof),
                   signals="cartesian" if signals is None else str(signals),
                   runs=2 if quick else 10)
-    papers = {f"{p}-{d}": asdict(paper_experiment(p, d, quick, base.dof, base.signals).config)
+    papers = {f"{p}-{d}": _recorded(paper_experiment(p, d, quick, base.dof, base.signals))
               for p in PAPERS for d in DIMS}
     cfg = Config(base.quick, base.dof, base.signals, base.runs, papers)
     groups = {**{p: tuple(row_id(p, d, r) for d in DIMS for r in ids)
