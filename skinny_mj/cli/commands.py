@@ -380,11 +380,15 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
     options = {"quick": bool(args.quick), "movement": args.movement,
                "asf": None if args.asf is None else str(args.asf), "dof": args.dof,
-               "signals": args.signals}
+               "signals": args.signals, "protocol": args.protocol}
     from skinny_mj.cli import config_files as cf  # --config: the file's options, rows, runs
 
     options, rows, runs, invocation = cf.apply_sweep_config(args, options, rows)
-    exp = module.build(**options)
+    if options["protocol"] is not None:  # readings of unstated settings, on the study's base
+        from skinny_mj.engine import protocols
+
+        module = protocols.apply(options["protocol"], module, args.name)
+    exp = module.build(**{k: v for k, v in options.items() if k != "protocol"})
     cf.check_experiment(invocation, exp)
     return _sweep_and_report(args, module, exp, rows, runs, options, invocation)
 

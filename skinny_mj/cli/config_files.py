@@ -29,8 +29,9 @@ __all__ = ["read_json", "read_train_file", "file_config", "train_config", "Sweep
            "sweep_invocation", "apply_sweep_config", "check_experiment",
            "warn_if_rebuilt_differs"]
 
-#: The CLI options a sweep's ``config.json`` records (``options``) and ``build`` takes.
-SWEEP_OPTIONS = ("quick", "movement", "asf", "dof", "signals")
+#: The CLI options a sweep's ``config.json`` records (``options``): ``build`` takes them, but
+#: ``protocol``, which is applied to the study before it is built.
+SWEEP_OPTIONS = ("quick", "movement", "asf", "dof", "signals", "protocol")
 
 
 def read_json(path: str | Path) -> dict[str, Any]:

@@ -205,6 +205,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "seeds are the full sweep's")
     p.add_argument("--config", type=Path, help="repeat a sweep: its config.json (options, "
                    "rows, runs); flags given as well override them")
+    p.add_argument("--protocol", help="run the study under a named set of readings of the "
+                   "thesis's unstated settings (`thesis`: the recorded-like YMCA, u_error gain "
+                   "2, ...; each with what it rests on: docs/results/claims.md)")
 
     p = sub.add_parser("sweep", help="a grid over any config keys on the experiment engine: "
                        "skinny sweep esn.spectral_radius=0.5,0.9 --runs 20")
