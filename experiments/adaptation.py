@@ -3,7 +3,7 @@ left on and learning continuing online.
 
 Each run trains paper E's experiment 5 (new method, β = 0.1, N = 200, YMCA; the
 torque rows: the same on the torque twin, ``actuation=torque``, as
-``experiments/dynamic.py``'s ``2d-ymca-fel-new``, no gravity feed-forward, so nothing
+``experiments/dynamic/study.py``'s ``2d-ymca-fel-new``, no gravity feed-forward, so nothing
 in the loop knows the change), then performs the movement cycle after cycle with
 feedback gain K = ``gain`` and reservoir noise off: ``pre_cycles`` nominal cycles,
 ``change_cycles`` cycles with the plant changed (:class:`skinny_mj.plant.perturb.PerturbedPlant`),
