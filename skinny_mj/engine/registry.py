@@ -153,7 +153,9 @@ def get(name: str) -> Any:
     known ones."""
     from skinny_mj.engine.study import Study
 
-    found = _entries()
+    found = _package_studies()
+    if name not in found:  # the package's own names win: no scan of the entry points
+        found = _entries()
     if name not in found:
         known = ", ".join(sorted(found)) or f"none (is the package installed? group {GROUP})"
         raise SkinnyInputError(f"unknown experiment {name!r}; known: {known}")
