@@ -9,8 +9,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse
-import scipy.sparse.linalg
 
 _NOISE_KINDS = ("uniform", "gaussian")
 _ACTIVATIONS = ("tanh", "identity")
@@ -120,6 +118,11 @@ def spectral_radius(w: np.ndarray) -> float:
     n = w.shape[0]
     if n <= _EXACT_EIG_MAX_N:
         return float(np.max(np.abs(np.linalg.eigvals(w))))
+    # Here, not at the top: the training config imports this module, and SciPy would
+    # triple the start-up time of every `skinny` command that reads a config.
+    import scipy.sparse
+    import scipy.sparse.linalg
+
     try:
         vals = scipy.sparse.linalg.eigs(
             scipy.sparse.csr_array(w), k=6, which="LM", v0=np.ones(n), ncv=min(n - 1, 60),

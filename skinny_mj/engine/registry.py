@@ -1,9 +1,11 @@
 """The studies ``skinny experiment NAME`` can run.
 
 This project's own are the modules of the ``experiments`` package that set a top-level
-``NAME = "..."``: found by reading their source (so listing them imports none), loaded
-by name. Another package adds its own through the entry-point group
-``skinny_mj.experiments`` in its pyproject::
+``NAME = "..."``: found by reading their source, loaded by name. Their descriptions are
+read off the source too (the module docstring, or the literal a ``STUDY = Study(...,
+description=...)`` gives), so ``skinny experiment list`` imports none of them. Another
+package adds its own through the entry-point group ``skinny_mj.experiments`` in its
+pyproject::
 
     [project.entry-points."skinny_mj.experiments"]
     my-sweep = "my_package.my_sweep:STUDY"    # a skinny_mj.engine.study.Study
@@ -24,7 +26,7 @@ import importlib.util
 from importlib.metadata import entry_points
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import Any, NamedTuple
 
 from skinny_mj.errors import SkinnyInputError
 
@@ -32,22 +34,75 @@ GROUP = "skinny_mj.experiments"
 PACKAGE = "skinny_mj.experiments"
 
 
-def declared_name(path: Path) -> str | None:
-    """The string a module's top-level ``NAME = "..."`` sets, None without one."""
+class Declared(NamedTuple):
+    """What a study module's source declares: its ``NAME``, and its description when the
+    source states it (None: only importing the module tells)."""
+
+    name: str | None
+    description: str | None
+
+
+_DECLARED: dict[tuple[Path, int, int], Declared] = {}  # (path, mtime, size) -> its reading
+
+
+def declared(path: Path) -> Declared:
+    """Read a study module's source, without importing it: the string of its top-level
+    ``NAME = "..."`` (None without one) and its description: the literal of a top-level
+    ``STUDY = Study(..., description=...)`` (``description=__doc__`` or no ``STUDY``: the
+    module docstring); None when that argument is any other expression."""
     try:
+        stat = path.stat()
+        key = (path.resolve(), stat.st_mtime_ns, stat.st_size)
+        if key in _DECLARED:
+            return _DECLARED[key]
         tree = ast.parse(path.read_text(encoding="utf-8"))
     except (OSError, SyntaxError, ValueError):
-        return None
+        return Declared(None, None)
+    name, description = None, ast.get_docstring(tree, clean=False)
     for stmt in tree.body:
-        if (isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
-                and isinstance(stmt.targets[0], ast.Name) and stmt.targets[0].id == "NAME"
-                and isinstance(stmt.value, ast.Constant) and isinstance(stmt.value.value, str)):
-            return stmt.value.value
-    return None
+        if isinstance(stmt, ast.Assign) and len(stmt.targets) == 1:
+            target, value = stmt.targets[0], stmt.value
+        elif isinstance(stmt, ast.AnnAssign) and stmt.value is not None:
+            target, value = stmt.target, stmt.value
+        elif isinstance(stmt, ast.Import | ast.ImportFrom) \
+                and "STUDY" in (a.asname or a.name for a in stmt.names):
+            description = None  # a STUDY made elsewhere: importing it tells
+            continue
+        else:
+            continue
+        if not isinstance(target, ast.Name):
+            continue
+        if target.id == "NAME" and isinstance(value, ast.Constant) \
+                and isinstance(value.value, str):
+            name = value.value
+        elif target.id == "STUDY":
+            description = _study_description(value, description)
+    _DECLARED[key] = Declared(name, description)
+    return _DECLARED[key]
 
 
-def _package_studies() -> dict[str, str]:
-    """name -> module of the package's studies (none imported): a module
+def _study_description(call: ast.expr, docstring: str | None) -> str | None:
+    """The ``description=`` of a ``Study(...)`` call read as source (see :func:`declared`)."""
+    func = call.func if isinstance(call, ast.Call) else None
+    if getattr(func, "id", getattr(func, "attr", None)) != "Study":
+        return None
+    for kw in call.keywords:
+        if kw.arg == "description":
+            if isinstance(kw.value, ast.Name) and kw.value.id == "__doc__":
+                return docstring
+            if isinstance(kw.value, ast.Constant) and isinstance(kw.value.value, str):
+                return kw.value.value
+            return None
+    return None  # the Study's default: importing it tells
+
+
+def declared_name(path: Path) -> str | None:
+    """The string a module's top-level ``NAME = "..."`` sets, None without one."""
+    return declared(path).name
+
+
+def _package_sources() -> dict[str, tuple[str, Path]]:
+    """name -> (module, source file) of the package's studies (none imported): a module
     ``experiments/<name>.py``, or ``experiments/<folder>/study.py`` for a study kept in one
     folder with its report."""
     spec = importlib.util.find_spec(PACKAGE)
@@ -59,8 +114,19 @@ def _package_studies() -> dict[str, str]:
             if path.name.startswith("_") or not (name := declared_name(path)):
                 continue
             rel = path.relative_to(folder).with_suffix("")
-            found[name] = ".".join((PACKAGE, *rel.parts))
+            found[name] = (".".join((PACKAGE, *rel.parts)), path)
     return found
+
+
+def source_path(name: str) -> Path | None:
+    """The source file of the package's own study ``name`` (None: not one of them)."""
+    found = _package_sources().get(name)
+    return None if found is None else found[1]
+
+
+def _package_studies() -> dict[str, str]:
+    """name -> module of the package's studies (none imported)."""
+    return {name: module for name, (module, _) in _package_sources().items()}
 
 
 def _entries() -> dict[str, str]:
@@ -87,7 +153,9 @@ def get(name: str) -> Any:
     known ones."""
     from skinny_mj.engine.study import Study
 
-    found = _entries()
+    found = _package_studies()
+    if name not in found:  # the package's own names win: no scan of the entry points
+        found = _entries()
     if name not in found:
         known = ", ".join(sorted(found)) or f"none (is the package installed? group {GROUP})"
         raise SkinnyInputError(f"unknown experiment {name!r}; known: {known}")
@@ -99,7 +167,11 @@ def get(name: str) -> Any:
 
 
 def doc(name: str) -> str:
-    """The study's whole description (a module's docstring)."""
+    """The study's whole description (a module's docstring), read off the source of the
+    package's own studies (:func:`declared`), imported otherwise."""
+    path = source_path(name)
+    if path is not None and (text := declared(path).description) is not None:
+        return text
     study = get(name)
     return (study.description if not isinstance(study, ModuleType) else study.__doc__) or ""
 
