@@ -246,8 +246,9 @@ def cmd_test(args: argparse.Namespace) -> int:
     from skinny_mj.cli.config_flags import TEST_FLAGS
     from skinny_mj.controllers.esn import ESN, read_metadata
     from skinny_mj.training.loop import TrainConfig, evaluate, run_of, run_streams
+    from skinny_mj.training.presets import model_path
 
-    path = Path(args.model)
+    path = model_path(args.model)  # a shipped model's name, or a file
     if not path.is_file():
         raise SkinnyInputError("no such model file", path=path)
     try:

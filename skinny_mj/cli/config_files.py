@@ -99,7 +99,9 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     if preset is not None:
         from skinny_mj.training.presets import preset_fields
 
-        cfg = cfg.override(preset_fields(preset, str(texts.get("actuation", "velocity"))))
+        cfg = cfg.override(preset_fields(preset, str(texts.get("actuation", "velocity")),
+                                         dof=texts.get("plant.dof"),
+                                         signals=texts.get("plant.signals")))
     if getattr(args, "config", None) is not None:
         path = Path(args.config)
         fields, seed = read_train_file(path)
