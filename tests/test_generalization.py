@@ -1,4 +1,4 @@
-"""Issue 13: motor babbling, training sets, motion-imitation metrics, the generalization
+"""Motor babbling, training sets, motion-imitation metrics, the generalization
 experiment and the ``general`` preset."""
 
 from __future__ import annotations

@@ -210,7 +210,7 @@ def general_section(runs: list[dict], out_dir: Path) -> str:
              "| rep | row | role | n | " + " | ".join(f"{c} pos | {c} DTW" for c in CLIPS)
              + " | train s/run |", "|---|---|---|---|" + "---|---|" * len(CLIPS) + "---|"]
     bars = []
-    for rep in REPRESENTATIONS:
+    for rep in ("j2", "j3", "c2", "c3"):
         rows = dict.fromkeys([BEFORE[rep], *(f"{r}-{t}" for r, t in GENERAL_ROWS if r == rep),
                               GENERAL_OF[rep]])
         for row in rows:
@@ -223,30 +223,31 @@ def general_section(runs: list[dict], out_dir: Path) -> str:
                      for m in ("position_nrmse", "dtw_nrmse")]
             lines.append(f"| {rep} | {row} | {role} | {n} | " + " | ".join(cells)
                          + f" | {stat(runs, row, 'train_wall_s')[0]:.1f} |")
-            bars.append((rep, row, [stat(runs, row, f"{c}__position_nrmse")[:2]
-                                    for c in CLIPS]))
+            bars.append((f"{row}\n({role})", [stat(runs, row, f"{c}__position_nrmse")[:2]
+                                               for c in CLIPS]))
     if bars:
         general_figure(out_dir / "general.png", bars)
     return "\n".join(lines)
 
 
 def general_figure(path: Path, bars: list) -> Path:
-    """Grouped bars: per row (grouped by representation) the clips' mean ± sd."""
+    """Grouped bars: per row (label, [(mean, sd) per clip]) the clips' mean ± sd."""
     from skinny_mj.plots import pyplot, save_figure
 
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(1.0 + 0.55 * len(bars), 3.6))
+    fig, ax = plt.subplots(figsize=(1.5 + 0.7 * len(bars), 4.2))
     x = np.arange(len(bars))
     width = 0.8 / len(CLIPS)
     for k, clip in enumerate(CLIPS):
-        mean = [b[2][k][0] for b in bars]
-        sd = [b[2][k][1] for b in bars]
+        mean = [b[1][k][0] for b in bars]
+        sd = [b[1][k][1] for b in bars]
         ax.bar(x + (k - (len(CLIPS) - 1) / 2) * width, mean, width, yerr=sd, capsize=2,
                label=f"{clip} (never trained on)")
     ax.axhline(0.03, color="black", lw=0.8, ls="--", label="goal 0.03")
-    ax.set_xticks(x, [b[1] for b in bars], rotation=35, ha="right", fontsize=7)
+    ax.set_xticks(x, [b[0] for b in bars], rotation=35, ha="right", fontsize=7)
     ax.set_yscale("log")
+    ax.set_ylim(top=4 * max(b[1][k][0] + b[1][k][1] for b in bars for k in range(len(CLIPS))))
     ax.set_ylabel("test position NRMSE (mean ± sd)")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, ncol=3, loc="upper left")
     ax.set_title("Imitating unseen CMU dance: before -> the general presets", fontsize=9)
     return save_figure(fig, path)

@@ -11,6 +11,12 @@ excerpt), and mixtures joined by minimum-jerk bridges (``set:A+B``). Two rows va
 network instead of the movement: the reservoir size (N = 400) and the command scale
 (full scale = 4x instead of 2x the training movement's fastest speed per DOF).
 
+The rows of ``--rows general`` (:data:`GENERAL_ROWS`) measure the ``general`` preset of
+each body and signal (2D and 3D, joint angles and Cartesian; ``j3`` is 3D joint angles)
+against the best row before it, and its ingredients: babbling that also moves to the
+joint limits and rests (``limits``, ``holds``), a longer babble, the feedback
+controller's correction weighted 3x in the learning targets (``rule.u_error_gain``).
+
 Every network is trained once (paper E's experiment 5 schedule: new method, β = 0.1,
 3 learning cycles x 10 epochs, K 1 -> 0, N = 200, spectral radius 0.5) and tested on
 every column (:data:`TESTS`: the YMCA family with mirrors and speeds, both clips whole and

@@ -28,6 +28,9 @@ __all__ = ["GENERAL", "PRESETS", "TORQUE_PRESETS", "SHIPPED", "preset_fields", "
            "model_name", "model_path"]
 
 _LIMITS30 = "babble:seed=0,duration=30,limits=0.5,holds=0.2"
+#: The joint-angle presets' keys (2D and 3D alike).
+_JOINT = {"plant.signals": "joint", "movement.trajectory": _LIMITS30,
+          "movement.full_scale_factor": 4.0, "test.washout_cycles": 1}
 #: ``general`` per (dof, signals): (one-line reason, the dotted TrainConfig keys).
 GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
     (4, "joint"): (
@@ -35,20 +38,21 @@ GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
         "between random targets over every joint's whole range, peak speeds 1-8 rad/s) "
         "that also moves to the joint limits and rests (limits=0.5, holds=0.2), full "
         "scale = 4x its fastest speed per DOF, paper E exp. 5 schedule (N = 200), one "
-        "washout cycle before the test: row j2-limits30-scale4",
-        {"plant.dof": 4, "plant.signals": "joint", "movement.trajectory": _LIMITS30,
-         "movement.full_scale_factor": 4.0, "test.washout_cycles": 1},
+        "washout cycle before the test: row j2-limits30-scale4 (unseen md_02 0.0078, md_03 "
+        "0.0060, 10 seeds)",
+        {"plant.dof": 4, **_JOINT},
     ),
     (8, "joint"): (
         "3D, joint-angle signals, trained on 30 s of babbling that also moves to the "
-        "joint limits and rests (limits=0.5, holds=0.2), full scale 4x: row j3-general",
-        {"plant.dof": 8, "plant.signals": "joint", "movement.trajectory": _LIMITS30,
-         "movement.full_scale_factor": 4.0, "test.washout_cycles": 1},
+        "joint limits and rests (limits=0.5, holds=0.2), full scale 4x: row j3-general "
+        "(unseen md_02 0.011, md_03 0.012, 10 seeds)",
+        {"plant.dof": 8, **_JOINT},
     ),
     (4, "cartesian"): (
         "2D, Cartesian signals, trained on 60 s of babbling that also moves to the joint "
         "limits and rests (limits=0.5, holds=0.2), full scale 4x, the feedback "
-        "controller's correction x3 in the learning targets: row c2-general",
+        "controller's correction x3 in the learning targets: row c2-general (unseen md_02 "
+        "0.064, md_03 0.052, 10 seeds)",
         {"plant.dof": 4, "plant.signals": "cartesian",
          "movement.trajectory": "babble:seed=0,duration=60,limits=0.5,holds=0.2",
          "movement.full_scale_factor": 4.0, "rule.u_error_gain": 3.0,
@@ -56,7 +60,8 @@ GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
     ),
     (8, "cartesian"): (
         "3D, Cartesian signals, trained on 15 s of motor babbling then YMCA (joined by a "
-        "minimum-jerk bridge), full scale 2x: row c3-babble15+ymca; no babbling at the "
+        "minimum-jerk bridge), full scale 2x: row c3-babble15+ymca (unseen md_02 0.127, "
+        "md_03 0.100, 10 seeds); no babbling at the "
         "limits, larger scale, reservoir (N = 400), reservoir noise or feedback weight "
         "measured did better on the unseen clips",
         {"plant.dof": 8, "plant.signals": "cartesian",
