@@ -248,3 +248,23 @@ def test_compare_reports_metric_and_seed_differences_but_not_wall_time(tmp_path)
     assert diffs == [f"{path.name}: metrics differ in ['k']"] and len(params) == 1
     next((tmp_path / "b" / "runs").glob("c-*.json")).unlink()
     assert compare.main([str(tmp_path / "a"), str(tmp_path / "b")]) == 1
+
+
+def test_compare_leaves_out_measurements_inside_a_metrics_records(tmp_path):
+    exp = toy().build(quick=True)
+    run_sweep(exp, tmp_path / "a", rows=["a"], runs=1, workers=1, progress=False)
+    run_sweep(exp, tmp_path / "b", rows=["a"], runs=1, workers=1, progress=False)
+    (path,) = (tmp_path / "b" / "runs").glob("*.json")
+    record = json.loads(path.read_text())
+    record["metrics"].update(curve=[{"steps": 0, "wall_s": 9.0, "cpu_s": 9.0}],
+                             cpu_to_0_05=3.0, wall_to_0_05=3.0)  # a learning curve's clocks
+    path.write_text(json.dumps(record))
+    (same,) = (tmp_path / "a" / "runs").glob("*.json")
+    mine = json.loads(same.read_text())
+    mine["metrics"].update(curve=[{"steps": 0, "wall_s": 1.0, "cpu_s": 1.0}])
+    same.write_text(json.dumps(mine))
+    assert compare.compare(tmp_path / "a", tmp_path / "b") == ([], [])
+    record["metrics"]["curve"][0]["steps"] = 1  # a result inside the records: a difference
+    path.write_text(json.dumps(record))
+    assert compare.compare(tmp_path / "a", tmp_path / "b")[0] == [
+        f"{path.name}: metrics differ in ['curve']"]

@@ -3,8 +3,9 @@
 ``python -m skinny_mj.engine.compare BEFORE AFTER`` prints every difference (exit 1 when
 the metrics or seeds differ, 0 otherwise): run files only in one folder, and per run file
 the fields that differ, the machine's measurements left out (``wall_s``, ``finished_at``,
-any metric whose name holds ``wall_s``, ``cpu_s`` or ``peak_rss``: ``train_wall_s``,
-``wall_s_run``, ``peak_rss_mb``, ...). ``params``
+any metric whose name holds ``wall_s``, ``cpu_s``, ``peak_rss``, ``wall_to`` or ``cpu_to``:
+``train_wall_s``, ``wall_s_run``, ``peak_rss_mb``, ``cpu_to_0.05``, ...; also inside a
+metric's lists of records, e.g. a learning curve's points). ``params``
 differences are listed apart: a row whose parameters are spelled differently (e.g. as
 config overrides) may still run the same thing, which the metrics then show.
 """
@@ -19,7 +20,7 @@ from typing import Any
 #: Record fields that are the machine's measurements (time, memory), not results.
 WALL_FIELDS = ("wall_s", "finished_at", "fallback_traceback", "traceback")
 #: Parts of metric names that mark a measurement of time or memory.
-MEASURED = ("wall_s", "cpu_s", "peak_rss")
+MEASURED = ("wall_s", "cpu_s", "peak_rss", "wall_to", "cpu_to")
 
 
 def _is_wall(key: str) -> bool:
@@ -30,9 +31,18 @@ def _load(folder: Path) -> dict[str, dict[str, Any]]:
     return {p.name: json.loads(p.read_text()) for p in sorted((folder / "runs").glob("*.json"))}
 
 
+def _results(value: Any) -> Any:
+    """A metric without the measurements in it (a list of records: each record's)."""
+    if isinstance(value, dict):
+        return {k: _results(v) for k, v in value.items() if not _is_wall(k)}
+    if isinstance(value, list):
+        return [_results(v) for v in value]
+    return value
+
+
 def _strip(record: dict[str, Any]) -> dict[str, Any]:
     out = {k: v for k, v in record.items() if not _is_wall(k)}
-    out["metrics"] = {k: v for k, v in record.get("metrics", {}).items() if not _is_wall(k)}
+    out["metrics"] = _results(record.get("metrics", {}))
     return out
 
 
