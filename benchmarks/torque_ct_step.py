@@ -19,10 +19,10 @@ import time
 os.environ.setdefault("MUJOCO_GL", "disabled")
 
 import mujoco  # noqa: E402
-from skinny_mj.experiments.dynamic import joint_nrmse  # noqa: E402
 
 from skinny_mj.plant import model as skinny_model  # noqa: E402
 from skinny_mj.training.loop import TrainConfig, train  # noqa: E402
+from skinny_mj.training.torque import joint_nrmse  # noqa: E402
 
 RK4, IMPLICITFAST = mujoco.mjtIntegrator.mjINT_RK4, mujoco.mjtIntegrator.mjINT_IMPLICITFAST
 #: label: (integrator, timestep s); the first is the twin as it is

@@ -39,7 +39,8 @@ class ArmLoop(TorqueLoop):
 
     def begin(self, plant, n_steps: int) -> None:
         super().begin(plant, n_steps)
-        self.feedback_nm = np.zeros((n_steps, plant.n_runs, plant.n_dof))
+        if self.feedback_nm is None or self.feedback_nm.shape != self.velocity_rad_s.shape:
+            self.feedback_nm = np.zeros(self.velocity_rad_s.shape)  # reused, as TorqueLoop's
 
     def u_error(self, t: int, desired: np.ndarray, sensed: np.ndarray, plant) -> np.ndarray:
         state = self.state_of(sensed)

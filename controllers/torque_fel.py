@@ -82,6 +82,8 @@ class TorqueLoop:
         self.desired_velocity_rad_s = np.asarray(self.desired_velocity_rad_s, float)
         self.velocity_scale_rad_s = np.asarray(self.velocity_scale_rad_s, float)
         self._limit = self.controller.gains.limit
+        # qd_d(t+1) / v_max of every step, once (each row as the step would divide it)
+        self._desired_in = self.desired_velocity_rad_s[1:] / self.velocity_scale_rad_s
 
     @property
     def n_inputs(self) -> int:
@@ -92,9 +94,13 @@ class TorqueLoop:
             raise ValueError(f"torque loop built for {len(self.desired_velocity_rad_s)} "
                              f"states, rollout has {n_steps}")
         shape = (n_steps, plant.n_runs, plant.n_dof)
-        self.applied_nm = np.zeros((n_steps - 1, *shape[1:]))
-        self.velocity_rad_s = np.zeros(shape)
-        self.bias_nm = np.zeros(shape)
+        if self.velocity_rad_s is None or self.velocity_rad_s.shape != shape:
+            # the arrays of the last cycle, reused by the next one (every entry is written)
+            self.applied_nm = np.zeros((n_steps - 1, *shape[1:]))
+            self.velocity_rad_s = np.zeros(shape)
+            self.bias_nm = np.zeros(shape)
+            self._inputs = np.zeros((plant.n_runs, 2 * plant.n_dof))
+            self._no_feedforward = np.zeros(shape[1:])
         self._record(0, plant)
 
     def _record(self, t: int, plant) -> None:
@@ -102,9 +108,11 @@ class TorqueLoop:
         self.bias_nm[t] = plant.bias_torque_nm()
 
     def inputs(self, t: int, plant) -> np.ndarray:
-        v = self.velocity_scale_rad_s
-        desired = np.broadcast_to(self.desired_velocity_rad_s[t + 1] / v, (plant.n_runs, len(v)))
-        return np.concatenate([desired, self.velocity_rad_s[t] / v], axis=1)
+        """(R, 2 n_dof) [qd_d(t+1); qd(t)] / v_max, in a buffer the next call overwrites."""
+        out, n = self._inputs, self._desired_in.shape[1]
+        out[:, :n] = self._desired_in[t]
+        np.divide(self.velocity_rad_s[t], self.velocity_scale_rad_s, out=out[:, n:])
+        return out
 
     def u_error(self, t: int, desired: np.ndarray, sensed: np.ndarray, plant) -> np.ndarray:
         bias = None
@@ -117,7 +125,7 @@ class TorqueLoop:
 
     def feedforward(self, t: int, plant) -> np.ndarray:
         if not self.gravity_feedforward:
-            return np.zeros((plant.n_runs, plant.n_dof))
+            return self._no_feedforward
         return self.bias_nm[t] / self._limit
 
     def after_step(self, t: int, plant) -> None:

@@ -24,7 +24,6 @@ lockstep (bit for bit each seed alone); wall time = batch / R.
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -34,7 +33,7 @@ from skinny_mj.controllers import generation as gen
 from skinny_mj.controllers.esn import ESN, ESNConfig
 from skinny_mj.experiments.claims import claim_lines
 
-from skinny_mj.engine.experiment import Row
+from skinny_mj.engine.study import Row
 
 #: Row order fixes each row's seeds (the engine's per-row seeds): new rows go last.
 METHODS = ("ordinary", "new", "new-blend", "force", "reservoirpy", "new-conv")
@@ -51,8 +50,9 @@ def streams(seed: int) -> tuple[np.random.Generator, np.random.Generator]:
     return np.random.default_rng(data), np.random.default_rng(net)
 
 
-def rows(methods: tuple[str, ...], runs: int) -> tuple[Row, ...]:
-    return tuple(Row(m, {"method": m}, runs=runs) for m in methods)
+def rows(methods: tuple[str, ...]) -> tuple[Row, ...]:
+    """One row per method (its run reads ``params["method"]``)."""
+    return tuple(Row(m, params={"method": m}) for m in methods)
 
 
 def fit_ours(method: str, esn: ESN, inputs: np.ndarray, teacher: np.ndarray,
@@ -145,15 +145,15 @@ def claims_for(kind: str) -> list:
     ]
 
 
-def report(results: dict, out_dir: Path, kind: str, extra: list[str] | None = None) -> str:
-    """Box plots of horizon and free-run NRMSE per row, the claims, the median run's
-    free run of each row as a PNG."""
+def report(results, plan, out_dir: Path, kind: str, extra: list[str] | None = None) -> str:
+    """Box plots of horizon and free-run NRMSE per row of the sweep's ``plan``, and the
+    claims."""
     from skinny_mj.engine.stats import load_runs
     from skinny_mj.plots import boxplot_png
 
     out_dir = Path(out_dir)
     runs = load_runs(out_dir)
-    ids = [r["row"] for r in json.loads((out_dir / "config.json").read_text())["rows"]]
+    ids = [p.row.id for p in plan.rows]
     lines = []
     for metric, label in (("horizon", "free-run horizon (steps)"),
                           ("free_nrmse", "free-run NRMSE")):
@@ -168,7 +168,8 @@ def report(results: dict, out_dir: Path, kind: str, extra: list[str] | None = No
 
 
 def unavailable_rows() -> dict[str, str]:
-    """The ``reservoirpy`` row needs the optional package (the ``bench`` extra)."""
+    """The ``reservoirpy`` row needs the optional package (the ``bench`` extra): a
+    study's ``unavailable``."""
     import importlib.util
 
     if importlib.util.find_spec("reservoirpy") is not None:

@@ -21,18 +21,16 @@ against each other, so it cannot test "almost half").
 
 from __future__ import annotations
 
-import functools
+import time
 import warnings
-from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 from skinny_mj.controllers.fel import run_mean
 
-from skinny_mj.engine.experiment import Experiment, Row, RunFailed
-from skinny_mj.engine.options import OPTION_KEYS, movement_changes
-from skinny_mj.engine.sweep import one_of_batch
-from skinny_mj.training.config import TrainConfig, relative_cost
+from skinny_mj.engine.experiment import RunFailed
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.training.config import TrainConfig
 
 NAME = "paper-a"
 ARCHITECTURES = ("inverse", "parallel", "serial", "hybrid")
@@ -60,42 +58,20 @@ MODEL = TrainConfig().override({
     "rule.gain_value": 0.65})
 
 
-@dataclass(frozen=True)
-class Config:
-    """The sweep: the run's parameters (``model``), delays and runs (§3.4, §4)."""
-
-    model: TrainConfig = field(default_factory=lambda: MODEL)
-    delays: tuple[int, ...] = DELAYS
-    runs: int = 10
-
-
 def row_id(architecture: str, delay: int) -> str:
     return f"{architecture}-d{delay}"
 
 
-def rows(delays: tuple[int, ...] = DELAYS) -> tuple[Row, ...]:
-    out = []
-    for arch in ARCHITECTURES:
-        for d in delays:
-            paper = {}
-            if arch in ("serial", "hybrid") and d in (0, 10):
-                paper["pretrain_prediction_nrmse"] = PAPER_TEXT[f"pretrain_prediction_delay_{d}"]
-            out.append(Row(row_id(arch, d), {"architecture": arch, "delay": d}, paper))
-    return tuple(out)
-
-
-METRICS = ("performance_nrmse", "performance_mae", "correction_ratio", "feedback_share",
-           "prediction_nrmse", "pretrain_prediction_nrmse", "motor_nrmse",
-           "test_position_nrmse", "test_motor_nrmse", "wall_s")
-
-
-def train_config(cfg: Config, row: Row) -> TrainConfig:
-    """The row's run: the delay, and the forward model for every architecture but
-    ``inverse`` (parallel: trained alongside; serial: pre-trained, then frozen; hybrid:
-    pre-trained, then trained on)."""
-    arch = row.params["architecture"]
-    return cfg.model.override({"plant.delay": int(row.params["delay"]),
-                               "forward": "none" if arch == "inverse" else arch})
+def _row(arch: str, delay: int) -> Row:
+    """The delay, and the forward model for every architecture but ``inverse`` (parallel:
+    trained alongside; serial: pre-trained, then frozen; hybrid: pre-trained, then trained
+    on); ``--quick`` halves the forward network."""
+    paper = {}
+    if arch in ("serial", "hybrid") and delay in (0, 10):
+        paper["pretrain_prediction_nrmse"] = PAPER_TEXT[f"pretrain_prediction_delay_{delay}"]
+    return Row(row_id(arch, delay), {"plant.delay": delay,
+                                     "forward": "none" if arch == "inverse" else arch},
+               paper, group=arch, quick={} if arch == "inverse" else {"forward.reservoir": 50})
 
 
 def mean_abs_error(true_signals: np.ndarray, desired: np.ndarray) -> np.ndarray:
@@ -113,7 +89,7 @@ def feedback_share(ro) -> np.ndarray:
     return fb / np.maximum(fb + ff, 1e-12)
 
 
-def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
+def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Train and measure one (architecture, delay) row for several seeds in lockstep.
 
     Metrics from the evaluation cycle of the LAST training epoch (feedback ON, K = 0.65,
@@ -124,14 +100,12 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     model during the last epoch". A closed-loop test with K = 0 (on the training plant,
     its noise stream continuing) is recorded as an extra (``test_*``).
     """
-    import time
-
     from skinny_mj.controllers.forward_model import rollout_prediction_error
 
     from skinny_mj.training.loop import build_run, evaluate, train_run
 
     start = time.perf_counter()
-    run = build_run(train_config(cfg, row), seeds)
+    run = build_run(config, seeds)
     trained = train_run(run)
     result, ro = trained.fel, trained.fel.last_rollout
     tests = evaluate(run, plant=run.plant)
@@ -156,40 +130,6 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
                        None if not np.isfinite(v) else float(v) for v in result.position_nrmse[r]])
         outs.append(out)
     return outs
-
-
-def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    """One (architecture, delay) training run: :func:`run_batch` of one seed."""
-    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
-
-
-def cost(cfg: Config, row: Row) -> float:
-    """One run's relative cost (the engine starts the costliest batches first)."""
-    return relative_cost(train_config(cfg, row))
-
-
-def quick_config() -> Config:
-    """A smoke test (N = 100 / 50, 2 epochs, 2 delays, 2 runs), not a reproduction."""
-    return Config(model=MODEL.override({"esn.n_reservoir": 100, "forward.reservoir": 50,
-                                        "rule.epochs": 2, "rule.cycles": 2}),
-                  delays=QUICK_DELAYS, runs=2)
-
-
-def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          dof: int | None = None, signals: str | None = None) -> Experiment:
-    """The sweep over (architecture, delay); ``movement``/``asf``/``dof``/``signals``
-    replace the paper's YMCA, 2D joint angles (None: the paper's)."""
-    cfg = quick_config() if quick else Config()
-    cfg = replace(cfg, model=cfg.model.override(
-        movement_changes(movement, asf, dof, signals, OPTION_KEYS)))
-    return Experiment(
-        name=NAME, rows=rows(cfg.delays), run_one=functools.partial(run_one, cfg),
-        run_batch=functools.partial(run_batch, cfg), config=cfg, runs=cfg.runs,
-        cost=functools.partial(cost, cfg),
-        groups={arch: tuple(row_id(arch, d) for d in cfg.delays) for arch in ARCHITECTURES},
-        table_columns=("performance_nrmse", "feedback_share", "prediction_nrmse",
-                       "pretrain_prediction_nrmse", "test_position_nrmse", "wall_s"),
-    )
 
 
 # -- report -------------------------------------------------------------------------
@@ -308,7 +248,7 @@ def claims(out_dir: Path) -> list[str]:
     return lines
 
 
-def report(results: dict, out_dir: Path) -> str:
+def report(results, plan, out_dir: Path) -> str:
     """Figures (error, feedback share, prediction error vs delay; paper Fig. 4/5/6) and
     the paper's claims, checked."""
     from skinny_mj.plots import line_sweep_png
@@ -331,3 +271,15 @@ def report(results: dict, out_dir: Path) -> str:
                                {a: _matrix(v, delays) for a, v in per.items()},
                                "delay (steps of 20 ms)", label, title=f"Paper A: {metric}")
     return "\n".join(claims(out_dir))
+
+
+STUDY = Study(
+    name=NAME, description=__doc__, base=MODEL, runs=10, run_batch=run_batch,
+    rows=tuple(_row(a, d) for a in ARCHITECTURES for d in DELAYS),
+    columns=("performance_nrmse", "feedback_share", "prediction_nrmse",
+             "pretrain_prediction_nrmse", "test_position_nrmse", "wall_s"),
+    # a smoke test (N = 100 / 50, 2 epochs of 2 learning cycles, 2 delays, 2 runs)
+    quick=Quick({"esn.n_reservoir": 100, "rule.epochs": 2, "rule.cycles": 2}, runs=2,
+                rows=tuple(row_id(a, d) for a in ARCHITECTURES for d in QUICK_DELAYS)),
+    report=report,
+)

@@ -9,24 +9,28 @@ cycle, K = 0). Patterns: relative phase 0°, 90°, 180°; frequency ratio 1:2, 1
 3:5; amplitude ratio 2:1. The paper reports no numbers, only Figure 3 and the
 qualitative claims that :func:`report` checks here with our numbers.
 
-Not stated in paper B (our choices, in :data:`MODEL` and :class:`Config`): the number
-of epochs, runs, spectral radius, reservoir noise, the movement's period and amplitude.
-Each row is a config of the one training path on paper B's plant
-(:class:`skinny_mj.plant.bimanual.BimanualPlant`, ``leading_arm="right"``).
+Not stated in paper B (our choices, in :data:`MODEL` and the study's runs): the number
+of epochs, runs, spectral radius, reservoir noise, the movement's period and amplitude
+(:class:`skinny_mj.trajectories.patterns.Movement`'s). Each row is a config of the one
+training path on paper B's plant (:class:`skinny_mj.plant.bimanual.BimanualPlant`,
+``leading_arm="right"``): ``MODEL`` with the row's pattern as its movement. ``--dof 8``
+runs the patterns on the 3D body (shoulder abduction swings; flexion, rotation and elbow
+held: :mod:`skinny_mj.trajectories.patterns`), ``--signals`` the position signals;
+``--movement`` does not apply (each row's movement is its pattern). ``--quick``: 1 run of
+2 epochs per pattern (a smoke test).
 """
 
 from __future__ import annotations
 
-import functools
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
-from skinny_mj.engine.experiment import Experiment, Row, RunFailed
-from skinny_mj.engine.sweep import one_of_batch
+from skinny_mj.engine.experiment import RunFailed
+from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plant.body import CONTROL_DT_S
-from skinny_mj.training.config import TrainConfig, relative_cost
+from skinny_mj.training.config import TrainConfig
 from skinny_mj.trajectories.patterns import PATTERNS, PREFIX
 
 NAME = "paper-b"
@@ -62,28 +66,15 @@ MODEL = TrainConfig().override({
 })
 
 
-@dataclass(frozen=True)
-class Config:
-    """The run (``model``; its movement is each row's pattern) and the runs per row
-    (not stated in the paper). The movement's period, amplitude and elbow angle are
-    :class:`skinny_mj.trajectories.patterns.Movement`'s (not stated either)."""
-
-    model: TrainConfig = MODEL
-    runs: int = 10
-
-
 def _tag(speed: float) -> str:
     return f"x{speed:g}"
 
 
-def train_config(cfg: Config, row: Row) -> TrainConfig:
-    return cfg.model.override({"movement.trajectory": PREFIX + row.row_id})
-
-
-def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
-    """Train lagging-arm ESNs on ``row``'s pattern for several seeds in lockstep, then
-    test each at every leader speed in SPEEDS (a fresh plant whose sensor noise comes
-    from the run's plant seed + 1)."""
+def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
+    """Train lagging-arm ESNs on ``row``'s pattern (``config``: the row's training
+    configuration, its movement the pattern) for several seeds in lockstep, then test
+    each at every leader speed in SPEEDS (a fresh plant whose sensor noise comes from the
+    run's plant seed + 1)."""
     import time
 
     from skinny_mj.plant.bimanual import arm_dofs, phase_lag_deg
@@ -92,10 +83,10 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     from skinny_mj.trajectories.patterns import Movement
 
     start = time.perf_counter()
-    tcfg = train_config(cfg, row)
-    run = build_run(tcfg, seeds)
+    run = build_run(config, seeds)
     result = train_run(run).fel
-    lead_side, dof, movement = tcfg.plant.leading_arm, tcfg.plant.dof, tcfg.movement.trajectory
+    lead_side, dof = config.plant.leading_arm, config.plant.dof
+    movement = config.movement.trajectory
     lag_side = "left" if lead_side == "right" else "right"
     lead, lag = arm_dofs(dof, lead_side)[0], arm_dofs(dof, lag_side)[0]
     outs: list = [{"train_position_nrmse": float(result.position_nrmse[r, -1]),
@@ -104,7 +95,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
                   for r in range(len(seeds))]
     failed = {r: "the lagging arm's ESN diverged during training"
               for r in range(len(seeds)) if result.failed[r]}
-    period_s, pattern = Movement().period_s, PATTERNS[row.row_id]
+    period_s, pattern = Movement().period_s, PATTERNS[row.id]
     for speed in SPEEDS:
         trajectory = get(f"{movement}@{speed:g}" if speed != 1.0 else movement, dof)
         tests = evaluate(run, trajectory, plant_seeds=[s + 1 for s in run.plant_seeds])
@@ -129,47 +120,6 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     for out in outs:
         out["wall_s_run"] = wall
     return [RunFailed(failed[r]) if r in failed else out for r, out in enumerate(outs)]
-
-
-def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    """One run of ``row``: :func:`run_batch` of one seed."""
-    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
-
-
-def rows() -> tuple[Row, ...]:
-    return tuple(Row(name, asdict(p)) for name, p in PATTERNS.items())
-
-
-def cost(cfg: Config, row: Row) -> float:
-    """One run's relative cost: its pattern's length (2:3 and 3:5 hold more periods)."""
-    from skinny_mj.trajectories import get
-
-    return relative_cost(train_config(cfg, row)) * len(get(PREFIX + row.row_id,
-                                                          cfg.model.plant.dof))
-
-
-def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          dof: int | None = None, signals: str | None = None) -> Experiment:
-    """The sweep; ``quick`` = 1 run of 2 epochs per pattern (a smoke test). ``dof`` 8
-    runs the patterns on the 3D body (shoulder abduction swings; flexion, rotation and
-    elbow held: :mod:`skinny_mj.trajectories.patterns`), ``signals`` the position
-    signals. ``movement`` does not apply: each row's movement is its pattern."""
-    if movement is not None or asf is not None:
-        from skinny_mj.errors import SkinnyInputError
-
-        raise SkinnyInputError("paper-b's movements are its coordination patterns (one per "
-                               "row, e.g. bimanual-phase90); --movement/--asf do not apply")
-    changes = {k: v for k, v in (("plant.dof", dof), ("plant.signals", signals))
-               if v is not None}
-    model = MODEL.override(changes)
-    cfg = Config(model=model.override({"rule.epochs": 2}), runs=1) if quick \
-        else Config(model=model)
-    columns = [f"{m}_{_tag(s)}" for m in ("relative_error", "phase_lag_deg")
-               for s in SPEEDS] + ["position_nrmse_x1", "motor_nrmse_x1"]
-    return Experiment(name=NAME, rows=rows(), run_one=functools.partial(run_one, cfg),
-                      run_batch=functools.partial(run_batch, cfg),
-                      cost=functools.partial(cost, cfg), config=cfg, runs=cfg.runs,
-                      table_columns=tuple(columns))
 
 
 # -- report: figures and claims -------------------------------------------------------
@@ -274,7 +224,7 @@ def _fig3(path: Path, row: str, traces: dict) -> None:
     plt.close(fig)
 
 
-def report(results: dict, out_dir: Path) -> str:
+def report(results: dict, plan, out_dir: Path) -> str:
     """Fig. 3-style traces (first ok run per pattern), a box plot, the claims."""
     from skinny_mj.engine.stats import load_runs
     from skinny_mj.plots import boxplot_png
@@ -297,3 +247,15 @@ def report(results: dict, out_dir: Path) -> str:
                     title="Paper B: lagging arm, trained (x1) and tested (x0.5, x1.5)")
     says = "\n".join(f"- {r}: paper: {t}" for r, t in PAPER_SAYS.items())
     return "\n".join(claims(out_dir)) + "\n\nWhat the paper says (no numbers given):\n" + says
+
+
+#: The table's columns: relative error and timing at each speed, then the NRMSEs at 1x.
+COLUMNS = (*(f"{m}_{_tag(s)}" for m in ("relative_error", "phase_lag_deg") for s in SPEEDS),
+           "position_nrmse_x1", "motor_nrmse_x1")
+STUDY = Study(
+    name=NAME, description=__doc__, base=MODEL, runs=10,  # runs: not stated in the paper
+    rows=tuple(Row(name, {"movement.trajectory": PREFIX + name}, params=asdict(p))
+               for name, p in PATTERNS.items()),
+    run_batch=run_batch, columns=COLUMNS, takes=("dof", "signals"),
+    quick=Quick({"rule.epochs": 2}, runs=1), report=report,
+)

@@ -82,9 +82,13 @@ FIGURE_4_ROWS = ("1", "2", "4")
 
 def trainings(config: TrainConfig, row: Row) -> dict[str, TrainConfig]:
     """The two runs of one experiment: ``{"tt": ..., "fel": ...}`` (the row's config is
-    FEL's; TT fits the same network to the analytic commands, ``tt_cycles`` rounds)."""
+    FEL's; TT fits the same network to the analytic commands, ``tt_cycles`` rounds, with
+    the study parameter ``tt_input_noise`` on its teacher-forced inputs: unstated in the
+    thesis, 0 unless a protocol reads it, see :mod:`skinny_mj.engine.protocols`)."""
     return {"tt": config.override({"rule": "true-target", "rule.beta": config.rule.beta,
-                                   "rule.cycles": row.params["tt_cycles"]}), "fel": config}
+                                   "rule.cycles": row.params["tt_cycles"],
+                                   "rule.input_noise": row.params.get("tt_input_noise", 0.0)}),
+            "fel": config}
 
 
 def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list[dict[str, Any]]:

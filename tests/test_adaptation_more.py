@@ -88,16 +88,18 @@ def test_defaults_pass_through_bit_for_bit_and_the_old_rows_keep_their_seeds():
     assert np.array_equal(wrapped.command_jacobian(), bare.command_jacobian())
     with pytest.raises(ValueError):
         wrapped.set(forearm=1.2, payload_kg=1.0)
-    exp = adaptation.build()
+    study = adaptation.STUDY
+    exp = study.build()
     old = [f"{c}-{lr}" for c in ("gain", "offset") for lr in ("frozen", "fel", "rls")]
     assert [r.row_id for r in exp.rows[:6]] == old  # row index -> seed: unchanged
-    cfg = adaptation.Config()
-    assert (cfg.gain, cfg.pre, cfg.change, cfg.post, cfg.actuator_gain, cfg.offset,
-            cfg.epochs, cfg.runs) == (0.5, 2, 8, 4, 0.7, 0.1, 10, 10)
-    assert adaptation.train_config(cfg, "gain") == \
-        adaptation.TrainConfig().override({"rule.epochs": 10})
-    assert adaptation.train_config(cfg, "payload").actuation.kind == "torque"
-    assert 0 < adaptation.forearm_floor(cfg) < 0.1
+    p = exp.config.params
+    assert (p["gain"], p["pre_cycles"], p["change_cycles"], p["post_cycles"],
+            p["actuator_gain"], p["offset"], study.runs) == (0.5, 2, 8, 4, 0.7, 0.1, 10)
+    assert study.config("gain-fel") == adaptation.TrainConfig().override({"rule.epochs": 10})
+    assert study.config("payload-fel").actuation.kind == "torque"
+    assert 0 < adaptation.forearm_floor(study.base, p["forearm"]) < 0.1
+    quick = study.build(quick=True).config
+    assert (quick.params["change_cycles"], quick.config("mass-rls").rule.epochs) == (2, 2)
     # the batch model without an edit is the one it always was
     from skinny_mj.plant.model import load_batch_model
     a, b = load_batch_model(4, 2), load_batch_model(4, 2, edit=None)

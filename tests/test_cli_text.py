@@ -52,13 +52,12 @@ def test_experiment_help_describes_that_study(capsys):
 
 
 def test_experiment_help_of_a_study_that_cannot_build_still_describes_it(capsys, monkeypatch):
+    from skinny_mj.engine.study import Study
     from skinny_mj.errors import SkinnyInputError
 
-    module = registry.get("figure-eight")
-
-    def refuse(**_):
+    def refuse(*_, **__):
         raise SkinnyInputError("figure-eight needs an extra: pip install x")
-    monkeypatch.setattr(module, "build", refuse)
+    monkeypatch.setattr(Study, "build", refuse)
     code, out, _ = _exit(["experiment", "figure-eight", "--help"], capsys)
     assert code == 0 and registry.describe("figure-eight")[:40] in " ".join(out.split())
     assert "Rows: not listed here: figure-eight needs an extra: pip install x" in out

@@ -81,17 +81,33 @@ def test_true_target_learns_torques_with_velocity_inputs():
 
 
 def test_dynamic_experiment_rows():
-    from skinny_mj.experiments import dynamic
+    from skinny_mj.experiments.dynamic import study as dynamic
 
-    exp = dynamic.build(quick=True)
-    ids = {r.row_id for r in exp.rows}
+    from skinny_mj.engine.plan import plan
+
+    quick = plan(dynamic.STUDY, quick=True)
+    ids = {p.row.id for p in quick.rows}
     assert {"2d-ymca-pd", "3d-md02-tt", "2d-ymca-payload1-fel-new-gff-k1",
             "2d-ymca-kinematic"} <= ids
-    assert set(exp.groups["table"]) == {i for i in ids if "kinematic" not in i
-                                        and not any(p in i for p in dynamic.PERTURBATIONS)}
-    cfg = dynamic.train_config(exp.config, next(r for r in exp.rows
-                                                 if r.row_id == "2d-ymca-mass-20-pd"))
+    groups = quick.groups()
+    assert set(groups["table"]) == {i for i in ids if "kinematic" not in i
+                                    and not any(p in i for p in dynamic.PERTURBATIONS)}
+    assert set(groups["2d"]) | set(groups["3d"]) == ids
+    cfg = quick.config("2d-ymca-mass-20-pd")
     assert cfg.torque.test_mass_scale == 0.8 and (cfg.method, cfg.test.gain) == ("none", 1.0)
+    # --quick shrinks every FEL row to 2 epochs (the long rows to 2 x 2), nothing else
+    assert quick.config("2d-ymca-fel-arm").rule.epochs == 2
+    assert quick.config("3d-ymca-fel-arm-long").rule.epochs == 4
+    full = plan(dynamic.STUDY)
+    arm2, arm3 = full.config("2d-ymca-fel-arm"), full.config("3d-ymca-fel-arm")
+    assert (arm2.rule.epochs, arm2.rule.cycles, arm2.esn.n_reservoir) == (15, 3, 200)
+    assert (arm3.rule.epochs, arm3.rule.cycles, arm3.esn.n_reservoir) == (15, 6, 500)
+    long3 = full.config("3d-ymca-fel-arm-long")
+    assert (long3.rule.epochs, long3.rule.cycles) == (30, 3)
+    # --movement replaces the md_02 excerpt of the md02 rows only
+    other = plan(dynamic.STUDY, movement="md_03.amc")
+    assert other.config("2d-md02-pd").movement.trajectory == "md_03.amc"
+    assert other.config("2d-ymca-pd").movement.trajectory == "ymca"
 
 
 def test_a_diverged_simulation_fails_the_run_and_splits_a_batch(monkeypatch):

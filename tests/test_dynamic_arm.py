@@ -111,3 +111,28 @@ def test_feedback_share_is_the_gain_times_the_error_signal():
     np.testing.assert_allclose(m["feedback_share"],
                                np.asarray(m["gains"]) * m["error_signal_share"])
     assert m["error_signal_share"][0] > 0 and m["feedback_share"][-1] == 0.0
+
+
+@pytest.mark.parametrize("dof", [4, 8])
+def test_the_batch_arm_state_mass_matrix_is_each_robots_block_of_mj_fullm(dof):
+    """BatchArmState gathers each robot's M(q) from the batch's sparse M: the same bits as
+    mj_fullM's dense matrix, cut into the robots' diagonal blocks (zeros off the tree)."""
+    import mujoco
+
+    from skinny_mj.plant.adapters import BatchPlant
+    from skinny_mj.plant.dynamics import BatchArmState
+
+    plant = BatchPlant(dof, "cartesian", n_runs=3, actuation="torque")
+    state = BatchArmState(plant)
+    m, d, n1 = plant.model, plant.data, plant.model.nv // 3
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        d.qpos[:] = rng.uniform(-1.0, 1.0, m.nq)
+        d.qvel[:] = rng.standard_normal(m.nv)
+        mujoco.mj_forward(m, d)
+        full = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, d, full)
+        adr = state.adr
+        blocks = [full[r * n1 + adr][:, r * n1 + adr] for r in range(3)]
+        assert np.array_equal(state.mass(), np.stack(blocks))
+        assert not np.array_equal(blocks[0], np.diag(np.diag(blocks[0])))  # coupled joints

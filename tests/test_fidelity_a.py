@@ -10,20 +10,22 @@ import pytest
 from skinny_mj.experiments import paper_a
 from skinny_mj.experiments.fidelity_a import study as fidelity_a
 
-from skinny_mj.engine.experiment import Row
+from skinny_mj.engine.study import Row
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
 
-TINY = fidelity_a.Config(model=paper_a.MODEL.override({
-    "esn.n_reservoir": 30, "forward.reservoir": 20, "rule.cycles": 1,
-    "movement.trajectory": "y"}), runs=2, checkpoints=(1, 2))
+#: Small networks on the short movement Y (the rows' runs in a fraction of a second).
+TINY = {"esn.n_reservoir": 30, "forward.reservoir": 20, "rule.cycles": 1,
+        "movement.trajectory": "y"}
 SEEDS = [11, 12]
 
 
-def _row(arch: str, delay: int, epochs: int, forward_input: str = "sensed") -> Row:
-    return Row(fidelity_a.row_id(arch, forward_input, delay),
-               {"architecture": arch, "forward_input": forward_input, "delay": delay,
-                "epochs": epochs})
+def _run(arch: str, delay: int, epochs: int, seeds: list[int],
+         forward_input: str = "sensed") -> list:
+    """fidelity-a's run of the row, on :data:`TINY`, with checkpoints 1 and 2."""
+    row = fidelity_a.plan_row(arch, forward_input, delay, epochs)
+    config = paper_a.MODEL.override({**row.overrides, **TINY})
+    return fidelity_a.run_batch(config, Row(row.id, params={"checkpoints": (1, 2)}), seeds)
 
 
 def _numbers(out: dict, suffix: str) -> dict:
@@ -35,8 +37,8 @@ def test_a_short_run_equals_the_long_runs_checkpoint(arch, forward_input):
     """A 1-epoch run = the 2-epoch run's epoch-1 record, bit for bit; the 2-epoch record is
     paper A's own last-epoch metrics of a 2-epoch run, and the K = 0 tests at the
     checkpoints leave the training curve as it is without them."""
-    short = fidelity_a.run_batch(TINY, _row(arch, 3, 1, forward_input), SEEDS)
-    long = fidelity_a.run_batch(TINY, _row(arch, 3, 2, forward_input), SEEDS)
+    short = _run(arch, 3, 1, SEEDS, forward_input)
+    long = _run(arch, 3, 2, SEEDS, forward_input)
     for s, g in zip(short, long, strict=True):
         first = _numbers(s, "_e1")
         assert len(first) >= 10 and first == _numbers(g, "_e1")  # NaN-free, bit for bit
@@ -44,9 +46,9 @@ def test_a_short_run_equals_the_long_runs_checkpoint(arch, forward_input):
         assert set(_numbers(g, "_e2")) == {k.replace("_e1", "_e2") for k in first}
     if forward_input == "chained":
         return
-    pa_cfg = paper_a.Config(model=TINY.model.override({"rule.epochs": 2}))
-    theirs = paper_a.run_batch(pa_cfg, Row(f"{arch}-d3", {"architecture": arch, "delay": 3}),
-                               SEEDS)
+    pa_row = paper_a.STUDY.row(f"{arch}-d3")
+    theirs = paper_a.run_batch(paper_a.STUDY.config(pa_row.id).override(
+        {**TINY, "rule.epochs": 2}), pa_row, SEEDS)
     for o, t in zip(long, theirs, strict=True):
         assert o["curve_train_nrmse"] == t["curve_performance_nrmse"]
         assert o["train_nrmse_e2"] == t["performance_nrmse"]
@@ -59,7 +61,8 @@ def test_a_short_run_equals_the_long_runs_checkpoint(arch, forward_input):
 def test_chained_forward_model_is_fed_its_own_prediction():
     from skinny_mj.training.loop import build_run, train_run
 
-    cfg = TINY.model.override({"rule.epochs": 1, "plant.delay": 3, "forward": "parallel"})
+    cfg = paper_a.MODEL.override({**TINY, "rule.epochs": 1, "plant.delay": 3,
+                                  "forward": "parallel"})
     for forward_input in ("sensed", "chained"):
         run = build_run(cfg.override({"forward.input": forward_input}), SEEDS[:1])
         ro = train_run(run).fel.last_rollout
@@ -72,8 +75,8 @@ def test_chained_forward_model_is_fed_its_own_prediction():
 
 
 def test_chained_without_delay_is_the_sensed_forward_model():
-    a = fidelity_a.run_batch(TINY, _row("hybrid", 0, 1, "chained"), SEEDS[:1])
-    b = fidelity_a.run_batch(TINY, _row("hybrid", 0, 1, "sensed"), SEEDS[:1])
+    a = _run("hybrid", 0, 1, SEEDS[:1], "chained")
+    b = _run("hybrid", 0, 1, SEEDS[:1], "sensed")
     assert a == b
     with pytest.raises(SkinnyInputError, match="forward.input"):
         TrainConfig().override({"forward.input": "chained"})  # no forward model to chain
@@ -83,17 +86,13 @@ def test_chained_without_delay_is_the_sensed_forward_model():
 def test_quick_sweep_writes_tables_and_figures(tmp_path):
     from skinny_mj.engine.experiment import run_sweep
 
-    tiny = replace(TINY, model=TINY.model.override({"esn.n_reservoir": 10,
-                                                    "forward.reservoir": 10}), runs=2,
-                   plan=tuple((a, "sensed", 2, 1) for a in paper_a.ARCHITECTURES),
-                   checkpoints=(1,))
-    exp = fidelity_a.build(quick=True)
-    exp = replace(exp, rows=fidelity_a.rows(tiny), config=tiny, runs=2,
-                  run_one=lambda row, seed: fidelity_a.run_one(tiny, row, seed),
-                  run_batch=lambda row, seeds: fidelity_a.run_batch(tiny, row, seeds),
-                  groups={}, table_columns=("train_nrmse_e1",))
+    study = replace(fidelity_a.STUDY, base=paper_a.MODEL.override(
+        {**TINY, "esn.n_reservoir": 10, "forward.reservoir": 10}), runs=2,
+        rows=tuple(fidelity_a.plan_row(a, "sensed", 2, 1) for a in paper_a.ARCHITECTURES),
+        params={"checkpoints": (1,)}, columns=("train_nrmse_e1",))
+    exp = study.build()
     results = run_sweep(exp, tmp_path, workers=1, progress=False)
-    text = fidelity_a.report(results, tmp_path)
+    text = exp.report(results, tmp_path)
     assert "highest prediction error" in text and "parallel ≈ hybrid" in text
     assert "| serial-d2 | 1 | 2 |" in (tmp_path / "tables.md").read_text()
     assert (tmp_path / "fig5_band.png").stat().st_size > 1000

@@ -112,9 +112,11 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
     exp = g.STUDY.build(quick=True)
     assert {r.row_id for r in exp.rows} == {f"j2-{s}" for s in g.QUICK_SETS}
     full = g.STUDY.build()
-    assert len(full.rows) == len(g.TRAIN_SETS) + 2 * len(g.CORE_SETS) + len(g.EXTRA_ROWS)
-    assert set(full.groups) == {*g.REPRESENTATIONS, "extra"}
-    assert [r.row_id for r in full.rows[-len(g.EXTRA_ROWS):]] == list(full.groups["extra"])
+    assert len(full.rows) == len(g.TRAIN_SETS) + 2 * len(g.CORE_SETS) + len(g.EXTRA_ROWS) \
+        + len(g.GENERAL_ROWS)
+    assert set(full.groups) == {*g.REPRESENTATIONS, "extra", "general"}
+    late = [r.row_id for r in full.rows[-len(g.EXTRA_ROWS) - len(g.GENERAL_ROWS):]]
+    assert late == [*full.groups["extra"], *full.groups["general"]]  # earlier rows keep seeds
     c3 = full.config.config("c3-md_03")
     assert (c3.plant.dof, c3.plant.signals, c3.movement.trajectory, c3.esn.n_reservoir) == \
         (8, "cartesian", "md_03.amc", 200)

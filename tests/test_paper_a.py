@@ -12,12 +12,23 @@ from skinny_mj.experiments import get, paper_a
 
 from skinny_mj.engine.experiment import Experiment, Row, run_sweep
 
-TINY = paper_a.Config(model=paper_a.quick_config().model.override({"rule.epochs": 1,
-                                                                    "rule.cycles": 1}))
+
+def _tiny(arch: str, delay: int):
+    """The row's run at --quick's network sizes, 1 epoch of 1 learning cycle."""
+    forward = {} if arch == "inverse" else {"forward.reservoir": 50}
+    return paper_a.STUDY.config(paper_a.row_id(arch, delay)).override(
+        {"esn.n_reservoir": 100, "rule.epochs": 1, "rule.cycles": 1, **forward})
 
 
-def _row(arch: str, delay: int) -> Row:
-    return Row(paper_a.row_id(arch, delay), {"architecture": arch, "delay": delay})
+def _run(arch: str, delay: int, seeds: list[int], config=None) -> list:
+    row = paper_a.STUDY.row(paper_a.row_id(arch, delay))
+    return paper_a.run_batch(config or _tiny(arch, delay), row, seeds)
+
+
+def _rows(delays: tuple[int, ...]) -> tuple[Row, ...]:
+    """The engine's rows of paper A's ids for ``delays`` (the claims read only ids)."""
+    return tuple(Row(paper_a.row_id(a, d), {"architecture": a, "delay": d})
+                 for a in paper_a.ARCHITECTURES for d in delays)
 
 
 def _movement(n: int = 120) -> tuple[np.ndarray, np.ndarray]:
@@ -61,30 +72,29 @@ def test_feedback_share_is_a_fraction_and_correction_ratio_can_exceed_one():
 
 
 def test_run_is_reproducible_and_reports_the_metrics():
-    a = paper_a.run_one(TINY, _row("serial", 2), seed=5)
-    b = paper_a.run_one(TINY, _row("serial", 2), seed=5)
+    (a,), (b,) = _run("serial", 2, [5]), _run("serial", 2, [5])
     for key in ("performance_nrmse", "feedback_share", "prediction_nrmse",
                 "pretrain_prediction_nrmse", "test_position_nrmse"):
         assert a[key] == b[key], key
         assert np.isfinite(a[key])
     assert 0 <= a["feedback_share"] <= 1
-    assert "prediction_nrmse" not in paper_a.run_one(TINY, _row("inverse", 0), seed=5)
+    assert "prediction_nrmse" not in _run("inverse", 0, [5])[0]
 
 
 @pytest.mark.parametrize("arch", paper_a.ARCHITECTURES)
 def test_lockstep_batch_equals_each_seed_alone(arch):
-    row, seeds = _row(arch, 3), [11, 12, 13]
-    batch = paper_a.run_batch(TINY, row, seeds)
+    seeds = [11, 12, 13]
+    batch = _run(arch, 3, seeds)
     for seed, out in zip(seeds, batch, strict=True):
-        alone = paper_a.run_one(TINY, row, seed)
+        (alone,) = _run(arch, 3, [seed])
         assert {k: v for k, v in out.items() if k != "wall_s"} == \
             {k: v for k, v in alone.items() if k != "wall_s"}
 
 
 def test_delay_hurts_the_inverse_only_architecture():
-    cfg = paper_a.quick_config()
-    d0 = paper_a.run_one(cfg, _row("inverse", 0), seed=1)["performance_nrmse"]
-    d4 = paper_a.run_one(cfg, _row("inverse", 4), seed=1)["performance_nrmse"]
+    quick = paper_a.STUDY.build(quick=True).config  # the --quick sweep's plan
+    d0 = _run("inverse", 0, [1], quick.config("inverse-d0"))[0]["performance_nrmse"]
+    d4 = _run("inverse", 4, [1], quick.config("inverse-d4"))[0]["performance_nrmse"]
     assert d4 > 2 * d0
 
 
@@ -98,12 +108,12 @@ def test_claims_hold_and_fail_on_synthetic_runs(tmp_path):
     good = {"inverse": (0.15, 0.5), "parallel": (0.08, 0.3), "hybrid": (0.07, 0.3),
             "serial": (0.04, 0.2)}
     metrics = {}
-    for row in paper_a.rows((0, 4)):
+    for row in _rows((0, 4)):
         arch, d = row.params["architecture"], row.params["delay"]
         err, share = good[arch] if d else (0.01, 0.3)
         metrics[row.row_id] = [{"performance_nrmse": err + k * 0.001, "correction_ratio": share,
                                 "pretrain_prediction_nrmse": 0.08} for k in range(3)]
-    exp = Experiment("fake-a", paper_a.rows((0, 4)), _fake(metrics), runs=3)
+    exp = Experiment("fake-a", _rows((0, 4)), _fake(metrics), runs=3)
     run_sweep(exp, tmp_path / "good", workers=1, progress=False)
     lines = paper_a.claims(tmp_path / "good")
     assert len(lines) == 8
@@ -118,7 +128,7 @@ def test_claims_hold_and_fail_on_synthetic_runs(tmp_path):
 
 
 def test_serial_best_counts_a_tie_within_the_spread_and_not_a_clear_loss(tmp_path):
-    rows = paper_a.rows((4,))
+    rows = _rows((4,))
     spread = (0.0, 0.01, -0.01)
 
     def sweep(name, serial_offset):
@@ -142,32 +152,36 @@ def test_serial_best_counts_a_tie_within_the_spread_and_not_a_clear_loss(tmp_pat
 
 
 def test_quick_sweep_end_to_end(tmp_path):
-    module = get("paper-a")
-    exp = module.build(quick=True)
+    exp = get("paper-a").build(quick=True)
     results = run_sweep(exp, tmp_path, rows=["inverse-d0", "serial-d4"], workers=1,
                         progress=False)
     assert [r["row"] for r in results["rows"]] == ["inverse-d0", "serial-d4"]
     assert all(r["n_ok"] == 2 and r["n_failed"] == 0 for r in results["rows"])
-    text = module.report(results, tmp_path)
+    text = exp.report(results, tmp_path)
     assert (tmp_path / "fig4_error.png").is_file()
     assert (tmp_path / "fig4_share.png").is_file()
     assert len(text.splitlines()) == 8
 
 
 def test_full_config_matches_the_paper():
-    cfg = paper_a.Config()
-    m = cfg.model
+    study = paper_a.STUDY
+    m = study.base
     assert (m.esn.n_reservoir, m.forward.reservoir) == (1000, 100)
     assert (m.esn.spectral_radius, m.esn.noise_level, m.rule.gain_value) == (0.1, 0.2, 0.65)
     assert (m.plant.dof, m.plant.signals, m.rule.gain_schedule) == (4, "joint", "fixed")
     assert (m.method, m.learning_cycles, m.rule.epochs) == ("original", 5, 10)
-    assert cfg.delays == tuple(range(11)) and cfg.runs == 10
-    assert len(paper_a.rows()) == 44
-    tcfg = paper_a.train_config(cfg, _row("hybrid", 3))
+    assert study.runs == 10 and len(study.rows) == 44
+    assert [r.id for r in study.rows[:11]] == [f"inverse-d{d}" for d in range(11)]
+    tcfg = study.config("hybrid-d3")
     assert (tcfg.plant.delay, tcfg.forward.kind, tcfg.forward.reservoir) == (3, "hybrid", 100)
-    assert paper_a.train_config(cfg, _row("inverse", 3)).forward.kind == "none"
+    assert study.config("inverse-d3").forward.kind == "none"
+    quick = study.build(quick=True).config
+    assert quick.config("serial-d4").forward.reservoir == 50
+    assert (quick.config("inverse-d4").esn.n_reservoir, quick.config("inverse-d4").rule.epochs) \
+        == (100, 2)
 
 
 def test_dof_8_builds_a_3d_sweep():
-    exp = paper_a.build(quick=True, dof=8, signals="cartesian")
-    assert (exp.config.model.plant.dof, exp.config.model.plant.signals) == (8, "cartesian")
+    exp = paper_a.STUDY.build(quick=True, dof=8, signals="cartesian")
+    assert {(exp.config.config(r.row_id).plant.dof, exp.config.config(r.row_id).plant.signals)
+            for r in exp.rows} == {(8, "cartesian")}

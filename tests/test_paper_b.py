@@ -11,7 +11,6 @@ from skinny_mj.controllers.esn import ESN, ESNConfig
 from skinny_mj.controllers.plant import Plant
 from skinny_mj.experiments import paper_b
 
-from skinny_mj.engine.experiment import Row
 from skinny_mj.plant import bimanual as bm
 from skinny_mj.plant.body import position_signals
 from skinny_mj.plant.ideal import max_speeds
@@ -116,11 +115,12 @@ def test_feedback_tracks_and_fel_learns_in_phase():
 
 
 def test_lockstep_batch_equals_each_seed_alone():
-    cfg = paper_b.Config(model=paper_b.MODEL.override({"rule.epochs": 2}))
-    row = Row("freq1-2", {})
-    batch = paper_b.run_batch(cfg, row, [4, 5])
+    config = paper_b.MODEL.override({"movement.trajectory": "bimanual-freq1-2",
+                                     "rule.epochs": 2})
+    row = paper_b.STUDY.row("freq1-2")
+    batch = paper_b.run_batch(config, row, [4, 5])
     for seed, out in zip([4, 5], batch, strict=True):
-        alone = paper_b.run_one(cfg, row, seed)
+        alone = paper_b.run_batch(config, row, [seed])[0]
         assert {k: v for k, v in out.items() if k != "wall_s_run"} == \
             {k: v for k, v in alone.items() if k != "wall_s_run"}
 
@@ -131,8 +131,8 @@ def test_quick_sweep_end_to_end(tmp_path, workers):
 
     from skinny_mj.engine.experiment import run_sweep
 
-    module = get("paper-b")
-    exp = module.build(quick=True)
+    study = get("paper-b")
+    exp = study.build(quick=True)
     assert [r.row_id for r in exp.rows] == list(pt.PATTERNS)
     results = run_sweep(exp, tmp_path, workers=workers, progress=False)
     assert all(r["n_ok"] == 1 for r in results["rows"])
@@ -144,16 +144,14 @@ def test_quick_sweep_end_to_end(tmp_path, workers):
         assert len(tr["leader"]) == len(tr["desired"]) == len(tr["actual"])
     assert len(run["metrics"]["traces"]["x0.5"]["leader"]) > \
         len(run["metrics"]["traces"]["x1.5"]["leader"])
-    text = module.report(results, tmp_path)
+    text = exp.report(results, tmp_path)
     assert text.count("- [") >= 9
     assert (tmp_path / "fig3_phase90.png").stat().st_size > 0
     assert (tmp_path / "relative_error.png").is_file()
 
 
 def test_build_rejects_a_movement():
-    from skinny_mj.experiments.paper_b import build
-
     from skinny_mj.errors import SkinnyInputError
 
-    with pytest.raises(SkinnyInputError):
-        build(movement="ymca")
+    with pytest.raises(SkinnyInputError, match="takes no --movement"):
+        paper_b.STUDY.build(movement="ymca")

@@ -1,6 +1,6 @@
 """``skinny experiment rl-vs-fel``: the two learners are scored alike, FEL's curve is the
-one training path's, the RL runs are reproducible, and without the ``rl`` extra the
-experiment refuses in one line."""
+one training path's, the RL runs are reproducible, and without the ``rl`` extra the RL
+rows are left out (refused by name in one line) while the FEL rows run."""
 
 from __future__ import annotations
 
@@ -21,19 +21,31 @@ from skinny_mj.training.config import TrainConfig  # noqa: E402
 from skinny_mj.training.parts import run_streams  # noqa: E402
 
 
-def test_without_the_rl_extra_build_refuses_in_one_line(monkeypatch):
+def test_without_the_rl_extra_the_rl_rows_are_refused_in_one_line(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "stable_baselines3", None)  # import raises ImportError
+    exp = rl_vs_fel.STUDY.build(quick=True)
+    assert sorted(exp.unavailable) == sorted(r.row_id for r in exp.rows
+                                             if not r.row_id.startswith("fel-"))
     with pytest.raises(SkinnyInputError) as err:
-        rl_vs_fel.build(quick=True)
-    assert str(err.value) == "rl-vs-fel needs the rl extra: pip install -e '.[rl]'"
+        run_sweep(exp, tmp_path, rows=["ppo-velocity-ymca"], workers=1, progress=False)
+    assert str(err.value) == ("experiment 'rl-vs-fel': row 'ppo-velocity-ymca' needs the rl "
+                              "extra: pip install -e '.[rl]'")
 
 
 def test_rows_cover_learner_x_body_x_movement():
-    rows = rl_vs_fel.all_rows()
-    assert {r.row_id for r in rows} == {f"{a}-{b}-{m}" for a in rl_vs_fel.LEARNERS
-                                       for b in rl_vs_fel.BODIES for m in rl_vs_fel.MOVEMENTS}
-    g = rl_vs_fel.groups(rows)
+    exp = rl_vs_fel.STUDY.build()
+    assert {r.row_id for r in exp.rows} == {f"{a}-{b}-{m}" for a in rl_vs_fel.LEARNERS
+                                           for b in rl_vs_fel.BODIES
+                                           for m in rl_vs_fel.MOVEMENTS}
+    g = exp.groups
     assert len(g["sac"]) == 4 and len(g["torque"]) == 6 and len(g["md02"]) == 6
+    plan = exp.config
+    assert plan.config("fel-torque-md02").movement.trajectory == rl_vs_fel.CLIP
+    assert plan.config("fel-torque-md02").actuation.kind == "torque"
+    assert plan.config("sac-velocity-ymca").movement.trajectory == "ymca"
+    moved = rl_vs_fel.STUDY.build(movement="y").config  # --movement replaces the YMCA only
+    assert moved.config("ppo-velocity-ymca").movement.trajectory == "y"
+    assert moved.config("ppo-velocity-md02").movement.trajectory == rl_vs_fel.CLIP
 
 
 @pytest.mark.parametrize("actuation", ["velocity", "torque"])
@@ -99,7 +111,7 @@ def test_a_diverged_simulation_ends_the_episode_with_the_worst_reward(monkeypatc
 
 def test_quick_sweep_writes_curves_table_and_figures(tmp_path):
     pytest.importorskip("stable_baselines3")
-    exp = rl_vs_fel.build(quick=True)
+    exp = rl_vs_fel.STUDY.build(quick=True)
     res = run_sweep(exp, tmp_path, rows=["ppo-velocity-ymca", "sac-torque-ymca"], workers=1,
                     progress=False)
     assert res["n_ok"] == 2 and res["n_error"] == 0
@@ -110,7 +122,7 @@ def test_quick_sweep_writes_curves_table_and_figures(tmp_path):
         assert steps[0] == 0 and steps == sorted(steps) and steps[-1] >= budget
         assert all(0 < p["position_nrmse"] < 2 for p in m["curve"])
         assert m["position_nrmse"] == m["curve"][-1]["position_nrmse"]
-    text = rl_vs_fel.report(res, tmp_path)
+    text = exp.report(res, tmp_path)
     assert (tmp_path / "curves_steps.png").stat().st_size > 0
     assert "| PPO | velocity | ymca | 256 |" in text
     assert (tmp_path / "comparison.md").read_text().strip() in text

@@ -23,9 +23,11 @@ from skinny_mj.errors import SkinnyInputError
 
 
 def _cheapest(exp):
+    """The cheapest row this machine can run (an optional extra's rows left out)."""
+    rows = [r for r in exp.rows if r.row_id not in exp.unavailable]
     if exp.cost is None:
-        return exp.rows[0]
-    return min(exp.rows, key=exp.cost)
+        return rows[0]
+    return min(rows, key=exp.cost)
 
 
 #: Studies whose report fails on a sweep of one row (to fix in the study, then remove here).

@@ -90,6 +90,31 @@ def test_a_report_gets_typed_results_and_the_plan(tmp_path):
     assert seen == {"values": [1], "base": TrainConfig(), "out": tmp_path}
 
 
+def test_quick_params_columns_and_the_studys_cost_memory_and_unavailable_hooks(tmp_path):
+    from skinny_mj import memory
+
+    study = toy(quick=Quick({"rule.epochs": 2}, runs=2, rows=("g", "c"), params={"tol": 0.5},
+                            columns=("k",)),
+                columns=("reservoir", "k"),
+                cost=lambda config, row: float(config.esn.n_reservoir + row.params["k"]),
+                memory=lambda config, row, runs: None if row.id == "a" else
+                memory.Estimate({"x": runs * config.esn.n_reservoir}, {"x": "toy"}),
+                unavailable=lambda: {"c": "needs a package", "q": "is not in this sweep"})
+    full, quick = study.build(), study.build(quick=True)
+    assert full.config.params == {"k": 0, "tol": 0.1} and full.table_columns == ("reservoir", "k")
+    assert quick.config.params == {"k": 0, "tol": 0.5} and quick.table_columns == ("k",)
+    assert quick.config.run_row("a").params == {"k": 1, "tol": 0.5}  # a row's own params win
+    assert json.loads(json.dumps(quick.config.to_dict()))["params"]["tol"] == 0.5
+    assert [full.cost(r) for r in full.rows] == [31.0, 42.0, 204.0]
+    assert full.unavailable == {"c": "needs a package"}  # of the rows this sweep has
+    rows = {r.row_id: r for r in full.rows}
+    assert memory.row_estimate(study, full, rows["b"], 3).parts == {"x": 120}
+    # no estimate of its own: the row's training configuration's
+    assert memory.row_estimate(study, full, rows["a"], 3).total > 0
+    with pytest.raises(SkinnyInputError, match="row 'c' needs a package"):
+        run_sweep(full, tmp_path, rows=["c"], workers=1, progress=False)
+
+
 def test_read_metric_follows_dotted_paths_or_calls():
     m = {"test": {"position_nrmse": 0.1}, "wall_s": 2.0}
     assert read_metric(m, "test.position_nrmse") == 0.1
@@ -167,6 +192,45 @@ def test_skinny_sweep_runs_resumes_and_refuses_in_one_line(tmp_path, capsys):
     assert main(["sweep", "esn.spectral_radius=x"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "must be a number" in err
+
+
+def test_a_quick_grid_is_a_smoke_test_of_its_base_and_the_axes_keep_their_values():
+    quick = grid_study(["esn.spectral_radius=0.5,0.9"], quick=True)
+    assert (quick.base.rule.epochs, quick.runs) == (2, 2)
+    assert grid_study(["esn.spectral_radius=0.5,0.9"], quick=True, runs=3).runs == 3
+    swept = grid_study(["rule.epochs=5,6"], quick=True)  # the axis after --quick's keys
+    assert [swept.base.override(dict(r.overrides)).rule.epochs for r in swept.rows] == [5, 6]
+    tt = grid_study(["rule.cycles=2,3"], quick=True,  # a rule without epochs: left as it is
+                    base=TrainConfig().override({"rule": "true-target"}))
+    assert tt.base.rule.kind == "true-target"
+    full = grid_study(["esn.spectral_radius=0.5,0.9"], study=toy(), row="b")
+    assert (full.base.esn.n_reservoir, full.rows[0].params["k"], full.runs) == (40, 2, 10)
+    small = grid_study(["esn.spectral_radius=0.5,0.9"], study=toy(), row="b", quick=True)
+    assert (small.base.esn.n_reservoir, small.base.rule.epochs) == (35, 2)  # the study's quick
+    assert (small.rows[0].params["k"], small.runs) == (3, 2)
+    with pytest.raises(SkinnyInputError, match="two bases"):
+        grid_study(["esn.spectral_radius=0.5,0.9"], study=toy(), row="b", base=TrainConfig())
+
+
+def test_skinny_sweep_starts_from_a_config_file_and_quick_shrinks_it(tmp_path, capsys):
+    run_file = tmp_path / "metrics.json"  # what `skinny train` writes: config and seed
+    run_file.write_text(json.dumps({"config": {"movement.trajectory": "y", "rule.epochs": 7,
+                                               "esn.n_reservoir": 20}, "seed": 3}))
+    out = tmp_path / "sw"
+    assert main(["sweep", "esn.spectral_radius=0.5,0.9", "--config", str(run_file),
+                 "--quick", "--workers", "1", "--out", str(out), "-q"]) == 0
+    recorded = json.loads((out / "config.json").read_text())
+    base = recorded["config"]["base"]
+    assert (base["movement.trajectory"], base["esn.n_reservoir"], base["rule.epochs"]) == \
+        ("y", 20, 2)  # the file's, then --quick's 2 epochs
+    assert recorded["options"]["quick"] is True
+    assert recorded["options"]["config"] == str(run_file)
+    assert len(list((out / "runs").glob("*.json"))) == 4  # 2 rows x --quick's 2 runs
+    capsys.readouterr()
+    assert main(["sweep", "esn.spectral_radius=0.5,0.9", "--config",
+                 str(tmp_path / "missing.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "no such config file" in err
 
 
 # -- comparing two sweep folders ----------------------------------------------------------

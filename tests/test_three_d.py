@@ -12,6 +12,7 @@ from skinny_mj.experiments import paper_a
 from skinny_mj.experiments.three_d import report as three_d_report
 from skinny_mj.experiments.three_d import study as three_d
 
+from skinny_mj.engine import registry
 from skinny_mj.engine.experiment import Experiment, Row, run_sweep
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.errors import SkinnyInputError
@@ -38,54 +39,67 @@ def test_a_row_with_seeds_of_takes_its_twins_seeds_and_config_records_it(tmp_pat
 
 
 def test_rows_are_the_papers_own_on_both_bodies_the_3d_twin_on_the_2d_seeds():
-    exp = three_d.build()
+    exp = three_d.STUDY.build()
     ids = [r.row_id for r in exp.rows]
     n = sum(len(v) for v in three_d.SUBSET.values())
     assert len(ids) == 2 * n and exp.runs == 10
-    own = {r.row_id: r for r in paper_a.build().rows}
     for row in exp.rows:
         p, dim, rid = row.params["paper"], row.params["dim"], row.params["row"]
         assert row.row_id == f"{p}-{dim}-{rid}" and rid in three_d.SUBSET[p]
         assert row.seeds_of == (None if dim == "2d" else f"{p}-2d-{rid}")
-        if p == "a":
-            assert {k: v for k, v in row.params.items() if k not in ("paper", "dim", "row")} \
-                == dict(own[rid].params)
-    papers = exp.config.papers
-    plant = {k: papers[k]["model"]["plant"] for k in ("a-2d", "a-3d", "b-3d")}
-    assert (plant["a-2d"]["dof"], plant["a-2d"]["signals"]) == (4, "joint")
-    assert (plant["a-3d"]["dof"], plant["a-3d"]["signals"]) == (8, "cartesian")
-    assert (papers["c-3d"]["dof"], plant["b-3d"]["dof"]) == (8, 8)
+        config = exp.config.config(row.row_id)
+        own, paper_row = three_d.paper_of(config, exp.config.run_row(row.row_id))
+        assert paper_row.row_id == rid and own.name == three_d.PAPERS[p]
+        assert dict(row.paper) == dict(paper_row.paper)  # the paper's numbers, if any
+        if p == "a":  # paper A's own row on the row's body
+            trained = own.config.config(rid)
+            assert (trained.plant.dof, trained.plant.signals) == \
+                ((4, "joint") if dim == "2d" else (8, "cartesian"))
+            assert trained == paper_a.STUDY.build(**({} if dim == "2d" else {
+                "dof": 8, "signals": "cartesian"})).config.config(rid)
     assert set(exp.groups["3d"]) == {i for i in ids if "-3d-" in i}
-    with pytest.raises(SkinnyInputError, match="do not apply"):
-        three_d.build(movement="ymca")
+    quick = three_d.STUDY.build(quick=True)
+    assert [r.row_id for r in quick.rows[:6]] == [
+        "a-2d-inverse-d0", "a-2d-serial-d4", "b-2d-phase0", "b-2d-phase90", "c-2d-ymca",
+        "c-2d-mirror-left"]  # each sweep's own order: its seeds
+    body = three_d.STUDY.build(dof=8, signals="joint").config
+    assert body.config("a-3d-serial-d4").plant.signals == "joint"
+    assert body.config("a-2d-serial-d4").plant.signals == "joint"
+    with pytest.raises(SkinnyInputError, match="takes no --movement"):
+        three_d.STUDY.build(movement="ymca")
 
 
 @pytest.fixture
 def tiny_paper_a(monkeypatch):
-    """Paper A's --quick config cut to 1 epoch of 1 cycle (this module's time budget)."""
+    """Paper A's --quick sweep cut to 1 epoch of 1 cycle (this module's time budget)."""
     from dataclasses import replace
 
-    quick = paper_a.quick_config()
-    monkeypatch.setattr(paper_a, "quick_config", lambda: replace(
-        quick, model=quick.model.override({"rule.epochs": 1, "rule.cycles": 1})))
+    from skinny_mj.engine.study import Quick
+
+    quick = paper_a.STUDY.quick
+    tiny = replace(paper_a.STUDY, quick=Quick({**quick.overrides, "rule.epochs": 1,
+                                               "rule.cycles": 1}, quick.runs, quick.rows))
+    real = registry.get
+    monkeypatch.setattr(registry, "get", lambda name: tiny if name == "paper-a" else real(name))
     three_d.paper_experiment.cache_clear()
     yield
     three_d.paper_experiment.cache_clear()
 
 
 def test_quick_pair_end_to_end_2d_is_the_papers_own_run(tmp_path, tiny_paper_a):
-    exp = three_d.build(quick=True)
+    exp = three_d.STUDY.build(quick=True)
     results = run_sweep(exp, tmp_path, rows=["a-2d-inverse-d0", "a-3d-inverse-d0"], runs=1,
                         workers=1, progress=False)
     assert results["n_ok"] == 2
     runs = {r["row"]: r for r in load_runs(tmp_path)}
     two, three = runs["a-2d-inverse-d0"], runs["a-3d-inverse-d0"]
     assert two["seed"] == three["seed"]
-    pa = paper_a.build(quick=True)
-    own = pa.run_one(next(r for r in pa.rows if r.row_id == "inverse-d0"), two["seed"])
+    pa = registry.get("paper-a").build(quick=True)
+    (own,) = pa.run_batch(next(r for r in pa.rows if r.row_id == "inverse-d0"), [two["seed"]])
     assert own["performance_nrmse"] == two["metrics"]["performance_nrmse"]
     assert two["metrics"]["performance_nrmse"] != three["metrics"]["performance_nrmse"]
-    text = three_d_report.report(results, tmp_path, figures=False)  # figures: the slow test
+    text = three_d_report.write_report(results, tmp_path, True, 8, "cartesian",
+                                       figures=False)  # figures: the slow test
     assert (tmp_path / "three_d.md").read_text().strip() == text.strip()
     view = load_runs(tmp_path / "papers" / "a-3d")
     assert [(r["row"], r["experiment"], r["seed"]) for r in view] == [
@@ -127,9 +141,10 @@ def test_angle_nrmse_is_the_joint_angle_error_on_either_body():
 
 @pytest.mark.slow
 def test_report_makes_the_figure_and_each_papers_own_report_per_body(tmp_path, tiny_paper_a):
-    results = run_sweep(three_d.build(quick=True), tmp_path, rows="a-2d-inverse-d0,"
-                        "a-3d-inverse-d0", runs=1, workers=1, progress=False)
-    three_d.report(results, tmp_path)
+    exp = three_d.STUDY.build(quick=True)
+    results = run_sweep(exp, tmp_path, rows="a-2d-inverse-d0,a-3d-inverse-d0", runs=1,
+                        workers=1, progress=False)
+    exp.report(results, tmp_path)
     assert (tmp_path / "three_d.png").stat().st_size > 10_000
     for dim in ("2d", "3d"):
         assert (tmp_path / "papers" / f"a-{dim}" / "fig4_error.png").is_file()

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 from skinny_mj.experiments import paper_b
 
-from skinny_mj.engine.experiment import Row as EngineRow
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
@@ -77,8 +76,7 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Paper B's training and tests (:func:`skinny_mj.experiments.paper_b.run_batch`) of the row's
     config, for several seeds in lockstep; adds |timing error| per speed and the worst
     over the three speeds."""
-    pb = paper_b.Config(model=config)
-    outs = paper_b.run_batch(pb, EngineRow(row.params["pattern"], {}), seeds)
+    outs = paper_b.run_batch(config, paper_b.STUDY.row(row.params["pattern"]), seeds)
     for out in outs:
         if isinstance(out, RunFailed):
             continue

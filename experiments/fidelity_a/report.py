@@ -17,6 +17,18 @@ COLORS = {"inverse": "tab:red", "serial": "tab:blue", "parallel": "tab:green",
           "hybrid": "tab:purple"}
 
 
+def labels(params: dict) -> dict:
+    """A row's architecture, forward input, delay and epochs from its run files'
+    ``params``: the config keys it changes (or, in sweeps of earlier versions, the
+    names themselves)."""
+    if "architecture" in params:
+        return params
+    forward = params.get("forward", "none")
+    return {"architecture": "inverse" if forward == "none" else forward,
+            "forward_input": params.get("forward.input", "sensed"),
+            "delay": params["plant.delay"], "epochs": params["rule.epochs"]}
+
+
 class Runs:
     """Values of the ok runs by (row id, metric), seeds in run order."""
 
@@ -24,7 +36,7 @@ class Runs:
         self.runs = [r for d in out_dirs for r in load_runs(d) if r.get("status") == "ok"]
         self.rows: dict[str, dict] = {}
         for r in self.runs:
-            self.rows.setdefault(r["row"], r["params"])
+            self.rows.setdefault(r["row"], labels(r["params"]))
 
     def get(self, row: str, metric: str) -> np.ndarray:
         """(n,) finite values of ``metric`` in ``row``."""
@@ -331,7 +343,13 @@ def fig6(runs: Runs, path: Path) -> bool:
     return True
 
 
-def write_report(out_dir: Path, cfg, extra_dirs: tuple[Path, ...] = ()) -> str:
+def report(results, plan, out_dir: Path) -> str:
+    """The study's report: tables.md (error and prediction-error tables, the claims) and
+    the figures."""
+    return write_report(Path(out_dir))
+
+
+def write_report(out_dir: Path, extra_dirs: tuple[Path, ...] = ()) -> str:
     """tables.md and the figures in ``out_dir``, from its runs and those of ``extra_dirs``
     (sweeps of other rows of the same config, e.g. run apart); returns the claims."""
     runs = Runs(out_dir, *extra_dirs)
@@ -357,12 +375,9 @@ if __name__ == "__main__":  # python -m skinny_mj.experiments.fidelity_a.report 
     import json
     import sys
 
-    from skinny_mj.experiments.fidelity_a.study import Config
-
     dirs = [Path(a) for a in sys.argv[1:]]
-    config = Config.from_dict(json.loads((dirs[0] / "config.json").read_text())["config"])
+    config = json.loads((dirs[0] / "config.json").read_text())["config"]
     for d in dirs[1:]:
-        other = Config.from_dict(json.loads((d / "config.json").read_text())["config"])
-        if other != config:
+        if json.loads((d / "config.json").read_text())["config"] != config:
             raise SystemExit(f"{d} was run with another config than {dirs[0]}")
-    print(write_report(dirs[0], config, tuple(dirs[1:])))
+    print(write_report(dirs[0], tuple(dirs[1:])))

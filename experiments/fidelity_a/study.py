@@ -24,23 +24,19 @@ prediction error p(t) vs the actual x(t) (``pred_nrmse``, ``pred_mad``).
 Rows ``<architecture>[-chained]-d<delay>``; ``chained``: the forward model fed its own
 previous prediction instead of the delayed sensed position (``forward.input``).
 :data:`PLAN` gives each row its epochs (the compute budget: see docs/results/fidelity-a.md).
+A row is paper A's run (:data:`skinny_mj.experiments.paper_a.MODEL`) with its delay, forward model,
+forward input and epochs as overrides.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import functools
-import json
-from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 from skinny_mj.experiments import paper_a
 
-from skinny_mj.engine.experiment import Experiment, Row
-from skinny_mj.engine.options import OPTION_KEYS, movement_changes
-from skinny_mj.engine.sweep import one_of_batch
-from skinny_mj.training.config import TrainConfig, relative_cost
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.training.config import TrainConfig
 
 NAME = "fidelity-a"
 #: Epochs at which a run's metrics are recorded (those <= the row's epochs, and its last).
@@ -59,77 +55,33 @@ PLAN = (
     ("hybrid", "sensed", 4, 10), ("hybrid", "sensed", 10, 10),
     ("serial", "chained", 4, 10), ("parallel", "chained", 4, 10), ("hybrid", "chained", 4, 10),
 )
-QUICK_PLAN = (("inverse", "sensed", 0, 3), ("inverse", "sensed", 4, 3),
-              ("serial", "sensed", 4, 2), ("parallel", "sensed", 4, 2),
-              ("hybrid", "sensed", 4, 2), ("serial", "chained", 4, 2))
+#: ``--quick``: these rows of :data:`PLAN`, with these epochs.
+QUICK_EPOCHS = {("inverse", "sensed", 0): 3, ("inverse", "sensed", 4): 3,
+                ("serial", "sensed", 4): 2, ("parallel", "sensed", 4): 2,
+                ("hybrid", "sensed", 4): 2, ("serial", "chained", 4): 2}
 #: The thesis's numbers for these quantities (paper A §4.1–4.2 text; its figures give no
 #: table), beside ours in the report.
 THESIS = paper_a.PAPER_TEXT
-
-
-@dataclass(frozen=True)
-class Config:
-    """The study: paper A's run (``model``; its ``epochs`` is replaced per row), the plan,
-    seeds per row and the checkpoints."""
-
-    model: TrainConfig = field(default_factory=lambda: paper_a.MODEL)
-    plan: tuple[tuple[str, str, int, int], ...] = PLAN
-    runs: int = 5
-    checkpoints: tuple[int, ...] = CHECKPOINTS
-
-    @classmethod
-    def from_dict(cls, d: dict) -> Config:
-        """From ``config.json``'s ``config``."""
-        names = {f.name for f in dataclasses.fields(cls)}
-        kw = {k: v for k, v in d.items() if k in names}
-        if "model" in kw:
-            kw["model"] = TrainConfig.from_dict(dotted(kw["model"]))
-        if "plan" in kw:
-            kw["plan"] = tuple(tuple(p) for p in kw["plan"])
-        if "checkpoints" in kw:
-            kw["checkpoints"] = tuple(kw["checkpoints"])
-        return cls(**kw)
-
-
-def dotted(d: dict, prefix: str = "") -> dict:
-    """A config written nested (``{"plant": {"dof": 4}, "rule": {"kind": "new", ...}}``,
-    as ``dataclasses.asdict`` writes it) as flat dotted keys (``{"plant.dof": 4, "rule":
-    "new", ...}``); a flat dict as it is."""
-    out: dict = {}
-    for key, value in d.items():
-        if isinstance(value, dict):
-            if "kind" in value:
-                out[prefix + key] = value["kind"]
-            out.update(dotted({k: v for k, v in value.items() if k != "kind"},
-                              f"{prefix}{key}."))
-        else:
-            out[prefix + key] = value
-    return out
 
 
 def row_id(architecture: str, forward_input: str, delay: int) -> str:
     return f"{architecture}{'-chained' if forward_input == 'chained' else ''}-d{delay}"
 
 
-def rows(cfg: Config) -> tuple[Row, ...]:
-    return tuple(Row(row_id(a, i, d), {"architecture": a, "forward_input": i, "delay": d,
-                                       "epochs": e}) for a, i, d, e in cfg.plan)
+def plan_row(arch: str, forward_input: str, delay: int, epochs: int) -> Row:
+    """Paper A's row (its delay and forward model), with its epochs and the forward
+    model's input; ``--quick``: the forward network halved, a few epochs."""
+    forward = {} if arch == "inverse" else {"forward": arch, "forward.input": forward_input}
+    quick = QUICK_EPOCHS.get((arch, forward_input, delay))
+    return Row(row_id(arch, forward_input, delay),
+               {"plant.delay": delay, "forward": "none", **forward, "rule.epochs": epochs},
+               group="chained" if forward_input == "chained" else arch,
+               quick={"rule.epochs": quick, **({"forward.reservoir": 50} if forward else {})}
+               if quick else {})
 
 
-def train_config(cfg: Config, row: Row) -> TrainConfig:
-    """Paper A's run of the row (:func:`paper_a.train_config`), with its epochs and the
-    forward model's input."""
-    p = row.params
-    base = paper_a.Config(model=cfg.model.override({"rule.epochs": int(p["epochs"])}))
-    tc = paper_a.train_config(base, Row(row.row_id, {"architecture": p["architecture"],
-                                                     "delay": p["delay"]}))
-    if p["architecture"] == "inverse" and p["forward_input"] == "sensed":
-        return tc  # no forward model: the inverse model's input is the sensed one
-    return tc.override({"forward.input": p["forward_input"]})
-
-
-def checkpoints_of(cfg: Config, epochs: int) -> tuple[int, ...]:
-    return tuple(sorted({c for c in cfg.checkpoints if c <= epochs} | {epochs}))
+def checkpoints_of(checkpoints: tuple[int, ...], epochs: int) -> tuple[int, ...]:
+    return tuple(sorted({c for c in checkpoints if c <= epochs} | {epochs}))
 
 
 def _mad(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -178,12 +130,12 @@ def _stack_rollouts(ros: list):
                       for f in dataclasses.fields(Rollout)})
 
 
-def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
+def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Train one row for its epochs, recording every checkpoint (see the module doc)."""
     from skinny_mj.training.loop import build_run, train_run
 
-    run = build_run(train_config(cfg, row), seeds)
-    checks = checkpoints_of(cfg, run.cfg.rule.epochs)
+    run = build_run(config, seeds)
+    checks = checkpoints_of(row.params["checkpoints"], run.cfg.rule.epochs)
     last_cycle = run.cfg.learning_cycles + 1
     recorded: dict[int, dict[str, np.ndarray]] = {}
 
@@ -215,44 +167,18 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     return outs
 
 
-def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
+def _columns(epochs: int) -> tuple[str, ...]:
+    return (f"train_nrmse_e{epochs}", f"train_mad_e{epochs}", f"test_nrmse_e{epochs}",
+            f"test_mad_e{epochs}", f"train_pred_nrmse_e{epochs}")
 
 
-def quick_config() -> Config:
-    """A smoke test (N = 100 / 50, 2 cycles, 2–3 epochs, 2 runs), not a result."""
-    return Config(model=paper_a.MODEL.override({"esn.n_reservoir": 100, "forward.reservoir": 50,
-                                                "rule.cycles": 2}),
-                  plan=QUICK_PLAN, runs=2, checkpoints=(1, 2, 3))
-
-
-def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          dof: int | None = None, signals: str | None = None) -> Experiment:
-    """The plan's rows; ``movement``/``asf``/``dof``/``signals`` replace paper A's YMCA,
-    2D joint angles (None: the paper's)."""
-    cfg = quick_config() if quick else Config()
-    cfg = replace(cfg, model=cfg.model.override(
-        movement_changes(movement, asf, dof, signals, OPTION_KEYS)))
-    every = rows(cfg)
-    groups = {a: tuple(r.row_id for r in every if r.params["architecture"] == a
-                       and r.params["forward_input"] == "sensed")
-              for a in paper_a.ARCHITECTURES}
-    groups["chained"] = tuple(r.row_id for r in every if r.params["forward_input"] == "chained")
-    groups = {k: v for k, v in groups.items() if v}
-    last = max(TABLE_EPOCHS[0], 1) if not quick else 2
-    return Experiment(
-        name=NAME, rows=every, groups=groups, run_one=functools.partial(run_one, cfg),
-        run_batch=functools.partial(run_batch, cfg), config=cfg, runs=cfg.runs,
-        cost=lambda row: relative_cost(train_config(cfg, row)),
-        table_columns=(f"train_nrmse_e{last}", f"train_mad_e{last}", f"test_nrmse_e{last}",
-                       f"test_mad_e{last}", f"train_pred_nrmse_e{last}"),
-    )
-
-
-def report(results: dict, out_dir: Path) -> str:
-    """tables.md (error and prediction-error tables, the claims) and the figures."""
-    from skinny_mj.experiments.fidelity_a.report import write_report
-
-    out_dir = Path(out_dir)
-    cfg = Config.from_dict(json.loads((out_dir / "config.json").read_text())["config"])
-    return write_report(out_dir, cfg)
+STUDY = Study(
+    name=NAME, description=__doc__, base=paper_a.MODEL, runs=5, run_batch=run_batch,
+    rows=tuple(plan_row(*p) for p in PLAN), params={"checkpoints": CHECKPOINTS},
+    columns=_columns(TABLE_EPOCHS[0]),
+    # a smoke test (N = 100 / 50, 2 cycles, 2–3 epochs, 2 runs), not a result
+    quick=Quick({"esn.n_reservoir": 100, "rule.cycles": 2}, runs=2,
+                rows=tuple(row_id(*k) for k in QUICK_EPOCHS),
+                params={"checkpoints": (1, 2, 3)}, columns=_columns(2)),
+    report="skinny_mj.experiments.fidelity_a.report:report",
+)

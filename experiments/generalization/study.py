@@ -43,10 +43,15 @@ from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import imitation_metrics, saturation  # noqa: F401 (API)
+from skinny_mj.training.presets import preset_fields
 
 NAME = "generalization"
-#: Representation id -> (dof, signals).
-REPRESENTATIONS = {"j2": (4, "joint"), "c2": (4, "cartesian"), "c3": (8, "cartesian")}
+#: Representation id -> (dof, signals); the matrix runs the first three.
+REPRESENTATIONS = {"j2": (4, "joint"), "c2": (4, "cartesian"), "c3": (8, "cartesian"),
+                   "j3": (8, "joint")}
+MATRIX_REPS = ("j2", "c2", "c3")
+#: Babbling that also dwells at the joint limits and rests (30 s).
+LIMITS_BABBLE = "babble:seed=0,duration=30,limits=0.5,holds=0.2"
 #: Training set id -> (movement, TrainConfig overrides).
 TRAIN_SETS: dict[str, tuple[str, dict]] = {
     "ymca": ("ymca", {}),  # the thesis's (paper C)
@@ -66,6 +71,21 @@ TRAIN_SETS: dict[str, tuple[str, dict]] = {
 #: experiment so every earlier row keeps its place and seeds: (representation, set id).
 EXTRA_ROWS = (("j2", "ymca-recorded"), ("c2", "ymca-recorded"))
 TRAIN_SETS_EXTRA = {"ymca-recorded": ("ymca-recorded", {})}
+#: The general model of each body and signal (``--rows general``, after EXTRA_ROWS):
+#: ``general`` is the preset (:func:`skinny_mj.training.presets.preset_fields`), the
+#: others isolate its ingredients. Babbling with ``limits``/``holds`` moves to the joint
+#: limits and rests as real dance does (:mod:`skinny_mj.trajectories.babble`).
+TRAIN_SETS_GENERAL: dict[str, tuple[str, dict]] = {
+    "babble15-scale4": TRAIN_SETS["babble15-scale4"],
+    "limits30-scale4": (LIMITS_BABBLE, {"movement.full_scale_factor": 4.0}),
+    "general": ("", {}),  # the preset's own movement and keys (general_row)
+}
+GENERAL_ROWS = (("j2", "limits30-scale4"), ("j3", "babble15-scale4"), ("j3", "general"),
+                ("c2", "babble15-scale4"),
+                ("c2", "limits30-scale4"), ("c2", "general"), ("c3", "babble15-scale4"))
+#: Per representation, the row of its ``general`` preset (c3's is the matrix's row).
+GENERAL_OF = {"j2": "j2-limits30-scale4", "j3": "j3-general", "c2": "c2-general",
+              "c3": "c3-babble15+ymca"}
 #: Test column id -> movement.
 TESTS = {
     "ymca": "ymca", "y": "y", "y-pure": "y-pure", "ym": "ym",
@@ -172,10 +192,21 @@ def _row(rep: str, ts: str, movement: str, changes: dict) -> Row:
                quick={"tests": QUICK_TESTS})
 
 
-#: j2: every training set; c2, c3: CORE_SETS; then EXTRA_ROWS.
-ROWS = (*(_row(rep, ts, *TRAIN_SETS[ts]) for rep in REPRESENTATIONS for ts in TRAIN_SETS
+def general_row(rep: str, ts: str) -> Row:
+    """A row of GENERAL_ROWS: ``general`` is ``skinny train --preset general`` for the
+    representation's body and signals."""
+    if ts != "general":
+        return _row(rep, ts, *TRAIN_SETS_GENERAL[ts])
+    dof, signals = REPRESENTATIONS[rep]
+    fields = preset_fields("general", dof=dof, signals=signals)
+    return _row(rep, ts, fields.pop("movement.trajectory"), fields)
+
+
+#: j2: every training set; c2, c3: CORE_SETS; then EXTRA_ROWS, then GENERAL_ROWS.
+ROWS = (*(_row(rep, ts, *TRAIN_SETS[ts]) for rep in MATRIX_REPS for ts in TRAIN_SETS
           if rep == "j2" or ts in CORE_SETS),
-        *(_row(rep, ts, *TRAIN_SETS_EXTRA[ts]) for rep, ts in EXTRA_ROWS))
+        *(_row(rep, ts, *TRAIN_SETS_EXTRA[ts]) for rep, ts in EXTRA_ROWS),
+        *(general_row(rep, ts) for rep, ts in GENERAL_ROWS))
 
 
 STUDY = Study(
@@ -187,10 +218,12 @@ STUDY = Study(
     columns={"train_position_nrmse": "train pos", "ymca__position_nrmse": "YMCA pos",
              "md_02__position_nrmse": "md_02 pos", "md_03__position_nrmse": "md_03 pos",
              "train_wall_s": "train s/run"},
-    groups={"extra": [f"{rep}-{ts}" for rep, ts in EXTRA_ROWS]},
+    groups={"extra": [f"{rep}-{ts}" for rep, ts in EXTRA_ROWS],
+            "general": [f"{rep}-{ts}" for rep, ts in GENERAL_ROWS]},
     # a smoke test: N = 50, 2 epochs, 2 runs, 3 sets x 3 tests on j2
     quick=Quick({"esn.n_reservoir": 50, "rule.epochs": 2}, runs=2,
                 rows=tuple(f"j2-{ts}" for ts in QUICK_SETS)),
-    # the rows are the training sets and their bodies (select one with --rows j2|c2|c3)
+    # the rows are the training sets and their bodies (select one with --rows j2|c2|c3|j3,
+    # or --rows general)
     takes=(), report="skinny_mj.experiments.generalization.report:report",
 )

@@ -99,6 +99,7 @@ class Config:
     gain_factor: float = 0.9  # K = 0.9^epoch (-10 % per epoch)
     beta: float = 1.0  # FEL target: 1 = the original (paper C); < 1 = paper E's β blend
     max_speed_from: str = "ymca"
+    full_scale: str = "per-joint"  # "shared": the fastest joint's for every joint (3D)
     tests: tuple[str, ...] = tuple(MOVEMENTS)
     real_movement: str | None = field(default_factory=lambda: str(REAL_MOVEMENT))
     asf: str | None = None
@@ -116,7 +117,8 @@ def train_config(cfg: Config, movement: str):
     return TrainConfig().override({
         "plant.dof": cfg.dof, "plant.signals": cfg.signals,
         "plant.sensor_noise": cfg.sensor_noise, "movement.trajectory": str(movement),
-        "movement.asf": asf, "movement.max_speed_from": cfg.max_speed_from, **rule,
+        "movement.asf": asf, "movement.max_speed_from": cfg.max_speed_from,
+        "movement.full_scale": cfg.full_scale, **rule,
         "rule.cycles": cfg.learning_cycles, "rule.epochs": cfg.epochs,
         "rule.gain_schedule": "multiplicative", "rule.gain_factor": cfg.gain_factor,
         "esn.n_reservoir": cfg.reservoir, "esn.spectral_radius": cfg.spectral_radius,
@@ -256,12 +258,15 @@ QUICK_TESTS = ("ymca", "y", "ym", "mirror-left")
 
 
 def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          dof: int | None = None, signals: str | None = None) -> Experiment:
+          dof: int | None = None, signals: str | None = None,
+          full_scale: str = "per-joint") -> Experiment:
     """The sweep. ``movement`` (+ ``asf``) is the experiment's real movement: a training
     row ``real`` and the test column ``real`` (default: CMU md_02, tested only).
     ``dof``/``signals``: another body (None: the paper's 2D joint angles).
+    ``full_scale``: the command scale per joint, or one ``"shared"`` by every joint.
     ``quick``: N = 100, 3 epochs, 2 runs, 3 training x 4 test movements (a smoke test)."""
     changes: dict = {k: v for k, v in (("dof", dof), ("signals", signals)) if v is not None}
+    changes["full_scale"] = full_scale
     if quick:
         changes.update(reservoir=100, epochs=3, runs=2, tests=QUICK_TESTS)
     if movement is not None:

@@ -40,7 +40,7 @@ def _xy(curve: list[dict], x: str) -> tuple[np.ndarray, np.ndarray]:
     return xs, ys
 
 
-def curves_png(path: Path, cfg, rows, curves: dict, x: str) -> Path:
+def curves_png(path: Path, thresholds, rows, curves: dict, x: str) -> Path:
     from skinny_mj.plots import pyplot, save_figure
 
     plt = pyplot()
@@ -63,7 +63,7 @@ def curves_png(path: Path, cfg, rows, curves: dict, x: str) -> Path:
                 ys = np.nanmean([_xy(c[:n], x)[1] for c in runs], axis=0)
                 ax.plot(xs, ys, color=colour, lw=2, marker="o", ms=3,
                         label=f"{LABELS[p['learner']]} ({len(runs)} run{'s' * (len(runs) > 1)})")
-            for th in cfg.thresholds:
+            for th in thresholds:
                 ax.axhline(th, color="grey", ls="--", lw=0.8)
             ax.set(xscale="linear" if x == "steps" else "log", yscale="log",
                    title=f"{body} body, {mv}",
@@ -76,13 +76,13 @@ def curves_png(path: Path, cfg, rows, curves: dict, x: str) -> Path:
     return save_figure(fig, path)
 
 
-def overlay_png(path: Path, cfg, rows, sources: list[tuple[Path, str]],
+def overlay_png(path: Path, thresholds, rows, sources: list[tuple[Path, str]],
                 x: str = "steps") -> Path:
     """:func:`curves_png` of ``rows`` with each row's runs taken from its own sweep
     folder, ``sources`` = [(folder, row id)] (e.g. a longer PPO budget run apart)."""
     curves = {row_id: _curves(load_runs(d)).get(row_id, []) for d, row_id in sources}
     shown = [r for r in rows if curves.get(r.row_id)]
-    return curves_png(path, cfg, shown, {k: v for k, v in curves.items() if v}, x)
+    return curves_png(path, thresholds, shown, {k: v for k, v in curves.items() if v}, x)
 
 
 def _cell(values: list[float]) -> str:
@@ -102,10 +102,10 @@ def _reach(ms: list[dict], th: float) -> str:
     return f"{len(hit)}/{len(ms)}: {steps:,.0f} steps, {cpu:.1f} CPU s, {wall:.1f} s"
 
 
-def comparison_table(cfg, rows, runs: list[dict]) -> str:
+def comparison_table(thresholds, rows, runs: list[dict]) -> str:
     head = ["learner", "body", "movement", "env steps (budget)", "final test NRMSE",
             "best test NRMSE"]
-    head += [f"reach {th:g}: runs, mean steps, CPU, wall" for th in cfg.thresholds]
+    head += [f"reach {th:g}: runs, mean steps, CPU, wall" for th in thresholds]
     head += ["train CPU (s) per run", "train wall (s) per run", "failed / n"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for row in rows:
@@ -120,7 +120,7 @@ def comparison_table(cfg, rows, runs: list[dict]) -> str:
         n_failed = sum(r["status"] == "failed" for r in recs)
         cells = [LABELS[p["learner"]], p["actuation"], p["movement"],
                  f"{steps:,}" if ms else "—", _cell(final), _cell(best)]
-        cells += [_reach(ms, th) for th in cfg.thresholds]
+        cells += [_reach(ms, th) for th in thresholds]
         cells += [_cell([m["train_cpu_s"] for m in ms]), _cell([m["train_wall_s"] for m in ms]),
                   f"{n_failed} / {sum(r['status'] != 'error' for r in recs)}"]
         lines.append("| " + " | ".join(cells) + " |")
@@ -130,13 +130,22 @@ def comparison_table(cfg, rows, runs: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def write_report(out_dir: Path, cfg, rows) -> str:
+def report(results, plan, out_dir: Path) -> str:
+    """The study's report: learning curves (test NRMSE against env steps and against
+    CPU time) and the comparison table (``comparison.md``)."""
+    return write_report(Path(out_dir), plan.params["thresholds"], plan.experiment().rows)
+
+
+def write_report(out_dir: Path, thresholds, rows) -> str:
+    """The figures and ``comparison.md`` of the sweep in ``out_dir``: ``rows`` (row_id,
+    params with ``learner``, ``actuation``, ``movement``), ``thresholds`` (NRMSE)."""
     runs = load_runs(out_dir)
     curves = _curves(runs)
     lines = []
     if curves:
         for x, name in (("steps", "curves_steps.png"), ("cpu_s", "curves_cpu.png")):
-            lines.append(f"figure: {curves_png(out_dir / name, cfg, rows, curves, x).name}")
-    table = comparison_table(cfg, rows, runs)
+            png = curves_png(out_dir / name, thresholds, rows, curves, x)
+            lines.append(f"figure: {png.name}")
+    table = comparison_table(thresholds, rows, runs)
     atomic_write_text(out_dir / "comparison.md", table + "\n")
     return "\n".join([*lines, "", table])

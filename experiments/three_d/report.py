@@ -11,24 +11,17 @@ report, so the paper's claim functions read them as their own sweep's.
 
 from __future__ import annotations
 
-import json
 import re
 import shutil
-from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 from skinny_mj.experiments import paper_a, paper_b
-from skinny_mj.experiments.three_d.study import (
-    DIMS,
-    PAPERS,
-    module,
-    paper_experiment,
-    row_id,
-    subset,
-)
+from skinny_mj.experiments.three_d.study import DIMS, PAPERS, paper_experiment, row_id, subset
 
-from skinny_mj.engine.stats import aggregate, load_runs
+from skinny_mj.engine import registry
+from skinny_mj.engine.folder import recorded_config
+from skinny_mj.engine.stats import aggregate, load_runs, to_jsonable
 from skinny_mj.io import atomic_write_json, atomic_write_text
 
 #: The table's lines: paper -> (paper row or None for every row of the subset, metric,
@@ -73,34 +66,38 @@ def angle_nrmse(produced: np.ndarray, desired: np.ndarray, dof: int) -> float | 
                        body.normalize_angles(desired, dof)))
 
 
-def _with_angle_errors(rec: dict, paper_c_config) -> dict:
-    """Paper C's run metrics plus ``<col>__angle_nrmse`` for the kept joint angles."""
-    from skinny_mj.experiments.paper_c.study import MOVEMENTS, load
+def _with_angle_errors(rec: dict, dof: int) -> dict:
+    """Paper C's run metrics (on the body with ``dof`` DOFs) plus ``<col>__angle_nrmse``
+    for the kept joint angles."""
+    from skinny_mj.experiments.paper_c.study import MOVEMENTS
 
-    metrics, dof = dict(rec["metrics"]), paper_c_config.dof
+    from skinny_mj.trajectories import load_movement
+
+    metrics = dict(rec["metrics"])
     for key, value in rec["metrics"].items():
         if key.startswith("angles__") and value is not None:
             col = key.removeprefix("angles__")
-            desired = load(paper_c_config, MOVEMENTS[col]).angles
+            desired = load_movement(MOVEMENTS[col], dof)[0].angles
             e = angle_nrmse(np.asarray(value, float), desired, dof)
             if e is not None:
                 metrics[f"{col}__angle_nrmse"] = e
     return metrics
 
 
-def write_views(out_dir: Path, runs: list[dict], cfg: dict) -> dict[str, Path]:
+def write_views(out_dir: Path, runs: list[dict], quick: bool, dof: int,
+                signals: str) -> dict[str, Path]:
     """``papers/<paper>-<dim>/``: each paper's run files on each body under the paper's
     own row ids and seeds (:mod:`skinny_mj.engine.stats` format), and its config."""
     views = {}
     for p in PAPERS:
         for dim in DIMS:
-            exp = paper_experiment(p, dim, cfg["quick"], cfg["dof"], cfg["signals"])
+            exp = paper_experiment(p, dim, quick, dof, signals)
             index = {r.row_id: i for i, r in enumerate(exp.rows)}
             view = out_dir / "papers" / f"{p}-{dim}"
             shutil.rmtree(view / "runs", ignore_errors=True)
             (view / "runs").mkdir(parents=True)
-            atomic_write_json(view / "config.json", {"experiment": exp.name,
-                                                     "config": asdict(exp.config)})
+            atomic_write_json(view / "config.json", {
+                "experiment": exp.name, "config": to_jsonable(recorded_config(exp.config))})
             for rec in runs:
                 if rec["params"].get("paper") != p or rec["params"].get("dim") != dim:
                     continue
@@ -246,10 +243,19 @@ def figure_png(path: Path, lines: list[dict], bodies: dict[str, str]) -> Path | 
     return save_figure(fig, path)
 
 
-def report(results: dict, out_dir: Path, figures: bool = True) -> str:
+def report(results, plan, out_dir: Path) -> str:
+    """The study's report: the 2D vs 3D table, each paper's figures and claims per body,
+    the claims side by side and the figure, for the sweep's ``plan`` (its quick, its 3D
+    body)."""
+    return write_report(results, Path(out_dir), plan.params["quick"], plan.base.plant.dof,
+                        plan.base.plant.signals)
+
+
+def write_report(results: dict, out_dir: Path, quick: bool, dof: int, signals: str,
+                 figures: bool = True) -> str:
     """Views, each paper's report per body (its figures; not with ``figures=False``), the
-    table, the figure and the claims."""
-    cfg = json.loads((out_dir / "config.json").read_text())["config"]
+    table, the figure and the claims; ``quick``: the sweep's, ``dof`` and ``signals``: its
+    3D body."""
     runs = load_runs(out_dir)
     values: dict = {}
     for rec in runs:
@@ -257,21 +263,21 @@ def report(results: dict, out_dir: Path, figures: bool = True) -> str:
             continue
         p, dim = rec["params"]["paper"], rec["params"]["dim"]
         metrics = rec["metrics"] if p != "c" else _with_angle_errors(
-            rec, paper_experiment(p, dim, cfg["quick"], cfg["dof"], cfg["signals"]).config)
+            rec, 4 if dim == "2d" else dof)
         for k, v in metrics.items():
             if isinstance(v, int | float) and not isinstance(v, bool) and np.isfinite(v):
                 values.setdefault((rec["row"], k), []).append(float(v))
-    lines = table_lines(results, values, cfg["quick"])
+    lines = table_lines(results, values, quick)
     table = table_markdown(lines)
     if figures:
         figure_png(out_dir / "three_d.png", lines, {
-            "2d": "2D (4 DOF, joint angles)", "3d": f"3D ({cfg['dof']} DOF, {cfg['signals']})"})
+            "2d": "2D (4 DOF, joint angles)", "3d": f"3D ({dof} DOF, {signals})"})
     text = ["## 2D vs 3D", "", table, "",
             "Means and sd over the ok runs (failed runs diverged and are left out). "
             "'signals' = the run's position signals: joint angles in 2D, Cartesian elbow "
             "and wrist positions in 3D.", ""]
     summary = []
-    views = write_views(out_dir, runs, cfg)
+    views = write_views(out_dir, runs, quick, dof, signals)
     for p in PAPERS:
         per_dim = {}
         for dim in DIMS:
@@ -280,9 +286,10 @@ def report(results: dict, out_dir: Path, figures: bool = True) -> str:
                 per_dim[dim] = []
                 continue
             if figures:  # the paper's own report: its figures and claims.md
-                own = module(p).report(aggregate(view), view)
+                exp = paper_experiment(p, dim, quick, dof, signals)
+                own = (exp.report or registry.get(PAPERS[p]).report)(aggregate(view), view)
                 atomic_write_text(view / "claims.md", f"## Claims\n{own}\n")
-            per_dim[dim] = paper_claims(p, view, 4 if dim == "2d" else cfg["dof"])
+            per_dim[dim] = paper_claims(p, view, 4 if dim == "2d" else dof)
         if not per_dim["2d"] and not per_dim["3d"]:
             text += [f"## Paper {p.upper()}: claims on 2D and on 3D", "",
                      "(no run of this paper in the sweep yet)", ""]

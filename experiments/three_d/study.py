@@ -2,11 +2,12 @@
 their own 2D joint-angle setting, in one sweep with the same seeds.
 
 Rows ``<paper>-<dim>-<paper row>`` (``a-2d-serial-d4``, ``b-3d-phase90``,
-``c-3d-mirror-left``): each is the paper's own row, run by the paper module's
-``run_batch`` as that paper's ``build(dof=..., signals=...)`` makes it, so no recipe is
-copied here. ``2d`` is the paper's setting (4 DOF, joint angles); ``3d`` is ``dof=8,
-signals="cartesian"`` (``--dof`` / ``--signals`` replace it). A 3D row takes its 2D
-twin's seeds (:attr:`skinny_mj.engine.experiment.Row.seeds_of`): run k of both starts from the
+``c-3d-mirror-left``): each is the paper's own row, run by the paper's own sweep as
+``skinny experiment <paper> [--dof ... --signals ...]`` builds it, so no recipe is
+copied here: the row's configuration only says the body (``plant.dof`` and
+``plant.signals``). ``2d`` is the paper's setting (4 DOF, joint angles); ``3d`` is
+``dof=8, signals="cartesian"`` (``--dof`` / ``--signals`` replace it). A 3D row takes its
+2D twin's seeds (:attr:`skinny_mj.engine.study.Row.seeds_of`): run k of both starts from the
 same seed. :mod:`skinny_mj.experiments.three_d.report` writes the table (2D vs 3D, mean ± sd,
 failed / n), each paper's own figures and claims on each body, and the claims side by side.
 
@@ -43,81 +44,66 @@ Where 3D needs a choice (every paper is 2D only):
 from __future__ import annotations
 
 import functools
-import importlib
-from dataclasses import asdict, dataclass, field
-from pathlib import Path
 
-from skinny_mj.engine.experiment import Experiment, Row
+from skinny_mj.engine import registry
+from skinny_mj.engine.experiment import Experiment
+from skinny_mj.engine.experiment import Row as EngineRow
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.training.config import TrainConfig
 
 NAME = "three-d"
-#: paper id -> its module
-PAPERS = {"a": "skinny_mj.experiments.paper_a", "b": "skinny_mj.experiments.paper_b",
-          "c": "skinny_mj.experiments.paper_c.study"}
+#: paper id -> its study's name
+PAPERS = {"a": "paper-a", "b": "paper-b", "c": "paper-c"}
 #: The paper rows run here (module docstring: what is left out and why).
 SUBSET = {"a": ("inverse-d4", "serial-d4", "inverse-d10", "serial-d10"),
           "b": ("phase0", "phase90", "phase180"),
           "c": ("ymca",)}
-#: ``--quick``: rows that every paper's own --quick build has (a smoke test).
+#: ``--quick``: rows that every paper's own --quick sweep has (a smoke test).
 QUICK_SUBSET = {"a": ("inverse-d0", "serial-d4"), "b": ("phase0", "phase90"),
                 "c": ("ymca", "mirror-left")}
+#: Both sweeps' paper rows in one order that keeps each sweep's own order (its seeds).
+ORDER = {"a": ("inverse-d0", "inverse-d4", "serial-d4", "inverse-d10", "serial-d10"),
+         "b": ("phase0", "phase90", "phase180"), "c": ("ymca", "mirror-left")}
 DIMS = ("2d", "3d")
 #: Group ``core``: the fewest rows per paper that its headline claims need (a loaded
 #: machine's sweep); ``--resume`` without ``--rows`` adds the others.
 CORE = {"a": ("inverse-d4", "serial-d4"), "b": ("phase0",), "c": ("ymca",)}
-
-
-@dataclass(frozen=True)
-class Config:
-    """The 3D body (``dof``, ``signals``), the runs per row, and each paper's own config
-    per body (``papers``: ``"<paper>-<dim>"`` -> that paper's Config, as its ``build``
-    makes it; recorded in config.json)."""
-
-    quick: bool = False
-    dof: int = 8
-    signals: str = "cartesian"
-    runs: int = 10
-    papers: dict = field(default_factory=dict)
+#: The 2D rows' body: each paper's own setting.
+BODY_2D = {"plant.dof": 4, "plant.signals": "joint"}
 
 
 def row_id(paper: str, dim: str, paper_row: str) -> str:
     return f"{paper}-{dim}-{paper_row}"
 
 
-def module(paper: str):
-    return importlib.import_module(PAPERS[paper])
-
-
 @functools.lru_cache(maxsize=16)
 def paper_experiment(paper: str, dim: str, quick: bool, dof: int, signals: str) -> Experiment:
     """Paper ``paper``'s own sweep on ``dim``'s body (2D: the paper's default)."""
     body = {} if dim == "2d" else {"dof": dof, "signals": signals}
-    return module(paper).build(quick=quick, **body)
+    return registry.get(PAPERS[paper]).build(quick=quick, **body)
 
 
-def _paper_of(cfg: Config, row: Row) -> tuple[Experiment, Row]:
+def paper_of(config: TrainConfig, row: Row) -> tuple[Experiment, EngineRow]:
+    """The paper's own sweep (on ``config``'s body) and row that ``row`` runs."""
     p = row.params
-    exp = paper_experiment(p["paper"], p["dim"], cfg.quick, cfg.dof, cfg.signals)
+    exp = paper_experiment(p["paper"], p["dim"], p["quick"], config.plant.dof,
+                           config.plant.signals)
     return exp, next(r for r in exp.rows if r.row_id == p["row"])
 
 
-def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
-    """The paper's own ``run_batch`` of the paper's row on this row's body."""
-    exp, paper_row = _paper_of(cfg, row)
+def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
+    """The paper's own run of the paper's row on this row's body."""
+    exp, paper_row = paper_of(config, row)
     return exp.run_batch(paper_row, seeds)
 
 
-def train_configs(cfg: Config, row: Row) -> dict:
-    """The TrainConfigs the paper's own row trains (its module's ``train_config(s)``), for
-    the sweep's memory estimate."""
+def trainings(config: TrainConfig, row: Row) -> dict[str, TrainConfig]:
+    """The TrainConfigs the paper's own row trains, for the sweep's memory estimate."""
     from skinny_mj.memory import row_configs
 
-    exp, paper_row = _paper_of(cfg, row)
-    return dict(enumerate(row_configs(module(row.params["paper"]), exp, paper_row)))
-
-
-def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    exp, paper_row = _paper_of(cfg, row)
-    return dict(exp.run_one(paper_row, seed))
+    exp, paper_row = paper_of(config, row)
+    found = row_configs(registry.get(PAPERS[row.params["paper"]]), exp, paper_row)
+    return {str(i): c for i, c in enumerate(found)}
 
 
 #: One run's CPU seconds on the 2D body, idle core, lockstep batches of 10 (measured;
@@ -126,12 +112,12 @@ SECONDS_2D = {"a": 3.0, "b": 5.0, "c": 25.0}
 FACTOR_3D = 1.8
 
 
-def cost(cfg: Config, row: Row) -> float:
+def cost(config: TrainConfig, row: Row) -> float:
     """Seconds-like cost: the paper's own relative cost of the row, scaled to seconds
-    by the paper's mean over :data:`SUBSET` (paper costs are in different units)."""
-    exp, paper_row = _paper_of(cfg, row)
+    by the paper's mean over the sweep's subset (paper costs are in different units)."""
+    exp, paper_row = paper_of(config, row)
     p = row.params["paper"]
-    own = [exp.cost(r) for r in exp.rows if r.row_id in subset(cfg.quick)[p]]
+    own = [exp.cost(r) for r in exp.rows if r.row_id in subset(row.params["quick"])[p]]
     scale = SECONDS_2D[p] * (FACTOR_3D if row.params["dim"] == "3d" else 1.0)
     return scale * exp.cost(paper_row) / (sum(own) / len(own))
 
@@ -140,58 +126,39 @@ def subset(quick: bool) -> dict[str, tuple[str, ...]]:
     return QUICK_SUBSET if quick else SUBSET
 
 
-def rows(cfg: Config) -> tuple[Row, ...]:
-    """Every paper row of the subset on the 2D body, then on the 3D one (its 2D twin's
-    seeds); params: paper, dim, row (the paper's row id) and the paper row's params."""
-    out = []
-    for dim in DIMS:
-        for p, ids in subset(cfg.quick).items():
-            exp = paper_experiment(p, dim, cfg.quick, cfg.dof, cfg.signals)
-            by_id = {r.row_id: r for r in exp.rows}
-            for rid in ids:
-                r = by_id[rid]
-                out.append(Row(row_id(p, dim, rid),
-                               {"paper": p, "dim": dim, "row": rid, **r.params}, r.paper,
-                               seeds_of=None if dim == "2d" else row_id(p, "2d", rid)))
-    return tuple(out)
+def _paper_numbers(paper: str, paper_row: str) -> dict[str, float]:
+    """The paper's numbers of its row (a study's; papers B and C state none)."""
+    study = registry.get(PAPERS[paper])
+    return dict(study.row(paper_row).paper) if isinstance(study, Study) else {}
 
 
-def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          dof: int | None = None, signals: str | None = None) -> Experiment:
-    """The 2D + 3D sweep; ``dof`` / ``signals`` replace the 3D body's (default 8 DOF,
-    Cartesian); ``quick``: each paper's --quick config on 2 of its rows, 2 runs (a smoke
-    test). ``movement`` does not apply (each paper's rows name their movements)."""
-    if movement is not None or asf is not None:
-        from skinny_mj.errors import SkinnyInputError
-
-        raise SkinnyInputError("three-d runs the papers' own movements; --movement/--asf "
-                               "do not apply")
-    base = Config(quick=quick, dof=8 if dof is None else int(dof),
-                  signals="cartesian" if signals is None else str(signals),
-                  runs=2 if quick else 10)
-    papers = {f"{p}-{d}": asdict(paper_experiment(p, d, quick, base.dof, base.signals).config)
-              for p in PAPERS for d in DIMS}
-    cfg = Config(base.quick, base.dof, base.signals, base.runs, papers)
-    groups = {**{p: tuple(row_id(p, d, r) for d in DIMS for r in ids)
-                 for p, ids in subset(quick).items()},
-              **{d: tuple(row_id(p, d, r) for p, ids in subset(quick).items() for r in ids)
-                 for d in DIMS},
-              **{f"{p}-{d}": tuple(row_id(p, d, r) for r in ids)
-                 for p, ids in subset(quick).items() for d in DIMS}}
-    if not quick:
-        groups["core"] = tuple(row_id(p, d, r) for d in DIMS for p, ids in CORE.items()
-                               for r in ids)
-    return Experiment(name=NAME, rows=rows(cfg), run_one=functools.partial(run_one, cfg),
-                      run_batch=functools.partial(run_batch, cfg),
-                      cost=functools.partial(cost, cfg), config=cfg, runs=cfg.runs,
-                      groups=groups, table_columns=("performance_nrmse", "feedback_share",
-                                                    "relative_error_x1",
-                                                    "ymca__position_nrmse", "wall_s"))
+def _row(paper: str, dim: str, paper_row: str) -> Row:
+    """Paper ``paper``'s row on ``dim``'s body; a 3D row takes its 2D twin's seeds."""
+    full, quick = paper_row in SUBSET[paper], paper_row in QUICK_SUBSET[paper]
+    return Row(row_id(paper, dim, paper_row), BODY_2D if dim == "2d" else {},
+               _paper_numbers(paper, paper_row) if full else {},
+               seeds_of=None if dim == "2d" else row_id(paper, "2d", paper_row),
+               group=f"{paper}-{dim}", params={"paper": paper, "dim": dim, "row": paper_row},
+               quick_only=quick and not full)
 
 
-def report(results: dict, out_dir: Path) -> str:
-    """The 2D vs 3D table, each paper's figures and claims per body, the claims side by
-    side and the figure (:mod:`skinny_mj.experiments.three_d.report`)."""
-    from skinny_mj.experiments.three_d import report as three_d_report
+ROWS = tuple(_row(p, dim, r) for dim in DIMS for p, ids in ORDER.items() for r in ids)
 
-    return three_d_report.report(results, Path(out_dir))
+
+STUDY = Study(
+    name=NAME, description=__doc__, rows=ROWS, run_batch=run_batch, runs=10,
+    # the 3D body; the 2D rows' overrides set each paper's own (--dof/--signals: the 3D one)
+    base=TrainConfig().override({"plant.dof": 8, "plant.signals": "cartesian"}),
+    params={"quick": False}, trainings=trainings, cost=cost,
+    groups={**{p: [row_id(p, d, r) for d in DIMS for r in ORDER[p]] for p in PAPERS},
+            **{d: [row_id(p, d, r) for p in PAPERS for r in ORDER[p]] for d in DIMS},
+            "core": [row_id(p, d, r) for d in DIMS for p, ids in CORE.items() for r in ids]},
+    columns=("performance_nrmse", "feedback_share", "relative_error_x1",
+             "ymca__position_nrmse", "wall_s"),
+    # each paper's --quick sweep on 2 of its rows, 2 runs: a smoke test
+    quick=Quick(runs=2, rows=tuple(row_id(p, d, r) for d in DIMS
+                                   for p, ids in QUICK_SUBSET.items() for r in ids),
+                params={"quick": True}),
+    takes=("dof", "signals"),  # the papers' own rows name their movements
+    report="skinny_mj.experiments.three_d.report:report",
+)

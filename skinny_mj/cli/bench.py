@@ -11,6 +11,7 @@ average at the start and end is recorded with the figures. Goals:
 | ``lockstep_speedup`` (20 runs one at a time over the same 20 in lockstep) | >= 3 |
 | ``fast_vs_naive`` (naive run-step cost over the fast path's) | >= 6 |
 | ``paper_e_full_s`` (complete paper-E table, 2 cores) | <= 20 s |
+| ``torque_over_kinematic`` (a torque FEL run over the kinematic run, :mod:`bench_torque`) | <= 2 |
 | ``mackey_glass`` N = 1000, log10 NRMSE_84 | <= -4.5 |
 
 The speed figures are here; the accuracy one (Mackey-Glass) is in
@@ -30,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from skinny_mj.cli.bench_mackey_glass import mackey_glass
+from skinny_mj.cli.bench_torque import torque_over_kinematic
 
 GOALS = {
     "esn_run_vs_reservoirpy_N200": (">=", 2.0),
@@ -38,6 +40,7 @@ GOALS = {
     "lockstep_speedup": (">=", 3.0),
     "fast_vs_naive": (">=", 6.0),
     "paper_e_full_s": ("<=", 20.0),
+    "torque_over_kinematic": ("<=", 2.0),
     "mackey_glass_log10_nrmse84": ("<=", -4.5),
 }
 N_RUNS = 20  # R of the lockstep figures
@@ -279,7 +282,7 @@ def _descendants(root: int) -> list[int]:
 # -- the command ------------------------------------------------------------------------
 #: The figures :func:`run` measures, in order (its ``progress`` is called with each).
 RUN_STEPS = ("esn_run_vs_reservoirpy", "control_step_over_physics", "lockstep_speedup",
-             "fast_vs_naive", "mackey_glass", "paper_e_full_s")
+             "fast_vs_naive", "mackey_glass", "paper_e_full_s", "torque_over_kinematic")
 
 
 def run(quick: bool = False, workers: int | None = None,
@@ -304,6 +307,9 @@ def run(quick: bool = False, workers: int | None = None,
     tick(RUN_STEPS[5])
     figures["paper_e_full_s"] = ({"skipped": "--quick"} if quick
                                  else paper_e_full_s(workers))
+    tick(RUN_STEPS[6])
+    figures["torque_over_kinematic"] = (torque_over_kinematic(2, 1, epochs=1) if quick
+                                        else torque_over_kinematic(10, 1))
     figures["load_avg_end"] = os.getloadavg()
     figures["cpu_count"] = os.cpu_count()
     figures["summary"] = summary(figures)
@@ -345,6 +351,7 @@ def summary(figures: dict) -> dict[str, dict]:
         "lockstep_speedup": get(["lockstep_speedup", "ratio"]),
         "fast_vs_naive": get(["fast_vs_naive", "ratio"]),
         "paper_e_full_s": get(["paper_e_full_s", "wall_s"]),
+        "torque_over_kinematic": get(["torque_over_kinematic", "ratio"]),
         "mackey_glass_log10_nrmse84": get(["mackey_glass", "ours_log10_nrmse84"]),
     }
     out = {}

@@ -246,8 +246,9 @@ def cmd_test(args: argparse.Namespace) -> int:
     from skinny_mj.cli.config_flags import TEST_FLAGS
     from skinny_mj.controllers.esn import ESN, read_metadata
     from skinny_mj.training.loop import TrainConfig, evaluate, run_of, run_streams
+    from skinny_mj.training.presets import model_path
 
-    path = Path(args.model)
+    path = model_path(args.model)  # a shipped model's name, or a file
     if not path.is_file():
         raise SkinnyInputError("no such model file", path=path)
     try:
@@ -380,18 +381,23 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
     options = {"quick": bool(args.quick), "movement": args.movement,
                "asf": None if args.asf is None else str(args.asf), "dof": args.dof,
-               "signals": args.signals}
+               "signals": args.signals, "protocol": args.protocol}
     from skinny_mj.cli import config_files as cf  # --config: the file's options, rows, runs
 
     options, rows, runs, invocation = cf.apply_sweep_config(args, options, rows)
-    exp = module.build(**options)
+    if options["protocol"] is not None:  # readings of unstated settings, on the study's base
+        from skinny_mj.engine import protocols
+
+        module = protocols.apply(options["protocol"], module, args.name)
+    exp = module.build(**{k: v for k, v in options.items() if k != "protocol"})
     cf.check_experiment(invocation, exp)
     return _sweep_and_report(args, module, exp, rows, runs, options, invocation)
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``skinny sweep KEY=V1,V2 ...``: a grid over config keys (:mod:`skinny_mj.engine.grid`)
-    on the experiment engine, from TrainConfig's defaults or a study's row."""
+    on the experiment engine, from TrainConfig's defaults, a config file or a study's row."""
+    from skinny_mj.cli.config_files import file_config
     from skinny_mj.engine import registry
     from skinny_mj.engine.grid import grid_study
     from skinny_mj.engine.study import Study
@@ -404,9 +410,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                 f"--study {args.study}: not a study declared as data "
                 "(a skinny_mj.engine.study.Study), so it has no row to sweep from"
             )
-    grid = grid_study(args.axes, study=study, row=args.row, runs=args.runs or 10)
+    base = None if args.config is None else file_config(args.config)
+    grid = grid_study(args.axes, study=study, row=args.row, runs=args.runs,
+                      quick=args.quick, base=base)
     rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
-    options = {"axes": list(args.axes), "study": args.study, "row": args.row}
+    options = {"axes": list(args.axes), "study": args.study, "row": args.row,
+               "quick": args.quick, "config": None if args.config is None else str(args.config)}
     return _sweep_and_report(args, grid, grid.build(), rows, None, options, None)
 
 

@@ -25,12 +25,13 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import DERIVED, TrainConfig
 from skinny_mj.training.legacy import is_legacy
 
-__all__ = ["read_json", "read_train_file", "train_config", "SweepInvocation",
+__all__ = ["read_json", "read_train_file", "file_config", "train_config", "SweepInvocation",
            "sweep_invocation", "apply_sweep_config", "check_experiment",
            "warn_if_rebuilt_differs"]
 
-#: The CLI options a sweep's ``config.json`` records (``options``) and ``build`` takes.
-SWEEP_OPTIONS = ("quick", "movement", "asf", "dof", "signals")
+#: The CLI options a sweep's ``config.json`` records (``options``): ``build`` takes them, but
+#: ``protocol``, which is applied to the study before it is built.
+SWEEP_OPTIONS = ("quick", "movement", "asf", "dof", "signals", "protocol")
 
 
 def read_json(path: str | Path) -> dict[str, Any]:
@@ -63,6 +64,13 @@ def read_train_file(path: str | Path) -> tuple[dict[str, Any], int | None]:
     return data, None
 
 
+def file_config(path: str | Path) -> TrainConfig:
+    """The TrainConfig a config file holds (a run's ``metrics.json`` or a bare config;
+    its seed, if any, is not part of it)."""
+    fields, _ = read_train_file(path)
+    return _make(fields, Path(path), TrainConfig())
+
+
 def _make(fields: dict[str, Any], path: Path | None, base: TrainConfig | None = None
           ) -> TrainConfig:
     """The config of a file's ``fields`` (today's dotted keys over ``base``, or an earlier
@@ -91,7 +99,9 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     if preset is not None:
         from skinny_mj.training.presets import preset_fields
 
-        cfg = cfg.override(preset_fields(preset, str(texts.get("actuation", "velocity"))))
+        cfg = cfg.override(preset_fields(preset, str(texts.get("actuation", "velocity")),
+                                         dof=texts.get("plant.dof"),
+                                         signals=texts.get("plant.signals")))
     if getattr(args, "config", None) is not None:
         path = Path(args.config)
         fields, seed = read_train_file(path)

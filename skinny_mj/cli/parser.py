@@ -144,18 +144,22 @@ def build_parser() -> argparse.ArgumentParser:
                    "config JSON of dotted keys); flags given as well override its settings")
     p.add_argument("--preset", choices=("general",), help="a named configuration; flags "
                    "given as well override its settings. general: the inverse model for "
-                   "unseen movements: 2D, joint-angle signals, 15 s of motor babbling "
-                   "(random minimum-jerk moves over every joint's whole range, 1-8 rad/s), "
-                   "full scale 4x its fastest speed, paper E exp. 5 schedule; of 12 training "
-                   "sets in `skinny experiment generalization` it had the lowest error on "
-                   "real dance it never saw (position NRMSE 0.009 on CMU md_02, 10 seeds). "
-                   "Then: skinny test --model M --trajectory CLIP.amc --asf SKELETON.asf. "
+                   "unseen movements, one per --dof and --signals (default: 2D, joint "
+                   "angles): motor babbling over every joint's whole range (with "
+                   "Cartesian signals or in 3D also at the joint limits and at rest), full "
+                   "scale 4x its fastest speed, paper E exp. 5 schedule; the configuration "
+                   "with the lowest error on real dance it never saw in `skinny experiment "
+                   "generalization --rows general`. Trained ones ship: skinny test --model "
+                   "general-2d-joint|general-3d-joint|general-2d-cartesian|"
+                   "general-3d-cartesian --trajectory CLIP.amc --asf SKELETON.asf. "
                    "With --actuation torque: the torque twin's general, 15 s of babbling at "
                    "0.5-4 rad/s (within the torque limits), the inertia-scaled PD teacher "
                    "and the forgetting readout")
 
     p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
-    p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny train`")
+    p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny "
+                   "train`, or a shipped general model: general-2d-joint, general-3d-joint, "
+                   "general-2d-cartesian, general-3d-cartesian")
     p.config_flags = "TEST_FLAGS"
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, help="output folder (default: results/test/<time>)")
@@ -205,16 +209,24 @@ def build_parser() -> argparse.ArgumentParser:
                    "seeds are the full sweep's")
     p.add_argument("--config", type=Path, help="repeat a sweep: its config.json (options, "
                    "rows, runs); flags given as well override them")
+    p.add_argument("--protocol", help="run the study under a named set of readings of the "
+                   "thesis's unstated settings (`thesis`: the recorded-like YMCA, u_error gain "
+                   "2, ...; each with what it rests on: docs/results/claims.md)")
 
     p = sub.add_parser("sweep", help="a grid over any config keys on the experiment engine: "
                        "skinny sweep esn.spectral_radius=0.5,0.9 --runs 20")
     p.add_argument("axes", nargs="+", metavar="KEY=V1,V2", help="a config key and its values "
                    "(quote a value holding a comma: KEY='a,b',c); rows are the product of the "
                    "keys with several values, a key with one value changes every row")
-    p.add_argument("--runs", type=_positive_int, help="runs per row (default 10)")
+    p.add_argument("--runs", type=_positive_int, help="runs per row (default 10; with "
+                   "--quick, the study's --quick runs or 2)")
     p.add_argument("--study", help="start from a study's row (with --row): its config, "
                    "metrics and run (default: paper E exp. 5, TrainConfig's defaults)")
     p.add_argument("--row", help="the --study row to start from")
+    p.add_argument("--config", type=Path, help="start from a config file: a run's "
+                   "metrics.json or a bare config (instead of TrainConfig's defaults)")
+    p.add_argument("--quick", action="store_true", help="a smoke test: the --study's own "
+                   "--quick for its row, else 2 epochs; 2 runs per row unless --runs")
     p.add_argument("--rows", help="comma-separated row ids to run (default: all)")
     p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
     p.add_argument("--out", type=Path, help="output folder (default: results/sweep/<time>)")

@@ -9,13 +9,18 @@ none/null where the field allows it, else text); the configuration checks the re
 A row's id is its values, ``esn.spectral_radius=0.5`` (keys joined by ``+``), as a
 plain file-name word.
 
-The base is :class:`~skinny_mj.training.config.TrainConfig`'s defaults (paper E exp. 5), or a
-study's row (``--study NAME --row ID``: its configuration, metrics, columns and run).
+The base is :class:`~skinny_mj.training.config.TrainConfig`'s defaults (paper E exp. 5), a config
+file's (``--config FILE``: a run's ``metrics.json`` or a bare config), or a study's row
+(``--study NAME --row ID``: its configuration, metrics, columns and run). ``--quick`` makes
+it a smoke test: a study's row as that study's ``--quick`` has it (and its runs per row),
+else the base with :data:`QUICK`'s keys (those it has) and 2 runs per row; the axes are
+applied after, so a swept key keeps its values.
 """
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import itertools
 import re
 from collections.abc import Sequence
@@ -24,14 +29,18 @@ from typing import Any
 from skinny_mj.engine.study import Row, Study
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.overrides import keys as config_keys
 from skinny_mj.training.overrides import parse_value
 
-__all__ = ["NAME", "METRICS", "parse_assignment", "grid_study"]
+__all__ = ["NAME", "METRICS", "QUICK", "parse_assignment", "grid_study"]
 
 NAME = "sweep"
 #: What a grid reports without a ``--study``: the test of every run, and its wall time.
 METRICS = {"position_nrmse": "test.position_nrmse", "motor_nrmse": "test.motor_nrmse",
            "train_wall_s": "wall_s"}
+#: ``--quick`` without a study: these keys of the base (those it has), 2 runs per row.
+QUICK = {"rule.epochs": 2}
+QUICK_RUNS = 2
 _UNSAFE = re.compile(r"[^A-Za-z0-9_.+=-]")
 
 
@@ -52,13 +61,40 @@ def _row_id(pairs: Sequence[tuple[str, str]]) -> str:
     return "+".join(_UNSAFE.sub("_", f"{k}={t}") for k, t in pairs)
 
 
+def _study_row(study: Study, row: str, quick: bool) -> tuple[TrainConfig, Row, dict, int]:
+    """A study's row as the base: its config, its row as its run gets it, the study's
+    params (``quick``: as the study's ``--quick`` has them) and the runs per row (10, or
+    the study's ``--quick`` runs)."""
+    from skinny_mj.engine.plan import plan
+
+    study.row(row)  # an unknown row: one line naming the study's rows
+    if quick:  # every row, not only those --quick keeps
+        study = dataclasses.replace(study, quick=dataclasses.replace(study.quick, rows=None))
+    planned = plan(study, quick=quick)
+    if study.unavailable is not None and row in (gone := study.unavailable()):
+        raise SkinnyInputError(f"study {study.name!r}: row {row!r} {gone[row]}")
+    return (planned.config(row), planned.run_row(row), dict(planned.params),
+            study.quick.runs if quick else 10)
+
+
 def grid_study(items: Sequence[str], *, study: Study | None = None, row: str | None = None,
-               runs: int = 10) -> Study:
-    """The study of ``skinny sweep ITEMS`` (see the module docstring)."""
+               runs: int | None = None, quick: bool = False,
+               base: TrainConfig | None = None) -> Study:
+    """The study of ``skinny sweep ITEMS`` (see the module docstring); ``runs`` None: 10,
+    or ``--quick``'s."""
     if (study is None) != (row is None):
         raise SkinnyInputError("--study and --row go together: the study's row is the base")
-    base_row = study.row(row) if study is not None else None
-    base = study.config(row) if study is not None else TrainConfig()
+    if study is not None and base is not None:
+        raise SkinnyInputError("--config and --study/--row are two bases: give one")
+    if study is not None:
+        base, base_row, params, default_runs = _study_row(study, row, quick)
+    else:
+        base = TrainConfig() if base is None else base
+        if quick:
+            have = set(config_keys(base))
+            base = base.override({k: v for k, v in QUICK.items() if k in have})
+        default_runs = QUICK_RUNS if quick else 10
+    runs = default_runs if runs is None else runs
     if not items:
         raise SkinnyInputError("give at least one KEY=VALUE[,VALUE...] to sweep")
     probe, parsed = base, {}
@@ -91,4 +127,5 @@ def grid_study(items: Sequence[str], *, study: Study | None = None, row: str | N
                  rows=tuple(Row(r.id, r.overrides, params=base_row.params,
                                 run_batch=base_row.run_batch) for r in rows),
                  metrics=study.metrics, columns=study.columns, runs=runs, takes=(),
-                 params=study.params, run_batch=study.run_batch, trainings=study.trainings)
+                 params=params, run_batch=study.run_batch, trainings=study.trainings,
+                 cost=study.cost, memory=study.memory)

@@ -132,20 +132,20 @@ class Plan:
 
     @property
     def params(self) -> Mapping[str, Any]:
-        """The study-wide parameters of its custom runs."""
-        return dict(self.study.params)
+        """The study-wide parameters of its custom runs (``--quick``'s applied)."""
+        return {**self.study.params, **(self.study.quick.params if self.quick else {})}
 
     def trainings(self, row_id: str) -> dict[str, TrainConfig]:
         """What one run of the row trains: ``study.trainings`` or the row's config."""
         p = self.row(row_id)
         if self.study.trainings is None:
             return {"run": p.config}
-        return dict(self.study.trainings(p.config, self._run_row(p)))
+        return dict(self.study.trainings(p.config, self.run_row(row_id)))
 
     def to_dict(self) -> dict[str, Any]:
         """What ``config.json`` records as ``config`` (``--resume`` needs it the same)."""
         return {"study": self.study.name, "base": self.base.to_dict(),
-                "after_rows": dict(self.after), "params": dict(self.study.params),
+                "after_rows": dict(self.after), "params": dict(self.params),
                 "quick": self.quick}
 
     def groups(self) -> dict[str, tuple[str, ...]]:
@@ -160,8 +160,9 @@ class Plan:
             out[name] = [i for m in members for i in out.get(m, [m]) if i in kept]
         return {g: tuple(m) for g, m in out.items() if m}
 
-    @staticmethod
-    def _run_row(p: PlannedRow) -> Row:
+    def run_row(self, row_id: str) -> Row:
+        """Row ``row_id`` as its run gets it: its params with the study's."""
+        p = self.row(row_id)
         return dataclasses.replace(p.row, params=p.params, quick={})
 
     def experiment(self) -> Experiment:
@@ -177,15 +178,20 @@ class Plan:
             EngineRow(p.row.id, {**p.row.overrides, **p.row.params}, p.row.paper,
                       row_runs(p.row), p.row.seeds_of) for p in self.rows)
         runner = _Runner(dict(study.metrics), {
-            p.row.id: (p.config, self._run_row(p), p.row.run_batch or study.run_batch)
+            p.row.id: (p.config, self.run_row(p.row.id), p.row.run_batch or study.run_batch)
             for p in self.rows})
-        costs = {p.row.id: relative_cost(p.config) for p in self.rows}
-        columns = study.columns if study.columns is not None else tuple(study.metrics)
+        costs = {p.row.id: relative_cost(p.config) if study.cost is None
+                 else study.cost(p.config, self.run_row(p.row.id)) for p in self.rows}
+        columns = quick.columns if self.quick and quick.columns is not None else \
+            study.columns if study.columns is not None else tuple(study.metrics)
+        kept = {p.row.id for p in self.rows}
+        unavailable = {} if study.unavailable is None else {
+            k: v for k, v in study.unavailable().items() if k in kept}
         return Experiment(
             name=study.name, rows=engine_rows, run_one=functools.partial(one_of_batch, runner),
             config=self, runs=runs, base_seed=study.base_seed, table_columns=columns or None,
             run_batch=runner, cost=functools.partial(_cost, costs), groups=self.groups(),
-            report=functools.partial(_report, self))
+            unavailable=unavailable, report=functools.partial(_report, self))
 
 
 def _report(plan: Plan, results: Mapping[str, Any], out_dir: str | Path) -> str:
@@ -239,5 +245,6 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
         if tiny:  # the contract test's shrink: of its keys, those this row's config has
             have = set(overrides.keys(config))
             config = config.override({k: v for k, v in study.tiny.items() if k in have})
-        planned.append(PlannedRow(r, {**study.params, **r.params}, config))
+        params = {**study.params, **(study.quick.params if quick else {}), **r.params}
+        planned.append(PlannedRow(r, params, config))
     return Plan(study, base, after, quick, tuple(planned))

@@ -95,11 +95,14 @@ class Row:
 @dataclass(frozen=True)
 class Quick:
     """What ``--quick`` (a smoke test, not a reproduction) shrinks: ``overrides`` applied
-    after every row's, the runs per row, and the rows kept (ids or groups; None: all)."""
+    after every row's, the runs per row, the rows kept (ids or groups; None: all), the
+    study-wide ``params`` it replaces and the table's ``columns`` (None: the study's)."""
 
     overrides: Mapping[str, Any] = field(default_factory=dict)
     runs: int = 2
     rows: tuple[str, ...] | None = None
+    params: Mapping[str, Any] = field(default_factory=dict)
+    columns: Sequence[str] | Mapping[str, str] | None = None
 
 
 @dataclass(frozen=True)
@@ -116,7 +119,12 @@ class Study:
     ``report(results, plan, out_dir) -> str``: figures and claims after the sweep, or the
     ``"module:function"`` that has it (a study kept in one folder with its report names
     its report so: the report imports the study, never the other way round);
-    ``tiny``: the contract test's shrink (default :data:`TINY`).
+    ``tiny``: the contract test's shrink (default :data:`TINY`); ``cost(config, row) ->
+    float``: one run's relative cost, for the schedule (default: the training's
+    :func:`~skinny_mj.training.config.relative_cost`); ``memory(config, row, runs)``: the
+    bytes a lockstep batch of a custom run needs (a :class:`skinny_mj.memory.Estimate`;
+    None: its ``trainings``' estimate); ``unavailable() -> {row id: why}``: rows this
+    machine cannot run (an optional package missing).
     """
 
     name: str
@@ -135,6 +143,9 @@ class Study:
     takes: tuple[str, ...] = OPTIONS
     tiny: Mapping[str, Any] = field(default_factory=lambda: dict(TINY))
     base_seed: int = 0
+    cost: Callable[[TrainConfig, Row], float] | None = None
+    memory: Callable[[TrainConfig, Row, int], Any] | None = None
+    unavailable: Callable[[], Mapping[str, str]] | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "rows", tuple(self.rows))
@@ -179,3 +190,11 @@ class Study:
         """The training configurations one run of ``row`` trains (for the memory check):
         ``config`` is the built Experiment's config (its :class:`Plan`)."""
         return config.trainings(row.row_id)
+
+    def estimate_bytes(self, config: Any, row: Any, runs: int) -> Any:
+        """The memory check's estimate of ``runs`` lockstep runs of ``row`` (``config``:
+        the built Experiment's :class:`Plan`): the study's ``memory``, None without one."""
+        if self.memory is None:
+            return None
+        p = config.row(row.row_id)
+        return self.memory(p.config, config.run_row(row.row_id), runs)

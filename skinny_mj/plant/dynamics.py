@@ -167,7 +167,8 @@ class BatchArmState:
     :class:`skinny_mj.plant.adapters.BatchPlant` of the torque twin: each call returns the
     :class:`skinny_mj.controllers.torque_arm.ArmState` of the current step.
 
-    M(q) is read from the batch's own ``qM`` (``mj_fullM``, each robot's diagonal block);
+    M(q) is each robot's diagonal block of the batch's own ``M`` (gathered: the numbers
+    ``mj_fullM`` gives);
     the bias ``qfrc_bias``; the gravity torque (``gravity=True`` only) from a scratch
     ``MjData`` at the same poses with zero velocity. Sensed angles: the true angles plus
     the position sensors' noise seen in joint space (joint signals: exactly the noise
@@ -191,7 +192,7 @@ class BatchArmState:
         self.nv1 = m.nv // plant.n_runs
         self.adr = np.asarray(plant.layout.dof_adr)
         self.damping = m.dof_damping[self.adr].copy()
-        self._full = np.zeros((m.nv, m.nv))
+        self._mass_at, self._qm = _mass_index(m, plant.n_runs, self.adr)
         self._scratch = mujoco.MjData(m) if gravity else None
         lo, hi = body.joint_ranges(plant.n_dof).T
         self._per_rad = 2.0 / (hi - lo)
@@ -221,12 +222,9 @@ class BatchArmState:
 
     def mass(self, d=None) -> np.ndarray:
         """(R, n, n) each robot's M(q) of the current state, kg m^2."""
-        m, r, n1 = self.model, self.n_runs, self.nv1
         d = self._data() if d is None else d
-        mujoco.mj_fullM(m, d, self._full)
-        runs = np.arange(r)
-        blocks = self._full.reshape(r, n1, r, n1)[runs, :, runs, :]
-        return blocks[:, self.adr][:, :, self.adr]
+        self._qm[:-1] = d.M  # the last entry stays 0: the structural zeros
+        return self._qm[self._mass_at]
 
     def gravity(self) -> np.ndarray:
         """(R, n) g(q) of the current poses, N m."""
@@ -247,6 +245,21 @@ class BatchArmState:
                         mass=self.mass(d), bias=bias,
                         gravity=None if self._scratch is None else self.gravity(),
                         damping=self.damping)
+
+
+def _mass_index(model, n_runs: int, adr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where each robot's M(q) entries (R, n, n) sit in ``MjData.M`` (its size for a
+    structural zero), and a buffer of that size + 1 zeros: M(q) is then one gather, the
+    same numbers as ``mj_fullM`` (which copies ``M`` into the dense matrix) without the
+    dense (R n)^2 matrix of the whole batch."""
+    d = mujoco.MjData(model)
+    d.M[:] = np.arange(1, d.M.size + 1)
+    full = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, d, full)
+    n1 = model.nv // n_runs
+    at = np.stack([full[np.ix_(r * n1 + adr, r * n1 + adr)] for r in range(n_runs)])
+    at = np.where(at > 0, at - 1, d.M.size).astype(np.intp)
+    return at, np.zeros(d.M.size + 1)
 
 
 def feasibility_lines(figures: dict[str, np.ndarray], names: list[str]) -> list[str]:

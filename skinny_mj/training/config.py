@@ -61,6 +61,7 @@ FORWARD_SHARING = ("none", "predictions", "commands")
 GAIN_SCHEDULES = ("linear", "multiplicative", "fixed")
 ARMS = ("right", "left")
 RETARGETS = ("angles", "positions")
+FULL_SCALES = ("per-joint", "shared")
 BACKENDS = ("batch", "env")
 #: Learning cycles per epoch the paper derived from its Figure 3 (paper E, Table 1).
 PAPER_CYCLES_FOR_BETA = {0.3: 2, 0.1: 3, 0.05: 6}
@@ -147,6 +148,8 @@ class Movement:
     reps: int = 1
     max_speed_from: str | None = None  # movement whose speeds set full scale (None: this)
     full_scale_factor: float = 2.0  # full scale = this x the fastest speed per DOF
+    #: "per-joint": each DOF its own full scale; "shared": the fastest DOF's for every DOF
+    full_scale: str = "per-joint"
     retarget: str = "angles"  # motion capture: by joint angles, or "positions"
 
     def __post_init__(self) -> None:
@@ -156,6 +159,8 @@ class Movement:
             (isinstance(self.reps, int) and self.reps >= 1, f"reps must be >= 1, got {self.reps}"),
             (_at_least(self.full_scale_factor, 0) and self.full_scale_factor > 0,
              f"full scale factor must be > 0, got {self.full_scale_factor}"),
+            (self.full_scale in FULL_SCALES,
+             f"full scale must be one of {FULL_SCALES}, got {self.full_scale!r}"),
             (self.retarget in RETARGETS,
              f"retarget must be one of {RETARGETS}, got {self.retarget!r}"),
         ])

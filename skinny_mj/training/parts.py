@@ -44,14 +44,16 @@ def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
     """(n_dof,) rad/s: ``movement.full_scale_factor`` (default 2) x the fastest speed per
     DOF of ``trajectory`` (one repetition) or of the movement named by
     ``movement.max_speed_from``,
-    so that networks trained on different movements share one command scale (paper C)."""
+    so that networks trained on different movements share one command scale (paper C);
+    ``movement.full_scale="shared"``: the fastest DOF's for every DOF."""
     from skinny_mj.plant.ideal import max_speeds
     from skinny_mj.trajectories import load_movement
 
     mv = cfg.movement
     if mv.max_speed_from is not None:
         trajectory, _ = load_movement(mv.max_speed_from, cfg.plant.dof, asf=mv.asf)
-    return max_speeds(trajectory.angles, trajectory.dt, speed_factor=mv.full_scale_factor)
+    speeds = max_speeds(trajectory.angles, trajectory.dt, speed_factor=mv.full_scale_factor)
+    return np.full_like(speeds, speeds.max()) if mv.full_scale == "shared" else speeds
 
 
 def make_plant(cfg: TrainConfig, trajectory, plant_seeds: Sequence[int],

@@ -1,11 +1,13 @@
 """Named training configurations for ``skinny train --preset NAME``.
 
-``general`` is the inverse model the generalization matrix
-(``skinny experiment generalization``, docs/results/generalization.md) found best on
-movements it never saw: 2D Skinny with joint-angle signals, trained on motor babbling
-(:mod:`skinny_mj.trajectories.babble`) with paper E's experiment-5 schedule. Test it on
-any CMU clip with ``skinny test --model .../model.npz --trajectory CLIP.amc --asf
-SKELETON.asf``.
+``general`` is the inverse model for movements it never saw, one per body and signal
+(``--dof 4|8``, ``--signals joint|cartesian``; by default 2D joint angles): each is the
+configuration with the lowest error on the real CMU clips it never trained on in the
+generalization study (``skinny experiment generalization --rows general``,
+docs/results/generalization.md). All train on motor babbling
+(:mod:`skinny_mj.trajectories.babble`) with paper E's experiment-5 schedule. The trained
+models ship with the package (:data:`SHIPPED`): ``skinny test --model general-3d-cartesian
+--trajectory CLIP.amc --asf SKELETON.asf`` runs one without training.
 
 With ``--actuation torque`` the same name picks the torque twin's ``general``
 (:data:`TORQUE_PRESETS`): babbling slow enough for the motors' torque limits, learned by
@@ -16,25 +18,59 @@ need more torque than the motors have at full speed; test it on them slowed down
 
 from __future__ import annotations
 
+from importlib.resources import files
+from pathlib import Path
 from typing import Any
 
 from skinny_mj.errors import SkinnyInputError
 
-__all__ = ["PRESETS", "TORQUE_PRESETS", "preset_fields", "describe"]
+__all__ = ["GENERAL", "PRESETS", "TORQUE_PRESETS", "SHIPPED", "preset_fields", "describe",
+           "model_name", "model_path"]
 
-#: Preset name -> (one-line reason, the dotted TrainConfig keys the preset sets).
-PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
-    "general": (
-        "2D, joint-angle signals, trained on 15 s of motor babbling (minimum-jerk moves "
+_LIMITS30 = "babble:seed=0,duration=30,limits=0.5,holds=0.2"
+#: ``general`` per (dof, signals): (one-line reason, the dotted TrainConfig keys).
+GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
+    (4, "joint"): (
+        "2D, joint-angle signals, trained on 30 s of motor babbling (minimum-jerk moves "
         "between random targets over every joint's whole range, peak speeds 1-8 rad/s) "
-        "with full scale = 4x its fastest speed per DOF, paper E exp. 5 schedule (N = 200), "
-        "one washout cycle before the test: row j2-babble15-scale4, the lowest error on "
-        "the unseen real clips in the generalization matrix (md_02 0.009, md_03 0.007)",
-        {"plant.dof": 4, "plant.signals": "joint",
-         "movement.trajectory": "babble:seed=0,duration=15",
+        "that also moves to the joint limits and rests (limits=0.5, holds=0.2), full "
+        "scale = 4x its fastest speed per DOF, paper E exp. 5 schedule (N = 200), one "
+        "washout cycle before the test: row j2-limits30-scale4",
+        {"plant.dof": 4, "plant.signals": "joint", "movement.trajectory": _LIMITS30,
          "movement.full_scale_factor": 4.0, "test.washout_cycles": 1},
     ),
+    (8, "joint"): (
+        "3D, joint-angle signals, trained on 30 s of babbling that also moves to the "
+        "joint limits and rests (limits=0.5, holds=0.2), full scale 4x: row j3-general",
+        {"plant.dof": 8, "plant.signals": "joint", "movement.trajectory": _LIMITS30,
+         "movement.full_scale_factor": 4.0, "test.washout_cycles": 1},
+    ),
+    (4, "cartesian"): (
+        "2D, Cartesian signals, trained on 60 s of babbling that also moves to the joint "
+        "limits and rests (limits=0.5, holds=0.2), full scale 4x, the feedback "
+        "controller's correction x3 in the learning targets: row c2-general",
+        {"plant.dof": 4, "plant.signals": "cartesian",
+         "movement.trajectory": "babble:seed=0,duration=60,limits=0.5,holds=0.2",
+         "movement.full_scale_factor": 4.0, "rule.u_error_gain": 3.0,
+         "test.washout_cycles": 1},
+    ),
+    (8, "cartesian"): (
+        "3D, Cartesian signals, trained on 15 s of motor babbling then YMCA (joined by a "
+        "minimum-jerk bridge), full scale 2x: row c3-babble15+ymca; no babbling at the "
+        "limits, larger scale, reservoir (N = 400), reservoir noise or feedback weight "
+        "measured did better on the unseen clips",
+        {"plant.dof": 8, "plant.signals": "cartesian",
+         "movement.trajectory": "set:babble:seed=0,duration=15+ymca",
+         "test.washout_cycles": 1},
+    ),
 }
+#: Preset name -> (one-line reason, the dotted TrainConfig keys) of its default body.
+PRESETS: dict[str, tuple[str, dict[str, Any]]] = {"general": GENERAL[4, "joint"]}
+#: The trained general models shipped as package data (``skinny_mj/data/models``):
+#: name -> (dof, signals); each file is ``skinny train --preset general --dof D
+#: --signals S --seed 0``'s model.npz, compressed, with its training metadata.
+SHIPPED: dict[str, tuple[int, str]] = {
+    f"general-{'2d' if dof == 4 else '3d'}-{signals}": (dof, signals) for dof, signals in GENERAL}
 
 #: The same names for ``--actuation torque``.
 TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -55,14 +91,42 @@ def _table(actuation: str) -> dict[str, tuple[str, dict[str, Any]]]:
     return TORQUE_PRESETS if actuation == "torque" else PRESETS
 
 
-def preset_fields(name: str, actuation: str = "velocity") -> dict[str, Any]:
-    """A copy of the dotted TrainConfig keys preset ``name`` sets for ``actuation``
-    (``TrainConfig().override(preset_fields(name))`` is the preset's config)."""
+def _entry(name: str, actuation: str, dof: Any, signals: Any) -> tuple[str, dict[str, Any]]:
     table = _table(actuation)
     if name not in table:
         raise SkinnyInputError(f"unknown preset {name!r}; known: {', '.join(table)}")
-    return dict(table[name][1])
+    if actuation == "torque" or name != "general" or (dof is None and signals is None):
+        return table[name]
+    try:
+        key = (4 if dof is None else int(dof), "joint" if signals is None else str(signals))
+    except (TypeError, ValueError):  # a bad dof is the config's own error, said there
+        return table[name]
+    return GENERAL.get(key, table[name])
 
 
-def describe(name: str, actuation: str = "velocity") -> str:
-    return _table(actuation)[name][0]
+def preset_fields(name: str, actuation: str = "velocity", *, dof: Any = None,
+                  signals: Any = None) -> dict[str, Any]:
+    """A copy of the dotted TrainConfig keys preset ``name`` sets for ``actuation``
+    (``TrainConfig().override(preset_fields(name))`` is the preset's config); ``general``
+    on the velocity servo has one per ``dof`` (4, 8) and ``signals`` (joint, cartesian),
+    None: 4 and joint."""
+    return dict(_entry(name, actuation, dof, signals)[1])
+
+
+def describe(name: str, actuation: str = "velocity", *, dof: Any = None,
+             signals: Any = None) -> str:
+    return _entry(name, actuation, dof, signals)[0]
+
+
+def model_name(dof: int, signals: str) -> str:
+    """The shipped general model's name for a body and signals (``general-3d-cartesian``)."""
+    return next(n for n, key in SHIPPED.items() if key == (dof, signals))
+
+
+def model_path(model: str | Path) -> Path:
+    """The file of a shipped model's name (:data:`SHIPPED`), else ``model`` as a path
+    (a file of that name in the current folder comes first)."""
+    path = Path(model)
+    if str(model) in SHIPPED and not path.exists():
+        return Path(str(files("skinny_mj").joinpath("data", "models", f"{model}.npz")))
+    return path

@@ -241,3 +241,22 @@ class ShareRecorder:
         fb = np.abs(ro.u_error[:, :-1]).mean(axis=(1, 2))
         self.error_signal[:, epoch] = fb / np.maximum(u, 1e-12)
         self.share[:, epoch] = self.gains[epoch] * self.error_signal[:, epoch]
+
+
+def torque_movement(dof: int, name: str):
+    """The movement ``name`` as the torque body of ``dof`` DOFs loads it."""
+    from skinny_mj.training.parts import load_trajectory
+
+    return load_trajectory(TrainConfig().override({
+        "plant.dof": dof, "movement.trajectory": name, "actuation": "torque"}))[0]
+
+
+def joint_nrmse(outcome) -> float:
+    """Test joint-angle NRMSE (each angle normalized to [-1, 1] over its range) of a
+    :class:`skinny_mj.training.loop.TrainOutcome` against its movement's angles."""
+    from skinny_mj.controllers.metrics import position_nrmse
+
+    dof = outcome.config.plant.dof
+    angles = outcome.test.rollout.angles[:, :, :dof]
+    return float(position_nrmse(body.normalize_angles(angles, dof),
+                                body.normalize_angles(outcome.test.trajectory.angles, dof))[0])

@@ -123,7 +123,8 @@ def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajec
             raise SkinnyInputError(f"bad speed suffix in {name!r} (use e.g. 'ymca@0.5')") from None
     if babbling is not None:
         traj = babble(dof, seed=int(babbling["seed"]), duration_s=babbling["duration"],
-                      v_min=babbling["vmin"], v_max=babbling["vmax"]
+                      v_min=babbling["vmin"], v_max=babbling["vmax"],
+                      limits=babbling["limits"], holds=babbling["holds"]
                       ).resample(speed).repeat(reps)
     elif base in _MOVEMENTS:
         traj = _MOVEMENTS[base](dof).resample(speed).repeat(reps)

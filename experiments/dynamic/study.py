@@ -1,0 +1,231 @@
+"""Dynamic control: the torque-driven Skinny, with mass, gravity and torque limits,
+tracked by textbook controllers and learned by an ESN inverse-dynamics model.
+
+Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` with
+``actuation=torque`` (:mod:`skinny_mj.training.torque`):
+
+- ``table``: for 2D and 3D (``2d``, ``3d``) and YMCA and an excerpt of CMU clip md_02
+  (``ymca``, ``md02``; md_02 needs more torque than the motors have, see the report):
+  ``pd`` the limit-scaled PD alone (K = 1, nothing learned), ``ct`` that PD plus the
+  inverse-dynamics torque of the desired motion, ``fel-orig`` ESN + FEL original
+  method, ``fel-new`` ESN + FEL new β (0.1, 3 cycles), ``fel-new-gff`` the same with the
+  gravity feed-forward ``qfrc_bias / limit``, ``tt`` the true-target architecture
+  (torques of ``mj_inverse``, β = 0.1, 50 cycles). The learned rows train with K 1 -> 0
+  over 10 epochs and are tested at K = 0 (the ESN alone, plus the feed-forward in
+  ``fel-new-gff``). ``<body>-rec-<controller>``: the same on the recorded-like YMCA.
+- ``robust`` (2D, YMCA): the test plant carries a 1 kg point mass at the right hand's
+  centre of mass (``payload1``) or every arm link's mass and inertia x 1.2 / x 0.8
+  (``mass+20``, ``mass-20``); tested at K = 0 (``-k0``) and with the teacher left on
+  at K = 1 (``-k1``).
+- ``arm-table``, ``arm-robust``: the arm's own dynamics
+  (:mod:`skinny_mj.controllers.torque_arm`, poles placed in inertia-scaled coordinates):
+  ``arm-ct`` computed torque (omega 15 rad/s), ``arm-idpd`` inverse-dynamics
+  feed-forward + PD (omega 5), ``arm-pdg`` PD + gravity compensation (omega 15),
+  ``arm-pd`` the inertia-scaled PD alone (omega 5, the teacher's gains), all zeta = 1
+  and K = 1; ``fel-arm`` ESN + FEL with that PD's feedback torque as the error signal
+  (beta = 1, 3 cycles x 15 epochs, K 1 -> 0; readout on the normal equations with
+  forgetting 0.8 and ridge 1e-2; the 3D arm's ESN has 500 units and 6 learning cycles
+  per epoch; ``3d-*-fel-arm-long``: 3 cycles x 30 epochs instead),
+  ``fel-arm-cycle`` / ``fel-arm-rls`` the same with the readout refitted on each cycle
+  alone / by RLS; robustness rows as above with ``fel-arm`` and ``arm-ct``.
+- ``kinematic``: ``2d-ymca-kinematic`` is the velocity-servo run of paper E's schedule,
+  for the wall-time ratio.
+
+Groups ``2d`` and ``3d`` hold each body's rows (``--rows 3d``). ``--movement`` replaces
+the md_02 excerpt of the ``md02`` rows; ``--signals`` the position signals of every row
+(default Cartesian).
+
+Metrics per run: test position / joint-angle / motor NRMSE (motor: against the
+normalized inverse-dynamics torques), mean |applied torque| (N m), positive motor work
+(J), max |commanded| and |applied| torque / limit, MuJoCo warnings of the training and
+test plants, the wall time per run (lockstep batch / R), and the learning curves
+(position NRMSE and feedback share per epoch) in the run files. Goals, targets to
+measure against (not numbers tuned to): computed torque <= 0.008 joint-angle NRMSE on
+YMCA and the recorded-like YMCA with mean |tau| <= 1.5x the movement's need; the ESN
+alone (K = 0) on YMCA <= 0.010 (2D) and <= 0.008 (3D) position NRMSE; earlier goals
+(limit-scaled PD teacher) <= 0.03 (2D) and <= 0.06 (3D).
+"""
+
+from __future__ import annotations
+
+from skinny_mj.engine.experiment import RunFailed
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.training.config import TrainConfig
+
+NAME = "dynamic"
+#: The movements: YMCA, the recorded-like YMCA (never still, marker noise) and the
+#: md_02 excerpt of the ``md02`` rows (``--movement`` replaces it)
+YMCA, RECORDED, CLIP = "ymca", "ymca-recorded", "md_02.amc@start=3,duration=6.26"
+#: epochs of K 1 -> 0: the limit-scaled teacher's FEL rows, the inertia-scaled one's
+EPOCHS, ARM_EPOCHS = 10, 15
+#: controller id -> TrainConfig overrides
+CONTROLLERS = {
+    "pd": {"rule": "none", "test.gain": 1.0},
+    "ct": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "computed-torque"},
+    "fel-orig": {"rule": "original"},
+    "fel-new": {"rule": "new", "rule.beta": 0.1},
+    "fel-new-gff": {"rule": "new", "rule.beta": 0.1, "actuation.gravity_feedforward": True},
+    "tt": {"rule": "true-target", "rule.beta": 0.1},
+}
+#: The arm's own dynamics (skinny_mj.controllers.torque_arm): the textbook controllers
+#: alone (K = 1) and FEL with the inertia-scaled PD teacher (beta = 1, 3 learning cycles
+#: per epoch, 15 epochs of K 1 -> 0; readout on the normal equations with forgetting
+#: 0.8, ridge 1e-2, or on each cycle alone, or by RLS)
+ARM_FEL = {"rule": "new", "rule.beta": 1.0, "rule.cycles": 3, "rule.epochs": ARM_EPOCHS,
+           "actuation.feedback": "inertia-pd", "rule.fit": "forgetting"}
+ARM_CONTROLLERS = {
+    "arm-ct": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "ct"},
+    "arm-idpd": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "id-pd"},
+    "arm-pdg": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "pd-gravity"},
+    "arm-pd": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "inertia-pd"},
+    "fel-arm": ARM_FEL,
+    "fel-arm-cycle": {**ARM_FEL, "rule.fit": "cycle"},
+    "fel-arm-rls": {**ARM_FEL, "rule.fit": "rls"},
+}
+#: The 3D arm's ESN in the arm-dynamics rows (2D: the default 200 units), and its FEL's
+#: learning cycles per epoch (2D: 3); the search that chose 6 (omega, forgetting,
+#: reservoir size, epochs, cycles) is in docs/results/dynamic.md
+ARM_3D = {"esn.n_reservoir": 500}
+ARM_3D_CYCLES = 6
+#: perturbation id -> test-plant changes
+PERTURBATIONS = {"payload1": {"actuation.test_payload_kg": 1.0},
+                 "mass+20": {"actuation.test_mass_scale": 1.2},
+                 "mass-20": {"actuation.test_mass_scale": 0.8}}
+#: goals for the ESN alone on YMCA (position NRMSE), by body: the limit-scaled PD
+#: teacher's (GOALS) and the inertia-scaled teacher's (ARM_GOALS); computed torque's
+#: joint-angle NRMSE goal and its torque budget (x the movement's mean |tau| need)
+GOALS = {"2d": 0.03, "3d": 0.06}
+ARM_GOALS = {"2d": 0.010, "3d": 0.008}
+CT_JOINT_GOAL, TORQUE_BUDGET = 0.008, 1.5
+TABLE_COLUMNS = {"position_nrmse": "test position NRMSE", "joint_nrmse": "joint-angle NRMSE",
+                 "motor_nrmse": "test motor NRMSE",
+                 "mean_abs_torque_nm": "mean |τ| (N m)", "energy_j": "motor work (J)",
+                 "max_torque_ratio": "max |τ|/limit", "warnings": "MuJoCo warnings",
+                 "train_wall_s": "wall per run (s)"}
+BODIES = {"2d": 4, "3d": 8}
+#: ``--quick`` (a smoke test): 2 epochs of every FEL row (the long rows 2 x 2)
+QUICK_EPOCHS = 2
+
+
+def _fel(epochs: int, factor: int = 1) -> dict:
+    """A FEL row's epochs, and what --quick makes of them."""
+    return {"overrides": {"rule.epochs": epochs * factor},
+            "quick": {"rule.epochs": QUICK_EPOCHS * factor}}
+
+
+def _row(row_id: str, overrides: dict, epochs: int | None = None, factor: int = 1) -> Row:
+    """A row; ``epochs``: a FEL row's epochs of K 1 -> 0 (None: nothing learned by FEL)."""
+    if epochs is None:
+        return Row(row_id, overrides)
+    fel = _fel(epochs, factor)
+    return Row(row_id, {**overrides, **fel["overrides"]}, quick=fel["quick"])
+
+
+def _learns(changes: dict) -> bool:
+    return changes.get("rule") in ("original", "new")
+
+
+def _rows() -> tuple[Row, ...]:
+    out = []
+    for bd, dof in BODIES.items():
+        for mv, traj in (("ymca", YMCA), ("md02", None)):
+            where = {"plant.dof": dof, **({} if traj is None else {"movement.trajectory": traj})}
+            for ctl, changes in CONTROLLERS.items():
+                out.append(_row(f"{bd}-{mv}-{ctl}", {**where, **changes},
+                                EPOCHS if _learns(changes) else None))
+    ymca2 = {"plant.dof": 4, "movement.trajectory": YMCA}
+    for pert, changes in PERTURBATIONS.items():
+        for ctl, gain in (("fel-new-gff-k0", 0.0), ("fel-new-gff-k1", 1.0)):
+            out.append(_row(f"2d-ymca-{pert}-{ctl}", {**ymca2, **CONTROLLERS["fel-new-gff"],
+                                                      "test.gain": gain, **changes}, EPOCHS))
+        out.append(_row(f"2d-ymca-{pert}-pd", {**ymca2, **CONTROLLERS["pd"], **changes}))
+    out.append(_row("2d-ymca-kinematic", {**ymca2, "actuation": "velocity", "rule": "new"},
+                    EPOCHS))
+    for bd, dof in BODIES.items():  # appended last, so the rows above keep their seeds
+        for ctl in ("pd", "ct", "fel-new", "fel-new-gff"):
+            changes = CONTROLLERS[ctl]
+            out.append(_row(f"{bd}-rec-{ctl}", {"plant.dof": dof, "movement.trajectory":
+                                                RECORDED, **changes},
+                            EPOCHS if _learns(changes) else None))
+    for bd, dof in BODIES.items():  # the arm's own dynamics, appended after every earlier row
+        size = {} if dof == 4 else ARM_3D
+        cycles = {} if dof == 4 else {"rule.cycles": ARM_3D_CYCLES}
+        for mv, traj in (("ymca", YMCA), ("rec", RECORDED)):
+            for ctl, changes in ARM_CONTROLLERS.items():
+                if mv == "rec" and ctl in ("fel-arm-cycle", "fel-arm-rls"):
+                    continue
+                learns = _learns(changes)
+                out.append(_row(f"{bd}-{mv}-{ctl}", {"plant.dof": dof, "movement.trajectory":
+                                                     traj, **changes, **size,
+                                                     **(cycles if learns else {})},
+                                ARM_EPOCHS if learns else None))
+        for pert, changes in PERTURBATIONS.items() if bd == "2d" else ():
+            for ctl, gain in (("fel-arm-k0", 0.0), ("fel-arm-k1", 1.0)):
+                out.append(_row(f"{bd}-ymca-{pert}-{ctl}", {
+                    "plant.dof": dof, "movement.trajectory": YMCA, **ARM_FEL, **size,
+                    **cycles, "test.gain": gain, **changes}, ARM_EPOCHS))
+            out.append(_row(f"{bd}-ymca-{pert}-arm-ct", {
+                "plant.dof": dof, "movement.trajectory": YMCA, **ARM_CONTROLLERS["arm-ct"],
+                **changes}))
+    for mv, traj in (("ymca", YMCA), ("rec", RECORDED)):  # 3 cycles x 30 epochs instead
+        out.append(_row(f"3d-{mv}-fel-arm-long", {"plant.dof": 8, "movement.trajectory": traj,
+                                                  **ARM_FEL, **ARM_3D},
+                        ARM_EPOCHS, 2))
+    return tuple(out)
+
+
+def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
+    """``table``, ``robust``, ``kinematic``, each per body (``table-2d``, ...), the
+    arm-dynamics rows' (``arm-table``, ``arm-robust``, ...), and each body's rows."""
+    out: dict[str, tuple[str, ...]] = {}
+    for row in rows:
+        kind = "kinematic" if row.id.endswith("kinematic") else \
+            "robust" if any(p in row.id for p in PERTURBATIONS) else "table"
+        arm = "arm" in row.id.split("-")
+        for g in (kind, f"{kind}-{row.id[:2]}", row.id[:2],
+                  *((f"arm-{kind}", f"arm-{kind}-{row.id[:2]}") if arm else ())):
+            out[g] = (*out.get(g, ()), row.id)
+    return out
+
+
+def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
+    """Several seeds of one row in lockstep; seed by seed what each gets alone."""
+    from skinny_mj.training.loop import train_batch
+    from skinny_mj.training.torque import joint_nrmse
+
+    out = []
+    for o in train_batch(config, seeds):
+        m = o.metrics
+        if m["failed"]:
+            out.append(RunFailed(m.get("fail_reason") or "diverged"))
+            continue
+        metrics = {"position_nrmse": m["test"]["position_nrmse"],
+                   "motor_nrmse": m["test"]["motor_nrmse"], "train_wall_s": m["wall_s"],
+                   "joint_nrmse": joint_nrmse(o)}
+        train = m.get("train", {})
+        for key in ("position_nrmse", "feedback_share", "error_signal_share"):
+            if key in train:  # learning curves, per epoch (kept in the run file)
+                metrics[f"curve_{key}"] = train[key]
+        tq = m["test"].get("torque")
+        if tq is not None:
+            metrics.update({k: tq[k] for k in ("mean_abs_torque_nm", "energy_j",
+                                               "max_commanded_ratio", "max_applied_ratio")})
+            metrics["max_torque_ratio"] = max(tq["max_commanded_ratio"],
+                                              tq["max_applied_ratio"])
+            metrics["warnings"] = tq["warnings"] + (m.get("train_warnings") or 0)
+        out.append(metrics)
+    return out
+
+
+ROWS = _rows()
+STUDY = Study(
+    name=NAME, description=__doc__, rows=ROWS, runs=10, groups=_groups(ROWS),
+    # every row on the torque twin with Cartesian signals; the md02 rows' movement is
+    # the base's (--movement replaces it)
+    base=TrainConfig().override({"actuation": "torque", "plant.signals": "cartesian",
+                                 "movement.trajectory": CLIP}),
+    run_batch=run_batch, columns=TABLE_COLUMNS,
+    # a smoke test, not a reproduction: 2 runs, 2 epochs of each FEL row
+    quick=Quick(runs=2), takes=("movement", "signals"),
+    report="skinny_mj.experiments.dynamic.report:report",
+)

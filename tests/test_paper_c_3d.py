@@ -1,0 +1,37 @@
+"""Paper C on the 3D body (experiments/paper_c_3d.py) and the shared full scale it uses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from skinny_mj.experiments.paper_c import study as paper_c
+
+from skinny_mj.engine import registry
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.parts import full_scale_speeds, load_trajectory
+
+
+def test_shared_full_scale_is_the_fastest_joints_for_every_joint():
+    own = TrainConfig().override({"plant.dof": 8, "plant.signals": "joint"})
+    per_joint = full_scale_speeds(own, load_trajectory(own)[0])
+    shared = own.override({"movement.full_scale": "shared"})
+    speeds = full_scale_speeds(shared, load_trajectory(shared)[0])
+    assert per_joint.min() < per_joint.max() / 5  # the 3D joints' scales differ widely
+    np.testing.assert_array_equal(speeds, np.full(8, per_joint.max()))
+    with pytest.raises(SkinnyInputError, match="full scale must be one of"):
+        own.override({"movement.full_scale": "per-arm"})
+
+
+def test_paper_c_3d_is_paper_c_on_the_3d_body_with_one_full_scale():
+    module = registry.get("paper-c-3d")
+    exp, two_d = module.build(), paper_c.build()
+    assert exp.name == "paper-c-3d" and [r.row_id for r in exp.rows] == \
+        [r.row_id for r in two_d.rows] and exp.runs == two_d.runs
+    config = paper_c.train_config(exp.config, "ymca")
+    assert (config.plant.dof, config.plant.signals, config.movement.full_scale) == \
+        (8, "joint", "shared")
+    assert config.override({"plant.dof": 4, "movement.full_scale": "per-joint"}) == \
+        paper_c.train_config(two_d.config, "ymca")  # nothing else differs from paper C
+    with pytest.raises(SkinnyInputError, match="paper-c --dof"):
+        module.build(dof=4)

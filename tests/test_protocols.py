@@ -1,0 +1,58 @@
+"""Named protocols (skinny_mj.engine.protocols): declared readings applied to a study."""
+
+from __future__ import annotations
+
+import types
+
+import pytest
+from skinny_mj.experiments import paper_d
+from skinny_mj.experiments.paper_e import study as paper_e
+
+from skinny_mj.cli.parser import main
+from skinny_mj.engine import protocols, registry
+from skinny_mj.engine.plan import plan
+from skinny_mj.errors import SkinnyInputError
+
+
+def test_every_reading_says_what_it_rests_on_and_reaches_its_studies():
+    for protocol in protocols.PROTOCOLS.values():
+        for reading in protocol.readings:
+            assert len(reading.rests_on) > 80, reading.setting
+            for name in reading.studies:
+                study = protocols.apply(protocol.name, registry.get(name), name)
+                base = plan(study).base.to_dict()
+                assert all(base[k] == v for k, v in reading.overrides.items()), name
+                assert all(study.params[k] == v for k, v in reading.params.items()), name
+
+
+def test_thesis_reading_on_paper_e_keeps_each_rows_own_settings():
+    study = protocols.apply("thesis", paper_e.STUDY, "paper-e")
+    for row in ("1", "2", "5", "fig5a-nu0.1"):
+        config, default = plan(study).config(row), plan(paper_e.STUDY).config(row)
+        assert config.movement.trajectory == "ymca-recorded"
+        assert config.rule.u_error_gain == 2.0 != default.rule.u_error_gain
+        assert config.override({"movement.trajectory": "ymca", "rule.u_error_gain": 1.0}) \
+            == default  # nothing else changed: the row's method, noise, repetitions
+    # --movement is the user's: it still wins over the reading
+    assert plan(study, movement="ymca").config("5").movement.trajectory == "ymca"
+
+
+def test_thesis_reading_reaches_paper_d_true_target_half():
+    study = protocols.apply("thesis", paper_d.STUDY, "paper-d")
+    both = plan(study).trainings("2")
+    assert both["tt"].rule.input_noise == 0.01
+    assert both["fel"].rule.u_error_gain == 2.0
+    assert both["tt"].movement.trajectory == both["fel"].movement.trajectory == "ymca-recorded"
+    assert plan(paper_d.STUDY).trainings("2")["tt"].rule.input_noise == 0.0
+
+
+def test_refusals_name_what_is_wrong_in_one_line(capsys):
+    with pytest.raises(SkinnyInputError, match="reads no setting of 'generalization'"):
+        protocols.apply("thesis", registry.get("generalization"), "generalization")
+    with pytest.raises(SkinnyInputError, match="not declared as data"):
+        protocols.apply("thesis", types.ModuleType("old_form"), "paper-e")
+    with pytest.raises(SkinnyInputError, match="unknown protocol 'nope'; protocols: thesis"):
+        protocols.get("nope")
+    assert main(["experiment", "paper-a", "--protocol", "thesis", "--quick"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "reads no setting of 'paper-a'" in err
