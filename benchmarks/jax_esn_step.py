@@ -21,7 +21,7 @@ import sys
 import numpy as np
 from skinny_mj.controllers.esn import ESN, ESNConfig
 
-from skinny_mj.cli.bench import interleaved
+from skinny_mj.cli.bench_timing import interleaved
 
 
 def figure(n_runs: int, n_res: int, n_steps: int, repeats: int, dense: bool) -> dict:
