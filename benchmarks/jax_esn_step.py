@@ -17,20 +17,11 @@ from __future__ import annotations
 import itertools
 import os
 import sys
-import time
 
 import numpy as np
 from skinny_mj.controllers.esn import ESN, ESNConfig
 
-
-def interleaved(fns: dict, repeats: int) -> dict[str, float]:
-    best = dict.fromkeys(fns, np.inf)
-    for _ in range(repeats):
-        for key, fn in fns.items():
-            start = time.perf_counter()
-            fn()
-            best[key] = min(best[key], time.perf_counter() - start)
-    return best
+from skinny_mj.cli.bench_timing import interleaved
 
 
 def figure(n_runs: int, n_res: int, n_steps: int, repeats: int, dense: bool) -> dict:

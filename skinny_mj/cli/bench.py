@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from skinny_mj.cli.bench_mackey_glass import mackey_glass
+from skinny_mj.cli.bench_timing import interleaved
 from skinny_mj.cli.bench_torque import torque_over_kinematic
 
 GOALS = {
@@ -44,17 +45,6 @@ GOALS = {
     "mackey_glass_log10_nrmse84": ("<=", -4.5),
 }
 N_RUNS = 20  # R of the lockstep figures
-
-
-def interleaved(fns: dict[str, Callable[[], Any]], repeats: int) -> dict[str, float]:
-    """Best wall time (s) of each callable over ``repeats`` interleaved rounds."""
-    best = {k: np.inf for k in fns}
-    for _ in range(repeats):
-        for key, fn in fns.items():
-            start = time.perf_counter()
-            fn()
-            best[key] = min(best[key], time.perf_counter() - start)
-    return best
 
 
 def _movement(n_steps: int):

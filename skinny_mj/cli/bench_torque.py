@@ -12,7 +12,7 @@ def torque_over_kinematic(n_runs: int, repeats: int, epochs: int | None = None) 
     cycles) over ``2d-ymca-kinematic`` (the velocity servo, paper E's 10 epochs of 5
     cycles), ``n_runs`` seeds in lockstep each, timed interleaved (best of ``repeats``);
     ``epochs`` shortens both to that many (a smoke test of this figure)."""
-    from skinny_mj.cli.bench import interleaved
+    from skinny_mj.cli.bench_timing import interleaved
     from skinny_mj.engine import registry
     from skinny_mj.training.loop import train_batch
 

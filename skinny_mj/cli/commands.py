@@ -372,12 +372,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     the selected rows, write table/claims/report; exit 1 if any run errored (a bug)."""
     from skinny_mj.engine import registry
 
-    if args.name == "list":
-        from skinny_mj.cli.study_help import list_text
-
-        print(list_text())
-        return 0
-    module = registry.get(args.name)
+    module = registry.get(args.name)  # `experiment list` is answered by the parser's main
     rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
     options = {"quick": bool(args.quick), "movement": args.movement,
                "asf": None if args.asf is None else str(args.asf), "dof": args.dof,

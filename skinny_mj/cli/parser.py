@@ -282,10 +282,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.given = given_options(argv)  # which flags override the file
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
     os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
-    from skinny_mj.cli import commands
-
-    handler = getattr(commands, f"cmd_{args.command}")
     try:
+        if args.command == "experiment" and args.name == "list":  # reads the studies' source
+            from skinny_mj.cli.study_help import list_text  # only: no NumPy, no study
+
+            print(list_text())
+            sys.stdout.flush()
+            return 0
+        from skinny_mj.cli import commands
         from skinny_mj.preflight import check_gl
         from skinny_mj.threads import one_blas_thread
 
@@ -294,7 +298,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         check_args(args)  # every numeric flag in its range (seed >= 0, ...), before any work
         with one_blas_thread():  # same bits whatever the machine's BLAS threads
-            code = int(handler(args) or 0)
+            code = int(getattr(commands, f"cmd_{args.command}")(args) or 0)
         sys.stdout.flush()  # a closed pipe shows here, not as exit 120 at shutdown
         return code
     except SkinnyInputError as err:
