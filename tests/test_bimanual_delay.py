@@ -1,4 +1,4 @@
-"""Bimanual coordination under delay (issue 16): the per-arm forward models' inputs and
+"""Bimanual coordination under delay: the per-arm forward models' inputs and
 fits, their config, lockstep determinism, and the report's table on known records."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Crash safety (issue 15): a sweep killed with SIGKILL at random (seeded) points, several
+"""Crash safety: a sweep killed with SIGKILL at random (seeded) points, several
 times, then ``--resume``, ends with the results of an uninterrupted sweep; no finished
 run is lost or redone, and no run file on disk is ever damaged.
 

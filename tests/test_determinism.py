@@ -1,4 +1,4 @@
-"""Determinism (issue 15): the same seed gives the same run files, byte for byte but for
+"""Determinism: the same seed gives the same run files, byte for byte but for
 the clock (``wall_s``, ``finished_at``, ``*_wall_s`` metrics), across processes, worker
 counts, joblib and Dask, and lockstep vs one run at a time.
 

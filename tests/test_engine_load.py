@@ -1,4 +1,4 @@
-"""Load (issue 15): the parent's memory does not grow with the run records of a sweep.
+"""Load: the parent's memory does not grow with the run records of a sweep.
 
 A fresh process runs 800 trivial runs, each with a 400-float trace in its run file
 (~9 KB a run); the parent's peak RSS over its baseline must stay far below what holding

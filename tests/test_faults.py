@@ -1,4 +1,4 @@
-"""Environment and numerical faults (issue 15): each ends in one line and the right exit
+"""Environment and numerical faults: each ends in one line and the right exit
 code (1: the machine, 2: the input), before the long work where it can be checked, with
 nothing half-written; a diverging run is a failed run with its reason and the sweep goes
 on. Paths into other folders never appear in a command's output.

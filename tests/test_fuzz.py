@@ -1,4 +1,4 @@
-"""Fuzzing the readers of user input (issue 15): every case is a correct result or one
+"""Fuzzing the readers of user input: every case is a correct result or one
 SkinnyInputError, never another exception.
 
 Inputs: trajectory files (.npz, .csv), ASF/AMC and BVH motion capture, training configs

@@ -1,4 +1,4 @@
-"""Fuzzing ``skinny`` itself (issue 15): random argv lists, in process.
+"""Fuzzing ``skinny`` itself: random argv lists, in process.
 
 Each case ends in exit 0, a one-line error (exit 2 bad input, exit 1 environment), or
 argparse's usage error (exit 2), or reaches the long work, which is stubbed out here

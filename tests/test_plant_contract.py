@@ -233,7 +233,7 @@ def test_protocol_attributes_and_shapes(case):
 def test_saturating_commands_keep_the_physics_valid(case):
     """Finite returns, and no MuJoCo warning: on a diverging state MuJoCo resets the
     whole MjData (every run of a batch) and only logs it, so finite is not enough. (The 3D
-    torque twin diverged here until its shoulder hinges got armature, issue 14.)"""
+    torque twin diverged here until its shoulder hinges got armature.)"""
     plant = case.make(_seeds(case), 0.01)
     rec = drive(plant, commands(case, 4 * EPISODE, amp=1.5))
     for name in ("sensed", "true", "angles", "jacobian"):

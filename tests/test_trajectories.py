@@ -186,7 +186,7 @@ def test_bimanual_patterns_are_regenerated_at_a_speed_not_resampled():
 
 def test_names_and_unknown_name():
     family = {"ymca", "y", "y-pure", "ym", "mirror-right", "mirror-left",
-              "ymca-smooth", "ymca-recorded", "ymca-recorded-unit2d"}  # issue 12
+              "ymca-smooth", "ymca-recorded", "ymca-recorded-unit2d"}  # the recorded-like data
     assert set(names()) == family | {f"bimanual-{p}" for p in PATTERNS}
     with pytest.raises(SkinnyInputError, match="valid names: ymca"):
         get("macarena", 4)

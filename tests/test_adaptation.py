@@ -1,5 +1,5 @@
-"""Adaptation's body changes (issue 16, item 4): the longer forearm (an MjSpec variant
-swapped into the running model), the torque twin's payload and heavier links, and the
+"""The adaptation study's body changes: the longer forearm (an MjSpec variant swapped
+into the running model), the torque twin's payload and heavier links, and the
 defaults left as they were."""
 
 from __future__ import annotations

@@ -1,5 +1,7 @@
-"""Issue 16 ("go past the thesis"): the RLS readout, ridge selection on a validation
-cycle, the rollout's online hook, the perturbed plant, the β method without a plant."""
+"""The readouts and loops beyond the thesis's: the RLS readout (controllers.readout), ridge
+selection on a validation cycle (controllers.ridge_select), the rollout's online hook
+(controllers.rollout), the perturbed plant, the β method without a plant
+(controllers.generation)."""
 
 from __future__ import annotations
 

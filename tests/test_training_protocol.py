@@ -1,5 +1,5 @@
-"""Issue 12: the recorded-like YMCA, explicit desired signals, position retargeting and
-the toolbox's protocol options (each default = today's behaviour)."""
+"""Faithful data and protocol: the recorded-like YMCA, explicit desired signals, position
+retargeting and the toolbox's protocol options (each default = today's behaviour)."""
 
 import numpy as np
 import pytest
