@@ -116,7 +116,8 @@ def test_feedback_share_is_the_gain_times_the_error_signal():
 @pytest.mark.parametrize("dof", [4, 8])
 def test_the_batch_arm_state_mass_matrix_is_each_robots_block_of_mj_fullm(dof):
     """BatchArmState gathers each robot's M(q) from the batch's sparse M: the same bits as
-    mj_fullM's dense matrix, cut into the robots' diagonal blocks (zeros off the tree)."""
+    mj_fullM's dense matrix cut into the robots' diagonal blocks (zeros off the tree), in
+    the same memory layout, so that the arm laws' M(q) products round alike."""
     import mujoco
 
     from skinny_mj.plant.adapters import BatchPlant
@@ -132,7 +133,10 @@ def test_the_batch_arm_state_mass_matrix_is_each_robots_block_of_mj_fullm(dof):
         mujoco.mj_forward(m, d)
         full = np.zeros((m.nv, m.nv))
         mujoco.mj_fullM(m, d, full)
-        adr = state.adr
-        blocks = [full[r * n1 + adr][:, r * n1 + adr] for r in range(3)]
-        assert np.array_equal(state.mass(), np.stack(blocks))
-        assert not np.array_equal(blocks[0], np.diag(np.diag(blocks[0])))  # coupled joints
+        runs, adr = np.arange(3), state.adr
+        dense = full.reshape(3, n1, 3, n1)[runs, :, runs, :][:, adr][:, :, adr]
+        mass = state.mass()
+        assert np.array_equal(mass, dense) and mass.strides == dense.strides
+        acc = rng.standard_normal((3, len(adr), 1))
+        assert np.array_equal(np.matmul(mass, acc), np.matmul(dense, acc))
+        assert not np.array_equal(dense[0], np.diag(np.diag(dense[0])))  # coupled joints

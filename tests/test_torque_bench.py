@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 from skinny_mj.cli import bench
-from skinny_mj.cli.bench_torque import torque_over_kinematic
 
 
 def test_torque_figure_times_the_dynamic_studys_two_rows_and_is_a_goal():
-    fig = torque_over_kinematic(1, 1, epochs=1)
+    fig = bench.torque_over_kinematic(1, 1, epochs=1)
     assert (fig["R"], fig["torque_epochs"], fig["kinematic_epochs"]) == (1, 1, 1)
     assert fig["torque_s"] > 0 and fig["kinematic_s"] > 0
     assert fig["ratio"] == fig["torque_s"] / fig["kinematic_s"]

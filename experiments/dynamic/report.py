@@ -18,7 +18,15 @@ from skinny_mj.experiments.dynamic.study import (
     YMCA,
 )
 
-from skinny_mj.training.torque import feasibility, torque_movement
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.parts import load_trajectory
+from skinny_mj.training.torque import feasibility
+
+
+def torque_movement(dof: int, name: str):
+    """The movement ``name`` as the torque body of ``dof`` DOFs loads it."""
+    return load_trajectory(TrainConfig().override({
+        "plant.dof": dof, "movement.trajectory": name, "actuation": "torque"}))[0]
 
 
 def feasibility_table(movements: tuple[str, ...], bodies: tuple[str, ...]) -> list[str]:

@@ -107,18 +107,13 @@ BODIES = {"2d": 4, "3d": 8}
 QUICK_EPOCHS = 2
 
 
-def _fel(epochs: int, factor: int = 1) -> dict:
-    """A FEL row's epochs, and what --quick makes of them."""
-    return {"overrides": {"rule.epochs": epochs * factor},
-            "quick": {"rule.epochs": QUICK_EPOCHS * factor}}
-
-
 def _row(row_id: str, overrides: dict, epochs: int | None = None, factor: int = 1) -> Row:
-    """A row; ``epochs``: a FEL row's epochs of K 1 -> 0 (None: nothing learned by FEL)."""
+    """A row; ``epochs``: a FEL row's epochs of K 1 -> 0 (x ``factor``; --quick: 2 x
+    ``factor``), None for a row that learns nothing by FEL."""
     if epochs is None:
         return Row(row_id, overrides)
-    fel = _fel(epochs, factor)
-    return Row(row_id, {**overrides, **fel["overrides"]}, quick=fel["quick"])
+    return Row(row_id, {**overrides, "rule.epochs": epochs * factor},
+               quick={"rule.epochs": QUICK_EPOCHS * factor})
 
 
 def _learns(changes: dict) -> bool:

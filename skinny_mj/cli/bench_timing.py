@@ -1,7 +1,7 @@
 """How ``skinny bench`` times a figure: both sides in one process, interleaved.
 
-A module of its own so that each figure's module (:mod:`skinny_mj.cli.bench`,
-:mod:`skinny_mj.cli.bench_torque`) times the same way without importing the other.
+A module of its own so that ``skinny bench`` and the benchmarks under ``benchmarks/`` time
+the same way.
 """
 
 from __future__ import annotations

@@ -243,14 +243,6 @@ class ShareRecorder:
         self.share[:, epoch] = self.gains[epoch] * self.error_signal[:, epoch]
 
 
-def torque_movement(dof: int, name: str):
-    """The movement ``name`` as the torque body of ``dof`` DOFs loads it."""
-    from skinny_mj.training.parts import load_trajectory
-
-    return load_trajectory(TrainConfig().override({
-        "plant.dof": dof, "movement.trajectory": name, "actuation": "torque"}))[0]
-
-
 def joint_nrmse(outcome) -> float:
     """Test joint-angle NRMSE (each angle normalized to [-1, 1] over its range) of a
     :class:`skinny_mj.training.loop.TrainOutcome` against its movement's angles."""
