@@ -14,7 +14,6 @@ from __future__ import annotations
 import json
 import re
 import shutil
-from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +23,7 @@ from skinny_mj.experiments.three_d.study import (
     PAPERS,
     module,
     paper_experiment,
+    recorded,
     row_id,
     subset,
 )
@@ -100,7 +100,7 @@ def write_views(out_dir: Path, runs: list[dict], cfg: dict) -> dict[str, Path]:
             shutil.rmtree(view / "runs", ignore_errors=True)
             (view / "runs").mkdir(parents=True)
             atomic_write_json(view / "config.json", {"experiment": exp.name,
-                                                     "config": asdict(exp.config)})
+                                                     "config": recorded(exp)})
             for rec in runs:
                 if rec["params"].get("paper") != p or rec["params"].get("dim") != dim:
                     continue

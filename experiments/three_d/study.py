@@ -96,7 +96,7 @@ def paper_experiment(paper: str, dim: str, quick: bool, dof: int, signals: str) 
     return module(paper).build(quick=quick, **body)
 
 
-def _recorded(exp: Experiment) -> dict:
+def recorded(exp: Experiment) -> dict:
     """A paper's own sweep config as its config.json records it."""
     return exp.config.to_dict() if hasattr(exp.config, "to_dict") else asdict(exp.config)
 
@@ -176,7 +176,7 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
     base = Config(quick=quick, dof=8 if dof is None else int(dof),
                   signals="cartesian" if signals is None else str(signals),
                   runs=2 if quick else 10)
-    papers = {f"{p}-{d}": _recorded(paper_experiment(p, d, quick, base.dof, base.signals))
+    papers = {f"{p}-{d}": recorded(paper_experiment(p, d, quick, base.dof, base.signals))
               for p in PAPERS for d in DIMS}
     cfg = Config(base.quick, base.dof, base.signals, base.runs, papers)
     groups = {**{p: tuple(row_id(p, d, r) for d in DIMS for r in ids)
