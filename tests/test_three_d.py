@@ -51,10 +51,11 @@ def test_rows_are_the_papers_own_on_both_bodies_the_3d_twin_on_the_2d_seeds():
             assert {k: v for k, v in row.params.items() if k not in ("paper", "dim", "row")} \
                 == dict(own[rid].params)
     papers = exp.config.papers
-    plant = {k: papers[k]["model"]["plant"] for k in ("a-2d", "a-3d", "b-3d")}
+    plant = {k: papers[k]["model"]["plant"] for k in ("a-2d", "a-3d")}
     assert (plant["a-2d"]["dof"], plant["a-2d"]["signals"]) == (4, "joint")
     assert (plant["a-3d"]["dof"], plant["a-3d"]["signals"]) == (8, "cartesian")
-    assert (papers["c-3d"]["dof"], plant["b-3d"]["dof"]) == (8, 8)
+    # paper B is a Study: its plan's dict, the base's keys dotted
+    assert (papers["c-3d"]["dof"], papers["b-3d"]["base"]["plant.dof"]) == (8, 8)
     assert set(exp.groups["3d"]) == {i for i in ids if "-3d-" in i}
     with pytest.raises(SkinnyInputError, match="do not apply"):
         three_d.build(movement="ymca")
