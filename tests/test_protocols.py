@@ -56,3 +56,10 @@ def test_refusals_name_what_is_wrong_in_one_line(capsys):
     assert main(["experiment", "paper-a", "--protocol", "thesis", "--quick"]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "reads no setting of 'paper-a'" in err
+
+
+def test_a_studys_help_names_the_protocols_that_read_its_settings():
+    from skinny_mj.cli.study_help import study_help
+
+    assert "Protocols (--protocol NAME): thesis (the training data;" in study_help("paper-e")
+    assert "--protocol NAME" not in study_help("generalization")

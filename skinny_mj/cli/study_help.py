@@ -170,6 +170,11 @@ def study_help(name: str) -> str:
         parts.append(_wrap("Groups (--rows GROUP)", "; ".join(
             _group(g, m, exp.groups) for g, m in exp.groups.items())))
     parts.append(_wrap("Runs per row", _runs_per_row(exp)))
+    from skinny_mj.engine import protocols  # here: `skinny experiment list` loads no study
+
+    if read := [f"{p.name} ({'; '.join(r.setting for r in p.readings_for(name))})"
+                for p in protocols.PROTOCOLS.values() if p.readings_for(name)]:
+        parts.append(_wrap("Protocols (--protocol NAME)", ", ".join(read)))
     effects = option_effects(module, exp)
     parts.append(_wrap("Options", "; ".join(f"--{k}: {v}" for k, v in effects.items())
                        + f"; --quick: a smoke test of {n_quick} runs. Every study also "

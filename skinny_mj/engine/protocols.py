@@ -102,6 +102,15 @@ THESIS = Protocol(
             "1 > 2 > 3a ~ 3b ~ 4; 0.05 keeps it on the smooth YMCA only. The thesis "
             "states none",
             params={"tt_input_noise": 0.01}, reproduces=True),
+        Reading(
+            "paper B's spectral radius and reservoir noise", ("paper-b",),
+            "measured (a sweep of spectral radius {0.5, 0.9} x reservoir noise {0.2, 0.02}, "
+            "every pattern, 2 runs per cell): 0.9 / 0.02 has the lowest mean relative error "
+            "over the eight patterns at the trained speed (0.313; 0.5 / 0.02 0.316, 0.9 / 0.2 "
+            "0.411, the default 0.5 / 0.2 0.420), a criterion written down before the sweep "
+            "ran that looks at learning only, not at which patterns the thesis says fail. The "
+            "thesis states neither",
+            overrides={"esn.spectral_radius": 0.9, "esn.noise_level": 0.02}),
     ),
 )
 #: name -> protocol (``skinny experiment NAME --protocol NAME``).
