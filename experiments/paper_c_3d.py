@@ -37,3 +37,4 @@ def build(quick: bool = False, movement: str | None = None, asf: str | None = No
 
 
 report = paper_c.report
+train_configs = paper_c.train_configs  # what a row trains, for the memory estimate
