@@ -74,7 +74,7 @@ def _info_markdown(title: str, dof: int, dof_names: Sequence[str], signal_names:
     lines = [f"# {title or 'Skinny-MJ run'}", "",
              f"{dof} DOF, {steps} steps of {dt * 1000:g} ms ({steps * dt:.2f} s).", "",
              "| DOF | range (deg) |", "|---|---|"]
-    ranges = np.degrees(body.joint_ranges(dof)) if dof in body.ARM_JOINTS else None
+    ranges = np.degrees(body.joint_ranges(dof)) if dof in body.BODIES else None
     for i, name in enumerate(dof_names):
         rng = "?" if ranges is None else f"{ranges[i, 0]:.0f} .. {ranges[i, 1]:.0f}"
         lines.append(f"| {name} | {rng} |")

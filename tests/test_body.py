@@ -20,10 +20,7 @@ from skinny_mj.plant.model import check_body, load_model, models_dir
 @pytest.fixture
 def six(tmp_path, monkeypatch):
     """Skinny without shoulder rotation (dof 6), its MJCF in tmp_path, not registered."""
-    monkeypatch.delitem(body.BODIES, 6, raising=False)
-    monkeypatch.delitem(body.ARM_JOINTS, 6, raising=False)
-    monkeypatch.setattr(body, "BODIES", dict(body.BODIES))
-    monkeypatch.setattr(body, "ARM_JOINTS", dict(body.ARM_JOINTS))
+    monkeypatch.setattr(body, "BODIES", {d: b for d, b in body.BODIES.items() if d != 6})
     shipped = models_dir()
     shutil.copy(shipped / "skinny_defaults.xml", tmp_path)
     robot = "\n".join(line for line in (shipped / "skinny_3d.xml").read_text().splitlines()
@@ -93,13 +90,21 @@ def test_check_body_names_what_the_mjcf_gets_wrong(six, tmp_path):
     assert any("sites' positions" in p for p in check_body(6))
 
 
-def test_another_package_adds_a_body_through_the_entry_point_group(six, monkeypatch):
+@pytest.fixture
+def fresh_entry_points():
+    """Entry points read anew in this test, and again after it."""
+    plugins.load_group.cache_clear()
+    yield
+    plugins.load_group.cache_clear()
+
+
+def test_another_package_adds_a_body_through_the_entry_point_group(six, monkeypatch,
+                                                                    fresh_entry_points):
     found = SimpleNamespace(name="six", value="pkg:SIX", load=lambda: six)
-    monkeypatch.setattr(body, "_entry_points_read", False)
     monkeypatch.setattr(plugins, "entry_points",
                         lambda group: [found] if group == body.BODY_GROUP else [])
     assert body.body_of(6) is six and check_body(6) == []
-    monkeypatch.setattr(body, "_entry_points_read", False)
+    plugins.load_group.cache_clear()
     bad = SimpleNamespace(name="bad", value="pkg:NOT_A_BODY", load=lambda: "six")
     monkeypatch.setattr(plugins, "entry_points", lambda group: [bad])
     with pytest.raises(SkinnyInputError, match="is not a skinny_mj.plant.body.Body"):

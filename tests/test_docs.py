@@ -46,7 +46,7 @@ def test_python_blocks_run(path, tmp_path, monkeypatch):
 
     monkeypatch.chdir(tmp_path)  # anything a block writes lands in the scratch folder
     # a page may register a body or a learning rule: for this test only
-    for module, name in ((body, "BODIES"), (body, "ARM_JOINTS"), (fits, "FITS")):
+    for module, name in ((body, "BODIES"), (fits, "FITS")):
         monkeypatch.setattr(module, name, dict(getattr(module, name)))
     namespace: dict = {"__name__": "__docs__"}
     for line, code, skipped in python_blocks(path.read_text()):

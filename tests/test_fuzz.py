@@ -47,7 +47,7 @@ BAD_TOKENS = ["nan", "NaN", "inf", "-inf", "1e309", "-1e309", "1e300", "-1e300",
 def _valid(traj: Trajectory, dof: int | None = None) -> None:
     """What a loader that did not raise must give: a well-formed trajectory."""
     assert isinstance(traj, Trajectory)
-    assert traj.angles.ndim == 2 and len(traj) >= 1 and traj.dof in body.ARM_JOINTS
+    assert traj.angles.ndim == 2 and len(traj) >= 1 and traj.dof in body.BODIES
     assert np.all(np.isfinite(traj.angles)) and math.isfinite(traj.dt) and traj.dt > 0
     if dof is not None:
         assert traj.dof == dof

@@ -50,7 +50,7 @@ def test_joints_match_body_contract(dof):
     model = load_model(dof)
     n_arm = dof // 2
     for k, side in enumerate(body.SIDES):
-        for i, spec in enumerate(body.ARM_JOINTS[dof]):
+        for i, spec in enumerate(body.body_of(dof).arm_joints):
             joint = model.joint(f"{side}_{spec.name}")
             assert model.body(joint.bodyid[0]).name == f"{side}_{spec.segment}"
             np.testing.assert_allclose(joint.axis, body.joint_axis(spec, side), atol=1e-15)

@@ -115,9 +115,6 @@ BODIES: dict[int, Body] = {
     8: Body(8, (_ABDUCTION, _FLEXION, _ROTATION, _ELBOW_3D), planar=False, label="3D",
             robot="skinny_3d.xml", scene="scene_3d.xml"),
 }
-#: Each body's right-arm hinges, by dof (a view of :data:`BODIES`, kept in step).
-ARM_JOINTS = {dof: b.arm_joints for dof, b in BODIES.items()}
-_entry_points_read = False
 
 
 def register_body(new: Body) -> Body:
@@ -131,25 +128,16 @@ def register_body(new: Body) -> Body:
     if old is not None and old != new:
         raise SkinnyInputError(f"dof {new.dof} is taken by the {old.label} body")
     BODIES[new.dof] = new
-    ARM_JOINTS[new.dof] = new.arm_joints
     return new
-
-
-def _read_entry_points() -> None:
-    global _entry_points_read
-    if _entry_points_read:
-        return
-    _entry_points_read = True
-    for _, found in plugins.load_group(BODY_GROUP, Body, "skinny_mj.plant.body.Body"):
-        register_body(found)
 
 
 def body_of(dof: object) -> Body:
     """The :class:`Body` chosen by ``dof``; an unknown dof is a :class:`SkinnyInputError`
     naming the known ones."""
     found = _lookup(dof)
-    if found is None and not isinstance(dof, bool):
-        _read_entry_points()
+    if found is None and not isinstance(dof, bool):  # another package's (read once)
+        for _, new in plugins.load_group(BODY_GROUP, Body, "skinny_mj.plant.body.Body"):
+            register_body(new)
         found = _lookup(dof)
     if found is None:
         known = " or ".join(f"{d} ({b.label})" for d, b in sorted(BODIES.items()))

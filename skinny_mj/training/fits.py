@@ -84,14 +84,9 @@ def make_rule(cfg: TrainConfig, esn: Any, steps: int) -> Any:
     return FITS[cfg.rule.fit].make(cfg, esn, steps)  # (the module's FITS, as registered)
 
 
-_entry_points_read = False
-
-
 def known(name: str) -> bool:
     """Is ``name`` a registered fit? An unknown name first reads :data:`FIT_GROUP`."""
-    global _entry_points_read
-    if name not in FITS and not _entry_points_read:
-        _entry_points_read = True
+    if name not in FITS:
         for found, fit in plugins.load_group(FIT_GROUP, Fit, "skinny_mj.training.fits.Fit"):
             FITS.setdefault(found, fit)
     return name in FITS

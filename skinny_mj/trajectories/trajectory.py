@@ -67,7 +67,7 @@ class Trajectory:
             raise SkinnyInputError(
                 f"trajectory {self.name!r}: angles must be (T>=1, n_dof), got shape {a.shape}"
             )
-        if a.shape[1] not in body.ARM_JOINTS:
+        if a.shape[1] not in body.BODIES:
             raise SkinnyInputError(
                 f"trajectory {self.name!r}: {a.shape[1]} columns, expected 4 (2D) or 8 (3D) DOFs"
             )
@@ -268,7 +268,7 @@ def _load_npz(path: Path) -> Trajectory:
         raise SkinnyInputError(f"not a readable trajectory npz ({exc})", path=path) from None
     if not isinstance(meta, dict):
         raise SkinnyInputError("'meta' must be a JSON object", path=path)
-    if angles.ndim != 2 or angles.shape[1] not in body.ARM_JOINTS:
+    if angles.ndim != 2 or angles.shape[1] not in body.BODIES:
         raise SkinnyInputError(f"angles must be (T, 4 or 8), got shape {angles.shape}", path=path)
     names = meta.get("dof_names")
     if names is not None and (not isinstance(names, list)
@@ -318,7 +318,7 @@ def _load_csv(path: Path) -> Trajectory:
         if header is None:
             header = cells
             n = len(header)
-            if n not in body.ARM_JOINTS or tuple(header) != body.dof_names(n):
+            if n not in body.BODIES or tuple(header) != body.dof_names(n):
                 raise SkinnyInputError(
                     f"header must be the DOF names of dof=4 {list(body.dof_names(4))} or "
                     f"dof=8, got {header}",
