@@ -50,12 +50,6 @@ def _valid_dof(text: str) -> object:
     return check_dof(int(text))
 
 
-def _valid_fit(text: str) -> object:
-    if not fits.known(text):
-        raise SkinnyInputError(f"fit must be one of {tuple(fits.FITS)}, got {text!r}")
-    return text
-
-
 def _checked(valid: Callable[[str], object]) -> Callable[[str], str]:
     def parse(text: str) -> str:
         try:
@@ -115,7 +109,7 @@ TRAIN_FLAGS: dict[str, list[Flag]] = {
              "λ chosen on a validation cycle (ridge-select, velocity body), or remembering "
              "earlier cycles: the normal equations with forgetting, or RLS (torque body); "
              f"one of {', '.join(FITS)} or a fit another package registered",
-             valid=_valid_fit),
+             valid=fits.check),
         Flag("--readout-forgetting", "rule.forgetting", "weight of earlier cycles per "
              "learning cycle, in [0, 1] (--readout-fit forgetting or rls)"),
         Flag("--tt-input-noise", "rule.input_noise", "SD of noise on the true target's "

@@ -194,7 +194,7 @@ class _FEL:
             (_at_least(self.gain_value, 0), f"feedback gain must be >= 0, got {self.gain_value}"),
             (_at_least(self.u_error_gain, 0) and self.u_error_gain > 0,
              f"u_error gain must be > 0, got {self.u_error_gain}"),
-            (fits.known(self.fit), f"fit must be one of {tuple(fits.FITS)}, got {self.fit!r}"),
+            (fits.known(self.fit), fits.refusal(self.fit)),
             (_at_least(self.forgetting, 0) and self.forgetting <= 1,
              f"forgetting must be in [0, 1], got {self.forgetting}"),
             (self.cycles is None or (isinstance(self.cycles, int) and self.cycles >= 1),

@@ -24,7 +24,8 @@ from skinny_mj.errors import SkinnyInputError
 if TYPE_CHECKING:
     from skinny_mj.training.config import TrainConfig
 
-__all__ = ["Fit", "FITS", "FIT_GROUP", "register_fit", "make_rule", "known"]
+__all__ = ["Fit", "FITS", "FIT_GROUP", "register_fit", "make_rule", "known", "check",
+           "refusal"]
 
 #: Entry-point group through which another package adds a fit (name = the fit's name,
 #: value = a :class:`Fit`).
@@ -82,6 +83,18 @@ def register_fit(name: str, make: Make, *, bodies: tuple[str, ...] = ("velocity"
 def make_rule(cfg: TrainConfig, esn: Any, steps: int) -> Any:
     """The learning rule of ``cfg``'s FEL training (None: the default per-cycle fit)."""
     return FITS[cfg.rule.fit].make(cfg, esn, steps)  # (the module's FITS, as registered)
+
+
+def refusal(name: str) -> str:
+    """The one line that refuses ``name`` as a value of ``rule.fit``."""
+    return f"fit must be one of {tuple(FITS)}, got {name!r}"
+
+
+def check(name: str) -> str:
+    """``name`` if it is a registered fit (:func:`known`), else a :class:`SkinnyInputError`."""
+    if not known(name):
+        raise SkinnyInputError(refusal(name))
+    return name
 
 
 def known(name: str) -> bool:
