@@ -22,9 +22,9 @@ import json
 from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse
 from skinny_mj.controllers._io import atomic_path
 from skinny_mj.controllers.readout import PinvFactors, solve_readout
 from skinny_mj.controllers.reservoir import ESNConfig, draw_weights, run_generators, spectral_radius
@@ -33,10 +33,8 @@ from skinny_mj.controllers.reservoir import ESNConfig, draw_weights, run_generat
 # solvers in skinny_mj.controllers.readout; these names stay importable from here.
 __all__ = ["ESN", "ESNConfig", "read_metadata", "run_generators", "spectral_radius"]
 
-try:  # SciPy's CSC matrix-vector kernel (what csc_array @ vector calls)
-    from scipy.sparse._sparsetools import csc_matvec as _csc_matvec
-except ImportError:  # pragma: no cover - other SciPy layouts
-    _csc_matvec = None
+if TYPE_CHECKING:
+    import scipy.sparse
 
 _NOISE_BLOCK = 256  # noise is drawn per run in blocks of this many steps
 _SPARSE_BELOW = 0.25  # use a block-diagonal sparse matrix below this connectivity
@@ -100,10 +98,15 @@ class ESN:
             # row's nonzeros), a mispredicted branch per row; CSC's scattered adds run
             # ~2x faster. Column by column, each output still sums its terms from the
             # first column to the last, as CSR did: the same numbers, bit for bit.
+            import scipy.sparse  # here: `skinny experiment NAME --help` needs no SciPy
+
             a = self._sparse = scipy.sparse.block_diag(
                 [scipy.sparse.csr_array(m) for m in self.W], format="csc"
             ).astype(dt)
             self._kernel_args = (a.shape[0], a.shape[1], a.indptr, a.indices, a.data)
+            # SciPy's CSC matrix-vector kernel (what csc_array @ vector calls), if exposed
+            self._matvec = getattr(getattr(scipy.sparse, "_sparsetools", None), "csc_matvec",
+                                   None)
 
     def _noise(self) -> np.ndarray:
         """Reservoir noise nu(t) of all runs, (R, N): a view into ``_noise_buf``."""
@@ -187,10 +190,10 @@ class ESN:
         else:  # W x summed from zero, then + W_in u1: bit for bit what CSR gave
             pre = np.zeros((n_runs, n_res), self.dtype)
             x = np.ascontiguousarray(self.x, self.dtype)
-            if _csc_matvec is None:
+            if self._matvec is None:
                 pre += (a @ x.reshape(-1)).reshape(n_runs, n_res)
             else:
-                _csc_matvec(*self._kernel_args, x, pre)
+                self._matvec(*self._kernel_args, x, pre)
         pre += np.matmul(self.W_in, u1)[..., 0]
         if cfg.output_feedback:
             y_prev = self.y if feedback is None else np.asarray(feedback, self.dtype)
@@ -258,7 +261,7 @@ class ESN:
         by_run = rows.reshape(n_steps, n_runs, n_res)  # a view in both cases
         np.matmul(xs[:, :, n_res:], np.swapaxes(self.W_in, 1, 2),
                   out=by_run.transpose(1, 0, 2))  # drive (R, T, N)
-        a, kernel_args = self._sparse, self._kernel_args
+        a, kernel_args, matvec = self._sparse, self._kernel_args, self._matvec
         leak = cfg.leak_rate
         if leak != 1.0:
             kept = np.empty(width, self.dtype)
@@ -266,10 +269,10 @@ class ESN:
         x = np.ascontiguousarray(self.x, self.dtype).reshape(-1)
         for t in range(n_steps):
             row = rows[t]
-            if _csc_matvec is None:
+            if matvec is None:
                 row += a @ x
             else:
-                _csc_matvec(*kernel_args, x, row)
+                matvec(*kernel_args, x, row)
             np.tanh(row, out=row)
             if leak != 1.0:  # (1 - a) x + a tanh(.), as in step
                 np.multiply(x, 1.0 - leak, out=kept)

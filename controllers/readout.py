@@ -19,7 +19,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-import scipy.linalg
 from skinny_mj.controllers.reservoir import ESNConfig
 
 PINV_RCOND = 1e-15  # singular values below this x the largest count as zero (NumPy's)
@@ -61,7 +60,7 @@ def pinv_solve_wide(m: np.ndarray, s: np.ndarray) -> np.ndarray:
     n_out = s.shape[-1]
     work = np.empty((d, n_steps), order="F")
     out = np.empty((n_runs, d, n_out))
-    lapack = scipy.linalg.lapack
+    lapack = _lapack()
     for r in range(n_runs):
         work[:] = m[r].T
         qr, tau = householder_qr(work, with_tau=True)
@@ -99,7 +98,7 @@ class PinvFactors:
         runs = np.arange(self.shape[0]) if runs is None else np.asarray(runs)
         if self._pinv is not None:
             return self._pinv[runs] @ s
-        d, lapack = self.shape[2], scipy.linalg.lapack
+        d, lapack = self.shape[2], _lapack()
         out = np.empty((runs.size, d, s.shape[-1]))
         for k, r in enumerate(runs):
             qr, tau = self._qr[r]
@@ -112,10 +111,18 @@ class PinvFactors:
         return out
 
 
+def _lapack():
+    """SciPy's LAPACK wrappers, imported on first use: a study's ``--help`` imports this
+    module and needs no SciPy."""
+    import scipy.linalg
+
+    return scipy.linalg.lapack
+
+
 def householder_qr(a: np.ndarray, with_tau: bool = False):
     """LAPACK ``dgeqrf`` of a Fortran-ordered ``a`` in place (R in its upper triangle,
     the reflectors below), with the blocked algorithm's workspace."""
-    lapack = scipy.linalg.lapack
+    lapack = _lapack()
     lwork, _ = lapack.dgeqrf_lwork(*a.shape)
     qr, tau, _, info = lapack.dgeqrf(a, lwork=int(lwork), overwrite_a=True)
     if info != 0:  # pragma: no cover - LAPACK argument error
@@ -132,7 +139,7 @@ def small_solver(r_m: np.ndarray, transpose: bool = False
     solution is then the pseudo-inverse's. Otherwise the SVD of R: singular values under
     the cutoff dropped, as ``np.linalg.pinv`` does. The solver reads ``r_m`` when
     called."""
-    lapack = scipy.linalg.lapack
+    lapack = _lapack()
     rcond, _ = lapack.dtrcon(r_m, norm="1")
     if rcond * PINV_DIRECT_COND > 1.0:
         return lambda b: lapack.dtrtrs(r_m, b, trans=int(transpose))[0]
@@ -149,6 +156,8 @@ def small_solver(r_m: np.ndarray, transpose: bool = False
 
 def ridge_solve(m: np.ndarray, s: np.ndarray, ridge_lambda: float) -> np.ndarray:
     """Solve (M^T M + lambda I) W = M^T S by Cholesky; M (T, D), S (T, n) -> W (D, n)."""
+    import scipy.linalg
+
     gram = m.T @ m + ridge_lambda * np.eye(m.shape[1])
     try:
         return scipy.linalg.cho_solve(scipy.linalg.cho_factor(gram), m.T @ s)

@@ -30,13 +30,15 @@ are never used in place of ours.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.loop import TrainOutcome, train
+
+if TYPE_CHECKING:  # the training loop is imported where it runs: `--help` needs no MuJoCo
+    from skinny_mj.training.loop import TrainOutcome
 
 NAME = "paper-d"
 
@@ -171,6 +173,7 @@ def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
     it reproduced the run file's TT test position NRMSE exactly."""
     from skinny_mj.plant import body
     from skinny_mj.plots import pyplot, save_figure
+    from skinny_mj.training.loop import train
 
     reproduced = [] if reproduced is None else reproduced
     picked = []

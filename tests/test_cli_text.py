@@ -3,6 +3,9 @@ hint, each study's own ``--help``, whole descriptions in ``skinny experiment lis
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import pytest
 
 from skinny_mj.cli.parser import main
@@ -49,6 +52,26 @@ def test_experiment_help_describes_that_study(capsys):
     assert code == 0 and bimanual != paper_e
     flat = " ".join(bimanual.split())  # (the help wraps its lines)
     assert "--movement: refused" in flat and "--signals: refused;" in flat
+
+
+def test_experiment_help_imports_neither_scipy_nor_mujoco():
+    """Each study's ``--help`` (in a fresh interpreter, every study in turn) loads none
+    of the learning code's or the plant's heavy libraries: they are most of a start-up."""
+    probe = ("import contextlib, io, sys\n"
+             "from skinny_mj.cli.parser import main\n"
+             "from skinny_mj.engine import registry\n"
+             "for name in registry.names():\n"
+             "    with contextlib.redirect_stdout(io.StringIO()) as text:\n"
+             "        with contextlib.suppress(SystemExit):\n"
+             "            main(['experiment', name, '--help'])\n"
+             "    heavy = sorted({m.split('.')[0] for m in sys.modules} & {'scipy', 'mujoco'})\n"
+             "    print(name, len(text.getvalue().splitlines()), *heavy)\n")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         check=True).stdout.splitlines()
+    assert [line.split()[0] for line in out] == registry.names()
+    for line in out:
+        name, n_lines, *heavy = line.split()
+        assert int(n_lines) > 5 and heavy == [], line
 
 
 def test_experiment_help_of_a_study_that_cannot_build_still_describes_it(capsys, monkeypatch):

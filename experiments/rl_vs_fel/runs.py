@@ -32,7 +32,6 @@ from skinny_mj.controllers.metrics import position_nrmse
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.parts import full_scale_speeds, load_trajectory, run_streams
 
 RL_EXTRA = "rl-vs-fel needs the rl extra: pip install -e '.[rl]'"
 #: The reward's worst value per step: -mean |desired - true| with signals in [-1, 1].
@@ -111,6 +110,7 @@ def make_env(tc: TrainConfig, seed: int, velocity_inputs: bool):
     """The tracking env of ``tc`` (its movement, full scale, sensor noise, body) as the
     learner sees it (:func:`tracking_wrapper`)."""
     from skinny_mj.gym.env import SkinnyEnv
+    from skinny_mj.training.parts import full_scale_speeds, load_trajectory
 
     trajectory, _ = load_trajectory(tc)
     env = SkinnyEnv(dof=tc.plant.dof, signals=tc.plant.signals, trajectory=trajectory,
@@ -211,6 +211,8 @@ def rl_curve(name: str, tc: TrainConfig, seed: int, budget: int, evals: int,
     noise starts from the run's plant seed, as ESN + FEL's test plant's."""
     import torch
     from stable_baselines3.common.callbacks import BaseCallback
+
+    from skinny_mj.training.parts import run_streams
 
     torch.set_num_threads(1)
     velocity_inputs = tc.torque is not None
