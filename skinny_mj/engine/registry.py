@@ -82,9 +82,10 @@ def declared(path: Path) -> Declared:
 
 
 def _study_description(call: ast.expr, docstring: str | None) -> str | None:
-    """The ``description=`` of a ``Study(...)`` call read as source (see :func:`declared`)."""
+    """The ``description=`` of a ``Study(...)`` call, or of a ``dataclasses.replace(...)``
+    deriving one study from another, read as source (see :func:`declared`)."""
     func = call.func if isinstance(call, ast.Call) else None
-    if getattr(func, "id", getattr(func, "attr", None)) != "Study":
+    if getattr(func, "id", getattr(func, "attr", None)) not in ("Study", "replace"):
         return None
     for kw in call.keywords:
         if kw.arg == "description":
