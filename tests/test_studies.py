@@ -48,6 +48,10 @@ def test_study_builds_plans_runs_one_tiny_run_and_writes_its_table(name, tmp_pat
     assert quick.rows and quick.runs <= full.runs  # --quick may run another, smaller grid
     exp = plan(study, quick=True, tiny=True).experiment()
     assert [r.row_id for r in exp.rows] == [r.row_id for r in quick.rows]  # same seeds
+    if "movement" in study.takes:  # it changes the runs, never moves a row (or its seeds);
+        moved = study.build(quick=True, movement="ymca@0.5")  # paper C adds one after
+        assert [r.row_id for r in moved.rows][:len(quick.rows)] == \
+            [r.row_id for r in quick.rows]
     row = _cheapest(exp)
     results = run_sweep(exp, tmp_path, rows=[row.row_id], runs=1, workers=1, progress=False)
     (run,) = load_runs(tmp_path)
@@ -75,19 +79,3 @@ def test_a_study_refuses_an_option_it_does_not_take():
     assert study.build(movement="y").config.config("a").movement.trajectory == "y"
     with pytest.raises(SkinnyInputError, match="takes no --dof"):
         study.build(dof=8)
-
-
-@pytest.mark.parametrize("name", registry.names())
-def test_movement_keeps_the_rows_and_their_seeds(name):
-    """``--movement`` changes a study's runs but never moves its rows: a study that takes it
-    as its own option (paper C adds a row) adds rows after the others."""
-    study = registry.get(name)
-    if "movement" not in study.takes:
-        pytest.skip(f"{name} takes no --movement")
-    try:
-        quick = study.build(quick=True)
-    except SkinnyInputError as err:  # an optional extra it needs is not installed
-        pytest.skip(f"{name}: {err}")
-    moved = study.build(quick=True, movement="ymca@0.5")
-    ids = [r.row_id for r in quick.rows]
-    assert [r.row_id for r in moved.rows][:len(ids)] == ids

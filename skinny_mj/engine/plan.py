@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from skinny_mj.engine.experiment import Experiment, RunFailed
 from skinny_mj.engine.experiment import Row as EngineRow
-from skinny_mj.engine.options import OPTION_KEYS, movement_changes
+from skinny_mj.engine.options import movement_changes
 from skinny_mj.engine.sweep import one_of_batch
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training import overrides
@@ -237,8 +237,7 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
     for option, derive in study.own_options.items():  # a change of rows or params
         if given[option] is not None:
             study, given[option] = derive(study, **values[option]), None
-    changes = movement_changes(given["movement"], asf, given["dof"], given["signals"],
-                               OPTION_KEYS)
+    changes = movement_changes(given["movement"], asf, given["dof"], given["signals"])
     base = study.base.override(changes) if changes else study.base
     after = dict(study.quick.overrides if quick else {})
     kept: Sequence[Row] = [r for r in study.rows if quick or not r.quick_only]

@@ -196,7 +196,7 @@ class Study:
 
         return plan(self, **options).config(row_id)
 
-    # -- the module contract of skinny_mj.engine.experiment, so every caller takes a Study too --
+    # -- what `skinny experiment`, the memory check and the study help call --
     def build(self, quick: bool = False, movement: str | None = None, asf: Any = None,
               dof: int | None = None, signals: str | None = None) -> Any:
         """The :class:`~skinny_mj.engine.experiment.Experiment` of ``skinny experiment NAME``."""
