@@ -16,8 +16,8 @@ The paper states no run count: 10 runs per training movement.
 Rows = training movements (YMCA, Y, Y pure, YM, right/left arm mirror, YMCA at 0.5x
 and 1.5x); each trained network is tested on every one of them plus a real movement
 (CMU modern dance ``md_02.amc`` retargeted, or ``--movement``, which also adds a row
-training on it): the train x test position-NRMSE matrix (the report,
-:mod:`skinny_mj.experiments.paper_c.report`: heat maps, Figs. 3-6, learning curves, claims).
+training on it): the train x test position-NRMSE matrix (the report: heat maps,
+Figs. 3-6, learning curves, the claims checked).
 
 One command scale for all: full scale = 2x YMCA's fastest speed per DOF
 (``max_speed_from="ymca"``). The command is a joint velocity as a fraction of full
