@@ -1,5 +1,5 @@
 """Pattern generation with output feedback, without a plant: the ordinary teacher-forced
-fit, paper E's new β method, and FORCE (online RLS), then a free run (issue 16, item 2).
+fit, paper E's new β method, and FORCE (online RLS), then a free run.
 
 An ESN with output feedback (``ESNConfig.output_feedback``) is driven by an input
 sequence u (R, T, n_in) (zeros for a pure generator: the bias drives it) and a teacher

@@ -1,4 +1,4 @@
-"""Issue 14: the torque body in the one training path (config, lockstep, torques, test
+"""The torque body in the one training path (config, lockstep, torques, test
 plant perturbations) and the ``dynamic`` experiment's rows."""
 
 from __future__ import annotations

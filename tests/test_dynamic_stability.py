@@ -1,4 +1,4 @@
-"""Issue 14, the torque twin's last items: the 3D shoulder's armature keeps saturated
+"""The torque twin's stability: the 3D shoulder's armature keeps saturated
 torques from diverging, the velocity servo and the 2D arm are unchanged, a plant's full
 scale is its own read-only array, and ``skinny test`` on a torque model records the
 torques beside the command (the default blueprint shows them)."""

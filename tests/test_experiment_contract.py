@@ -6,6 +6,7 @@ errored runs."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import json
 import sys
@@ -253,10 +254,10 @@ def _fake_module(calls: list, rows: tuple[Row, ...]) -> types.ModuleType:
     def build(*, quick, movement, asf, dof, signals):
         calls.append({"quick": quick, "movement": movement, "asf": asf, "dof": dof,
                       "signals": signals})
-        return fake(rows=rows, groups={"both": ("ok", rows[1].row_id)})
+        return dataclasses.replace(fake(rows=rows, groups={"both": ("ok", rows[1].row_id)}),
+                                   report=lambda results, out: f"- {results['n_error']} errored")
 
     module.build = build  # type: ignore[attr-defined]
-    module.report = lambda results, out: f"- {results['n_error']} errored"  # type: ignore
     return module
 
 

@@ -232,3 +232,61 @@ def test_names_from_files_and_configs_cannot_leave_the_output_folder(name, tmp_p
     assert written and all(out in p.parents or p == out or p in out.parents
                            for p in written), written
     assert json.loads((out / "metrics.json").read_text())["trajectory"] == str(movement)
+
+
+_SLOW_SWEEP = """
+import os, sys, time
+from pathlib import Path
+from skinny_mj.cli.parser import _on_sigterm, _terminate
+from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+
+def run_one(row, seed):
+    Path(sys.argv[1], f"worker-{os.getpid()}").touch()
+    time.sleep(120)
+    return {"m": 0.0}
+
+if __name__ == "__main__":
+    _on_sigterm(_terminate)  # as `skinny` does
+    run_sweep(Experiment("slow", (Row("a"),), run_one, runs=2), Path(sys.argv[1]) / "out",
+              workers=2, progress=False)
+"""
+
+
+def test_sigterm_stops_a_sweeps_workers_and_releases_its_lock(tmp_path):
+    """``kill PID`` on a sweep: the command ends as an interrupt (Terminated), its worker
+    processes do not run on (orphaned, each finishing its run), and no lock is left."""
+    import subprocess
+    import sys
+    import time
+
+    script = tmp_path / "slow_sweep.py"
+    script.write_text(_SLOW_SWEEP)
+    proc = subprocess.Popen([sys.executable, str(script), str(tmp_path)],
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while len(list(tmp_path.glob("worker-*"))) < 2 and time.monotonic() < deadline:
+            time.sleep(0.2)
+        workers = [int(p.name.split("-")[1]) for p in tmp_path.glob("worker-*")]
+        assert len(workers) == 2 and proc.poll() is None, "the sweep's runs did not start"
+        proc.send_signal(signal.SIGTERM)
+        err = proc.communicate(timeout=60)[1]
+        assert proc.returncode != 0 and "Terminated" in err, err
+        deadline = time.monotonic() + 30
+        while any(_alive(pid) for pid in workers) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert not any(_alive(pid) for pid in workers), "a worker runs on after SIGTERM"
+        assert not (tmp_path / "out" / "sweep.lock").exists()
+    finally:  # a failed check leaves no process behind
+        proc.kill()
+        for p in tmp_path.glob("worker-*"):
+            if _alive(pid := int(p.name.split("-")[1])):
+                os.kill(pid, signal.SIGKILL)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return Path(f"/proc/{pid}/stat").read_text().split()[2] != "Z"  # a zombie is gone

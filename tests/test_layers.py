@@ -270,18 +270,8 @@ def test_no_two_modules_import_each_other(layer):
     assert import_circles(layer) == []
 
 
-# Study/report pairs of experiments/ that import each other, counted when this test was
-# written; the count may only fall (the xfail below flips when it reaches 0).
-EXPERIMENT_CIRCLES = 1
-
-
-def test_experiment_import_circles_do_not_grow():
-    assert len(import_circles("experiments")) <= EXPERIMENT_CIRCLES
-
-
-@pytest.mark.xfail(strict=True, reason="experiments/ has 1 study/report import circle "
-                   "(an old-form study whose module imports its report)")
 def test_no_two_experiment_modules_import_each_other():
+    """A study names its report as text; the report imports the study, never both ways."""
     assert import_circles("experiments") == []
 
 

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import types
-
 import pytest
 from skinny_mj.experiments import paper_d
 from skinny_mj.experiments.paper_e import study as paper_e
@@ -49,8 +47,6 @@ def test_thesis_reading_reaches_paper_d_true_target_half():
 def test_refusals_name_what_is_wrong_in_one_line(capsys):
     with pytest.raises(SkinnyInputError, match="reads no setting of 'generalization'"):
         protocols.apply("thesis", registry.get("generalization"), "generalization")
-    with pytest.raises(SkinnyInputError, match="not declared as data"):
-        protocols.apply("thesis", types.ModuleType("old_form"), "paper-e")
     with pytest.raises(SkinnyInputError, match="unknown protocol 'nope'; protocols: thesis"):
         protocols.get("nope")
     assert main(["experiment", "paper-a", "--protocol", "thesis", "--quick"]) == 2

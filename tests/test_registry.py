@@ -3,16 +3,15 @@ studies, and listing the studies imports none of them."""
 
 import subprocess
 import sys
-from types import ModuleType
 
 import pytest
 
 from skinny_mj.engine import registry
+from skinny_mj.errors import SkinnyInputError
 
 
 def _imported_description(name: str) -> str:
-    study = registry.get(name)
-    return (study.__doc__ if isinstance(study, ModuleType) else study.description) or ""
+    return registry.get(name).description or ""
 
 
 @pytest.mark.parametrize("name", registry.names())
@@ -61,6 +60,17 @@ def test_a_study_imported_from_elsewhere_is_described_by_importing_it(tmp_path):
     path = tmp_path / "other.py"
     path.write_text('"""Docstring."""\nfrom somewhere import STUDY\n\nNAME = "other"\n')
     assert registry.declared(path) == registry.Declared("other", None)
-    path.write_text('"""Old contract: the docstring is the description."""\nNAME = "old"\n')
-    assert registry.declared(path).description == \
-        "Old contract: the docstring is the description."
+
+
+def test_a_derived_study_is_described_by_its_replace_call(tmp_path):
+    path = tmp_path / "derived.py"
+    path.write_text('"""Paper X on another body."""\nimport dataclasses\n'
+                    'from somewhere import other\n\nNAME = "derived"\n'
+                    'STUDY = dataclasses.replace(other.STUDY, name=NAME, description=__doc__)\n')
+    assert registry.declared(path) == registry.Declared("derived", "Paper X on another body.")
+
+
+def test_a_module_without_a_study_is_refused_in_one_line(monkeypatch):
+    monkeypatch.setattr(registry, "_package_studies", lambda: {"bare": "json"})
+    with pytest.raises(SkinnyInputError, match="'bare' .* is not a Study"):
+        registry.get("bare")

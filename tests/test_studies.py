@@ -1,11 +1,11 @@
 """One contract test over every registered study (as dm_control's ``suite_test``): it
 builds, plans its ``--quick`` rows, executes one tiny run and writes its table and report.
 
-Registering is setting ``NAME`` in a module of ``experiments/`` (or an entry point of
-another package): every name :func:`skinny_mj.engine.registry.names` lists is covered here, so
-a study that fails this cannot be registered. A study declared as data runs with its
-``tiny`` shrink (one epoch of a small reservoir); a module of the older contract runs its
-cheapest ``--quick`` row once.
+Registering is setting ``NAME`` and ``STUDY`` in a module of ``experiments/`` (or an entry
+point of another package): every name :func:`skinny_mj.engine.registry.names` lists is covered
+here, so a study that fails this cannot be registered. Every study is declared as data (a
+:class:`~skinny_mj.engine.study.Study`) and runs its cheapest ``--quick`` row once with its
+``tiny`` shrink (one epoch of a small reservoir).
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ REPORT_FAILS_ON_ONE_ROW: dict[str, str] = {}
 @pytest.mark.parametrize("name", registry.names())
 def test_study_builds_plans_runs_one_tiny_run_and_writes_its_table(name, tmp_path):
     study = registry.get(name)
+    assert isinstance(study, Study), f"{name} is not declared as data"
     assert registry.describe(name), f"{name} has no description"
     try:
         full = study.build()
@@ -45,8 +46,12 @@ def test_study_builds_plans_runs_one_tiny_run_and_writes_its_table(name, tmp_pat
     quick = study.build(quick=True)
     assert full.name == quick.name == name
     assert quick.rows and quick.runs <= full.runs  # --quick may run another, smaller grid
-    exp = plan(study, quick=True, tiny=True).experiment() if isinstance(study, Study) else quick
+    exp = plan(study, quick=True, tiny=True).experiment()
     assert [r.row_id for r in exp.rows] == [r.row_id for r in quick.rows]  # same seeds
+    if "movement" in study.takes:  # it changes the runs, never moves a row (or its seeds);
+        moved = study.build(quick=True, movement="ymca@0.5")  # paper C adds one after
+        assert [r.row_id for r in moved.rows][:len(quick.rows)] == \
+            [r.row_id for r in quick.rows]
     row = _cheapest(exp)
     results = run_sweep(exp, tmp_path, rows=[row.row_id], runs=1, workers=1, progress=False)
     (run,) = load_runs(tmp_path)
@@ -60,9 +65,9 @@ def test_study_builds_plans_runs_one_tiny_run_and_writes_its_table(name, tmp_pat
     assert config["experiment"] == name and config["selection"]["rows"] == [row.row_id]
     if name in REPORT_FAILS_ON_ONE_ROW:
         with pytest.raises(Exception):  # noqa: B017 (when it passes, remove it from the list)
-            (exp.report or study.report)(results, tmp_path)
+            exp.report(results, tmp_path)
         return
-    text = (exp.report or study.report)(results, tmp_path)
+    text = exp.report(results, tmp_path)
     assert isinstance(text, str)
 
 

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import pytest
@@ -64,6 +65,26 @@ def test_options_are_overrides_of_the_base_and_refused_when_not_taken():
     with pytest.raises(SkinnyInputError, match="unknown config key"):
         Study("bad", (Row("a", {"no_such_key": 1}),), metrics={"x": "wall_s"}).build()
 
+
+
+def _with_movement(study: Study, movement: str, asf: str | None) -> Study:
+    """A study that takes ``--movement`` its own way: one more row, a param."""
+    return dataclasses.replace(study, rows=(*study.rows, Row("own", {"rule.epochs": 5},
+                                                              params={"k": 9})),
+                               params={**study.params, "moved": (movement, asf)})
+
+
+def test_an_own_option_derives_the_study_and_sets_no_config_key():
+    study = toy(own_options={"movement": _with_movement})
+    assert plan(study).to_dict() == plan(toy()).to_dict()  # not given: the study as it is
+    moved = plan(study, movement="y", asf="s.asf", dof=8)
+    assert [p.row.id for p in moved.rows] == ["a", "b", "c", "own"]
+    assert moved.params["moved"] == ("y", "s.asf") and moved.row("own").params["k"] == 9
+    assert {moved.config(i).movement.trajectory for i in ("a", "own")} == \
+        {TrainConfig().movement.trajectory}  # --movement set no config key
+    assert moved.config("own").plant.dof == 8  # --dof still one
+    with pytest.raises(SkinnyInputError, match="own_options .* it does not take"):
+        toy(own_options={"dof": _with_movement}, takes=("movement",))
 
 def test_sweep_runs_the_custom_run_with_the_sweeps_seeds(tmp_path):
     exp = toy().build(quick=True)

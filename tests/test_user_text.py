@@ -112,3 +112,31 @@ def test_results_pages_say_when_and_on_what_machine(path):
     head = " ".join(path.read_text().split("\n\n")[:3])  # the title and the first paragraphs
     assert re.search(r"\b20\d\d-\d\d-\d\d\b", head), f"{path.name}: no date near the top"
     assert re.search(r"\b2-core\b|\b2 cores\b", head), f"{path.name}: no machine near the top"
+
+
+#: A tracker's number ("issue 14", "issues 20-24"): it means nothing to a reader of the code.
+TRACKER = re.compile(r"\bissues? #?\d+", re.IGNORECASE)
+SOURCES = sorted(p for part in ("skinny_mj", "controllers", "experiments", "tests",
+                                "benchmarks") for p in (ROOT / part).rglob("*.py"))
+
+
+def tracker_numbers(source: str) -> list[str]:
+    """The docstrings of ``source`` (module, classes, functions) that cite a tracker number."""
+    import ast
+
+    nodes = [n for n in ast.walk(ast.parse(source)) if isinstance(
+        n, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef)]
+    return [doc.split("\n")[0][:80] for n in nodes
+            if (doc := ast.get_docstring(n)) and TRACKER.search(doc)]
+
+
+def test_the_tracker_check_finds_a_number():
+    assert tracker_numbers('"""Issue 14: the torque body."""\ndef f():\n    """As issues 3'
+                           ' and 4 ask."""\n') == ["Issue 14: the torque body.",
+                                                  "As issues 3 and 4 ask."]
+    assert tracker_numbers('"""An issue with the plant."""') == []
+
+
+@pytest.mark.parametrize("path", SOURCES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_docstrings_cite_no_tracker_numbers(path):
+    assert tracker_numbers(path.read_text()) == []

@@ -1,7 +1,7 @@
 """What moves the Y-pure network's elbows on YM (paper C: "the elbows are not used").
 
-Trains paper C's Y-pure network (its recipe,
-:func:`skinny_mj.experiments.paper_c.study.train_config`),
+Trains paper C's Y-pure network (its recipe: the row ``y-pure`` of
+:data:`skinny_mj.experiments.paper_c.study.STUDY`),
 tests it on YM and measures, per elbow, the network's input -> command Jacobian along the
 test (one step from the previous reservoir state, tanh readout) and two closed-loop
 counterfactual tests: YM with both elbow targets held at Y pure's angle, and with the left
@@ -51,8 +51,7 @@ def analyse(run, dof: int = 4) -> list[dict]:
     from skinny_mj.training.loop import evaluate
 
     names, elbows = body.dof_names(dof), paper_c.elbow_dofs(dof)
-    cfg = paper_c.Config(dof=dof)
-    ym, pure = paper_c.load(cfg, "ym"), paper_c.load(cfg, "y-pure")
+    ym, pure = paper_c.load("ym", dof), paper_c.load("y-pure", dof)
     held, left_held = ym.angles.copy(), ym.angles.copy()
     held[:, elbows] = pure.angles[0, elbows]
     left_held[:, elbows[1]] = pure.angles[0, elbows[1]]
@@ -60,7 +59,7 @@ def analyse(run, dof: int = 4) -> list[dict]:
                for name, a in (("elbow targets held", held), ("left target held", left_held))}
     from skinny_mj.experiments.paper_c.report import lag_steps
 
-    ymca = paper_c.load(cfg, "ymca")
+    ymca = paper_c.load("ymca", dof)
     ymca_lags = [lag_steps(t.rollout.angles[0], ymca.angles) for t in evaluate(run, ymca)]
     out = []
     for r, test in enumerate(evaluate(run, ym)):
@@ -92,7 +91,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--epochs", type=int, default=150)
     p.add_argument("--quiet", action="store_true", help="sensor and reservoir noise 0")
     a = p.parse_args(argv)
-    tc = paper_c.train_config(paper_c.Config(epochs=a.epochs), "y-pure")
+    tc = paper_c.STUDY.config("y-pure").override({"rule.epochs": a.epochs})
     if a.quiet:
         tc = tc.override({"esn.noise_level": 0.0, "plant.sensor_noise": 0.0})
     run = build_run(tc, a.seeds)

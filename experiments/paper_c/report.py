@@ -5,6 +5,7 @@ itself is :mod:`skinny_mj.experiments.paper_c.study`)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from skinny_mj.controllers.metrics import nrmse
@@ -16,12 +17,14 @@ from skinny_mj.experiments.paper_c.study import (
     REAL_ID,
     STILL_ELBOW_RATIO,
     SYMMETRIC_FACTOR,
-    Config,
     elbow_range,
     load,
 )
 
 from skinny_mj.plant import body
+
+if TYPE_CHECKING:
+    from skinny_mj.engine.plan import Plan, Results
 
 
 def _runs(out_dir: Path) -> list[dict]:
@@ -119,7 +122,7 @@ def claims(runs: list[dict], dof: int = 4) -> list[str]:
                      f"ratio {ratio:.3f} (YMCA-trained on YM: {ref:.3f})"))
     produced = _mean(runs, "y", "ymca__elbow_range_rad")
     trained = _mean(runs, "y", "train_elbow_range_rad")
-    wanted = elbow_range(load(Config(dof=dof, real_movement=None), "ymca").angles, dof)
+    wanted = elbow_range(load("ymca", dof).angles, dof)
     out.append(_line(None if not np.isfinite(produced) else bool(produced > trained),
                      "Y -> YMCA: more elbow motion than trained on",
                      f"produced elbow range {np.degrees(produced):.1f}° vs "
@@ -208,29 +211,22 @@ def timing_lags(runs: list[dict], dof: int) -> dict[str, float]:
                 continue
             col = key.removeprefix("angles__")
             if col not in targets:
-                targets[col] = load(Config(dof=dof, real_movement=None), MOVEMENTS[col]).angles
+                targets[col] = load(MOVEMENTS[col], dof).angles
             out.setdefault(f"{r['row']} -> {col}", []).append(
                 lag_steps(np.asarray(value, float), targets[col]))
     return {k: float(np.mean(v)) for k, v in out.items()}
 
 
-def sweep_dof(out_dir: Path) -> int:
-    """The body's DOF of the sweep in ``out_dir`` (its config.json; 4 if it has none)."""
-    import json
-
-    path = Path(out_dir) / "config.json"
-    return int(json.loads(path.read_text())["config"].get("dof", 4)) if path.is_file() else 4
-
-
-def report(results: dict, out_dir: Path) -> str:
-    """The train x test heat maps, shoulder-vs-elbow figures, learning curves, claims."""
+def report(results: Results, plan: Plan, out_dir: Path) -> str:
+    """The train x test heat maps, shoulder-vs-elbow figures, learning curves, claims of
+    the sweep in ``out_dir`` (``plan``: what it ran; its body's DOFs)."""
     from skinny_mj.io import atomic_write_text
     from skinny_mj.plots import heatmap_png, learning_curve_png
     from skinny_mj.trajectories import get
 
     out_dir = Path(out_dir)
     runs = _runs(out_dir)
-    dof = sweep_dof(out_dir)
+    dof = plan.base.plant.dof
     if not runs:
         return "- [n/a] no finished runs"
     text = []

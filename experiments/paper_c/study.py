@@ -15,8 +15,9 @@ The paper states no run count: 10 runs per training movement.
 
 Rows = training movements (YMCA, Y, Y pure, YM, right/left arm mirror, YMCA at 0.5x
 and 1.5x); each trained network is tested on every one of them plus a real movement
-(CMU modern dance ``md_02.amc`` retargeted, or ``--movement``): the train x test
-position-NRMSE matrix.
+(CMU modern dance ``md_02.amc`` retargeted, or ``--movement``, which also adds a row
+training on it): the train x test position-NRMSE matrix (the report: heat maps,
+Figs. 3-6, learning curves, the claims checked).
 
 One command scale for all: full scale = 2x YMCA's fastest speed per DOF
 (``max_speed_from="ymca"``). The command is a joint velocity as a fraction of full
@@ -51,19 +52,18 @@ move 6-13 degrees; with one arm's held, both still move 31-44 degrees (cross-arm
 
 from __future__ import annotations
 
-import functools
+import dataclasses
 import resource
 import time
-from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from skinny_mj.controllers.metrics import nrmse
 
-from skinny_mj.engine.experiment import Experiment, Row, RunFailed
-from skinny_mj.engine.sweep import one_of_batch
+from skinny_mj.engine.experiment import RunFailed
+from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plant import body
-from skinny_mj.trajectories import sample_clip
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.trajectories import load_movement, sample_clip
 
 NAME = "paper-c"
 #: Row/column id -> movement name (paper C §3.4; speeds: §4.1).
@@ -82,69 +82,41 @@ AS_GOOD_FACTOR, AS_GOOD_ABS = 1.5, 0.01  # test <= 1.5x self error, or within 0.
 STILL_ELBOW_RATIO = 0.2  # "elbows do not move": produced range < 20 % of the desired one
 LARGE_ERROR_FACTOR = 2.0  # "large errors": >= 2x the YMCA-trained network's YMCA error
 SYMMETRIC_FACTOR = 0.5  # "symmetric": arm-to-arm difference < half the desired one
+#: ``--quick``: 3 training x 4 test movements (a smoke test).
+QUICK_TRAIN = ("ymca", "y-pure", "mirror-left")
+QUICK_TESTS = ("ymca", "y", "ym", "mirror-left")
+
+#: Paper C §3.5: 2D, joint-angle signals, N = 1000, spectral radius 0.1, reservoir noise
+#: 0.2, sensor noise 0.01; the original target (β = 1) fitted after each of 5 learning
+#: cycles per epoch, 150 epochs, K x 0.9 per epoch; one command scale, YMCA's
+#: (``max_speed_from``); a test of one initialization cycle + one evaluation cycle (§3.6).
+BASE = TrainConfig().override({
+    "plant.dof": 4, "plant.signals": "joint", "plant.sensor_noise": 0.01,
+    "movement.max_speed_from": "ymca", "movement.full_scale": "per-joint",
+    "rule": "original", "rule.cycles": 5, "rule.epochs": 150,
+    "rule.gain_schedule": "multiplicative", "rule.gain_factor": 0.9,
+    "esn.n_reservoir": 1000, "esn.spectral_radius": 0.1, "esn.noise_level": 0.2,
+    "test.washout_cycles": 1})
 
 
-@dataclass(frozen=True)
-class Config:
-    """Paper C §3.5 (the defaults) plus the movements of §3.4."""
-
-    dof: int = 4
-    signals: str = "joint"
-    reservoir: int = 1000
-    spectral_radius: float = 0.1
-    noise: float = 0.2
-    sensor_noise: float = 0.01
-    epochs: int = 150
-    learning_cycles: int = 5
-    gain_factor: float = 0.9  # K = 0.9^epoch (-10 % per epoch)
-    beta: float = 1.0  # FEL target: 1 = the original (paper C); < 1 = paper E's β blend
-    max_speed_from: str = "ymca"
-    full_scale: str = "per-joint"  # "shared": the fastest joint's for every joint (3D)
-    tests: tuple[str, ...] = tuple(MOVEMENTS)
-    real_movement: str | None = field(default_factory=lambda: str(REAL_MOVEMENT))
-    asf: str | None = None
-    runs: int = 10
+def is_clip(movement: str) -> bool:
+    """Whether ``movement`` is an .amc clip (which takes the ``--asf`` skeleton)."""
+    return str(movement).lower().split("@")[0].endswith(".amc")
 
 
-def train_config(cfg: Config, movement: str):
-    """Paper C §3.5: the original target (β = 1) fitted after each of 5 learning cycles
-    per epoch, K x 0.9 per epoch, one command scale (``max_speed_from``), and a test of
-    one initialization cycle + one evaluation cycle (§3.6)."""
-    from skinny_mj.training.config import TrainConfig
-
-    asf = cfg.asf if str(movement).lower().split("@")[0].endswith(".amc") else None
-    rule = {"rule": "original"} if cfg.beta >= 1.0 else {"rule": "new", "rule.beta": cfg.beta}
-    return TrainConfig().override({
-        "plant.dof": cfg.dof, "plant.signals": cfg.signals,
-        "plant.sensor_noise": cfg.sensor_noise, "movement.trajectory": str(movement),
-        "movement.asf": asf, "movement.max_speed_from": cfg.max_speed_from,
-        "movement.full_scale": cfg.full_scale, **rule,
-        "rule.cycles": cfg.learning_cycles, "rule.epochs": cfg.epochs,
-        "rule.gain_schedule": "multiplicative", "rule.gain_factor": cfg.gain_factor,
-        "esn.n_reservoir": cfg.reservoir, "esn.spectral_radius": cfg.spectral_radius,
-        "esn.noise_level": cfg.noise, "test.washout_cycles": 1})
+def load(movement: str, dof: int, asf: str | None = None):
+    """A test or training movement on the body with ``dof`` DOFs (an .amc gets ``asf``)."""
+    return load_movement(movement, dof, asf=asf if str(movement).lower().endswith(".amc")
+                         else None)[0]
 
 
-def train_configs(cfg: Config, row: Row) -> dict:
-    """The training of ``row`` (its movement's :func:`train_config`), for the sweep's
-    memory estimate."""
-    return {"train": train_config(cfg, row.params["train"])}
-
-
-def columns(cfg: Config) -> dict[str, object]:
-    """Column id -> movement (a library name or the real movement's path)."""
-    cols: dict[str, object] = {c: MOVEMENTS[c] for c in cfg.tests}
-    if cfg.real_movement is not None:
-        cols[REAL_ID] = cfg.real_movement
+def columns(params) -> dict[str, str]:
+    """Column id -> movement (a library name or the real movement's path) of a row's
+    ``params``: its ``tests`` and the real movement."""
+    cols = {c: MOVEMENTS[c] for c in params["tests"]}
+    if params["real"] is not None:
+        cols[REAL_ID] = params["real"]
     return cols
-
-
-def load(cfg: Config, movement):
-    """A test or training movement of ``cfg`` (an .amc gets ``cfg.asf``)."""
-    from skinny_mj.trajectories import load_movement
-
-    asf = cfg.asf if str(movement).lower().endswith(".amc") else None
-    return load_movement(movement, cfg.dof, asf=asf)[0]
 
 
 def elbow_dofs(dof: int) -> list[int]:
@@ -182,31 +154,27 @@ def elbow_range(angles: np.ndarray, dof: int) -> float:
     return float(np.mean(e.max(axis=0) - e.min(axis=0)))
 
 
-def run_one(cfg: Config, row: Row, seed: int) -> dict:
-    """Train on the row's movement (paper C §3.5), then test on every column (§3.6)."""
-    return dict(one_of_batch(functools.partial(run_batch, cfg), row, seed))
-
-
-def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
-    """:func:`run_one` for several seeds of one row in lockstep (the engine's fast path):
-    seed k's metrics dict, or its :class:`RunFailed`, bit for bit what it gets alone;
+def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
+    """Train the row's networks once in lockstep on its movement (paper C §3.5), then
+    test each on every column (§3.6): per seed its metrics, or its :class:`RunFailed`;
     the wall times are the batch's, shared out per run."""
     from skinny_mj.training.loop import build_run, evaluate, train_run
 
     start = time.perf_counter()
-    run = build_run(train_config(cfg, row.params["train"]), seeds)
+    dof = config.plant.dof
+    run = build_run(config, seeds)
     result = train_run(run).fel
     max_speed = run.max_speed_rad_s
     outs: list = [{
         "train_position_nrmse": float(result.position_nrmse[r, -1]),
         "train_motor_nrmse": float(result.motor_nrmse[r, -1]),
         "train_curve_position_nrmse": result.position_nrmse[r],
-        "train_elbow_range_rad": elbow_range(run.trajectory.angles, cfg.dof),
+        "train_elbow_range_rad": elbow_range(run.trajectory.angles, dof),
         "train_wall_s": (time.perf_counter() - start) / len(seeds),
         "n_test_failed": 0,
     } for r in range(len(seeds))]
-    for col, movement in columns(cfg).items():
-        test = load(cfg, movement)
+    for col, movement in columns(row.params).items():
+        test = load(movement, dof, row.params["asf"])
         outcomes = evaluate(run, test)
         raw = np.diff(test.angles, axis=0) / (max_speed * test.dt)  # unclipped commands
         for out, outcome in zip(outs, outcomes, strict=True):
@@ -214,7 +182,7 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
             if outcome.failed:
                 out["n_test_failed"] += 1
                 continue
-            out.update(_test_metrics(cfg, col, outcome))
+            out.update(_test_metrics(dof, col, outcome))
     wall = (time.perf_counter() - start) / len(seeds)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     for r, out in enumerate(outs):
@@ -224,74 +192,53 @@ def run_batch(cfg: Config, row: Row, seeds: list[int]) -> list:
     return outs
 
 
-def _test_metrics(cfg: Config, col: str, outcome) -> dict:
+def _test_metrics(dof: int, col: str, outcome) -> dict:
     """One run's metrics on test column ``col`` (a :class:`skinny_mj.training.loop.TestOutcome`)."""
     test, angles = outcome.trajectory, outcome.rollout.angles[0]
-    desired_rng = elbow_range(test.angles, cfg.dof)
+    desired_rng = elbow_range(test.angles, dof)
     out = {
         f"{col}__position_nrmse": outcome.position_nrmse,
         f"{col}__motor_nrmse": outcome.motor_nrmse,
-        f"{col}__elbow_range_rad": elbow_range(angles, cfg.dof),
-        f"{col}__elbow_rom_ratio": (elbow_range(angles, cfg.dof) / desired_rng
+        f"{col}__elbow_range_rad": elbow_range(angles, dof),
+        f"{col}__elbow_rom_ratio": (elbow_range(angles, dof) / desired_rng
                                     if desired_rng > 1e-6 else None),
     }
     if col == "ymca":
-        out.update({f"ymca__{k}": v for k, v in arm_metrics(angles, test.angles,
-                                                             cfg.dof).items()})
+        out.update({f"ymca__{k}": v for k, v in arm_metrics(angles, test.angles, dof).items()})
     if col in KEEP_ANGLES:
         out[f"angles__{col}"] = np.round(angles, 5)
     return out
 
 
-def rows(train: tuple[str, ...] = tuple(MOVEMENTS), real: str | None = None
-         ) -> tuple[Row, ...]:
-    """One row per training movement; with ``real`` (``--movement``) also a row
-    training on it."""
-    out = [Row(rid, {"train": MOVEMENTS[rid]}) for rid in train]
-    if real is not None:
-        out.append(Row(REAL_ID, {"train": str(real)}))
-    return tuple(out)
-
-
-QUICK_TRAIN = ("ymca", "y-pure", "mirror-left")
-QUICK_TESTS = ("ymca", "y", "ym", "mirror-left")
-
-
-def build(quick: bool = False, movement: str | None = None, asf: str | None = None,
-          dof: int | None = None, signals: str | None = None,
-          full_scale: str = "per-joint") -> Experiment:
-    """The sweep. ``movement`` (+ ``asf``) is the experiment's real movement: a training
-    row ``real`` and the test column ``real`` (default: CMU md_02, tested only).
-    ``dof``/``signals``: another body (None: the paper's 2D joint angles).
-    ``full_scale``: the command scale per joint, or one ``"shared"`` by every joint.
-    ``quick``: N = 100, 3 epochs, 2 runs, 3 training x 4 test movements (a smoke test)."""
-    changes: dict = {k: v for k, v in (("dof", dof), ("signals", signals)) if v is not None}
-    changes["full_scale"] = full_scale
-    if quick:
-        changes.update(reservoir=100, epochs=3, runs=2, tests=QUICK_TESTS)
-    if movement is not None:
-        changes.update(real_movement=str(movement), asf=None if asf is None else str(asf))
-    cfg = Config(**changes)
-    train = QUICK_TRAIN if quick else tuple(MOVEMENTS)
-    table = {"train_position_nrmse": "train pos", "ymca__position_nrmse": "test YMCA pos",
-             f"{REAL_ID}__position_nrmse": "test real pos", "wall_s": "wall s",
-             "peak_rss_mb": "peak RSS MB"}
-    return Experiment(name=NAME, rows=rows(train, movement),
-                      run_one=functools.partial(run_one, cfg),
-                      config=cfg, runs=cfg.runs, table_columns=table,
-                      run_batch=functools.partial(run_batch, cfg),
-                      cost=functools.partial(cost, cfg))
-
-
-def cost(cfg: Config, row: Row) -> float:
+def cost(config: TrainConfig, row: Row) -> float:
     """One run's relative cost, its training movement's length (the engine starts the
     costliest rows first; YMCA at half speed is twice YMCA)."""
-    return float(len(load(cfg, row.params["train"])))
+    return float(len(load(config.movement.trajectory, config.plant.dof, config.movement.asf)))
 
 
-def report(results: dict, out_dir: Path) -> str:
-    """The train x test heat maps, shoulder-vs-elbow figures, learning curves, claims
-    (:mod:`skinny_mj.experiments.paper_c.report`)."""
-    from skinny_mj.experiments.paper_c import report as paper_c_report
+def with_movement(study: Study, movement: str, asf: str | None) -> Study:
+    """``--movement`` (+ ``--asf``): the real movement, a training row ``real`` and the
+    test column ``real`` in place of CMU md_02 (``--quick`` keeps the row)."""
+    asf = None if asf is None else str(asf)
+    real = Row(REAL_ID, {"movement.trajectory": str(movement),
+                         "movement.asf": asf if is_clip(movement) else None})
+    quick = study.quick if study.quick.rows is None else \
+        dataclasses.replace(study.quick, rows=(*study.quick.rows, REAL_ID))
+    return dataclasses.replace(study, rows=(*study.rows, real), quick=quick,
+                               params={**study.params, "real": str(movement), "asf": asf})
 
-    return paper_c_report.report(results, out_dir)
+
+STUDY = Study(
+    name=NAME, description=__doc__, base=BASE, runs=10,  # the paper states no run count
+    rows=tuple(Row(rid, {"movement.trajectory": m}) for rid, m in MOVEMENTS.items()),
+    # every network is tested on every column (and on the real movement)
+    params={"tests": tuple(MOVEMENTS), "real": str(REAL_MOVEMENT), "asf": None},
+    run_batch=run_batch, cost=cost, own_options={"movement": with_movement},
+    columns={"train_position_nrmse": "train pos", "ymca__position_nrmse": "test YMCA pos",
+             f"{REAL_ID}__position_nrmse": "test real pos", "wall_s": "wall s",
+             "peak_rss_mb": "peak RSS MB"},
+    # a smoke test: N = 100, 3 epochs, 2 runs, 3 training x 4 test movements
+    quick=Quick({"esn.n_reservoir": 100, "rule.epochs": 3}, runs=2, rows=QUICK_TRAIN,
+                params={"tests": QUICK_TESTS}),
+    report="skinny_mj.experiments.paper_c.report:report",
+)

@@ -19,7 +19,6 @@ import numpy as np
 from skinny_mj.experiments import paper_a, paper_b
 from skinny_mj.experiments.three_d.study import DIMS, PAPERS, paper_experiment, row_id, subset
 
-from skinny_mj.engine import registry
 from skinny_mj.engine.folder import recorded_config
 from skinny_mj.engine.stats import aggregate, load_runs, to_jsonable
 from skinny_mj.io import atomic_write_json, atomic_write_text
@@ -287,7 +286,7 @@ def write_report(results: dict, out_dir: Path, quick: bool, dof: int, signals: s
                 continue
             if figures:  # the paper's own report: its figures and claims.md
                 exp = paper_experiment(p, dim, quick, dof, signals)
-                own = (exp.report or registry.get(PAPERS[p]).report)(aggregate(view), view)
+                own = exp.report(aggregate(view), view)
                 atomic_write_text(view / "claims.md", f"## Claims\n{own}\n")
             per_dim[dim] = paper_claims(p, view, 4 if dim == "2d" else dof)
         if not per_dim["2d"] and not per_dim["3d"]:

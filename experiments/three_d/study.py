@@ -129,7 +129,7 @@ def subset(quick: bool) -> dict[str, tuple[str, ...]]:
 def _paper_numbers(paper: str, paper_row: str) -> dict[str, float]:
     """The paper's numbers of its row (a study's; papers B and C state none)."""
     study = registry.get(PAPERS[paper])
-    return dict(study.row(paper_row).paper) if isinstance(study, Study) else {}
+    return dict(study.row(paper_row).paper)
 
 
 def _row(paper: str, dim: str, paper_row: str) -> Row:

@@ -30,9 +30,8 @@ def target_noise(dof: int, signals: str, sensor_noise: float, seed: int = 0) -> 
     """One feedback-only cycle of YMCA: y_est's error per DOF against the true commands."""
     from skinny_mj.training.loop import build_run
 
-    cfg = paper_c.Config(dof=dof, signals=signals, reservoir=50)
-    tc = paper_c.train_config(cfg, "ymca").override({"rule": "original",
-                                                     "plant.sensor_noise": sensor_noise})
+    tc = paper_c.STUDY.config("ymca", dof=dof, signals=signals).override({
+        "esn.n_reservoir": 50, "rule": "original", "plant.sensor_noise": sensor_noise})
     run = build_run(tc, [seed])
     run.esn.W_out[:] = 0.0  # the feedback controller alone
     ro = rollout(run.esn, run.plant, run.desired, 1.0, noise=False)

@@ -395,16 +395,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from skinny_mj.cli.config_files import file_config
     from skinny_mj.engine import registry
     from skinny_mj.engine.grid import grid_study
-    from skinny_mj.engine.study import Study
 
     study = None
     if args.study is not None:
         study = registry.get(args.study)
-        if not isinstance(study, Study):
-            raise SkinnyInputError(
-                f"--study {args.study}: not a study declared as data "
-                "(a skinny_mj.engine.study.Study), so it has no row to sweep from"
-            )
     base = None if args.config is None else file_config(args.config)
     grid = grid_study(args.axes, study=study, row=args.row, runs=args.runs,
                       quick=args.quick, base=base)
@@ -438,7 +432,7 @@ def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any
                             progress=_progress_on(args.quiet), options=options)
         cf.warn_if_rebuilt_differs(invocation, out)
         wall = time.perf_counter() - start
-        claims = (exp.report or module.report)(results, out)
+        claims = exp.report(results, out) if exp.report is not None else ""
         summary = (out / "table.md").read_text()
         if claims:  # a study without a report has no claims
             summary += f"\n## Claims\n{claims}\n"

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -274,6 +275,29 @@ def _one_line(err: BaseException) -> str:
     return " ".join(str(err).split()) or type(err).__name__
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill PID``, a batch system's time limit), raised like Ctrl-C so that a
+    sweep stops its worker processes and releases its lock on the way out."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated
+
+
+def _on_sigterm(handler: object) -> object:
+    """Install ``handler`` for SIGTERM, returning the one it replaces (None, and nothing
+    installed, off the main thread or where another handler than the default is set)."""
+    import threading
+
+    if handler is None or threading.current_thread() is not threading.main_thread():
+        return None
+    current = signal.getsignal(signal.SIGTERM)
+    if handler is _terminate and current is not signal.SIG_DFL:
+        return None  # an embedding program's own handler stays
+    signal.signal(signal.SIGTERM, handler)
+    return current
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -282,6 +306,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.given = given_options(argv)  # which flags override the file
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
     os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
+    previous = _on_sigterm(_terminate)
     try:
         if args.command == "experiment" and args.name == "list":  # reads the studies' source
             from skinny_mj.cli.study_help import list_text  # only: no NumPy, no study
@@ -311,9 +336,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         # no model folder, an unreachable scheduler, a worker killed (SkinnyEnvironmentError)
         print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
         return 1
+    except Terminated:
+        print("terminated", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    finally:
+        _on_sigterm(previous)
 
 
 if __name__ == "__main__":

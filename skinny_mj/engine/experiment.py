@@ -1,27 +1,20 @@
-"""The experiment engine shared by every paper: a sweep of (row, seed) runs.
+"""The experiment engine shared by every study: a sweep of (row, seed) runs.
 
-A paper module describes an :class:`Experiment`; :func:`run_sweep` runs it in parallel
-(joblib/loky here, or a Dask cluster), writing one JSON file per finished run to
+A study (:class:`skinny_mj.engine.study.Study`: a base config, rows of overrides) is planned
+into an :class:`Experiment` by :mod:`skinny_mj.engine.plan`; :func:`run_sweep` runs it in
+parallel (joblib/loky here, or a Dask cluster), writing one JSON file per finished run to
 ``out/runs/<row>-<seed>.json``; :func:`aggregate` rebuilds ``results.json`` from those
 files only and :func:`markdown_table` sets our numbers beside the paper's.
 
-A study declared as data (:class:`skinny_mj.engine.study.Study`: a base config, rows of
-overrides) is turned into an :class:`Experiment` by :mod:`skinny_mj.engine.plan`; the
-contract below is the execution layer under it, and what a study module of the older
-form implements by hand.
-
 The contract
 ------------
-**A paper module** (``experiments/paper_*.py``) exposes ``NAME``, ``report(results,
-out_dir) -> str`` (figures + claims, run after the sweep on whatever is on disk) and::
-
-    build(*, quick=False, movement=None, asf=None, dof=None, signals=None) -> Experiment
-
-each None meaning the paper's default. ``skinny experiment`` passes exactly these
-(``--quick --movement --asf --dof --signals``). ``build`` puts every one of them that
-changes the runs into ``Experiment.config`` (so ``config.json`` records it and
-``--resume`` refuses a different one), and never into the name: the name is ``NAME``
-whatever the movement, so the default output folder stays ``results/<NAME>/<time>``.
+An :class:`Experiment` is the execution layer under a study. ``Study.build(*, quick=False,
+movement=None, asf=None, dof=None, signals=None) -> Experiment`` takes exactly the options
+of ``skinny experiment`` (``--quick --movement --asf --dof --signals``), each None meaning the
+study's default; every one of them that changes the runs is in ``Experiment.config`` (the
+plan: ``config.json`` records it and ``--resume`` refuses a different one), never in the
+name: the name is the study's whatever the movement, so the default output folder stays
+``results/<name>/<time>``.
 
 **An Experiment holds ALL its rows**, always; ``build`` never filters them. Selection
 is the engine's: ``run_sweep(..., rows=["5", "fig4"])`` takes row ids and group names
@@ -167,7 +160,7 @@ class Experiment:
     #: of a sweep of every row (with a line saying so), refused when named in ``rows``
     unavailable: Mapping[str, str] = field(default_factory=dict)
     #: optional ``report(results, out_dir) -> str`` run after the sweep (a study's,
-    #: :mod:`skinny_mj.engine.plan`); None: the module's ``report``
+    #: :mod:`skinny_mj.engine.plan`); None: no report
     report: Callable[[Mapping[str, Any], Path], str] | None = None
 
     def __post_init__(self) -> None:

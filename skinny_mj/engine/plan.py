@@ -7,9 +7,10 @@ A row's configuration is ``study.base`` with, in order, the options of ``skinny
 experiment`` (``--movement`` -> trajectory + asf, ``--dof``, ``--signals``: those the
 study ``takes``, any other refused in one line), the row's overrides (and, under
 ``--quick``, the row's ``quick`` ones), then the overrides after every row's
-(``Quick.overrides``; the contract test's ``tiny``). A quick sweep keeps
-``Quick.rows`` (default: every row) in the study's order, a full sweep every row but the
-``quick_only`` ones, and a run's seed is
+(``Quick.overrides``; the contract test's ``tiny``). An option the study takes its own way
+(``Study.own_options``) sets no config key: the study its function returns is planned. A
+quick sweep keeps ``Quick.rows`` (default: every row) in the study's order, a full sweep
+every row but the ``quick_only`` ones, and a run's seed is
 ``run_seed(base_seed, row_index, run_index)`` over the rows the sweep has.
 """
 
@@ -25,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from skinny_mj.engine.experiment import Experiment, RunFailed
 from skinny_mj.engine.experiment import Row as EngineRow
-from skinny_mj.engine.options import OPTION_KEYS, movement_changes
+from skinny_mj.engine.options import movement_changes
 from skinny_mj.engine.sweep import one_of_batch
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training import overrides
@@ -231,7 +232,12 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
         takes = ", ".join(f"--{k}" for k in study.takes) or "none of them"
         raise SkinnyInputError(f"study {study.name!r} takes no --{refused[0]} (it takes "
                                f"{takes})")
-    changes = movement_changes(movement, asf, dof, signals, OPTION_KEYS)
+    values = {"movement": {"movement": movement, "asf": asf}, "dof": {"dof": dof},
+              "signals": {"signals": signals}}
+    for option, derive in study.own_options.items():  # a change of rows or params
+        if given[option] is not None:
+            study, given[option] = derive(study, **values[option]), None
+    changes = movement_changes(given["movement"], asf, given["dof"], given["signals"])
     base = study.base.override(changes) if changes else study.base
     after = dict(study.quick.overrides if quick else {})
     kept: Sequence[Row] = [r for r in study.rows if quick or not r.quick_only]

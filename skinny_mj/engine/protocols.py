@@ -13,8 +13,7 @@ reproduces the thesis's numbers::
 ``--dof``, ``--signals`` and a row's own overrides still win: a row that sweeps the key
 keeps its values) and its parameters on the study's parameters (a custom run reads them).
 A reading names the studies whose setting it reads; a study that none of the protocol's
-readings is for, or one not declared as data (a :class:`~skinny_mj.engine.study.Study`),
-is refused in one line.
+readings is for is refused in one line.
 """
 
 from __future__ import annotations
@@ -125,7 +124,7 @@ def get(name: str) -> Protocol:
     return PROTOCOLS[name]
 
 
-def apply(name: str, study: Any, study_name: str) -> Study:
+def apply(name: str, study: Study, study_name: str) -> Study:
     """``study`` (registered as ``study_name``) under protocol ``name``: its readings'
     overrides on the study's base and their parameters on its parameters (see the module
     docstring)."""
@@ -134,9 +133,6 @@ def apply(name: str, study: Any, study_name: str) -> Study:
     if not readings:
         raise SkinnyInputError(f"--protocol {name} reads no setting of {study_name!r}; it "
                                f"reads those of {', '.join(protocol.studies)}")
-    if not isinstance(study, Study):
-        raise SkinnyInputError(f"--protocol {name}: {study_name!r} is not declared as data "
-                               "(a Study), so its readings cannot be set on it")
     overrides = {k: v for r in readings for k, v in r.overrides.items()}
     params = {k: v for r in readings for k, v in r.params.items()}
     return dataclasses.replace(study, base=study.base.override(overrides),

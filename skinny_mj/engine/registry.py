@@ -1,19 +1,18 @@
 """The studies ``skinny experiment NAME`` can run.
 
 This project's own are the modules of the ``experiments`` package that set a top-level
-``NAME = "..."``: found by reading their source, loaded by name. Their descriptions are
-read off the source too (the module docstring, or the literal a ``STUDY = Study(...,
-description=...)`` gives), so ``skinny experiment list`` imports none of them. Another
+``NAME = "..."`` and a ``STUDY``: found by reading their source, loaded by name. Their
+descriptions are read off the source too (the module docstring, or the literal a ``STUDY =
+Study(..., description=...)`` gives), so ``skinny experiment list`` imports none of them. Another
 package adds its own through the entry-point group ``skinny_mj.experiments`` in its
 pyproject::
 
     [project.entry-points."skinny_mj.experiments"]
     my-sweep = "my_package.my_sweep:STUDY"    # a skinny_mj.engine.study.Study
-    my-other = "my_package.my_other"          # a module (its STUDY, or the contract below)
+    my-other = "my_package.my_other"          # a module: its STUDY
 
-An entry is a :class:`~skinny_mj.engine.study.Study` (a module's ``STUDY``), or a module of the
-contract of :mod:`skinny_mj.engine.experiment` (``NAME``, ``build(*, quick, movement, asf, dof,
-signals) -> Experiment``, ``report(results, out_dir) -> str``). Every registered study
+An entry is a :class:`~skinny_mj.engine.study.Study`, or a module whose ``STUDY`` is one; anything
+else is refused in one line when the study is asked for. Every registered study
 passes ``tests/test_studies.py`` (it builds, plans its ``--quick`` rows, runs one tiny run
 and writes its table). The project's own names win over an entry point of the same name.
 """
@@ -26,9 +25,12 @@ import importlib.util
 from importlib.metadata import entry_points
 from pathlib import Path
 from types import ModuleType
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from skinny_mj.errors import SkinnyInputError
+
+if TYPE_CHECKING:
+    from skinny_mj.engine.study import Study
 
 GROUP = "skinny_mj.experiments"
 PACKAGE = "skinny_mj.experiments"
@@ -82,9 +84,10 @@ def declared(path: Path) -> Declared:
 
 
 def _study_description(call: ast.expr, docstring: str | None) -> str | None:
-    """The ``description=`` of a ``Study(...)`` call read as source (see :func:`declared`)."""
+    """The ``description=`` of a ``Study(...)`` call, or of a ``dataclasses.replace(...)``
+    deriving one study from another, read as source (see :func:`declared`)."""
     func = call.func if isinstance(call, ast.Call) else None
-    if getattr(func, "id", getattr(func, "attr", None)) != "Study":
+    if getattr(func, "id", getattr(func, "attr", None)) not in ("Study", "replace"):
         return None
     for kw in call.keywords:
         if kw.arg == "description":
@@ -147,10 +150,9 @@ def _load(value: str) -> Any:
     return getattr(obj, "STUDY", obj) if isinstance(obj, ModuleType) else obj
 
 
-def get(name: str) -> Any:
-    """The study registered as ``name``: a :class:`~skinny_mj.engine.study.Study`, or a module
-    of the older contract; an unknown name is a :class:`SkinnyInputError` listing the
-    known ones."""
+def get(name: str) -> Study:
+    """The :class:`~skinny_mj.engine.study.Study` registered as ``name``; an unknown name is a
+    :class:`SkinnyInputError` listing the known ones."""
     from skinny_mj.engine.study import Study
 
     found = _package_studies()
@@ -160,20 +162,19 @@ def get(name: str) -> Any:
         known = ", ".join(sorted(found)) or f"none (is the package installed? group {GROUP})"
         raise SkinnyInputError(f"unknown experiment {name!r}; known: {known}")
     study = _load(found[name])
-    if not isinstance(study, Study | ModuleType):
-        raise SkinnyInputError(f"experiment {name!r} ({found[name]}) is neither a Study "
-                               "nor a module")
+    if not isinstance(study, Study):
+        raise SkinnyInputError(f"experiment {name!r} ({found[name]}) is not a Study (a "
+                               "module's STUDY = skinny_mj.engine.study.Study(...))")
     return study
 
 
 def doc(name: str) -> str:
-    """The study's whole description (a module's docstring), read off the source of the
-    package's own studies (:func:`declared`), imported otherwise."""
+    """The study's whole description, read off the source of the package's own studies
+    (:func:`declared`), imported otherwise."""
     path = source_path(name)
     if path is not None and (text := declared(path).description) is not None:
         return text
-    study = get(name)
-    return (study.description if not isinstance(study, ModuleType) else study.__doc__) or ""
+    return get(name).description or ""
 
 
 def describe(name: str) -> str:

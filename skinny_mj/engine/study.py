@@ -19,6 +19,22 @@ A row's run that is not "train, then read metrics" supplies ``run_batch(config, 
 seeds) -> list`` (per seed a metrics dict, or a :class:`~skinny_mj.engine.experiment.RunFailed`),
 for the whole study or for one row (:attr:`Row.run_batch`); ``config`` is the row's
 training configuration and ``row.params`` its study-specific parameters.
+
+An option of ``skinny experiment`` is a change of config keys (``--dof 8`` sets
+``plant.dof`` on the base). A study that takes one its own way instead, as a change of its
+rows or params, names a function in ``own_options``: ``fn(study, **values) -> Study``, the
+study that option makes. Paper C's ``--movement X.amc --asf Y.asf`` adds a training row
+``real`` and makes ``X.amc`` its test column ``real``::
+
+    def with_movement(study, movement, asf):
+        real = Row("real", {"movement.trajectory": movement, "movement.asf": asf})
+        return dataclasses.replace(study, rows=(*study.rows, real),
+                                   params={**study.params, "real": movement, "asf": asf})
+
+    STUDY = Study(..., own_options={"movement": with_movement})
+
+The engine plans the study the function returns (its rows, seeds, params, ``--quick``)
+and sets none of that option's config keys.
 """
 
 from __future__ import annotations
@@ -146,6 +162,7 @@ class Study:
     cost: Callable[[TrainConfig, Row], float] | None = None
     memory: Callable[[TrainConfig, Row, int], Any] | None = None
     unavailable: Callable[[], Mapping[str, str]] | None = None
+    own_options: Mapping[str, Callable[..., Study]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "rows", tuple(self.rows))
@@ -158,6 +175,8 @@ class Study:
         if bad := sorted(set(self.takes) - set(OPTIONS)):
             raise SkinnyInputError(f"study {self.name!r}: takes {bad}; options are "
                                    f"{', '.join(OPTIONS)}")
+        if bad := sorted(set(self.own_options) - set(self.takes)):
+            raise SkinnyInputError(f"study {self.name!r}: own_options {bad} it does not take")
         if not self.metrics and self.run_batch is None \
                 and any(r.run_batch is None for r in self.rows):
             raise SkinnyInputError(f"study {self.name!r} declares no metrics and no run_batch")
@@ -177,7 +196,7 @@ class Study:
 
         return plan(self, **options).config(row_id)
 
-    # -- the module contract of skinny_mj.engine.experiment, so every caller takes a Study too --
+    # -- what `skinny experiment`, the memory check and the study help call --
     def build(self, quick: bool = False, movement: str | None = None, asf: Any = None,
               dof: int | None = None, signals: str | None = None) -> Any:
         """The :class:`~skinny_mj.engine.experiment.Experiment` of ``skinny experiment NAME``."""
