@@ -54,12 +54,6 @@ def test_experiment_help_describes_that_study(capsys):
     assert "--movement: refused" in flat and "--signals: refused;" in flat
 
 
-#: Studies whose build loads a movement at another speed (paper C's cost is the length of
-#: its training movement, and SciPy's PCHIP resamples a slowed movement): their help
-#: imports SciPy; the test fails when one of them stops, so the list stays true.
-RESAMPLED_AT_BUILD = {"paper-c", "paper-c-3d", "three-d"}
-
-
 def _help_imports(names: list[str]) -> dict[str, tuple[int, list[str]]]:
     """Per study, in turn in one fresh interpreter: the lines of its ``--help`` and which
     of SciPy and MuJoCo are imported after it."""
@@ -78,17 +72,14 @@ def _help_imports(names: list[str]) -> dict[str, tuple[int, list[str]]]:
 
 def test_experiment_help_imports_neither_scipy_nor_mujoco():
     """Each study's ``--help`` loads none of the learning code's or the plant's heavy
-    libraries (they are most of a start-up); the studies that resample a movement while
-    they build load SciPy only, each seen in an interpreter of its own."""
+    libraries (they are most of a start-up): building a sweep to describe it runs nothing,
+    and a row's cost (paper C's loads its movement) is worked out only when scheduled."""
     names = registry.names()
-    assert RESAMPLED_AT_BUILD <= set(names)
-    seen = _help_imports([n for n in names if n not in RESAMPLED_AT_BUILD])
-    for name in sorted(RESAMPLED_AT_BUILD):
-        seen |= _help_imports([name])
+    seen = _help_imports(names)
     assert sorted(seen) == names
     for name, (n_lines, heavy) in seen.items():
         assert n_lines > 5, name
-        assert heavy == (["scipy"] if name in RESAMPLED_AT_BUILD else []), (name, heavy)
+        assert heavy == [], (name, heavy)
 
 
 def test_experiment_help_of_a_study_that_cannot_build_still_describes_it(capsys, monkeypatch):

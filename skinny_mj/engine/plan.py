@@ -75,7 +75,13 @@ class _Runner:
         return train_metrics(config, list(seeds), self.metrics)
 
 
-def _cost(costs: Mapping[str, float], row: EngineRow) -> float:
+def _cost(plan: Plan, costs: dict[str, float], row: EngineRow) -> float:
+    """Row ``row``'s relative cost, worked out when the schedule first asks (a study's
+    own cost may load a movement: a study's ``--help`` builds the sweep but runs none)."""
+    if row.row_id not in costs:
+        p, cost = plan.row(row.row_id), plan.study.cost
+        costs[row.row_id] = relative_cost(p.config) if cost is None \
+            else cost(p.config, plan.run_row(row.row_id))
     return costs[row.row_id]
 
 
@@ -181,8 +187,6 @@ class Plan:
         runner = _Runner(dict(study.metrics), {
             p.row.id: (p.config, self.run_row(p.row.id), p.row.run_batch or study.run_batch)
             for p in self.rows})
-        costs = {p.row.id: relative_cost(p.config) if study.cost is None
-                 else study.cost(p.config, self.run_row(p.row.id)) for p in self.rows}
         columns = quick.columns if self.quick and quick.columns is not None else \
             study.columns if study.columns is not None else tuple(study.metrics)
         kept = {p.row.id for p in self.rows}
@@ -191,7 +195,7 @@ class Plan:
         return Experiment(
             name=study.name, rows=engine_rows, run_one=functools.partial(one_of_batch, runner),
             config=self, runs=runs, base_seed=study.base_seed, table_columns=columns or None,
-            run_batch=runner, cost=functools.partial(_cost, costs), groups=self.groups(),
+            run_batch=runner, cost=functools.partial(_cost, self, {}), groups=self.groups(),
             unavailable=unavailable, report=functools.partial(_report, self))
 
 
