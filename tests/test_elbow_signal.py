@@ -64,3 +64,17 @@ def test_batch_plant_senses_and_differentiates_the_elbow_signals(dof):
 def test_training_config_takes_the_elbow_signals():
     cfg = TrainConfig().override({"plant.signals": "cartesian-elbow", "plant.dof": 8})
     assert cfg.plant.signals == "cartesian-elbow"
+
+
+@pytest.mark.parametrize("dof", [4, 8])
+def test_elbow_signal_is_the_angle_between_the_cartesian_segments(dof):
+    """The elbow angle adds no information a Cartesian target lacks: it is the angle
+    between the upper arm's and the forearm's directions (the elbow hinge is
+    perpendicular to the upper arm and bends 0 to at most 180°)."""
+    rng = np.random.default_rng(30 + dof)
+    lo, hi = body.joint_ranges(dof).T
+    q = rng.uniform(lo, hi, (50, dof))
+    seg = body.segment_vectors(q, dof)  # (50, arm, segment, 3)
+    unit = seg / np.linalg.norm(seg, axis=-1, keepdims=True)
+    bend = np.arccos(np.clip(np.sum(unit[..., 0, :] * unit[..., 1, :], axis=-1), -1, 1))
+    np.testing.assert_allclose(q[:, body.elbow_dofs(dof)], bend, atol=1e-7)
