@@ -93,7 +93,7 @@ GENERAL_ROWS = (("j2", "limits30-scale4"), ("j3", "babble15-scale4"), ("j3", "ge
 #: Per representation, the row of its ``general`` preset (the Cartesian ones: their
 #: CARTESIAN_ROWS row with the elbow angles).
 GENERAL_OF = {"j2": "j2-limits30-scale4", "j3": "j3-general", "c2": "c2-general+elbow",
-              "c3": "c3-babble15+ymca+elbow-babble30"}
+              "c3": "c3-babble15+ymca+elbow-babble60"}
 #: Candidates for the Cartesian presets (``--rows cartesian``, after GENERAL_ROWS): each
 #: is the representation's ``general`` preset with one change, on the preset row's seeds
 #: (a paired comparison): the feedback controller's damped-least-squares lambda, a
@@ -110,11 +110,13 @@ CARTESIAN_VARIANTS: dict[str, dict] = {
                        "movement.trajectory": "set:babble:seed=0,duration=30+ymca"},
     "elbow-babble60": {"plant.signals": "cartesian-elbow",
                        "movement.trajectory": "set:babble:seed=0,duration=60+ymca"},
+    "elbow-babble120": {"plant.signals": "cartesian-elbow",
+                        "movement.trajectory": "set:babble:seed=0,duration=120+ymca"},
 }
 #: The longer babbles before YMCA are c3's (its base row's movement).
 CARTESIAN_ROWS = (*((rep, v) for rep in ("c2", "c3") for v in CARTESIAN_VARIANTS
                     if not v.startswith("elbow-babble")),
-                  ("c3", "elbow-babble30"), ("c3", "elbow-babble60"))
+                  *(("c3", f"elbow-babble{d}") for d in (30, 60, 120)))
 #: Test column id -> movement.
 TESTS = {
     "ymca": "ymca", "y": "y", "y-pure": "y-pure", "ym": "ym",
