@@ -16,6 +16,11 @@ each body and signal (2D and 3D, joint angles and Cartesian; ``j3`` is 3D joint 
 against the best row before it, and its ingredients: babbling that also moves to the
 joint limits and rests (``limits``, ``holds``), a longer babble, the feedback
 controller's correction weighted 3x in the learning targets (``rule.u_error_gain``).
+The rows of ``--rows cartesian`` (:data:`CARTESIAN_ROWS`) change one thing in the
+Cartesian preset rows of before, on their seeds: the feedback controller's Jacobian
+damping (``rule.u_error_damping``), a forward model's prediction as an input, each
+elbow's angle as an extra signal (``cartesian-elbow``, the presets since) and, in 3D,
+a longer babble before YMCA.
 
 Every network is trained once (paper E's experiment 5 schedule: new method, β = 0.1,
 3 learning cycles x 10 epochs, K 1 -> 0, N = 200, spectral radius 0.5) and tested on
@@ -93,7 +98,7 @@ GENERAL_ROWS = (("j2", "limits30-scale4"), ("j3", "babble15-scale4"), ("j3", "ge
 #: Per representation, the row of its ``general`` preset (the Cartesian ones: their
 #: CARTESIAN_ROWS row with the elbow angles).
 GENERAL_OF = {"j2": "j2-limits30-scale4", "j3": "j3-general", "c2": "c2-general+elbow",
-              "c3": "c3-babble15+ymca+elbow-babble60"}
+              "c3": "c3-babble15+ymca+elbow-babble120"}
 #: Candidates for the Cartesian presets (``--rows cartesian``, after GENERAL_ROWS): each
 #: is the representation's ``general`` preset with one change, on the preset row's seeds
 #: (a paired comparison): the feedback controller's damped-least-squares lambda, a
