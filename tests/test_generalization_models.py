@@ -64,7 +64,8 @@ def test_general_preset_per_body_and_signal(dof, signals):
     from skinny_mj.training.config import TrainConfig
 
     fields = preset_fields("general", dof=dof, signals=signals)
-    assert (fields["plant.dof"], fields["plant.signals"]) == (dof, signals)
+    # the signals asked for, or a refinement of them (cartesian -> cartesian-elbow)
+    assert fields["plant.dof"] == dof and fields["plant.signals"] in (signals, f"{signals}-elbow")
     cfg = _train_config(["train", "--preset", "general", "--dof", str(dof),
                          "--signals", signals])
     assert cfg == TrainConfig().override(fields)
@@ -108,10 +109,11 @@ def test_shipped_model_loads_records_its_preset_and_imitates_a_clip(name):
     assert path.is_file() and path.stat().st_size < 2_000_000
     with np.load(path, allow_pickle=False) as data:  # plain arrays, no pickled objects
         assert all(data[k].dtype != object for k in data.files)
-    assert (meta["dof"], meta["signals"], meta["training"]["preset"]) == (dof, signals,
-                                                                           "general")
+    fields = preset_fields("general", dof=dof, signals=signals)
+    assert (meta["dof"], meta["signals"], meta["training"]["preset"]) == (
+        dof, fields["plant.signals"], "general")
     cfg = TrainConfig.from_dict(meta["config"])
-    assert cfg == TrainConfig().override(preset_fields("general", dof=dof, signals=signals))
+    assert cfg == TrainConfig().override(fields)
     clip, _ = load_movement("md_03.amc@start=0,duration=1", dof)
     run = run_of(cfg, esn, np.asarray(meta["max_speed_rad_s"]), clip,
                  [run_streams(0).plant_seed])
@@ -134,7 +136,9 @@ def test_skinny_test_runs_a_shipped_model_by_name(tmp_path):
     assert main(["test", "--model", "general-3d-cartesian", "--trajectory",
                  "md_03.amc@start=0,duration=1", "--out", str(out)]) == 0
     metrics = json.loads((out / "metrics.json").read_text())
-    assert metrics["dof"] == 8 and metrics["signals"] == "cartesian"
+    assert metrics["dof"] == 8
+    assert metrics["signals"] == preset_fields("general", dof=8, signals="cartesian")[
+        "plant.signals"]
     assert metrics["test"]["position_nrmse"] > 0
 
 

@@ -79,7 +79,7 @@ def test_forward_kinematics_and_jacobians_equal_body(dof):
         np.testing.assert_allclose(points, body.arm_points(q, dof), atol=1e-12)
         np.testing.assert_allclose(physics.segment_vectors(), body.segment_vectors(q, dof),
                                    atol=1e-12)
-        for signals in ("joint", "cartesian"):
+        for signals in body.SIGNALS:
             np.testing.assert_allclose(physics.position_signals(signals),
                                        body.position_signals(q, dof, signals), atol=1e-12)
             np.testing.assert_allclose(physics.signal_jacobian(signals),

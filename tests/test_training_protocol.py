@@ -11,6 +11,7 @@ from skinny_mj.controllers.true_target import TrueTargetConfig, train_true_targe
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
+from skinny_mj.training import protocol
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import movement_stats
 from skinny_mj.trajectories import Trajectory, excerpt, ik, load_movement, sample_clip, ymca
@@ -54,6 +55,21 @@ def test_u_error_gain_scales_u_error_and_training_follows():
         runs.append(train(ESN(ecfg, n_runs=2, seed=1), p, d, fcfg, c, feedback=fb))
     np.testing.assert_array_equal(runs[0].position_nrmse, runs[1].position_nrmse)
     assert not np.allclose(runs[0].position_nrmse, runs[2].position_nrmse)
+
+
+def test_u_error_damping_is_a_rule_key_whose_default_keeps_fels_own_controller():
+    assert TrainConfig().rule.u_error_damping == protocol.DAMPING == FeedbackController.damping
+    assert protocol.feedback_of(1.0) is None and protocol.feedback_of(1.0, protocol.DAMPING) is None
+    fb = protocol.feedback_of(1.0, 0.3)
+    assert (fb.damping, fb.gain) == (0.3, 1.0)
+    assert TrainConfig().override({"rule.u_error_damping": 0.3}).rule.u_error_damping == 0.3
+    with pytest.raises(SkinnyInputError):
+        TrainConfig().override({"rule.u_error_damping": -0.1})
+    plant, desired, _, _ = _toy()
+    sensed = plant.reset()
+    plain = FeedbackController().u_error(desired[5], sensed, plant)
+    damped = FeedbackController(damping=0.5).u_error(desired[5], sensed, plant)
+    assert np.linalg.norm(damped) < np.linalg.norm(plain)  # lambda shrinks the correction
 
 
 def test_test_noise_is_a_parameter_off_by_default():

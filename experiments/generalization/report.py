@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 from skinny_mj.experiments.generalization.study import (
+    CARTESIAN_BASE,
+    CARTESIAN_ROWS,
     GENERAL_OF,
     GENERAL_ROWS,
     REPRESENTATIONS,
@@ -198,6 +200,7 @@ def report(results: dict, plan, out_dir: Path) -> str:
         text.append(f"#### {rep}: per training set\n\n" + summary(runs, rep)
                     + "\n\n" + rq3(runs, rep))
     text.append(general_section(runs, out_dir))
+    text.append(cartesian_section(runs, out_dir))
     body = "\n\n".join(text) + "\n"
     atomic_write_text(out_dir / "matrix.md", body)
     return body
@@ -205,12 +208,15 @@ def report(results: dict, plan, out_dir: Path) -> str:
 
 def general_section(runs: list[dict], out_dir: Path) -> str:
     """Before -> after per body and signal on the two clips (no row here trained on
-    them): position and DTW NRMSE mean ± sd, and a bar figure ``general.png``."""
+    them): position (Cartesian rows: on the segment signals) and DTW NRMSE mean ± sd,
+    and a bar figure ``general.png``."""
     lines = ["### The general model per body and signal (clips never trained on)", "",
              "| rep | row | role | n | " + " | ".join(f"{c} pos | {c} DTW" for c in CLIPS)
              + " | train s/run |", "|---|---|---|---|" + "---|---|" * len(CLIPS) + "---|"]
     bars = []
     for rep in ("j2", "j3", "c2", "c3"):
+        # Cartesian rows scored on the segment signals alone (the elbow rows' own hold more)
+        pos = "cartesian_position_nrmse" if rep.startswith("c") else "position_nrmse"
         rows = dict.fromkeys([BEFORE[rep], *(f"{r}-{t}" for r, t in GENERAL_ROWS if r == rep),
                               GENERAL_OF[rep]])
         for row in rows:
@@ -220,17 +226,45 @@ def general_section(runs: list[dict], out_dir: Path) -> str:
             role = " and ".join(name for name, of in (("before", BEFORE), ("preset", GENERAL_OF))
                                 if of[rep] == row) or "ingredient"
             cells = [_ms(_values(runs, row, f"{c}__{m}")) for c in CLIPS
-                     for m in ("position_nrmse", "dtw_nrmse")]
+                     for m in (pos, "dtw_nrmse")]
             lines.append(f"| {rep} | {row} | {role} | {n} | " + " | ".join(cells)
                          + f" | {stat(runs, row, 'train_wall_s')[0]:.1f} |")
-            bars.append((f"{row}\n({role})", [stat(runs, row, f"{c}__position_nrmse")[:2]
+            bars.append((f"{row}\n({role})", [stat(runs, row, f"{c}__{pos}")[:2]
                                                for c in CLIPS]))
     if bars:
         general_figure(out_dir / "general.png", bars)
     return "\n".join(lines)
 
 
-def general_figure(path: Path, bars: list) -> Path:
+def cartesian_section(runs: list[dict], out_dir: Path) -> str:
+    """The Cartesian candidates against their base row, paired seeds: position NRMSE
+    scored on the Cartesian signals (``cartesian_position_nrmse``: the elbow rows' own
+    signals hold the elbow angles too), DTW NRMSE on each row's own signals and the
+    fraction of steps within 5°, and a bar figure ``cartesian.png``."""
+    lines = ["### Cartesian candidates (the preset row with one change, its seeds)", "",
+             "| rep | row | n | " + " | ".join(f"{c} pos | {c} DTW | {c} within 5°"
+                                                 for c in CLIPS)
+             + " | train s/run |", "|---|---|---|" + "---|---|---|" * len(CLIPS) + "---|"]
+    bars = []
+    for rep, base in CARTESIAN_BASE.items():
+        for row in (base, *(f"{base}+{v}" for r, v in CARTESIAN_ROWS if r == rep)):
+            n = stat(runs, row, "train_position_nrmse")[2]
+            if n:
+                cells = [_ms(_values(runs, row, f"{c}__{m}")) for c in CLIPS
+                         for m in ("cartesian_position_nrmse", "dtw_nrmse", "within5")]
+                lines.append(f"| {rep} | {row} | {n} | " + " | ".join(cells)
+                             + f" | {stat(runs, row, 'train_wall_s')[0]:.1f} |")
+                bars.append((row, [stat(runs, row, f"{c}__cartesian_position_nrmse")[:2]
+                                   for c in CLIPS]))
+    if bars:
+        general_figure(out_dir / "cartesian.png", bars,
+                       "Cartesian signals on unseen CMU dance: the preset row and one change")
+    return "\n".join(lines)
+
+
+def general_figure(path: Path, bars: list,
+                   title: str = "Imitating unseen CMU dance: before -> the general presets"
+                   ) -> Path:
     """Grouped bars: per row (label, [(mean, sd) per clip]) the clips' mean ± sd."""
     from skinny_mj.plots import pyplot, save_figure
 
@@ -249,5 +283,5 @@ def general_figure(path: Path, bars: list) -> Path:
     ax.set_ylim(top=4 * max(b[1][k][0] + b[1][k][1] for b in bars for k in range(len(CLIPS))))
     ax.set_ylabel("test position NRMSE (mean ± sd)")
     ax.legend(fontsize=7, ncol=3, loc="upper left")
-    ax.set_title("Imitating unseen CMU dance: before -> the general presets", fontsize=9)
+    ax.set_title(title, fontsize=9)
     return save_figure(fig, path)

@@ -16,6 +16,11 @@ each body and signal (2D and 3D, joint angles and Cartesian; ``j3`` is 3D joint 
 against the best row before it, and its ingredients: babbling that also moves to the
 joint limits and rests (``limits``, ``holds``), a longer babble, the feedback
 controller's correction weighted 3x in the learning targets (``rule.u_error_gain``).
+The rows of ``--rows cartesian`` (:data:`CARTESIAN_ROWS`) change one thing in the
+Cartesian preset rows of before, on their seeds: the feedback controller's Jacobian
+damping (``rule.u_error_damping``), a forward model's prediction as an input, each
+elbow's angle as an extra signal (``cartesian-elbow``, the presets since) and, in 3D,
+a longer babble before YMCA.
 
 Every network is trained once (paper E's experiment 5 schedule: new method, β = 0.1,
 3 learning cycles x 10 epochs, K 1 -> 0, N = 200, spectral radius 0.5) and tested on
@@ -39,6 +44,7 @@ one forced arm and one driven arm, not for a network that drives both.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 
@@ -89,9 +95,33 @@ TRAIN_SETS_GENERAL: dict[str, tuple[str, dict]] = {
 GENERAL_ROWS = (("j2", "limits30-scale4"), ("j3", "babble15-scale4"), ("j3", "general"),
                 ("c2", "babble15-scale4"),
                 ("c2", "limits30-scale4"), ("c2", "general"), ("c3", "babble15-scale4"))
-#: Per representation, the row of its ``general`` preset (c3's is the matrix's row).
-GENERAL_OF = {"j2": "j2-limits30-scale4", "j3": "j3-general", "c2": "c2-general",
-              "c3": "c3-babble15+ymca"}
+#: Per representation, the row of its ``general`` preset (the Cartesian ones: their
+#: CARTESIAN_ROWS row with the elbow angles).
+GENERAL_OF = {"j2": "j2-limits30-scale4", "j3": "j3-general", "c2": "c2-general+elbow",
+              "c3": "c3-babble15+ymca+elbow-babble120"}
+#: Candidates for the Cartesian presets (``--rows cartesian``, after GENERAL_ROWS): each
+#: is the representation's ``general`` preset with one change, on the preset row's seeds
+#: (a paired comparison): the feedback controller's damped-least-squares lambda, a
+#: parallel forward model whose prediction is an input of the inverse model (paper A),
+#: the elbow angles as extra signals (``cartesian-elbow``), and what the screen of those
+#: pointed to.
+CARTESIAN_VARIANTS: dict[str, dict] = {
+    "damp0.1": {"rule.u_error_damping": 0.1},
+    "damp0.3": {"rule.u_error_damping": 0.3},
+    "damp1": {"rule.u_error_damping": 1.0},
+    "forward": {"forward": "parallel"},
+    "elbow": {"plant.signals": "cartesian-elbow"},
+    "elbow-babble30": {"plant.signals": "cartesian-elbow",
+                       "movement.trajectory": "set:babble:seed=0,duration=30+ymca"},
+    "elbow-babble60": {"plant.signals": "cartesian-elbow",
+                       "movement.trajectory": "set:babble:seed=0,duration=60+ymca"},
+    "elbow-babble120": {"plant.signals": "cartesian-elbow",
+                        "movement.trajectory": "set:babble:seed=0,duration=120+ymca"},
+}
+#: The longer babbles before YMCA are c3's (its base row's movement).
+CARTESIAN_ROWS = (*((rep, v) for rep in ("c2", "c3") for v in CARTESIAN_VARIANTS
+                    if not v.startswith("elbow-babble")),
+                  *(("c3", f"elbow-babble{d}") for d in (30, 60, 120)))
 #: Test column id -> movement.
 TESTS = {
     "ymca": "ymca", "y": "y", "y-pure": "y-pure", "ym": "ym",
@@ -198,21 +228,39 @@ def _row(rep: str, ts: str, movement: str, changes: dict) -> Row:
                quick={"tests": QUICK_TESTS})
 
 
+def cartesian_row(base: Row, variant: str) -> Row:
+    """A row of CARTESIAN_ROWS: the ``base`` row (the representation's preset row,
+    :data:`CARTESIAN_BASE`) with the variant's keys, on the base row's seeds."""
+    return dataclasses.replace(
+        base, id=f"{base.id}+{variant}", overrides={**base.overrides,
+                                                    **CARTESIAN_VARIANTS[variant]},
+        params={**base.params, "train": f"{base.params['train']}+{variant}"},
+        seeds_of=base.id)
+
+
 def general_row(rep: str, ts: str) -> Row:
     """A row of GENERAL_ROWS: ``general`` is ``skinny train --preset general`` for the
-    representation's body and signals."""
+    representation's body and signals, on those signals (a preset on refined signals,
+    ``cartesian-elbow``, is a row of CARTESIAN_ROWS)."""
     if ts != "general":
         return _row(rep, ts, *TRAIN_SETS_GENERAL[ts])
     dof, signals = REPRESENTATIONS[rep]
     fields = preset_fields("general", dof=dof, signals=signals)
+    fields.pop("plant.signals")  # on the representation's own signals (the c2 row: the
+    # preset before the elbow signals, CARTESIAN_BASE)
     return _row(rep, ts, fields.pop("movement.trajectory"), fields)
 
 
 #: j2: every training set; c2, c3: CORE_SETS; then EXTRA_ROWS, then GENERAL_ROWS.
-ROWS = (*(_row(rep, ts, *TRAIN_SETS[ts]) for rep in MATRIX_REPS for ts in TRAIN_SETS
-          if rep == "j2" or ts in CORE_SETS),
-        *(_row(rep, ts, *TRAIN_SETS_EXTRA[ts]) for rep, ts in EXTRA_ROWS),
-        *(general_row(rep, ts) for rep, ts in GENERAL_ROWS))
+_ROWS = (*(_row(rep, ts, *TRAIN_SETS[ts]) for rep in MATRIX_REPS for ts in TRAIN_SETS
+           if rep == "j2" or ts in CORE_SETS),
+         *(_row(rep, ts, *TRAIN_SETS_EXTRA[ts]) for rep, ts in EXTRA_ROWS),
+         *(general_row(rep, ts) for rep, ts in GENERAL_ROWS))
+#: The Cartesian candidates' base per representation: its preset row before them.
+CARTESIAN_BASE = {"c2": "c2-general", "c3": "c3-babble15+ymca"}
+_BY_ID = {r.id: r for r in _ROWS}
+#: ... then CARTESIAN_ROWS.
+ROWS = (*_ROWS, *(cartesian_row(_BY_ID[CARTESIAN_BASE[rep]], v) for rep, v in CARTESIAN_ROWS))
 
 
 STUDY = Study(
@@ -225,7 +273,8 @@ STUDY = Study(
              "md_02__position_nrmse": "md_02 pos", "md_03__position_nrmse": "md_03 pos",
              "train_wall_s": "train s/run"},
     groups={"extra": [f"{rep}-{ts}" for rep, ts in EXTRA_ROWS],
-            "general": [f"{rep}-{ts}" for rep, ts in GENERAL_ROWS]},
+            "general": [f"{rep}-{ts}" for rep, ts in GENERAL_ROWS],
+            "cartesian": [f"{CARTESIAN_BASE[rep]}+{v}" for rep, v in CARTESIAN_ROWS]},
     # a smoke test: N = 50, 2 epochs, 2 runs, 3 sets x 3 tests on j2
     quick=Quick({"esn.n_reservoir": 50, "rule.epochs": 2}, runs=2,
                 rows=tuple(f"j2-{ts}" for ts in QUICK_SETS)),

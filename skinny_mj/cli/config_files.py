@@ -99,9 +99,14 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     if preset is not None:
         from skinny_mj.training.presets import preset_fields
 
-        cfg = cfg.override(preset_fields(preset, str(texts.get("actuation", "velocity")),
-                                         dof=texts.get("plant.dof"),
-                                         signals=texts.get("plant.signals")))
+        fields = preset_fields(preset, str(texts.get("actuation", "velocity")),
+                               dof=texts.get("plant.dof"), signals=texts.get("plant.signals"))
+        cfg = cfg.override(fields)
+        # --signals chose a preset that refines them (cartesian -> cartesian-elbow): keep it
+        if "plant.signals" not in keyed and str(fields.get("plant.signals")).startswith(
+                f"{texts.get('plant.signals')}-"):
+            texts.pop("plant.signals")
+            names.pop("plant.signals", None)
     if getattr(args, "config", None) is not None:
         path = Path(args.config)
         fields, seed = read_train_file(path)

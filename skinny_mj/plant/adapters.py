@@ -259,6 +259,9 @@ class BatchPlant:
             else:
                 pts = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
                 self._signals = segment_signals(pts, self.layout.arm_lengths, self._comp_sel)
+                if self.signals == "cartesian-elbow":
+                    self._signals = body.with_elbow(self._signals, self.joint_angles(),
+                                                    self.n_dof)
         return self._signals
 
     def joint_angles(self) -> np.ndarray:
@@ -274,6 +277,8 @@ class BatchPlant:
         points = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
         jac = segment_jacobian(axes, points, self.layout.segment_pairs,
                                self.layout.segment_lengths, self.layout.components)
+        if self.signals == "cartesian-elbow":
+            jac = body.with_elbow_jacobian(jac, self.n_dof)
         jac *= self.max_speed_rad_s * self.dt  # as EnvPlant.command_jacobian
         return jac
 

@@ -60,7 +60,10 @@ _ROTATION = JointSpec(
 _ELBOW_2D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, np.pi))
 _ELBOW_3D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, 5 * np.pi / 6))
 
-SIGNALS = ("joint", "cartesian")
+#: "cartesian-elbow": the Cartesian signals, then each arm's forearm hinge angles
+#: (normalized as joint signals): the elbow's bend, which the segment directions leave
+#: ambiguous where the arm is straight (see :func:`elbow_dofs`).
+SIGNALS = ("joint", "cartesian", "cartesian-elbow")
 ACTUATIONS = ("velocity", "torque")
 #: The control step, s (50 Hz: the thesis's 200 Hz capture, every 4th sample kept).
 CONTROL_DT_S = 0.02
@@ -161,7 +164,7 @@ def check_dof(dof: object) -> int:
 
 
 def check_signals(signals: object) -> str:
-    """``signals`` if it is "joint" or "cartesian", else a :class:`SkinnyInputError`."""
+    """``signals`` if it is one of :data:`SIGNALS`, else a :class:`SkinnyInputError`."""
     if signals not in SIGNALS:
         raise SkinnyInputError(f"signals must be one of {SIGNALS}, got {signals!r}")
     return str(signals)
@@ -201,9 +204,36 @@ def signal_names(dof: int, signals: str) -> tuple[str, ...]:
     if check_signals(signals) == "joint":
         return dof_names(dof)
     axes = "xz" if body_of(dof).planar else "xyz"
-    return tuple(
+    names = tuple(
         f"{side}_{point}_{a}" for side in SIDES for point in ("elbow", "wrist") for a in axes
     )
+    if signals == "cartesian-elbow":
+        names += tuple(dof_names(dof)[i] for i in elbow_dofs(dof))
+    return names
+
+
+def elbow_dofs(dof: int) -> np.ndarray:
+    """Indices (in :func:`dof_names` order) of the hinges that move only the forearm,
+    right arm first: the extra signals of "cartesian-elbow"."""
+    n_arm = dof // 2
+    own = [i for i, j in enumerate(body_of(dof).arm_joints) if j.segment == "forearm"]
+    return np.array([a * n_arm + i for a in range(2) for i in own])
+
+
+def with_elbow(cartesian: np.ndarray, q: np.ndarray, dof: int) -> np.ndarray:
+    """"cartesian-elbow" signals (..., n_cart + n_elbow): ``cartesian`` (..., n_cart)
+    with the normalized forearm hinge angles of q (..., n_dof) rad appended."""
+    return np.concatenate([cartesian, normalize_angles(q, dof)[..., elbow_dofs(dof)]], axis=-1)
+
+
+def with_elbow_jacobian(jac: np.ndarray, dof: int) -> np.ndarray:
+    """The "cartesian-elbow" Jacobian (..., n_cart + n_elbow, n_dof): the Cartesian one
+    ``jac`` (..., n_cart, n_dof) per rad with each forearm hinge's row, 2 / range, below."""
+    idx = elbow_dofs(dof)
+    lo, hi = joint_ranges(dof)[idx].T
+    rows = np.zeros((len(idx), jac.shape[-1]))
+    rows[np.arange(len(idx)), idx] = 2.0 / (hi - lo)
+    return np.concatenate([jac, np.broadcast_to(rows, jac.shape[:-2] + rows.shape)], axis=-2)
 
 
 def n_signals(dof: int, signals: str) -> int:
@@ -301,6 +331,8 @@ def position_signals(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
     """Normalized position signals (..., n_signals) for joint angles q (..., n_dof) rad."""
     if check_signals(signals) == "joint":
         return normalize_angles(q, dof)
+    if signals == "cartesian-elbow":
+        return with_elbow(cartesian_signals(q, dof), q, dof)
     return cartesian_signals(q, dof)
 
 
@@ -334,4 +366,6 @@ def signal_jacobian(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
             if spec.segment == "upper_arm":
                 jac[:, k * 2 * nc : k * 2 * nc + nc, col] = np.cross(axes[:, i], upper)[:, comps]
             jac[:, k * 2 * nc + nc : (k + 1) * 2 * nc, col] = np.cross(axes[:, i], fore)[:, comps]
+    if signals == "cartesian-elbow":
+        jac = with_elbow_jacobian(jac, dof)
     return jac.reshape(lead + jac.shape[1:])

@@ -167,8 +167,11 @@ class Layout:
         """(n_signals,) normalized noise-free signals (see :func:`body.signal_names`)."""
         if body.check_signals(signals) == "joint":
             return body.normalize_angles(self.joint_angles(data), self.dof)
-        return segment_signals(data.site_xpos[self.site_ids][None], self.arm_lengths,
-                               self.components)[0]
+        out = segment_signals(data.site_xpos[self.site_ids][None], self.arm_lengths,
+                              self.components)[0]
+        if signals == "cartesian-elbow":
+            return body.with_elbow(out, self.joint_angles(data), self.dof)
+        return out
 
     def site_jacobian(self, model: mujoco.MjModel, data: mujoco.MjData, site_id: int):
         """(3, nv) translational Jacobian of a site, m/rad (``mj_jacSite``)."""
@@ -185,8 +188,9 @@ class Layout:
             return np.diag(2.0 / (hi - lo))
         axes = data.cdof[self.dof_adr, :3][None]
         points = data.site_xpos[self.site_ids][None]
-        return segment_jacobian(axes, points, self.segment_pairs, self.segment_lengths,
-                                self.components)[0]
+        jac = segment_jacobian(axes, points, self.segment_pairs, self.segment_lengths,
+                               self.components)[0]
+        return body.with_elbow_jacobian(jac, self.dof) if signals == "cartesian-elbow" else jac
 
 
 class SkinnyPhysics(dm_mujoco.Physics):
@@ -233,7 +237,7 @@ class SkinnyPhysics(dm_mujoco.Physics):
         return self.layout.segment_vectors(self.data.ptr)
 
     def position_signals(self, signals: str) -> np.ndarray:
-        """(n_signals,) normalized noise-free position signals ("joint" or "cartesian")."""
+        """(n_signals,) normalized noise-free position signals (one of ``body.SIGNALS``)."""
         return self.layout.position_signals(self.data.ptr, signals)
 
     def site_jacobian(self, name: str) -> np.ndarray:

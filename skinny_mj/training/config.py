@@ -175,6 +175,8 @@ class _FEL:
     gain_factor: float = 0.9  # multiplicative: K = factor ** epoch (paper C)
     gain_value: float = 0.65  # fixed: K (paper A)
     u_error_gain: float = 1.0  # scalar on the feedback controller's u_error (unstated)
+    #: the feedback controller's damped-least-squares lambda (signal per command units)
+    u_error_damping: float = 1e-4
     #: the readout fits: each cycle alone ("cycle"), lambda chosen per fit on a validation
     #: cycle ("ridge-select"), or remembering earlier cycles ("forgetting", "rls")
     fit: str = "cycle"
@@ -194,6 +196,8 @@ class _FEL:
             (_at_least(self.gain_value, 0), f"feedback gain must be >= 0, got {self.gain_value}"),
             (_at_least(self.u_error_gain, 0) and self.u_error_gain > 0,
              f"u_error gain must be > 0, got {self.u_error_gain}"),
+            (_at_least(self.u_error_damping, 0),
+             f"u_error damping must be >= 0, got {self.u_error_damping}"),
             (fits.known(self.fit), fits.refusal(self.fit)),
             (_at_least(self.forgetting, 0) and self.forgetting <= 1,
              f"forgetting must be in [0, 1], got {self.forgetting}"),

@@ -205,7 +205,7 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
         observe = out.feedback_share if observe is None else _both(observe, out.feedback_share)
     out.fel = fel.train(run.esn, run.plant, run.desired, fcfg, true_commands=run.true_commands,
                         progress=tick, forward=run.forward, scored=run.scored,
-                        feedback=protocol.feedback_of(rule.u_error_gain),
+                        feedback=protocol.feedback_of(rule.u_error_gain, rule.u_error_damping),
                         hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s, run.plant),
                         rule=selector, observe=observe)
     if rule.fit == "ridge-select":

@@ -3,8 +3,10 @@
 ``general`` is the inverse model for movements it never saw, one per body and signal
 (``--dof 4|8``, ``--signals joint|cartesian``; by default 2D joint angles): each is the
 configuration with the lowest error on the real CMU clips it never trained on in the
-generalization study (``skinny experiment generalization --rows general``,
-docs/results/generalization.md). All train on motor babbling
+generalization study (``skinny experiment generalization --rows general,cartesian``,
+docs/results/generalization.md). The Cartesian ones see each elbow's angle beside the
+segment directions (``cartesian-elbow``, :func:`skinny_mj.plant.body.with_elbow`): the
+angle between the two segments, so a Cartesian target fixes it too. All train on motor babbling
 (:mod:`skinny_mj.trajectories.babble`) with paper E's experiment-5 schedule. The trained
 models ship with the package (:data:`SHIPPED`): ``skinny test --model general-3d-cartesian
 --trajectory CLIP.amc --asf SKELETON.asf`` runs one without training.
@@ -49,23 +51,25 @@ GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
         {"plant.dof": 8, **_JOINT},
     ),
     (4, "cartesian"): (
-        "2D, Cartesian signals, trained on 60 s of babbling that also moves to the joint "
-        "limits and rests (limits=0.5, holds=0.2), full scale 4x, the feedback "
-        "controller's correction x3 in the learning targets: row c2-general (unseen md_02 "
-        "0.064, md_03 0.052, 10 seeds)",
-        {"plant.dof": 4, "plant.signals": "cartesian",
+        "2D, Cartesian signals with each elbow's angle beside them (cartesian-elbow: the "
+        "angle between the segments, which the Cartesian target already fixes), trained on "
+        "60 s of babbling that also moves to the joint limits and rests (limits=0.5, "
+        "holds=0.2), full scale 4x, the feedback controller's correction x3 in the "
+        "learning targets: row c2-general+elbow (unseen md_02 0.027, md_03 0.022, 10 "
+        "seeds; without the elbow angles 0.064 and 0.052)",
+        {"plant.dof": 4, "plant.signals": "cartesian-elbow",
          "movement.trajectory": "babble:seed=0,duration=60,limits=0.5,holds=0.2",
          "movement.full_scale_factor": 4.0, "rule.u_error_gain": 3.0,
          "test.washout_cycles": 1},
     ),
     (8, "cartesian"): (
-        "3D, Cartesian signals, trained on 15 s of motor babbling then YMCA (joined by a "
-        "minimum-jerk bridge), full scale 2x: row c3-babble15+ymca (unseen md_02 0.127, "
-        "md_03 0.100, 10 seeds); no babbling at the "
-        "limits, larger scale, reservoir (N = 400), reservoir noise or feedback weight "
-        "measured did better on the unseen clips",
-        {"plant.dof": 8, "plant.signals": "cartesian",
-         "movement.trajectory": "set:babble:seed=0,duration=15+ymca",
+        "3D, Cartesian signals with each elbow's angle beside them (cartesian-elbow), "
+        "trained on 120 s of motor babbling then YMCA (joined by a minimum-jerk bridge), "
+        "full scale 2x: row c3-babble15+ymca+elbow-babble120 (unseen md_02 0.034, md_03 "
+        "0.032, 10 seeds; with 15 s of babbling 0.064 and 0.048, without the elbow angles "
+        "0.127 and 0.100)",
+        {"plant.dof": 8, "plant.signals": "cartesian-elbow",
+         "movement.trajectory": "set:babble:seed=0,duration=120+ymca",
          "test.washout_cycles": 1},
     ),
 }
