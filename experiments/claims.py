@@ -9,6 +9,9 @@ why a row has no value (not run, or every run failed or errored).
 :func:`tally` counts the verdicts of the project's table of every claim
 (docs/results/claims.md) per reading of the thesis's unstated settings, so the counts the
 page states are the table's: ``python -m skinny_mj.experiments.claims docs/results/claims.md``.
+Two of the table's reasons are measured here too: ``... claims c7 PAPER_C_SWEEP DOF`` (where
+the Y-trained networks' YM error lies) and ``... claims mirrors`` (how far each mirror
+movement leaves the joint ranges YMCA covers, 2D and 3D).
 """
 
 from __future__ import annotations
@@ -131,7 +134,97 @@ def tally_lines(counts: dict[str, Counter]) -> list[str]:
             f"{c['not run']} not run" for reading, c in counts.items()]
 
 
+# -- measured reasons (paper C's C1 and C7 in the claims table) ---------------------------
+def error_split(produced: np.ndarray, desired: np.ndarray, steps: np.ndarray
+                ) -> dict[str, Any]:
+    """Where a test's error lies. produced, desired: (T, n) normalized signals in [-1, 1];
+    steps: (T,) bool. Returns each signal's share of the squared error (``share``, (n,),
+    sums to 1), and the NRMSE (RMS error / 2) on the selected steps and on the others."""
+    e2 = (np.asarray(produced, float) - np.asarray(desired, float)) ** 2
+    steps = np.asarray(steps, bool)
+    return {"share": e2.sum(axis=0) / e2.sum(),
+            "nrmse_selected": float(np.sqrt(e2[steps].mean()) / 2.0),
+            "nrmse_other": float(np.sqrt(e2[~steps].mean()) / 2.0)}
+
+
+def range_excursion(angles: np.ndarray, reference: np.ndarray, tol: float = np.radians(1.0)
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """How far each joint of ``angles`` (T, n) rad leaves the range [min, max] the same
+    joint covers in ``reference`` (T', n) rad: (the largest excursion (n,) rad, the
+    fraction of steps (n,) beyond ``tol`` rad)."""
+    a, ref = np.asarray(angles, float), np.asarray(reference, float)
+    out = np.maximum(a - ref.max(axis=0), 0.0) + np.maximum(ref.min(axis=0) - a, 0.0)
+    return out.max(axis=0), (out > tol).mean(axis=0)
+
+
+def _measure_c7(out_dir: Path, dof: int) -> list[str]:
+    """C7: the Y-trained networks' YM error per joint (their kept ``angles__ym``), and
+    on the steps where YM's elbows have folded by more than 5 degrees vs the rest."""
+    from skinny_mj.experiments.paper_c import study as paper_c
+
+    from skinny_mj.plant import body
+
+    ym = paper_c.load(paper_c.Config(dof=dof, real_movement=None), "ym").angles
+    elbows = paper_c.elbow_dofs(dof)
+    folded = np.abs(ym[:, elbows] - ym[0, elbows]).max(axis=1) > np.radians(5.0)
+    lines = []
+    for run in load_runs(out_dir):
+        if run.get("row") != "y" or "angles__ym" not in run.get("metrics", {}):
+            continue
+        produced = np.asarray(run["metrics"]["angles__ym"], float)
+        n = min(len(produced), len(ym))
+        split = error_split(body.normalize_angles(produced[:n], dof),
+                            body.normalize_angles(ym[:n], dof), folded[:n])
+        lines.append(f"seed {run['seed']}: elbows' share of the YM error "
+                     f"{split['share'][elbows].sum():.3f}; NRMSE where YM's elbows have "
+                     f"folded ({folded[:n].mean():.0%} of steps) {split['nrmse_selected']:.4f}, "
+                     f"elsewhere {split['nrmse_other']:.4f}")
+    return lines
+
+
+def _measure_mirrors() -> list[str]:
+    """C1 in 3D: how far each mirror movement's arms leave the ranges YMCA covers."""
+    from skinny_mj.experiments.paper_c import study as paper_c
+
+    from skinny_mj.plant import body
+
+    lines = []
+    for dof in (4, 8):
+        cfg = paper_c.Config(dof=dof, real_movement=None)
+        ymca = paper_c.load(cfg, "ymca").angles
+        for name in ("mirror-right", "mirror-left"):
+            most, frac = range_excursion(paper_c.load(cfg, name).angles, ymca)
+            beyond = [f"{j} {np.degrees(most[i]):.1f} deg ({frac[i]:.0%} of steps)"
+                      for i, j in enumerate(body.dof_names(dof)) if most[i] > 0]
+            lines.append(f"{dof} DOF, {name}: beyond YMCA's range: "
+                         f"{', '.join(beyond) if beyond else 'none'}")
+    return lines
+
+
+USAGE = ("usage: python -m skinny_mj.experiments.claims CLAIMS_MD | c7 PAPER_C_SWEEP DOF "
+         "| mirrors")
+
+
+def _existing(path: str) -> Path:
+    if not Path(path).exists():
+        raise SystemExit(f"no such file or folder: {path}")
+    return Path(path)
+
+
+def main(args: list[str]) -> str:
+    """The command line: the table's count, or one of the measured reasons."""
+    if args == ["mirrors"]:
+        return "\n".join(_measure_mirrors())
+    if len(args) == 3 and args[0] == "c7" and args[2] in ("4", "8"):
+        return "\n".join(_measure_c7(_existing(args[1]), int(args[2])))
+    if len(args) == 1:
+        return "\n".join(tally_lines(tally(_existing(args[0]).read_text(encoding="utf-8"))))
+    raise SystemExit(USAGE)
+
+
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        sys.exit("usage: python -m skinny_mj.experiments.claims CLAIMS_MD")
-    print("\n".join(tally_lines(tally(Path(sys.argv[1]).read_text(encoding="utf-8")))))
+    try:
+        print(main(sys.argv[1:]))
+    except SystemExit as e:
+        print(e, file=sys.stderr)
+        sys.exit(2)

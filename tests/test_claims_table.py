@@ -1,12 +1,14 @@
-"""The claims table's count (skinny_mj.experiments.claims.tally) and the page that states it."""
+"""The claims table's count (skinny_mj.experiments.claims.tally), the page that states it,
+and the measures behind two of its reasons (error_split, range_excursion)."""
 
 from __future__ import annotations
 
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
-from skinny_mj.experiments.claims import tally, tally_lines
+from skinny_mj.experiments.claims import error_split, main, range_excursion, tally, tally_lines
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "results" / "claims.md"
 
@@ -47,3 +49,27 @@ def test_the_page_states_the_tables_own_count():
     stated = dict(re.findall(r"^- \*\*([a-z ]+)\*\*: (.+)$", text, flags=re.M))
     counted = dict(line.split(": ", 1) for line in tally_lines(tally(text)))
     assert stated == counted
+
+
+def test_error_split_shares_the_squared_error_and_splits_the_steps():
+    desired = np.zeros((4, 2))
+    produced = np.array([[0.0, 0.2], [0.0, 0.2], [0.4, 0.0], [0.4, 0.0]])
+    split = error_split(produced, desired, np.array([False, False, True, True]))
+    np.testing.assert_allclose(split["share"], [0.8, 0.2])
+    assert split["nrmse_selected"] == pytest.approx(np.sqrt(0.08) / 2)  # mean over both signals
+    assert split["nrmse_other"] == pytest.approx(np.sqrt(0.02) / 2)
+
+
+def test_range_excursion_measures_only_what_leaves_the_reference_range():
+    reference = np.array([[0.0, -1.0], [1.0, 1.0]])
+    angles = np.array([[0.5, 0.0], [1.5, 0.0], [-0.2, 0.0], [1.0, 1.0]])
+    most, frac = range_excursion(angles, reference, tol=0.3)
+    np.testing.assert_allclose(most, [0.5, 0.0])
+    np.testing.assert_allclose(frac, [0.25, 0.0])
+
+
+@pytest.mark.parametrize("args", [[], ["a", "b"], ["c7", "results", "5"], ["no-such.md"]])
+def test_the_command_line_refuses_bad_input_in_one_line(args):
+    with pytest.raises(SystemExit) as e:
+        main(args)
+    assert "\n" not in str(e.value)
