@@ -100,7 +100,8 @@ CT_JOINT_GOAL, TORQUE_BUDGET = 0.008, 1.5
 TABLE_COLUMNS = {"position_nrmse": "test position NRMSE", "joint_nrmse": "joint-angle NRMSE",
                  "motor_nrmse": "test motor NRMSE",
                  "mean_abs_torque_nm": "mean |τ| (N m)", "energy_j": "motor work (J)",
-                 "max_torque_ratio": "max |τ|/limit", "warnings": "MuJoCo warnings",
+                 "max_torque_ratio": "max |τ|/limit",
+                 "limit_overshoot_rad": "past a joint limit (rad)", "warnings": "MuJoCo warnings",
                  "train_wall_s": "wall per run (s)"}
 BODIES = {"2d": 4, "3d": 8}
 #: ``--quick`` (a smoke test): 2 epochs of every FEL row (the long rows 2 x 2)
@@ -204,7 +205,8 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
         tq = m["test"].get("torque")
         if tq is not None:
             metrics.update({k: tq[k] for k in ("mean_abs_torque_nm", "energy_j",
-                                               "max_commanded_ratio", "max_applied_ratio")})
+                                               "max_commanded_ratio", "max_applied_ratio",
+                                               "limit_overshoot_rad")})
             metrics["max_torque_ratio"] = max(tq["max_commanded_ratio"],
                                               tq["max_applied_ratio"])
             metrics["warnings"] = tq["warnings"] + (m.get("train_warnings") or 0)

@@ -171,7 +171,8 @@ def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
     :meth:`TorqueLoop.metrics` plus ``warnings`` (MuJoCo ``data.warning`` counts of the
     test plant, summed over mjtWarning and over its lockstep runs, which share one
     MjData) and ``within_limits`` (commanded and applied |torque| <= limit, 1e-9
-    slack); series (for recordings): ``commanded_nm`` (T-1, n_dof) = command x limit,
+    slack) and ``limit_overshoot_rad`` (the largest joint angle past its range over the
+    test cycle, rad; 0 inside the ranges); series (for recordings): ``commanded_nm`` (T-1, n_dof) = command x limit,
     ``applied_nm`` (T-1, n_dof) ``actuator_force``, ``gravity_nm`` (T, n_dof) the bias
     torque ``qfrc_bias`` of each state, ``limit_nm`` (n_dof,).
     """
@@ -181,10 +182,19 @@ def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
     metrics["warnings"] = int(plant.warning_count())
     metrics["within_limits"] = bool(max(metrics["max_commanded_ratio"],
                                         metrics["max_applied_ratio"]) <= 1 + 1e-9)
+    metrics["limit_overshoot_rad"] = limit_overshoot_rad(rollout.angles[r], plant.n_dof)
     series = {"commanded_nm": rollout.commands[r] * limit,
               "applied_nm": hook.applied_nm[:, r].copy(),
               "gravity_nm": hook.bias_nm[:, r].copy(), "limit_nm": limit.copy()}
     return {"metrics": metrics, "series": series}
+
+
+def limit_overshoot_rad(angles: np.ndarray, dof: int) -> float:
+    """The largest joint angle past its range in ``angles`` (T, >= dof) rad, in rad (0
+    when every angle stays within :func:`skinny_mj.plant.body.joint_ranges`)."""
+    lo, hi = body.joint_ranges(dof).T
+    q = np.asarray(angles)[:, :dof]
+    return float(max(np.max(lo - q), np.max(q - hi), 0.0))
 
 
 def train_warnings(run) -> int | None:
