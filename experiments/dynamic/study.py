@@ -202,6 +202,8 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
         for key in ("position_nrmse", "feedback_share", "error_signal_share"):
             if key in train:  # learning curves, per epoch (kept in the run file)
                 metrics[f"curve_{key}"] = train[key]
+        if "limit_overshoot_rad" in train:  # over every training cycle
+            metrics["train_limit_overshoot_rad"] = train["limit_overshoot_rad"]
         tq = m["test"].get("torque")
         if tq is not None:
             metrics.update({k: tq[k] for k in ("mean_abs_torque_nm", "energy_j",

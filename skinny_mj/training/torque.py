@@ -237,14 +237,20 @@ def readout_fitter(cfg: TrainConfig, esn, steps: int):
 class ShareRecorder:
     """FEL's ``observe`` callback: per epoch, on its evaluation cycle (the ESN with the
     epoch's K), the feedback share mean |K u_fb| / mean |u| of the command and the
-    teacher's error signal mean |u_fb| / mean |u| (each (R, E))."""
+    teacher's error signal mean |u_fb| / mean |u| (each (R, E)); and over every cycle of
+    the training, each run's largest joint angle past its range (``limit_overshoot_rad``
+    (R,), rad: 0 for a run that never touched a joint limit)."""
 
-    def __init__(self, gains: np.ndarray, n_runs: int, cycles: int):
-        self.gains, self.eval_cycle = np.asarray(gains, float), cycles + 1
+    def __init__(self, gains: np.ndarray, n_runs: int, cycles: int, dof: int):
+        self.gains, self.eval_cycle, self.dof = np.asarray(gains, float), cycles + 1, dof
         self.share = np.full((n_runs, len(gains)), np.nan)
         self.error_signal = np.full((n_runs, len(gains)), np.nan)
+        self.limit_overshoot_rad = np.zeros(n_runs)
 
     def __call__(self, epoch: int, cycle: int, ro, y_used) -> None:
+        for r in range(len(self.limit_overshoot_rad)):
+            self.limit_overshoot_rad[r] = max(self.limit_overshoot_rad[r],
+                                              limit_overshoot_rad(ro.angles[r], self.dof))
         if cycle != self.eval_cycle:
             return
         u = np.abs(ro.commands).mean(axis=(1, 2))
