@@ -16,10 +16,10 @@ differently in the two layouts.
 from __future__ import annotations
 
 import argparse
+import functools
 import time
 
 import numpy as np
-
 from skinny_mj.controllers.readout import RLS
 
 
@@ -57,6 +57,14 @@ def _rls(n_runs: int, d: int, forgetting: float) -> RLS:
     return RLS(np.zeros((n_runs, 8, d)), 1e-2, forgetting)
 
 
+def _step_before(rls: RLSBefore, x, s, runs, t: int) -> None:
+    update_before(rls, x[t], s[t], runs)
+
+
+def _step_after(rls: RLS, x, s, runs, t: int) -> None:
+    rls.update(x[t], s[t], runs)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=10)
@@ -78,11 +86,10 @@ def main() -> None:
     for _ in range(args.repeats):
         for label in best:  # interleaved: both see the same machine load
             if label == "before":
-                old = RLSBefore(args.runs, args.dim, g)
-                step = (lambda t, r=old: update_before(r, x[t], s[t], every))
+                rls_old = RLSBefore(args.runs, args.dim, g)
+                step = functools.partial(_step_before, rls_old, x, s, every)
             else:
-                rls = _rls(args.runs, args.dim, g)
-                step = (lambda t, r=rls: r.update(x[t], s[t], every))
+                step = functools.partial(_step_after, _rls(args.runs, args.dim, g), x, s, every)
             start = time.perf_counter()
             for t in range(args.samples):
                 step(t)

@@ -172,7 +172,8 @@ def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
     test plant, summed over mjtWarning and over its lockstep runs, which share one
     MjData) and ``within_limits`` (commanded and applied |torque| <= limit, 1e-9
     slack) and ``limit_overshoot_rad`` (the largest joint angle past its range over the
-    test cycle, rad; 0 inside the ranges); series (for recordings): ``commanded_nm`` (T-1, n_dof) = command x limit,
+    test cycle, rad; 0 inside the ranges); series (for recordings): ``commanded_nm``
+    (T-1, n_dof) = command x limit,
     ``applied_nm`` (T-1, n_dof) ``actuator_force``, ``gravity_nm`` (T, n_dof) the bias
     torque ``qfrc_bias`` of each state, ``limit_nm`` (n_dof,).
     """
