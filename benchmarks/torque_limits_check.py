@@ -1,7 +1,8 @@
 """Do the torque twin's joint limits hold? Every joint driven into each of its limits at
 full torque, and the bang-bang stress episodes of ``torque_stability_check.py``, with the
-twin's limits (:data:`skinny_mj.plant.model.TORQUE_LIMIT_SOLREF`) and with MuJoCo's
-default (solref 20 ms, critically damped: the twin's limits before).
+twin's limits (:data:`skinny_mj.plant.model.TORQUE_LIMIT_SOLREF` and
+``TORQUE_LIMIT_SOLIMP``), the same without the impedance ramp (MuJoCo's default solimp),
+and MuJoCo's default limit (solref 20 ms, critically damped: the twin's limits before).
 
     MUJOCO_GL=disabled OMP_NUM_THREADS=1 python benchmarks/torque_limits_check.py [--runs 20]
 
@@ -32,14 +33,17 @@ from torque_stability_check import CONTROL_DT_S, episodes  # noqa: E402
 from skinny_mj.plant.model import TORQUE_LIMIT_SOLREF, load_model  # noqa: E402
 
 DRIVE_S = 2.0
-#: label: joint solref (None: the twin's own)
-LIMITS = {"the twin": None, "MuJoCo's default (20 ms)": (0.02, 1.0)}
+MUJOCO_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
+#: label: joint (solref, solimp) (None: the twin's own)
+LIMITS = {"the twin": None,
+          "5 ms, MuJoCo's default solimp": (TORQUE_LIMIT_SOLREF, MUJOCO_SOLIMP),
+          "MuJoCo's default (20 ms)": ((0.02, 1.0), MUJOCO_SOLIMP)}
 
 
-def model_with(dof: int, solref) -> mujoco.MjModel:
+def model_with(dof: int, limits) -> mujoco.MjModel:
     model = load_model(dof, "torque")
-    if solref is not None:
-        model.jnt_solref[:] = solref
+    if limits is not None:
+        model.jnt_solref[:], model.jnt_solimp[:] = limits
     return model
 
 
@@ -80,8 +84,8 @@ def main() -> None:
           " past a limit (rad) |")
     print("|---|---|---|---|---|---|---|")
     for dof in (4, 8):
-        for label, solref in LIMITS.items():
-            model = model_with(dof, solref)
+        for label, limits in LIMITS.items():
+            model = model_with(dof, limits)
             over, speed, rest = drives(model)
             stress = [episodes(model, args.runs, hold) for hold in (1, 5)]
             cells = [f"{f} / {args.runs}, {o}" for f, _, o, _ in stress]

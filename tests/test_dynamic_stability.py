@@ -64,7 +64,7 @@ def test_saturated_torques_diverged_without_the_armature_and_stay_clean_with_it(
     inertia there; with the armature, 1 s is clean."""
     bare = load_model(8, "torque")
     bare.dof_armature[:] = 0.0
-    bare.jnt_solref[:] = (0.02, 1.0)
+    bare.jnt_solref[:], bare.jnt_solimp[:] = (0.02, 1.0), (0.9, 0.95, 0.001, 0.5, 2.0)
     assert _bang_bang(bare, seed, 1.0) in ("mjWARN_BADQACC", "mjWARN_BADQVEL", "mjWARN_BADQPOS")
     assert _bang_bang(load_model(8, "torque"), seed, 1.0) is None
 
@@ -139,9 +139,9 @@ def test_skinny_test_on_a_torque_model_records_the_torques(tmp_path):
 
 #: How far a joint driven into its limit at full torque may pass it (rad): at 40-80 rad/s
 #: a one-physics-step limit lets the arm travel about one 5 ms step past (worst measured
-#: 0.057 in 2D, 0.131 in 3D: benchmarks/torque_limits_check.py), and pushing on, it rests
-#: within LIMIT_REST_RAD
-LIMIT_PASS_RAD, LIMIT_REST_RAD = 0.15, 0.01
+#: 0.088 in 2D, 0.131 in 3D: benchmarks/torque_limits_check.py), and pushing on, it rests
+#: within LIMIT_REST_RAD (0.03 measured: the impedance ramps up over 0.05 rad)
+LIMIT_PASS_RAD, LIMIT_REST_RAD = 0.15, 0.04
 
 
 def _drive_into_limit(model: mujoco.MjModel, joint: int, sign: float) -> tuple[float, float]:
@@ -170,9 +170,11 @@ def test_a_saturated_joint_stays_near_its_limit(dof):
     # the same drives with MuJoCo's default limits (the twin's before) pass them by
     # 0.5-0.6 rad: the drives are a real test of the limit
     soft = load_model(dof, "torque")
-    soft.jnt_solref[:] = (0.02, 1.0)
+    soft.jnt_solref[:], soft.jnt_solimp[:] = (0.02, 1.0), (0.9, 0.95, 0.001, 0.5, 2.0)
     assert max(_drive_into_limit(soft, j, s)[0] for j in range(soft.njnt)
                for s in (-1.0, 1.0)) > 3 * LIMIT_PASS_RAD
     # the velocity servo keeps MuJoCo's default limits
     servo = load_model(dof)
     np.testing.assert_array_equal(servo.jnt_solref, np.tile((0.02, 1.0), (servo.njnt, 1)))
+    np.testing.assert_array_equal(servo.jnt_solimp, np.tile((0.9, 0.95, 0.001, 0.5, 2.0),
+                                                            (servo.njnt, 1)))

@@ -73,12 +73,18 @@ TORQUE_ARMATURE_3D_SHOULDER = 0.0036
 # time constant below two physics steps to two steps (its "refsafe"), so the limit is
 # given in MuJoCo's direct form (-stiffness, -damping) = (-1/tau^2, -2/tau): the same
 # constraint as solref (tau, 1), unclamped. One step is the stiffest that stays stable
-# with RK4 at 5 ms under full random torques (0.25 ms steps diverge in 3D); at the arm's
-# 40-80 rad/s impact speeds the limit still lets it travel 0.05-0.13 rad past, about one
-# physics step of motion, and a joint pushed into its limit at full torque rests < 0.01
-# rad past it.
+# with RK4 at 5 ms under full random torques (2.5 ms diverged in 3D).
 TORQUE_LIMIT_TIMECONST_S = 0.005
 TORQUE_LIMIT_SOLREF = (-1.0 / TORQUE_LIMIT_TIMECONST_S ** 2, -2.0 / TORQUE_LIMIT_TIMECONST_S)
+# ... and its impedance (solimp: d0, dmax, width rad, midpoint, power) ramps from 0.3 at
+# the limit to MuJoCo's 0.95 over the first 0.05 rad past it (MuJoCo's default: 0.9 to
+# 0.95 over 0.001): a learning arm that grazes a limit meets a soft stop, one driven
+# into it a stiff one. Stiff from the first touch, the limit's impulses entered FEL's
+# targets and the 3D YMCA learned 5x worse (docs/results/dynamic.md). Measured: a joint
+# driven into a limit from the far end at full torque (40-80 rad/s) passes it by at most
+# 0.09 rad (2D) / 0.13 rad (3D), about one physics step of motion, and pushed on rests
+# within 0.03 rad of it.
+TORQUE_LIMIT_SOLIMP = (0.3, 0.95, 0.05, 0.5, 2.0)
 BODY_MASS_KG = 70.0  # the stated body whose arm the twin is (ICRP reference man)
 # de Leva (1996, J Biomech 29:1223, Table 4), males: mass / body mass, CoM distance from
 # the proximal end / segment length, radii of gyration / length about the sagittal
@@ -213,6 +219,7 @@ def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
         joint.armature = TORQUE_ARMATURE_3D_SHOULDER if not body.body_of(dof).planar \
             and "shoulder" in name else TORQUE_ARMATURE
         joint.solref_limit = list(TORQUE_LIMIT_SOLREF)
+        joint.solimp_limit = list(TORQUE_LIMIT_SOLIMP)
         joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
         joint.actfrcrange = [-limit, limit]
         act = spec.actuator(name)
