@@ -37,13 +37,14 @@ the md_02 excerpt of the ``md02`` rows; ``--signals`` the position signals of ev
 
 Metrics per run: test position / joint-angle / motor NRMSE (motor: against the
 normalized inverse-dynamics torques), mean |applied torque| (N m), positive motor work
-(J), max |commanded| and |applied| torque / limit, MuJoCo warnings of the training and
-test plants, the wall time per run (lockstep batch / R), and the learning curves
-(position NRMSE and feedback share per epoch) in the run files. Goals, targets to
-measure against (not numbers tuned to): computed torque <= 0.008 joint-angle NRMSE on
-YMCA and the recorded-like YMCA with mean |tau| <= 1.5x the movement's need; the ESN
-alone (K = 0) on YMCA <= 0.010 (2D) and <= 0.008 (3D) position NRMSE; earlier goals
-(limit-scaled PD teacher) <= 0.03 (2D) and <= 0.06 (3D).
+(J), max |commanded| and |applied| torque / limit, the largest joint angle past a limit
+(rad, in the test; ``train_limit_overshoot_rad`` over every training cycle), MuJoCo
+warnings of the training and test plants, the wall time per run (lockstep batch / R),
+and the learning curves (position NRMSE and feedback share per epoch) in the run files.
+Goals, targets to measure against (not numbers tuned to): computed torque <= 0.008
+joint-angle NRMSE on YMCA and the recorded-like YMCA with mean |tau| <= 1.5x the
+movement's need; the ESN alone (K = 0) on YMCA <= 0.010 (2D) and <= 0.008 (3D)
+position NRMSE; earlier goals (limit-scaled PD teacher) <= 0.03 (2D) and <= 0.06 (3D).
 """
 
 from __future__ import annotations
