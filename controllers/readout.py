@@ -233,7 +233,11 @@ class RLS:
             p0 = np.broadcast_to(np.eye(d) / ridge_lambda, (n_runs, d, d))
         if p0.shape != (n_runs, d, d):
             raise ValueError(f"p0 must be {(n_runs, d, d)}, got {p0.shape}")
-        self.W, self.P, self.forgetting = w, np.array(p0, np.float64), float(forgetting)
+        # C order: a copy of a broadcast P_0 would keep the runs' axis innermost, and
+        # every product with P would then take NumPy's slow strided loop
+        self.W, self.forgetting = w, float(forgetting)
+        self.P = np.array(p0, np.float64, order="C")
+        self._outer = np.empty_like(self.P)  # update's (R, D, D) scratch buffer
 
     @classmethod
     def from_states(cls, w: np.ndarray, states: np.ndarray, ridge_lambda: float,
@@ -253,14 +257,15 @@ class RLS:
         px = np.matmul(self.P, x[..., None])[..., 0]  # (R, D)
         gain = px / (self.forgetting + np.sum(x * px, axis=1))[:, None]  # (R, D)
         err = np.asarray(target, np.float64) - np.matmul(self.W, x[..., None])[..., 0]
-        new_p = (self.P - gain[:, :, None] * px[:, None, :]) / self.forgetting
-        if runs is None:
-            self.W += err[:, :, None] * gain[:, None, :]
-            self.P = new_p
-        else:
-            sel = np.asarray(runs, bool)
-            self.W[sel] += err[sel][:, :, None] * gain[sel][:, None, :]
-            self.P[sel] = new_p[sel]
+        # P <- (P - gain px^T) / g in place, through one (R, D, D) buffer kept between
+        # calls (two fresh (R, D, D) arrays per sample cost more than the arithmetic)
+        sel = np.ones(len(x), bool) if runs is None else np.asarray(runs, bool)
+        for r in [slice(None)] if sel.all() else np.flatnonzero(sel):
+            outer = np.multiply(gain[r, :, None], px[r, None, :], out=self._outer[r])
+            np.subtract(self.P[r], outer, out=self.P[r])
+            if self.forgetting != 1.0:  # x / 1.0 == x exactly
+                np.divide(self.P[r], self.forgetting, out=self.P[r])
+            self.W[r] += err[r, :, None] * gain[r, None, :]
         return err
 
 

@@ -37,13 +37,14 @@ the md_02 excerpt of the ``md02`` rows; ``--signals`` the position signals of ev
 
 Metrics per run: test position / joint-angle / motor NRMSE (motor: against the
 normalized inverse-dynamics torques), mean |applied torque| (N m), positive motor work
-(J), max |commanded| and |applied| torque / limit, MuJoCo warnings of the training and
-test plants, the wall time per run (lockstep batch / R), and the learning curves
-(position NRMSE and feedback share per epoch) in the run files. Goals, targets to
-measure against (not numbers tuned to): computed torque <= 0.008 joint-angle NRMSE on
-YMCA and the recorded-like YMCA with mean |tau| <= 1.5x the movement's need; the ESN
-alone (K = 0) on YMCA <= 0.010 (2D) and <= 0.008 (3D) position NRMSE; earlier goals
-(limit-scaled PD teacher) <= 0.03 (2D) and <= 0.06 (3D).
+(J), max |commanded| and |applied| torque / limit, the largest joint angle past a limit
+(rad, in the test; ``train_limit_overshoot_rad`` over every training cycle), MuJoCo
+warnings of the training and test plants, the wall time per run (lockstep batch / R),
+and the learning curves (position NRMSE and feedback share per epoch) in the run files.
+Goals, targets to measure against (not numbers tuned to): computed torque <= 0.008
+joint-angle NRMSE on YMCA and the recorded-like YMCA with mean |tau| <= 1.5x the
+movement's need; the ESN alone (K = 0) on YMCA <= 0.010 (2D) and <= 0.008 (3D)
+position NRMSE; earlier goals (limit-scaled PD teacher) <= 0.03 (2D) and <= 0.06 (3D).
 """
 
 from __future__ import annotations
@@ -100,7 +101,8 @@ CT_JOINT_GOAL, TORQUE_BUDGET = 0.008, 1.5
 TABLE_COLUMNS = {"position_nrmse": "test position NRMSE", "joint_nrmse": "joint-angle NRMSE",
                  "motor_nrmse": "test motor NRMSE",
                  "mean_abs_torque_nm": "mean |τ| (N m)", "energy_j": "motor work (J)",
-                 "max_torque_ratio": "max |τ|/limit", "warnings": "MuJoCo warnings",
+                 "max_torque_ratio": "max |τ|/limit",
+                 "limit_overshoot_rad": "past a joint limit (rad)", "warnings": "MuJoCo warnings",
                  "train_wall_s": "wall per run (s)"}
 BODIES = {"2d": 4, "3d": 8}
 #: ``--quick`` (a smoke test): 2 epochs of every FEL row (the long rows 2 x 2)
@@ -201,10 +203,13 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
         for key in ("position_nrmse", "feedback_share", "error_signal_share"):
             if key in train:  # learning curves, per epoch (kept in the run file)
                 metrics[f"curve_{key}"] = train[key]
+        if "limit_overshoot_rad" in train:  # over every training cycle
+            metrics["train_limit_overshoot_rad"] = train["limit_overshoot_rad"]
         tq = m["test"].get("torque")
         if tq is not None:
             metrics.update({k: tq[k] for k in ("mean_abs_torque_nm", "energy_j",
-                                               "max_commanded_ratio", "max_applied_ratio")})
+                                               "max_commanded_ratio", "max_applied_ratio",
+                                               "limit_overshoot_rad")})
             metrics["max_torque_ratio"] = max(tq["max_commanded_ratio"],
                                               tq["max_applied_ratio"])
             metrics["warnings"] = tq["warnings"] + (m.get("train_warnings") or 0)

@@ -66,14 +66,25 @@ TORQUE_ARMATURE = 0.0
 # G1's 5020 (25 N m), rotor J (0.139, 0.017, 0.169)e-4 kg m^2 through a 16:1 two-stage
 # planetary gear, J1 (N1 N2)^2 + J2 N2^2 + J3 = 0.00361 kg m^2.
 TORQUE_ARMATURE_3D_SHOULDER = 0.0036
-# Joint limits of the torque twin (solref: time constant s, damping ratio): MuJoCo's
-# default 20 ms, as the velocity servos. A stiffer 10 ms (two physics steps, MuJoCo's
-# bound) halves the overshoot under full bang-bang torques (0.93 -> 0.51 rad in 2D,
-# 1.13 -> 0.52 rad in 3D; benchmarks/torque_stability_check.py --limits) but does not
-# hold the limits (the arm reaches 100-150 rad/s), and it made FEL learn the 3D YMCA
-# worse (position NRMSE 0.0107 / 0.0073 -> 0.0292 / 0.0155, seeds 0 and 1: the movement
-# passes 0.06-0.14 rad from the limits, and a learning arm touches them): not adopted.
-TORQUE_LIMIT_SOLREF = (0.02, 1.0)
+# Joint limits of the torque twin: a critically damped limit constraint with a time
+# constant of one 5 ms physics step (MuJoCo's default, 20 ms, let a saturated arm pass
+# 0.5-0.6 rad beyond a limit when driven into it from the far end, and 0.9-1.1 rad under
+# bang-bang torques; benchmarks/torque_limits_check.py). MuJoCo raises a positive
+# time constant below two physics steps to two steps (its "refsafe"), so the limit is
+# given in MuJoCo's direct form (-stiffness, -damping) = (-1/tau^2, -2/tau): the same
+# constraint as solref (tau, 1), unclamped. One step is the stiffest that stays stable
+# with RK4 at 5 ms under full random torques (2.5 ms diverged in 3D).
+TORQUE_LIMIT_TIMECONST_S = 0.005
+TORQUE_LIMIT_SOLREF = (-1.0 / TORQUE_LIMIT_TIMECONST_S ** 2, -2.0 / TORQUE_LIMIT_TIMECONST_S)
+# ... and its impedance (solimp: d0, dmax, width rad, midpoint, power) ramps from 0.3 at
+# the limit to MuJoCo's 0.95 over the first 0.05 rad past it (MuJoCo's default: 0.9 to
+# 0.95 over 0.001): a learning arm that grazes a limit meets a soft stop, one driven
+# into it a stiff one. Stiff from the first touch, the limit's impulses entered FEL's
+# targets and the 3D YMCA learned 5x worse (docs/results/dynamic.md). Measured: a joint
+# driven into a limit from the far end at full torque (40-80 rad/s) passes it by at most
+# 0.09 rad (2D) / 0.13 rad (3D), about one physics step of motion, and pushed on rests
+# within 0.03 rad of it.
+TORQUE_LIMIT_SOLIMP = (0.3, 0.95, 0.05, 0.5, 2.0)
 BODY_MASS_KG = 70.0  # the stated body whose arm the twin is (ICRP reference man)
 # de Leva (1996, J Biomech 29:1223, Table 4), males: mass / body mass, CoM distance from
 # the proximal end / segment length, radii of gyration / length about the sagittal
@@ -208,6 +219,7 @@ def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
         joint.armature = TORQUE_ARMATURE_3D_SHOULDER if not body.body_of(dof).planar \
             and "shoulder" in name else TORQUE_ARMATURE
         joint.solref_limit = list(TORQUE_LIMIT_SOLREF)
+        joint.solimp_limit = list(TORQUE_LIMIT_SOLIMP)
         joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
         joint.actfrcrange = [-limit, limit]
         act = spec.actuator(name)

@@ -201,7 +201,7 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
     selector = make_rule(cfg, run.esn, len(run.desired) - 1)  # rule.fit (skinny_mj.training.fits)
     if is_torque:  # the torque body: the feedback's share of the command
         out.feedback_share = torque.ShareRecorder(fcfg.gains(), run.esn.n_runs,
-                                                  fcfg.learning_cycles)
+                                                  fcfg.learning_cycles, cfg.plant.dof)
         observe = out.feedback_share if observe is None else _both(observe, out.feedback_share)
     out.fel = fel.train(run.esn, run.plant, run.desired, fcfg, true_commands=run.true_commands,
                         progress=tick, forward=run.forward, scored=run.scored,
@@ -335,6 +335,8 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
                                                   trained.feedback_share.share[r]]
             metrics["train"]["error_signal_share"] = [
                 float(v) for v in trained.feedback_share.error_signal[r]]
+            metrics["train"]["limit_overshoot_rad"] = float(
+                trained.feedback_share.limit_overshoot_rad[r])
         if trained.ridge_lambda is not None:
             metrics["train"]["ridge_lambda"] = [None if not np.isfinite(v) else float(v)
                                                 for v in trained.ridge_lambda[r]]

@@ -171,7 +171,9 @@ def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
     :meth:`TorqueLoop.metrics` plus ``warnings`` (MuJoCo ``data.warning`` counts of the
     test plant, summed over mjtWarning and over its lockstep runs, which share one
     MjData) and ``within_limits`` (commanded and applied |torque| <= limit, 1e-9
-    slack); series (for recordings): ``commanded_nm`` (T-1, n_dof) = command x limit,
+    slack) and ``limit_overshoot_rad`` (the largest joint angle past its range over the
+    test cycle, rad; 0 inside the ranges); series (for recordings): ``commanded_nm``
+    (T-1, n_dof) = command x limit,
     ``applied_nm`` (T-1, n_dof) ``actuator_force``, ``gravity_nm`` (T, n_dof) the bias
     torque ``qfrc_bias`` of each state, ``limit_nm`` (n_dof,).
     """
@@ -181,10 +183,19 @@ def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
     metrics["warnings"] = int(plant.warning_count())
     metrics["within_limits"] = bool(max(metrics["max_commanded_ratio"],
                                         metrics["max_applied_ratio"]) <= 1 + 1e-9)
+    metrics["limit_overshoot_rad"] = limit_overshoot_rad(rollout.angles[r], plant.n_dof)
     series = {"commanded_nm": rollout.commands[r] * limit,
               "applied_nm": hook.applied_nm[:, r].copy(),
               "gravity_nm": hook.bias_nm[:, r].copy(), "limit_nm": limit.copy()}
     return {"metrics": metrics, "series": series}
+
+
+def limit_overshoot_rad(angles: np.ndarray, dof: int) -> float:
+    """The largest joint angle past its range in ``angles`` (T, >= dof) rad, in rad (0
+    when every angle stays within :func:`skinny_mj.plant.body.joint_ranges`)."""
+    lo, hi = body.joint_ranges(dof).T
+    q = np.asarray(angles)[:, :dof]
+    return float(max(np.max(lo - q), np.max(q - hi), 0.0))
 
 
 def train_warnings(run) -> int | None:
@@ -227,14 +238,20 @@ def readout_fitter(cfg: TrainConfig, esn, steps: int):
 class ShareRecorder:
     """FEL's ``observe`` callback: per epoch, on its evaluation cycle (the ESN with the
     epoch's K), the feedback share mean |K u_fb| / mean |u| of the command and the
-    teacher's error signal mean |u_fb| / mean |u| (each (R, E))."""
+    teacher's error signal mean |u_fb| / mean |u| (each (R, E)); and over every cycle of
+    the training, each run's largest joint angle past its range (``limit_overshoot_rad``
+    (R,), rad: 0 for a run that never touched a joint limit)."""
 
-    def __init__(self, gains: np.ndarray, n_runs: int, cycles: int):
-        self.gains, self.eval_cycle = np.asarray(gains, float), cycles + 1
+    def __init__(self, gains: np.ndarray, n_runs: int, cycles: int, dof: int):
+        self.gains, self.eval_cycle, self.dof = np.asarray(gains, float), cycles + 1, dof
         self.share = np.full((n_runs, len(gains)), np.nan)
         self.error_signal = np.full((n_runs, len(gains)), np.nan)
+        self.limit_overshoot_rad = np.zeros(n_runs)
 
     def __call__(self, epoch: int, cycle: int, ro, y_used) -> None:
+        for r in range(len(self.limit_overshoot_rad)):
+            self.limit_overshoot_rad[r] = max(self.limit_overshoot_rad[r],
+                                              limit_overshoot_rad(ro.angles[r], self.dof))
         if cycle != self.eval_cycle:
             return
         u = np.abs(ro.commands).mean(axis=(1, 2))
