@@ -117,11 +117,13 @@ CARTESIAN_VARIANTS: dict[str, dict] = {
                        "movement.trajectory": "set:babble:seed=0,duration=60+ymca"},
     "elbow-babble120": {"plant.signals": "cartesian-elbow",
                         "movement.trajectory": "set:babble:seed=0,duration=120+ymca"},
+    "elbow-babble240": {"plant.signals": "cartesian-elbow",
+                        "movement.trajectory": "set:babble:seed=0,duration=240+ymca"},
 }
 #: The longer babbles before YMCA are c3's (its base row's movement).
 CARTESIAN_ROWS = (*((rep, v) for rep in ("c2", "c3") for v in CARTESIAN_VARIANTS
                     if not v.startswith("elbow-babble")),
-                  *(("c3", f"elbow-babble{d}") for d in (30, 60, 120)))
+                  *(("c3", f"elbow-babble{d}") for d in (30, 60, 120, 240)))
 #: Test column id -> movement.
 TESTS = {
     "ymca": "ymca", "y": "y", "y-pure": "y-pure", "ym": "ym",
