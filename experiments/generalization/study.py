@@ -98,7 +98,7 @@ GENERAL_ROWS = (("j2", "limits30-scale4"), ("j3", "babble15-scale4"), ("j3", "ge
 #: Per representation, the row of its ``general`` preset (the Cartesian ones: their
 #: CARTESIAN_ROWS row with the elbow angles).
 GENERAL_OF = {"j2": "j2-limits30-scale4", "j3": "j3-general", "c2": "c2-general+elbow",
-              "c3": "c3-babble15+ymca+elbow-babble120"}
+              "c3": "c3-babble15+ymca+elbow-babble240"}
 #: Candidates for the Cartesian presets (``--rows cartesian``, after GENERAL_ROWS): each
 #: is the representation's ``general`` preset with one change, on the preset row's seeds
 #: (a paired comparison): the feedback controller's damped-least-squares lambda, a

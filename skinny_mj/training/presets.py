@@ -64,12 +64,12 @@ GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
     ),
     (8, "cartesian"): (
         "3D, Cartesian signals with each elbow's angle beside them (cartesian-elbow), "
-        "trained on 120 s of motor babbling then YMCA (joined by a minimum-jerk bridge), "
-        "full scale 2x: row c3-babble15+ymca+elbow-babble120 (unseen md_02 0.034, md_03 "
-        "0.032, 10 seeds; with 15 s of babbling 0.064 and 0.048, without the elbow angles "
-        "0.127 and 0.100)",
+        "trained on 240 s of motor babbling then YMCA (joined by a minimum-jerk bridge), "
+        "full scale 2x: row c3-babble15+ymca+elbow-babble240 (unseen md_02 0.029, md_03 "
+        "0.026, 10 seeds; with 120 s of babbling 0.034 and 0.032, with 15 s 0.064 and "
+        "0.048, without the elbow angles 0.127 and 0.100)",
         {"plant.dof": 8, "plant.signals": "cartesian-elbow",
-         "movement.trajectory": "set:babble:seed=0,duration=120+ymca",
+         "movement.trajectory": "set:babble:seed=0,duration=240+ymca",
          "test.washout_cycles": 1},
     ),
 }
