@@ -140,7 +140,7 @@ class Plan:
     @property
     def params(self) -> Mapping[str, Any]:
         """The study-wide parameters of its custom runs (``--quick``'s applied)."""
-        return {**self.study.params, **(self.study.quick.params if self.quick else {})}
+        return _study_params(self.study, self.quick)
 
     def trainings(self, row_id: str) -> dict[str, TrainConfig]:
         """What one run of the row trains: ``study.trainings`` or the row's config."""
@@ -199,6 +199,11 @@ class Plan:
             unavailable=unavailable, report=functools.partial(_report, self))
 
 
+def _study_params(study: Study, quick: bool) -> dict[str, Any]:
+    """The study-wide parameters of its custom runs, ``--quick``'s over the study's."""
+    return {**study.params, **(study.quick.params if quick else {})}
+
+
 def _report(plan: Plan, results: Mapping[str, Any], out_dir: str | Path) -> str:
     report = plan.study.report
     if report is None:
@@ -255,6 +260,5 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
         if tiny:  # the contract test's shrink: of its keys, those this row's config has
             have = set(overrides.keys(config))
             config = config.override({k: v for k, v in study.tiny.items() if k in have})
-        params = {**study.params, **(study.quick.params if quick else {}), **r.params}
-        planned.append(PlannedRow(r, params, config))
+        planned.append(PlannedRow(r, {**_study_params(study, quick), **r.params}, config))
     return Plan(study, base, after, quick, tuple(planned))

@@ -39,6 +39,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from skinny_mj.controllers.feedback import FeedbackController
 from skinny_mj.controllers.reservoir import ESNConfig
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant.body import ACTUATIONS, SIGNALS, check_actuation, check_dof, check_signals
@@ -176,7 +177,7 @@ class _FEL:
     gain_value: float = 0.65  # fixed: K (paper A)
     u_error_gain: float = 1.0  # scalar on the feedback controller's u_error (unstated)
     #: the feedback controller's damped-least-squares lambda (signal per command units)
-    u_error_damping: float = 1e-4
+    u_error_damping: float = FeedbackController.damping
     #: the readout fits: each cycle alone ("cycle"), lambda chosen per fit on a validation
     #: cycle ("ridge-select"), or remembering earlier cycles ("forgetting", "rls")
     fit: str = "cycle"

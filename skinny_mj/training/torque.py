@@ -193,9 +193,14 @@ def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
 def limit_overshoot_rad(angles: np.ndarray, dof: int) -> float:
     """The largest joint angle past its range in ``angles`` (T, >= dof) rad, in rad (0
     when every angle stays within :func:`skinny_mj.plant.body.joint_ranges`)."""
+    return float(_overshoot_per_run(np.asarray(angles)[None], dof)[0])
+
+
+def _overshoot_per_run(angles: np.ndarray, dof: int) -> np.ndarray:
+    """(R,) each run's largest joint angle past its range in ``angles`` (R, T, >= dof)."""
     lo, hi = body.joint_ranges(dof).T
-    q = np.asarray(angles)[:, :dof]
-    return float(max(np.max(lo - q), np.max(q - hi), 0.0))
+    q = angles[..., :dof]
+    return np.maximum(np.maximum(lo - q, q - hi).max(axis=(1, 2)), 0.0)
 
 
 def train_warnings(run) -> int | None:
@@ -249,9 +254,8 @@ class ShareRecorder:
         self.limit_overshoot_rad = np.zeros(n_runs)
 
     def __call__(self, epoch: int, cycle: int, ro, y_used) -> None:
-        for r in range(len(self.limit_overshoot_rad)):
-            self.limit_overshoot_rad[r] = max(self.limit_overshoot_rad[r],
-                                              limit_overshoot_rad(ro.angles[r], self.dof))
+        np.maximum(self.limit_overshoot_rad, _overshoot_per_run(ro.angles, self.dof),
+                   out=self.limit_overshoot_rad)
         if cycle != self.eval_cycle:
             return
         u = np.abs(ro.commands).mean(axis=(1, 2))
