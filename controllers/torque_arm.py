@@ -120,16 +120,17 @@ def mid_step_error(state: ArmState, motion: DesiredMotion, t: int,
 def mass_times(mass: np.ndarray, acc: np.ndarray) -> np.ndarray:
     """(R, n) M(q) a, N m, for mass (R, n, n) kg m^2 and acc (R, n) or (n,) rad/s^2.
 
-    Each entry is summed over j = 0 .. n-1 in order, from zero: the same bits for every
-    batch size R and memory layout of ``mass``. np.matmul hands a stack whose matrices
-    are contiguous to BLAS (a one-run batch) and sums any other in its own loop, which
-    rounds otherwise, so a lockstep run would differ from the same run alone.
+    The products M_ij a_j in a C-contiguous (j, R, i) array, summed over its first axis:
+    j = 0 .. n-1 in order, the same bits for every batch size R and memory layout of
+    ``mass``. np.matmul hands a stack whose matrices are contiguous to BLAS (a one-run
+    batch) and sums any other in its own loop, which rounds otherwise, so a lockstep
+    run differed from the same run alone.
     """
-    acc = np.broadcast_to(acc, mass.shape[:-1])
-    out = np.zeros(mass.shape[:-1])
-    for j in range(mass.shape[-1]):
-        out += mass[:, :, j] * acc[:, None, j]
-    return out
+    a = np.asarray(acc).T  # (n, R) or (n,)
+    a = a[:, :, None] if a.ndim == 2 else a[:, None, None]
+    products = np.empty((mass.shape[2], mass.shape[0], mass.shape[1]))
+    np.multiply(mass.transpose(2, 0, 1), a, out=products)
+    return np.add.reduce(products, axis=0)
 
 
 def feedback_torque(state: ArmState, e: np.ndarray, e_dot: np.ndarray,
