@@ -117,11 +117,26 @@ def mid_step_error(state: ArmState, motion: DesiredMotion, t: int,
     return e, motion.qd_mid[t] - state.qd
 
 
+def mass_times(mass: np.ndarray, acc: np.ndarray) -> np.ndarray:
+    """(R, n) M(q) a, N m, for mass (R, n, n) kg m^2 and acc (R, n) or (n,) rad/s^2.
+
+    The products M_ij a_j in a C-contiguous (j, R, i) array, summed over its first axis:
+    j = 0 .. n-1 in order, the same bits for every batch size R and memory layout of
+    ``mass``. np.matmul hands a stack whose matrices are contiguous to BLAS (a one-run
+    batch) and sums any other in its own loop, which rounds otherwise, so a lockstep
+    run differed from the same run alone.
+    """
+    a = np.asarray(acc).T  # (n, R) or (n,)
+    a = a[:, :, None] if a.ndim == 2 else a[:, None, None]
+    products = np.empty((mass.shape[2], mass.shape[0], mass.shape[1]))
+    np.multiply(mass.transpose(2, 0, 1), a, out=products)
+    return np.add.reduce(products, axis=0)
+
+
 def feedback_torque(state: ArmState, e: np.ndarray, e_dot: np.ndarray,
                     gains: ArmGains) -> np.ndarray:
     """(R, n) M(q) (omega^2 e + 2 zeta omega e_dot), N m."""
-    acc = gains.kp * e + gains.kd * e_dot
-    return np.matmul(state.mass, acc[..., None])[..., 0]
+    return mass_times(state.mass, gains.kp * e + gains.kd * e_dot)
 
 
 def arm_torque(law: str, state: ArmState, motion: DesiredMotion, t: int, dt: float,
@@ -133,7 +148,7 @@ def arm_torque(law: str, state: ArmState, motion: DesiredMotion, t: int, dt: flo
     e, e_dot = mid_step_error(state, motion, t, dt)
     fb = feedback_torque(state, e, e_dot, gains)
     if law == "ct":
-        ff = np.matmul(state.mass, motion.qdd_step[t]) + state.bias \
+        ff = mass_times(state.mass, motion.qdd_step[t]) + state.bias \
             + state.damping * state.qd
     elif law == "id-pd":
         if motion.tau_id is None:

@@ -43,6 +43,21 @@ def test_torque_lockstep_is_each_run_alone():
     assert both[1].metrics["test"] == alone.metrics["test"]
 
 
+def test_3d_arm_fel_run_is_the_same_in_any_batch():
+    """The inertia-scaled teacher (M(q) products) and the remembering readout on the 3D
+    torque arm: a seed's run alone, first of two and last of three, bit for bit."""
+    cfg = TrainConfig().override({
+        "actuation": "torque", "plant.dof": 8, "actuation.feedback": "inertia-pd",
+        "rule": "new", "rule.beta": 1.0, "rule.fit": "forgetting", "rule.epochs": 1,
+        "rule.cycles": 1, "esn.n_reservoir": 20})
+    alone = train_batch(cfg, [5])[0]
+    for seeds in ([5, 6], [3, 4, 5]):
+        other = train_batch(cfg, seeds)[seeds.index(5)]
+        np.testing.assert_array_equal(other.test.rollout.commands, alone.test.rollout.commands)
+        np.testing.assert_array_equal(other.esn.W_out, alone.esn.W_out)
+        assert other.metrics["test"] == alone.metrics["test"]
+
+
 def test_controller_alone_stays_within_limits_without_warnings():
     (out,) = train_batch(TORQUE_PD, [0])
     tq = out.metrics["test"]["torque"]

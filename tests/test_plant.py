@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -126,7 +127,29 @@ def test_batch_model_copies_are_the_one_robot_model(dof, actuation):
                 np.testing.assert_array_equal(got[r], want[world:], err_msg=name)
             compared += 1
     assert compared > 40
-    for field in ("timestep", "integrator", "gravity", "disableflags", "jacobian"):
+    for field in ("timestep", "integrator", "gravity", "disableflags"):
         np.testing.assert_array_equal(getattr(batch.opt, field), getattr(one.opt, field))
+    # the constraint Jacobian one robot's "auto" resolves to (dense below nv = 60)
+    assert one.opt.jacobian == mujoco.mjtJacobian.mjJAC_AUTO and one.nv < 60
+    assert batch.opt.jacobian == mujoco.mjtJacobian.mjJAC_DENSE
     assert batch.ngeom == 3 * (one.ngeom - 1)  # no floor, nothing to collide with
     assert not batch.geom_contype.any() and not batch.geom_conaffinity.any()
+
+
+def test_torque_copy_is_the_robot_alone_in_a_large_batch():
+    """8 3D torque robots (nv = 64, where MuJoCo's automatic choice would turn sparse)
+    pressing into their joint limits: copy 0 is bit for bit the one-robot batch."""
+    traj = stand_in(8)
+    rng = np.random.default_rng(3)
+    commands = rng.uniform(-1.0, 1.0, (40, 8, 8))
+    plants = [BatchPlant(8, "cartesian", traj, n_runs=n, seeds=range(n), actuation="torque")
+              for n in (1, 8)]
+    for p in plants:
+        p.reset()
+    pressed = 0
+    for u in commands:
+        alone, batch = (p.step(u[:p.n_runs]) for p in plants)
+        np.testing.assert_array_equal(batch[0], alone[0])
+        np.testing.assert_array_equal(plants[1].joint_angles()[0], plants[0].joint_angles()[0])
+        pressed += plants[0].data.nefc > 0
+    assert pressed > 10  # the limits were in play

@@ -224,9 +224,7 @@ class BatchArmState:
         """(R, n, n) each robot's M(q) of the current state, kg m^2."""
         d = self._data() if d is None else d
         self._qm[:-1] = d.M  # the last entry stays 0: the structural zeros
-        # (R, n, n) laid out as the dense blocks were (Fortran order): np.matmul's
-        # rounding depends on the operands' layout, and M(q) feeds every arm law
-        return self._qm[self._mass_at].T
+        return self._qm[self._mass_at]
 
     def gravity(self) -> np.ndarray:
         """(R, n) g(q) of the current poses, N m."""
@@ -251,10 +249,9 @@ class BatchArmState:
 
 def _mass_index(model, n_runs: int, adr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Where each robot's M(q) entries sit in ``MjData.M`` (its size for a structural
-    zero), as (n, n, R) in C order (transposed, the (R, n, n) blocks in Fortran order),
-    and a buffer of that size + 1 zeros: M(q) is then one gather, the
-    same numbers as ``mj_fullM`` (which copies ``M`` into the dense matrix) without the
-    dense (R n)^2 matrix of the whole batch."""
+    zero), as (R, n, n), and a buffer of that size + 1 zeros: M(q) is then one gather,
+    the same numbers as ``mj_fullM`` (which copies ``M`` into the dense matrix) without
+    the dense (R n)^2 matrix of the whole batch."""
     d = mujoco.MjData(model)
     d.M[:] = np.arange(1, d.M.size + 1)
     full = np.zeros((model.nv, model.nv))
@@ -262,7 +259,7 @@ def _mass_index(model, n_runs: int, adr: np.ndarray) -> tuple[np.ndarray, np.nda
     n1 = model.nv // n_runs
     at = np.stack([full[np.ix_(r * n1 + adr, r * n1 + adr)] for r in range(n_runs)])
     at = np.where(at > 0, at - 1, d.M.size).astype(np.intp)
-    return np.ascontiguousarray(at.transpose(2, 1, 0)), np.zeros(d.M.size + 1)
+    return at, np.zeros(d.M.size + 1)
 
 
 def feasibility_lines(figures: dict[str, np.ndarray], names: list[str]) -> list[str]:

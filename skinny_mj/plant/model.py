@@ -262,6 +262,11 @@ def load_batch_model(dof: int, copies: int, actuation: str = "velocity",
     for name in dir(one.option):  # the robot's physics options, field by field
         if not name.startswith("_"):
             setattr(parent.option, name, getattr(one.option, name))
+    # jacobian="auto" is dense below nv = 60 (one robot) and sparse from there on (a batch
+    # of 8 3D or 15 2D robots), whose constraint solver rounds otherwise at a joint
+    # limit: dense, each copy is bit for bit the robot alone whatever the batch size
+    if parent.option.jacobian == mujoco.mjtJacobian.mjJAC_AUTO:
+        parent.option.jacobian = mujoco.mjtJacobian.mjJAC_DENSE
     parent.compiler.degree = one.compiler.degree
     parent.compiler.autolimits = one.compiler.autolimits
     for r in range(copies):
