@@ -61,6 +61,34 @@ def test_batch_plant_senses_and_differentiates_the_elbow_signals(dof):
         body.signal_jacobian(q, dof, "cartesian-elbow"), atol=1e-12)
 
 
+def test_a_new_signal_set_is_one_entry_of_the_table(monkeypatch):
+    """An entry of body.SIGNAL_SETS alone (here every hinge's angle after the Cartesian
+    signals) gives the names, the signals and the Jacobian of the body, the batch plant
+    and the dm_control physics alike."""
+    from skinny_mj.plant.physics import SkinnyPhysics
+
+    dof, name = 4, "cartesian-joints"
+    monkeypatch.setitem(body.SIGNAL_SETS, name, body.SignalSet("cartesian",
+                                                               lambda d: np.arange(d)))
+    names = body.signal_names(dof, name)
+    assert names == body.signal_names(dof, "cartesian") + body.dof_names(dof)
+    plant = BatchPlant(dof, name, n_runs=2, sensor_noise=0.0)
+    plant.reset()
+    sensed = plant.step(np.full((2, dof), 0.4))
+    q = plant.joint_angles()
+    want = body.position_signals(q, dof, name)
+    assert want.shape == (2, len(names))
+    np.testing.assert_allclose(sensed, want, atol=1e-12)
+    np.testing.assert_array_equal(want[:, -dof:], body.normalize_angles(q, dof))
+    jac = body.signal_jacobian(q, dof, name)
+    np.testing.assert_allclose(plant.command_jacobian() / (plant.max_speed_rad_s * plant.dt),
+                               jac, atol=1e-12)
+    physics = SkinnyPhysics.load(dof)
+    physics.set_joint_angles(q[0])
+    np.testing.assert_allclose(physics.position_signals(name), want[0], atol=1e-12)
+    np.testing.assert_allclose(physics.signal_jacobian(name), jac[0], atol=1e-12)
+
+
 def test_training_config_takes_the_elbow_signals():
     cfg = TrainConfig().override({"plant.signals": "cartesian-elbow", "plant.dof": 8})
     assert cfg.plant.signals == "cartesian-elbow"

@@ -143,6 +143,7 @@ class BatchPlant:
         self.dt = self.setup.dt
         self.max_speed_rad_s = self.setup.max_speed_rad_s
         self.signals = signals
+        self._signal_set = body.signal_set(signals)
         self.n_substeps = int(round(self.dt / self.model.opt.timestep))
         self._rk4 = self.model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4
         self._init_views(one)
@@ -253,34 +254,30 @@ class BatchPlant:
 
     def _true(self) -> np.ndarray:
         if self._signals is None:
-            n = self.n_runs
-            if self.signals == "joint":
-                self._signals = body.normalize_angles(self.joint_angles(), self.n_dof)
+            sig, q = self._signal_set, self.joint_angles()
+            if sig.base == "joint":
+                base = body.normalize_angles(q, self.n_dof)
             else:
-                pts = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
-                self._signals = segment_signals(pts, self.layout.arm_lengths, self._comp_sel)
-                if self.signals == "cartesian-elbow":
-                    self._signals = body.with_elbow(self._signals, self.joint_angles(),
-                                                    self.n_dof)
+                pts = self._site_xpos[:, self._site_sel].reshape(self.n_runs, 2, 3, 3)
+                base = segment_signals(pts, self.layout.arm_lengths, self._comp_sel)
+            self._signals = sig.extend(base, q, self.n_dof)
         return self._signals
 
     def joint_angles(self) -> np.ndarray:
         return self._qpos[:, self._qpos_sel].copy()
 
     def command_jacobian(self) -> np.ndarray:
-        n = self.n_runs
-        if self.signals == "joint":
+        n, sig = self.n_runs, self._signal_set
+        if sig.base == "joint":
             lo, hi = self.layout.range_rad.T
-            jac = np.diag(2.0 / (hi - lo)) * (self.max_speed_rad_s * self.dt)
-            return np.broadcast_to(jac, (n, *jac.shape)).copy()
-        axes = self._cdof[:, self._dof_sel, :3]
-        points = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
-        jac = segment_jacobian(axes, points, self.layout.segment_pairs,
-                               self.layout.segment_lengths, self.layout.components)
-        if self.signals == "cartesian-elbow":
-            jac = body.with_elbow_jacobian(jac, self.n_dof)
-        jac *= self.max_speed_rad_s * self.dt  # as EnvPlant.command_jacobian
-        return jac
+            jac = np.broadcast_to(np.diag(2.0 / (hi - lo)), (n, self.n_dof, self.n_dof))
+        else:
+            axes = self._cdof[:, self._dof_sel, :3]
+            points = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
+            jac = segment_jacobian(axes, points, self.layout.segment_pairs,
+                                   self.layout.segment_lengths, self.layout.components)
+        jac = sig.extend_jacobian(jac, self.n_dof) * (self.max_speed_rad_s * self.dt)
+        return jac  # as EnvPlant.command_jacobian
 
 
 def _as_slice(index: np.ndarray) -> slice | np.ndarray:

@@ -22,6 +22,7 @@ M = diag(-1, 1, 1), so equal joint angles give mirror-image poses.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -60,10 +61,6 @@ _ROTATION = JointSpec(
 _ELBOW_2D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, np.pi))
 _ELBOW_3D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, 5 * np.pi / 6))
 
-#: "cartesian-elbow": the Cartesian signals, then each arm's forearm hinge angles
-#: (normalized as joint signals): the elbow's bend, which the segment directions leave
-#: ambiguous where the arm is straight (see :func:`elbow_dofs`).
-SIGNALS = ("joint", "cartesian", "cartesian-elbow")
 ACTUATIONS = ("velocity", "torque")
 #: The control step, s (50 Hz: the thesis's 200 Hz capture, every 4th sample kept).
 CONTROL_DT_S = 0.02
@@ -164,10 +161,16 @@ def check_dof(dof: object) -> int:
 
 
 def check_signals(signals: object) -> str:
-    """``signals`` if it is one of :data:`SIGNALS`, else a :class:`SkinnyInputError`."""
-    if signals not in SIGNALS:
-        raise SkinnyInputError(f"signals must be one of {SIGNALS}, got {signals!r}")
+    """``signals`` if it names a :data:`SIGNAL_SETS` entry, else a :class:`SkinnyInputError`."""
+    signal_set(signals)
     return str(signals)
+
+
+def signal_set(signals: object) -> SignalSet:
+    """The :class:`SignalSet` named ``signals``, else a :class:`SkinnyInputError`."""
+    if not isinstance(signals, str) or signals not in SIGNAL_SETS:
+        raise SkinnyInputError(f"signals must be one of {tuple(SIGNAL_SETS)}, got {signals!r}")
+    return SIGNAL_SETS[signals]
 
 
 def check_actuation(actuation: object) -> str:
@@ -200,16 +203,15 @@ def joint_ranges(dof: int) -> np.ndarray:
 def signal_names(dof: int, signals: str) -> tuple[str, ...]:
     """Names of the position signals: joint angles, or Cartesian components of the
     elbow relative to the shoulder and the wrist relative to the elbow
-    (x, z in 2D; x, y, z in 3D), right arm first."""
-    if check_signals(signals) == "joint":
-        return dof_names(dof)
-    axes = "xz" if body_of(dof).planar else "xyz"
-    names = tuple(
-        f"{side}_{point}_{a}" for side in SIDES for point in ("elbow", "wrist") for a in axes
-    )
-    if signals == "cartesian-elbow":
-        names += tuple(dof_names(dof)[i] for i in elbow_dofs(dof))
-    return names
+    (x, z in 2D; x, y, z in 3D), right arm first; then the appended hinges' names."""
+    sig = signal_set(signals)
+    if sig.base == "joint":
+        names = dof_names(dof)
+    else:
+        axes = "xz" if body_of(dof).planar else "xyz"
+        names = tuple(f"{side}_{point}_{a}" for side in SIDES for point in ("elbow", "wrist")
+                      for a in axes)
+    return names + tuple(dof_names(dof)[i] for i in sig.appended_dofs(dof))
 
 
 def elbow_dofs(dof: int) -> np.ndarray:
@@ -220,20 +222,53 @@ def elbow_dofs(dof: int) -> np.ndarray:
     return np.array([a * n_arm + i for a in range(2) for i in own])
 
 
-def with_elbow(cartesian: np.ndarray, q: np.ndarray, dof: int) -> np.ndarray:
-    """"cartesian-elbow" signals (..., n_cart + n_elbow): ``cartesian`` (..., n_cart)
-    with the normalized forearm hinge angles of q (..., n_dof) rad appended."""
-    return np.concatenate([cartesian, normalize_angles(q, dof)[..., elbow_dofs(dof)]], axis=-1)
+@dataclass(frozen=True)
+class SignalSet:
+    """How a set of position signals is built (an entry of :data:`SIGNAL_SETS`).
+
+    base : "joint" (normalized joint angles) or "cartesian" (segment directions,
+        :func:`cartesian_signals`), which each plant builds its own way. appended : dof
+        -> indices (:func:`dof_names` order) of the hinges whose normalized angles (and
+        Jacobian rows, 2 / range) follow the base's, or None.
+    """
+
+    base: str
+    appended: Callable[[int], np.ndarray] | None = None
+
+    def appended_dofs(self, dof: int) -> np.ndarray:
+        return np.zeros(0, int) if self.appended is None else self.appended(dof)
+
+    def extend(self, values: np.ndarray, q: np.ndarray, dof: int) -> np.ndarray:
+        """(..., n_signals): the base signals ``values`` (..., n_base) with the appended
+        hinges' normalized angles of q (..., n_dof) rad after them."""
+        if self.appended is None:
+            return values
+        extra = normalize_angles(q, dof)[..., self.appended(dof)]
+        return np.concatenate([values, extra], axis=-1)
+
+    def extend_jacobian(self, jac: np.ndarray, dof: int) -> np.ndarray:
+        """(..., n_signals, n_dof): the base's Jacobian ``jac`` (..., n_base, n_dof) per
+        rad with each appended hinge's row, 2 / range, below."""
+        if self.appended is None:
+            return jac
+        idx = self.appended(dof)
+        lo, hi = joint_ranges(dof)[idx].T
+        rows = np.zeros((len(idx), jac.shape[-1]))
+        rows[np.arange(len(idx)), idx] = 2.0 / (hi - lo)
+        return np.concatenate([jac, np.broadcast_to(rows, jac.shape[:-2] + rows.shape)],
+                              axis=-2)
 
 
-def with_elbow_jacobian(jac: np.ndarray, dof: int) -> np.ndarray:
-    """The "cartesian-elbow" Jacobian (..., n_cart + n_elbow, n_dof): the Cartesian one
-    ``jac`` (..., n_cart, n_dof) per rad with each forearm hinge's row, 2 / range, below."""
-    idx = elbow_dofs(dof)
-    lo, hi = joint_ranges(dof)[idx].T
-    rows = np.zeros((len(idx), jac.shape[-1]))
-    rows[np.arange(len(idx)), idx] = 2.0 / (hi - lo)
-    return np.concatenate([jac, np.broadcast_to(rows, jac.shape[:-2] + rows.shape)], axis=-2)
+#: The signal sets by name; a new one is one entry. "cartesian-elbow": the Cartesian
+#: signals, then each arm's forearm hinge angles (normalized as joint signals): the
+#: elbow's bend, which the segment directions leave ambiguous where the arm is straight
+#: (see :func:`elbow_dofs`).
+SIGNAL_SETS: dict[str, SignalSet] = {
+    "joint": SignalSet("joint"),
+    "cartesian": SignalSet("cartesian"),
+    "cartesian-elbow": SignalSet("cartesian", elbow_dofs),
+}
+SIGNALS = tuple(SIGNAL_SETS)
 
 
 def n_signals(dof: int, signals: str) -> int:
@@ -329,11 +364,9 @@ def cartesian_signals(q: np.ndarray, dof: int) -> np.ndarray:
 
 def position_signals(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
     """Normalized position signals (..., n_signals) for joint angles q (..., n_dof) rad."""
-    if check_signals(signals) == "joint":
-        return normalize_angles(q, dof)
-    if signals == "cartesian-elbow":
-        return with_elbow(cartesian_signals(q, dof), q, dof)
-    return cartesian_signals(q, dof)
+    sig = signal_set(signals)
+    base = normalize_angles(q, dof) if sig.base == "joint" else cartesian_signals(q, dof)
+    return sig.extend(base, q, dof)
 
 
 def signal_jacobian(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
@@ -349,9 +382,11 @@ def signal_jacobian(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
         raise ValueError(f"expected {n_dof} joint angles for dof={dof}, got {q.shape[-1]}")
     lead = q.shape[:-1]
     q2 = q.reshape(-1, n_dof)
-    if check_signals(signals) == "joint":
+    sig = signal_set(signals)
+    if sig.base == "joint":
         lo, hi = joint_ranges(dof).T
-        return np.broadcast_to(np.diag(2.0 / (hi - lo)), lead + (n_dof, n_dof)).copy()
+        jac = np.broadcast_to(np.diag(2.0 / (hi - lo)), lead + (n_dof, n_dof)).copy()
+        return sig.extend_jacobian(jac, dof)
     comps = _cartesian_components(dof)
     nc = len(comps)
     n_arm = n_dof // 2
@@ -366,6 +401,5 @@ def signal_jacobian(q: np.ndarray, dof: int, signals: str) -> np.ndarray:
             if spec.segment == "upper_arm":
                 jac[:, k * 2 * nc : k * 2 * nc + nc, col] = np.cross(axes[:, i], upper)[:, comps]
             jac[:, k * 2 * nc + nc : (k + 1) * 2 * nc, col] = np.cross(axes[:, i], fore)[:, comps]
-    if signals == "cartesian-elbow":
-        jac = with_elbow_jacobian(jac, dof)
+    jac = sig.extend_jacobian(jac, dof)
     return jac.reshape(lead + jac.shape[1:])

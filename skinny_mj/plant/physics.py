@@ -165,13 +165,12 @@ class Layout:
 
     def position_signals(self, data: mujoco.MjData, signals: str) -> np.ndarray:
         """(n_signals,) normalized noise-free signals (see :func:`body.signal_names`)."""
-        if body.check_signals(signals) == "joint":
-            return body.normalize_angles(self.joint_angles(data), self.dof)
+        sig, q = body.signal_set(signals), self.joint_angles(data)
+        if sig.base == "joint":
+            return sig.extend(body.normalize_angles(q, self.dof), q, self.dof)
         out = segment_signals(data.site_xpos[self.site_ids][None], self.arm_lengths,
                               self.components)[0]
-        if signals == "cartesian-elbow":
-            return body.with_elbow(out, self.joint_angles(data), self.dof)
-        return out
+        return sig.extend(out, q, self.dof)
 
     def site_jacobian(self, model: mujoco.MjModel, data: mujoco.MjData, site_id: int):
         """(3, nv) translational Jacobian of a site, m/rad (``mj_jacSite``)."""
@@ -183,14 +182,15 @@ class Layout:
         self, model: mujoco.MjModel, data: mujoco.MjData, signals: str
     ) -> np.ndarray:
         """(n_signals, n_dof) d(normalized signal)/d(joint angle), per rad."""
-        if body.check_signals(signals) == "joint":
+        sig = body.signal_set(signals)
+        if sig.base == "joint":
             lo, hi = self.range_rad.T
-            return np.diag(2.0 / (hi - lo))
+            return sig.extend_jacobian(np.diag(2.0 / (hi - lo)), self.dof)
         axes = data.cdof[self.dof_adr, :3][None]
         points = data.site_xpos[self.site_ids][None]
         jac = segment_jacobian(axes, points, self.segment_pairs, self.segment_lengths,
                                self.components)[0]
-        return body.with_elbow_jacobian(jac, self.dof) if signals == "cartesian-elbow" else jac
+        return sig.extend_jacobian(jac, self.dof)
 
 
 class SkinnyPhysics(dm_mujoco.Physics):

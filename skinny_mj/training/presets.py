@@ -5,7 +5,7 @@
 configuration with the lowest error on the real CMU clips it never trained on in the
 generalization study (``skinny experiment generalization --rows general,cartesian``,
 docs/results/generalization.md). The Cartesian ones see each elbow's angle beside the
-segment directions (``cartesian-elbow``, :func:`skinny_mj.plant.body.with_elbow`): the
+segment directions (``cartesian-elbow``, :data:`skinny_mj.plant.body.SIGNAL_SETS`): the
 angle between the two segments, so a Cartesian target fixes it too. All train on motor babbling
 (:mod:`skinny_mj.trajectories.babble`) with paper E's experiment-5 schedule. The trained
 models ship with the package (:data:`SHIPPED`): ``skinny test --model general-3d-cartesian
