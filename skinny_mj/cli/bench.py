@@ -68,8 +68,8 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
         return {"skipped": "reservoirpy not installed: pip install 'skinny-mj[bench]'"}
     n_in = 16
     esn = ESN(ESNConfig(n_inputs=n_in, n_outputs=4, n_reservoir=n_reservoir), seed=0)
-    # reservoirpy builds its W as CSR; ours keeps CSC (a faster SciPy kernel)
-    w = esn.W[0] if esn.sparse_reservoir is None else esn.sparse_reservoir.tocsr()
+    # reservoirpy takes W as CSR, the format ours multiplies by
+    w = esn.W[0] if esn.sparse_reservoir is None else esn.sparse_reservoir
     theirs = Reservoir(units=n_reservoir, lr=1.0, W=w, Win=esn.W_in[0, :, :-1],
                        bias=esn.W_in[0, :, -1] * esn.cfg.bias, input_dim=n_in)
     theirs.initialize(np.zeros((1, n_in)))
