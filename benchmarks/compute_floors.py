@@ -16,6 +16,8 @@ interleaved round after round, median CPU time of the rounds, µs per control st
 - ``esn_floor``: of it, only SciPy's sparse kernel and tanh on the (R N) states;
 - ``noise_draws``: of it, only the uniform draws of the reservoir noise (R generators,
   256 steps at a time, as ``ESN`` draws them): fixed by the random streams;
+- ``plant_step``: ``BatchPlant.step`` alone (servo, physics, sensed signals with noise);
+- ``plant_reads``: the true signals and joint angles the rollout records each step;
 - ``feedback``: the feedback's ``u_error`` alone (segment Jacobian + damped solve);
 - ``ufunc_call``: one in-place NumPy ufunc on an (R, 4) array: the least a NumPy call of
   this loop's sizes costs, to set beside the statements per step (counted with
@@ -147,6 +149,18 @@ def control_floor(n_steps: int, rounds: int) -> dict:
         for t in range(steps):
             feedback.u_error(desired[t], sensed, plant)
 
+    command = np.zeros((N_RUNS, plant.n_dof))
+
+    def plant_steps() -> None:  # the servo, the physics, the sensed signals (with noise)
+        plant.reset()
+        for _ in range(steps):
+            plant.step(command)
+
+    def plant_reads() -> None:
+        for _ in range(steps):
+            plant.true_signals()
+            plant.joint_angles()
+
     small, small_out = np.ones((N_RUNS, 4)), np.empty((N_RUNS, 4))
 
     def ufunc_calls() -> None:
@@ -166,6 +180,7 @@ def control_floor(n_steps: int, rounds: int) -> dict:
         "separate_physics": lambda: runner.rollout([one] * N_RUNS, datas[0], single,
                                                    sep_ctrl, nstep=steps),
         "plant_physics": lambda: (plant.reset(), plant_physics()),
+        "plant_step": plant_steps, "plant_reads": plant_reads,
         "esn_step": esn_steps, "esn_floor": esn_floor, "noise_draws": noise_draws,
         "feedback": feedback_calls,
         "ufunc_call": ufunc_calls,

@@ -19,8 +19,8 @@ median (and best) of the rounds is reported, in CPU and wall µs per step. The s
 - ``floor_csc``: the same with SciPy's CSC kernel (the same bits as CSR);
 - ``dense``: ``floor_csr`` with W dense (BLAS ``dgemv``): other bits, reported;
 - ``ell_numba``: the whole loop compiled (numba): W as padded rows ("ELL", each row's
-  terms in CSR's column order, summed vectorized across rows), NumPy-identical only if
-  the compiled tanh is (reported as the largest difference from ``ours``);
+  terms added in CSR's column order, the loop over rows innermost so that it can be
+  vectorized), the C library's tanh (reported: the largest difference from ``ours``);
 - ``ell_numba_nptanh``: the compiled ELL product per step, NumPy's tanh.
 
 ``reservoirpy / floor_csr_u`` is the largest speed-up over reservoirpy any loop built on
@@ -64,13 +64,13 @@ def _ell(csr) -> tuple[np.ndarray, np.ndarray]:
 if numba is not None:
     @numba.njit(cache=True, boundscheck=False)
     def _ell_add(cols, vals, x, out):
-        """out += W x, row sums in column order, vectorized over rows."""
-        acc = np.zeros(out.shape[0])
+        """out += W x, each row's terms added to it in column order (as SciPy's CSR
+        kernel adds them), vectorized over rows."""
+        acc = out.copy()
         for k in range(cols.shape[0]):
             for i in range(out.shape[0]):
                 acc[i] += vals[k, i] * x[cols[k, i]]
-        for i in range(out.shape[0]):
-            out[i] += acc[i]
+        out[:] = acc
 
     @numba.njit(cache=True, boundscheck=False)
     def _ell_loop(cols, vals, rows):
@@ -79,12 +79,12 @@ if numba is not None:
         x = np.zeros(n)
         acc = np.zeros(n)
         for t in range(rows.shape[0]):
-            acc[:] = 0.0
+            acc[:] = rows[t]
             for k in range(cols.shape[0]):
                 for i in range(n):
                     acc[i] += vals[k, i] * x[cols[k, i]]
             for i in range(n):
-                x[i] = math.tanh(rows[t, i] + acc[i])
+                x[i] = math.tanh(acc[i])
                 rows[t, i] = x[i]
 
 
