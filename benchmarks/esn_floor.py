@@ -39,6 +39,8 @@ import numpy as np
 from scipy.sparse._sparsetools import csc_matvec, csr_matvec
 from skinny_mj.controllers.esn import ESN, ESNConfig
 
+from skinny_mj.cli.bench_floor import sparse_tanh_loop
+
 try:
     import numba
 except ImportError:
@@ -102,24 +104,6 @@ def sides(n_res: int, inputs: np.ndarray) -> dict[str, Callable[[], np.ndarray]]
         esn.reset()
         return esn.run(inputs[None], noise=False)[1][0, :, :n_res]
 
-    def floor(kernel, a, per_step_input: bool) -> Callable[[], np.ndarray]:
-        args = (a.shape[0], a.shape[1], a.indptr, a.indices, a.data)
-
-        def loop() -> np.ndarray:
-            rows = np.empty((n_steps, n_res))
-            if not per_step_input:
-                np.matmul(u1, w_in.T, out=rows)
-            x = np.zeros(n_res)
-            for t in range(n_steps):
-                row = rows[t]
-                if per_step_input:
-                    np.matmul(w_in, u1[t], out=row)
-                kernel(*args, x, row)
-                np.tanh(row, out=row)
-                x = row
-            return rows
-        return loop
-
     def dense() -> np.ndarray:
         rows = u1 @ w_in.T
         x, tmp = np.zeros(n_res), np.empty(n_res)
@@ -131,9 +115,9 @@ def sides(n_res: int, inputs: np.ndarray) -> dict[str, Callable[[], np.ndarray]]
             x = row
         return rows
 
-    out = {"ours": ours, "floor_csr_u": floor(csr_matvec, csr, True),
-           "floor_csr": floor(csr_matvec, csr, False),
-           "floor_csc": floor(csc_matvec, csc, False), "dense": dense}
+    out = {"ours": ours, "floor_csr_u": sparse_tanh_loop(csr_matvec, csr, w_in, u1, True),
+           "floor_csr": sparse_tanh_loop(csr_matvec, csr, w_in, u1),
+           "floor_csc": sparse_tanh_loop(csc_matvec, csc, w_in, u1), "dense": dense}
     try:
         from reservoirpy.nodes import Reservoir
 
