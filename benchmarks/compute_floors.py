@@ -47,8 +47,8 @@ from skinny_mj.controllers import fel
 from skinny_mj.controllers.feedback import FeedbackController
 
 from skinny_mj.cli.bench import N_RUNS, _lockstep_parts
+from skinny_mj.cli.bench_floor import separate_robots
 from skinny_mj.plant.adapters import BatchPlant
-from skinny_mj.plant.model import load_model
 
 
 def medians(fns: dict[str, Callable[[], object]], rounds: int) -> dict[str, float]:
@@ -100,14 +100,7 @@ def control_floor(n_steps: int, rounds: int) -> dict:
     steps = len(desired) - 1
     plant.reset()
     physics = _bare_physics(plant, steps)
-    one = load_model(4)
-    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    datas = [mujoco.MjData(one) for _ in range(N_RUNS)]
-    single = np.empty((N_RUNS, mujoco.mj_stateSize(one, spec)))
-    for r, d in enumerate(datas):
-        plant.layout.set_joint_angles(d, plant.setup.start_rad)
-        mujoco.mj_forward(one, d)
-        mujoco.mj_getState(one, d, single[r], spec)
+    one, single_data, single = separate_robots(plant)
     runner = mj_rollout.Rollout(nthread=0)
     sep_ctrl = np.zeros((N_RUNS, steps, one.nu))
 
@@ -177,7 +170,7 @@ def control_floor(n_steps: int, rounds: int) -> dict:
     med = medians({
         "control": control,
         "batch_physics": physics,
-        "separate_physics": lambda: runner.rollout([one] * N_RUNS, datas[0], single,
+        "separate_physics": lambda: runner.rollout([one] * N_RUNS, single_data, single,
                                                    sep_ctrl, nstep=steps),
         "plant_physics": lambda: (plant.reset(), plant_physics()),
         "plant_step": plant_steps, "plant_reads": plant_reads,

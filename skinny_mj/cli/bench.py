@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from skinny_mj.cli.bench_floor import esn_state_floor, floor_lines
+from skinny_mj.cli.bench_floor import esn_state_floor, floor_lines, separate_robots
 from skinny_mj.cli.bench_mackey_glass import mackey_glass
 from skinny_mj.cli.bench_timing import interleaved
 
@@ -137,19 +137,11 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
     from mujoco import rollout as mj_rollout
 
     from skinny_mj.controllers import fel
-    from skinny_mj.plant.model import load_model
-
     _, _, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
     plant.reset()
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     steps = (len(desired) - 1) * plant.n_substeps
-    one = load_model(4)
-    datas = [mujoco.MjData(one) for _ in range(N_RUNS)]
-    single_state = np.empty((N_RUNS, mujoco.mj_stateSize(one, spec)))
-    for r, d in enumerate(datas):
-        plant.layout.set_joint_angles(d, plant.setup.start_rad)
-        mujoco.mj_forward(one, d)
-        mujoco.mj_getState(one, d, single_state[r], spec)
+    one, single_data, single_state = separate_robots(plant)
     batch, batch_data = plant.model, mujoco.MjData(plant.model)
     batch_state = np.empty((1, mujoco.mj_stateSize(batch, spec)))
     mujoco.mj_getState(batch, plant.data, batch_state[0], spec)
@@ -157,7 +149,7 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
     buf: dict = {}  # the rollout arrays, reused as fel.train does
     best = interleaved({
         "control": lambda: fel.rollout(esn, plant, desired, 0.5, noise=True, buffers=buf),
-        "physics": lambda: runner.rollout([one] * N_RUNS, datas[0], single_state,
+        "physics": lambda: runner.rollout([one] * N_RUNS, single_data, single_state,
                                           np.zeros((N_RUNS, steps, one.nu)), nstep=steps),
         "batch_physics": lambda: runner.rollout([batch], batch_data, batch_state,
                                                 np.zeros((1, steps, batch.nu)), nstep=steps),

@@ -1,9 +1,11 @@
-"""The floor of an ESN state loop: the least any loop built on SciPy's sparse product pays.
+"""Floors ``skinny bench`` times beside its figures: the least any implementation pays.
 
+The floor of an ESN state loop is the least any loop built on SciPy's sparse product pays.
 ``skinny bench`` times it beside ``ESN.run`` and reservoirpy's ``Reservoir.run``, so that
 reservoirpy's time over the floor (the largest speed-up over reservoirpy that any loop on
 the same product and NumPy's tanh can reach) is measured in the same run as the ratio
-itself; ``benchmarks/esn_floor.py`` times it beside other products.
+itself; ``benchmarks/esn_floor.py`` times it beside other products. The floor of a control
+step starts from the bare physics of R separate robots (:func:`separate_robots`).
 """
 
 from __future__ import annotations
@@ -69,3 +71,20 @@ def floor_lines(esn_figures: list[dict]) -> list[str]:
             lines.append(f"{label:<30} {fig['reservoirpy_over_floor']:>10.3g} {'-':>8}  "
                          "(the most any loop on SciPy's product can reach)")
     return lines
+
+
+def separate_robots(plant) -> tuple:
+    """R separate one-robot ``MjData`` posed as ``plant`` (a ``BatchPlant``) starts, for
+    ``mujoco.rollout``: (the one-robot model, one ``MjData``, (R, S) full-physics states)."""
+    import mujoco
+
+    from skinny_mj.plant.model import load_model
+
+    one, spec = load_model(plant.n_dof), mujoco.mjtState.mjSTATE_FULLPHYSICS
+    data = mujoco.MjData(one)
+    states = np.empty((plant.n_runs, mujoco.mj_stateSize(one, spec)))
+    plant.layout.set_joint_angles(data, plant.setup.start_rad)
+    mujoco.mj_forward(one, data)
+    for r in range(plant.n_runs):
+        mujoco.mj_getState(one, data, states[r], spec)
+    return one, data, states
