@@ -8,7 +8,7 @@ less), same weights and inputs, outputs compared step by step. Reservoir noise i
 both sides (its draws are the same NumPy calls on both; the compiled side still adds a
 zero noise array, so it pays for the add that ``ESN.step`` skips):
 
-- ``hybrid``: SciPy's CSC product (C, as ``ESN.step``), then one compiled loop adds
+- ``hybrid``: SciPy's CSR product (C, as ``ESN.step``), then one compiled loop adds
   W_in [u; 1] (vectorized over units: W_in stored transposed), NumPy's tanh (SIMD),
   then one compiled loop adds the noise and writes x and the extended state; readout
   by NumPy;
@@ -31,7 +31,7 @@ from skinny_mj.controllers.esn import ESN, ESNConfig
 
 try:
     import numba
-    from scipy.sparse._sparsetools import csc_matvec
+    from scipy.sparse._sparsetools import csr_matvec
 except ImportError:
     sys.exit("needs numba: pip install numba")
 
@@ -90,7 +90,7 @@ def compiled_steps(esn: ESN, inputs: np.ndarray, fused: bool) -> np.ndarray:
         ext[:, n:-1] = u
         ext[:, -1] = esn.cfg.bias
         pre.fill(0.0)
-        csc_matvec(a.shape[0], a.shape[1], a.indptr, a.indices, a.data, x, pre)
+        csr_matvec(a.shape[0], a.shape[1], a.indptr, a.indices, a.data, x, pre)
         if fused:
             fused_update(pre, w_in_t, ext[:, n:], noise, x, ext)
         else:

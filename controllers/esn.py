@@ -94,18 +94,19 @@ class ESN:
         self.W_back, self.W_out = w_back.astype(dt), w_out.astype(dt)
         self._sparse = None
         if self.cfg.density < _SPARSE_BELOW:
-            # CSC, not CSR: CSR's inner loop ends after a random number of terms (a
-            # row's nonzeros), a mispredicted branch per row; CSC's scattered adds run
-            # ~2x faster. Column by column, each output still sums its terms from the
-            # first column to the last, as CSR did: the same numbers, bit for bit.
+            # CSR: each output sums its terms from the first column to the last, starting
+            # from what the output array holds. SciPy's CSR kernel ran 1-15 % faster than
+            # its CSC kernel on the same matrix (benchmarks/esn_floor.py, on an AVX-512
+            # Xeon); both add the same terms in the same order: the same bits.
             import scipy.sparse  # here: `skinny experiment NAME --help` needs no SciPy
 
             a = self._sparse = scipy.sparse.block_diag(
-                [scipy.sparse.csr_array(m) for m in self.W], format="csc"
+                [scipy.sparse.csr_array(m) for m in self.W], format="csr"
             ).astype(dt)
+            a.sort_indices()
             self._kernel_args = (a.shape[0], a.shape[1], a.indptr, a.indices, a.data)
-            # SciPy's CSC matrix-vector kernel (what csc_array @ vector calls), if exposed
-            self._matvec = getattr(getattr(scipy.sparse, "_sparsetools", None), "csc_matvec",
+            # SciPy's CSR matrix-vector kernel (what csr_array @ vector calls), if exposed
+            self._matvec = getattr(getattr(scipy.sparse, "_sparsetools", None), "csr_matvec",
                                    None)
 
     def _noise(self) -> np.ndarray:
@@ -343,8 +344,8 @@ class ESN:
 
     # -- selection and persistence -------------------------------------------------
     @property
-    def sparse_reservoir(self) -> scipy.sparse.csc_array | None:
-        """Every run's W as one block-diagonal CSC matrix (R N, R N), the one ``step``
+    def sparse_reservoir(self) -> scipy.sparse.csr_array | None:
+        """Every run's W as one block-diagonal CSR matrix (R N, R N), the one ``step``
         multiplies by; None when W is dense (connectivity >= 0.25)."""
         return self._sparse
 

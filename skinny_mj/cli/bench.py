@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj.cli.bench_floor import esn_state_floor, floor_lines, separate_robots
 from skinny_mj.cli.bench_mackey_glass import mackey_glass
 from skinny_mj.cli.bench_timing import interleaved
 
@@ -58,7 +59,9 @@ def _movement(n_steps: int):
 def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict:
     """Our ESN's state loop (``ESN.run``, one run) vs reservoirpy 0.4's ``Reservoir.run``:
     same weights, same input (T, 16), float64; checks the two produce the same states.
-    Also our R = 20 lockstep throughput (run-steps/s), the rate a sweep sees."""
+    Also our R = 20 lockstep throughput (run-steps/s), the rate a sweep sees, and
+    reservoirpy's time over the floor (:mod:`skinny_mj.cli.bench_floor`): the most any loop
+    on SciPy's sparse product can gain over reservoirpy."""
     from skinny_mj.controllers.esn import ESN, ESNConfig
 
     try:
@@ -68,8 +71,8 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
         return {"skipped": "reservoirpy not installed: pip install 'skinny-mj[bench]'"}
     n_in = 16
     esn = ESN(ESNConfig(n_inputs=n_in, n_outputs=4, n_reservoir=n_reservoir), seed=0)
-    # reservoirpy builds its W as CSR; ours keeps CSC (a faster SciPy kernel)
-    w = esn.W[0] if esn.sparse_reservoir is None else esn.sparse_reservoir.tocsr()
+    # reservoirpy takes W as CSR, the format ours multiplies by
+    w = esn.W[0] if esn.sparse_reservoir is None else esn.sparse_reservoir
     theirs = Reservoir(units=n_reservoir, lr=1.0, W=w, Win=esn.W_in[0, :, :-1],
                        bias=esn.W_in[0, :, -1] * esn.cfg.bias, input_dim=n_in)
     theirs.initialize(np.zeros((1, n_in)))
@@ -91,12 +94,15 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
         lockstep.run(batch_inputs, noise=False)
 
     max_diff = float(np.max(np.abs(ours() - rpy())))
-    best = interleaved({"ours": ours, "reservoirpy": rpy, "lockstep": ours_lockstep}, repeats)
+    floor = esn_state_floor(esn, inputs)  # SciPy's kernel + tanh, nothing else
+    best = interleaved({"ours": ours, "reservoirpy": rpy, "lockstep": ours_lockstep}
+                       | ({} if floor is None else {"floor": floor}), repeats)
     return {"N": n_reservoir, "steps": n_steps, "ours_steps_s": n_steps / best["ours"],
             "reservoirpy_steps_s": n_steps / best["reservoirpy"],
             "ratio": best["reservoirpy"] / best["ours"], "max_state_diff": max_diff,
             "ours_lockstep_R20_run_steps_s": N_RUNS * n_steps / best["lockstep"],
             "lockstep_ratio": N_RUNS * best["reservoirpy"] / best["lockstep"],
+            "reservoirpy_over_floor": best["reservoirpy"] / best.get("floor", np.nan),
             "reservoirpy_version": reservoirpy.__version__}
 
 
@@ -131,19 +137,11 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
     from mujoco import rollout as mj_rollout
 
     from skinny_mj.controllers import fel
-    from skinny_mj.plant.model import load_model
-
     _, _, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
     plant.reset()
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     steps = (len(desired) - 1) * plant.n_substeps
-    one = load_model(4)
-    datas = [mujoco.MjData(one) for _ in range(N_RUNS)]
-    single_state = np.empty((N_RUNS, mujoco.mj_stateSize(one, spec)))
-    for r, d in enumerate(datas):
-        plant.layout.set_joint_angles(d, plant.setup.start_rad)
-        mujoco.mj_forward(one, d)
-        mujoco.mj_getState(one, d, single_state[r], spec)
+    one, single_data, single_state = separate_robots(plant)
     batch, batch_data = plant.model, mujoco.MjData(plant.model)
     batch_state = np.empty((1, mujoco.mj_stateSize(batch, spec)))
     mujoco.mj_getState(batch, plant.data, batch_state[0], spec)
@@ -151,7 +149,7 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
     buf: dict = {}  # the rollout arrays, reused as fel.train does
     best = interleaved({
         "control": lambda: fel.rollout(esn, plant, desired, 0.5, noise=True, buffers=buf),
-        "physics": lambda: runner.rollout([one] * N_RUNS, datas[0], single_state,
+        "physics": lambda: runner.rollout([one] * N_RUNS, single_data, single_state,
                                           np.zeros((N_RUNS, steps, one.nu)), nstep=steps),
         "batch_physics": lambda: runner.rollout([batch], batch_data, batch_state,
                                                 np.zeros((1, steps, batch.nu)), nstep=steps),
@@ -386,6 +384,7 @@ def table(figures: dict) -> str:
     if strict is not None:
         lines.append(f"{'  same, over batch-model physics':<30} {strict:>10.3g} {'-':>8}  "
                      "(the R-robot model the fast path steps: a stricter floor)")
+    lines += floor_lines(figures.get("esn_run_vs_reservoirpy", []))
     start, end = figures["load_avg_start"], figures["load_avg_end"]
     lines.append(f"load average (1 min) {start[0]:.2f} -> {end[0]:.2f} on "
                  f"{figures['cpu_count']} CPUs: ratios are timed interleaved, "
