@@ -10,6 +10,11 @@ command unit is the same velocity on every joint. Everything else is paper C's
 report and claims. ``--movement`` is paper C's real movement; ``--quick`` paper C's smoke
 test; the body and signals are this study's (for another body: ``skinny experiment paper-c
 --dof/--signals``). Measured in docs/results/claims.md ("Paper C in 3D").
+
+YMCA, the mirrors, YM and the speeds are learned here; Y and Y pure are not. The joints Y
+barely moves (6 of 8) are held only by a weak loop fitted to noise once K is small.
+:mod:`skinny_mj.experiments.paper_c.why_3d` measures this per joint. A reservoir of 300
+learns Y, but it fails YMCA, so the study keeps paper C's 1000.
 """
 
 from __future__ import annotations

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from skinny_mj.experiments import paper_c_3d
 from skinny_mj.experiments.paper_c import elbows, why_3d
+from skinny_mj.experiments.paper_c import study as paper_c
 
 from skinny_mj.training.loop import build_run
 
@@ -37,3 +38,16 @@ def test_bad_override_ends_with_one_line(capsys):
         why_3d.main(["--set", "esn.n_reservoir=many"])
     assert exc.value.code == 2
     assert "esn.n_reservoir" in capsys.readouterr().err
+
+
+def test_the_3d_plant_is_a_pose_free_integrator_at_ys_poses():
+    out = why_3d.plant_response("y", every=40)
+    assert len(out["response_min"]) == 8
+    np.testing.assert_allclose(out["response_min"], 1.0, atol=0.01)
+    np.testing.assert_allclose(out["response_max"], 1.0, atol=0.01)
+    assert max(out["zero_command_drift_deg"]) < 1e-3
+
+
+def test_the_2d_contrast_measures_paper_cs_own_network():
+    out = why_3d.analyse("y", {"esn.n_reservoir": 20}, [0], epochs=1, study=paper_c.STUDY)
+    assert len(out["joints"]) == 4 and len(out["runs"][0]["sensed_gain"]) == 4

@@ -21,6 +21,10 @@ overrides, e.g. ``esn.n_reservoir=300``) and measures, per joint and run:
   alone (sqrt(var of the noise) x the norm of the joint's readout row on the reservoir
   units, through the tanh's slope at 0), beside the RMS of the joint's true command.
 
+``--plant`` instead measures the plant alone at the training movement's poses (every 10th
+step): each joint's one-step response to a command as a fraction of the ideal integrator's
+(full scale x command x dt) and its drift under a zero command, deg.
+
 Prints one JSON line per call::
 
     MUJOCO_GL=disabled OMP_NUM_THREADS=1 python -m skinny_mj.experiments.paper_c.why_3d \\
@@ -80,11 +84,13 @@ def noise_gain(run, r: int) -> list[float]:
     return np.round(std * np.linalg.norm(w, axis=1), 4).tolist()
 
 
-def analyse(row: str, overrides: dict, seeds: list[int], epochs: int | None = None) -> dict:
-    """Train ``row`` of paper-c-3d with ``overrides`` on ``seeds`` and measure it."""
+def analyse(row: str, overrides: dict, seeds: list[int], epochs: int | None = None,
+            study=paper_c_3d.STUDY) -> dict:
+    """Train ``row`` of ``study`` (paper-c-3d, or paper-c for the 2D contrast) with
+    ``overrides`` on ``seeds`` and measure it."""
     from skinny_mj.training.loop import build_run, evaluate, train_run
 
-    cfg = paper_c_3d.STUDY.config(row).override(overrides)
+    cfg = study.config(row).override(overrides)
     if epochs is not None:
         cfg = cfg.override({"rule.epochs": epochs})
     run = build_run(cfg, seeds)
@@ -130,6 +136,36 @@ def analyse(row: str, overrides: dict, seeds: list[int], epochs: int | None = No
             "true_command_rms": np.round(true_rms, 4).tolist(), "runs": runs}
 
 
+def plant_response(row: str, every: int = 10) -> dict:
+    """The 3D plant at ``row``'s poses: per joint the min and max one-step response to a
+    0.05 command / the ideal, and the largest drift (deg) under a zero command."""
+    from skinny_mj.training.loop import build_run
+
+    run = build_run(paper_c_3d.STUDY.config(row).override({"plant.sensor_noise": 0.0,
+                                                           "esn.n_reservoir": 1}), [0])
+    plant, dof, step = run.plant, run.cfg.plant.dof, 0.05
+    ideal = step * run.max_speed_rad_s * run.trajectory.dt
+    ratios, drift = [], []
+    for q in run.trajectory.angles[::every]:
+        row_ratio = []
+        for joint in [None, *range(dof)]:
+            plant.reset()
+            plant.set_joint_angles(q[None])
+            command = np.zeros((1, dof))
+            if joint is not None:
+                command[0, joint] = step
+            plant.step(command)
+            moved = plant.joint_angles()[0] - q
+            if joint is None:
+                drift.append(np.abs(moved))
+            else:
+                row_ratio.append(moved[joint] / ideal[joint])
+        ratios.append(row_ratio)
+    return {"row": row, "response_min": np.round(np.min(ratios, 0), 4).tolist(),
+            "response_max": np.round(np.max(ratios, 0), 4).tolist(),
+            "zero_command_drift_deg": np.round(np.degrees(np.max(drift, 0)), 4).tolist()}
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--row", default="y", choices=tuple(paper_c.MOVEMENTS))
@@ -137,8 +173,15 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--epochs", type=int, default=None, help="default: the study's (150)")
     p.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
                    help="config overrides, e.g. esn.n_reservoir=300")
+    p.add_argument("--plant", action="store_true", help="measure the plant alone")
+    p.add_argument("--2d", dest="two_d", action="store_true",
+                   help="paper C's own 2D network instead (the contrast)")
     a = p.parse_args(argv)
-    base = paper_c_3d.STUDY.config(a.row)
+    if a.plant:
+        print(json.dumps(plant_response(a.row)))
+        return
+    study = paper_c.STUDY if a.two_d else paper_c_3d.STUDY
+    base = study.config(a.row)
     overrides = {}
     for item in a.set:
         key, sep, text = item.partition("=")
@@ -148,7 +191,7 @@ def main(argv: list[str] | None = None) -> None:
             overrides[key] = parse_value(base, key, text)
         except SkinnyInputError as err:
             p.error(str(err))
-    print(json.dumps(analyse(a.row, overrides, a.seeds, a.epochs)))
+    print(json.dumps(analyse(a.row, overrides, a.seeds, a.epochs, study)))
 
 
 if __name__ == "__main__":
