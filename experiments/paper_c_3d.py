@@ -15,9 +15,11 @@ N = 200, not paper C's 1000: paper C's 1000 learns YMCA, the mirrors, YM and the
 but not Y and Y pure. The joints Y barely moves (6 of 8) are then held only by a weak loop
 fitted to noise once K is small (:mod:`skinny_mj.experiments.paper_c.why_3d` measures
 it per joint). N = 200 is the thesis's own best reservoir size for paper C's original
-method (paper E, Fig. 4), one size for every row. Measured on diagnostic seeds it learns
-both Y (0.010, 0.009) and YMCA (0.005), where N = 300 learns Y but fails YMCA and N = 500
-learns YMCA but fails Y.
+method (paper E, Fig. 4), one size for every row. It learns 7 of the 8 rows at or below
+their 2D error (YMCA 0.0053, Y 0.0087, Y pure 0.0092; 3 runs each). N = 300 learns Y but
+fails YMCA, and N = 500 learns YMCA but fails Y. YMCA at 1.5x fails at N = 200 (0.39): one
+cycle of it has 208 samples against the readout's 217 regressors, the pinv readout's
+interpolation threshold.
 """
 
 from __future__ import annotations
