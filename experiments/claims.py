@@ -164,7 +164,7 @@ def _measure_c7(out_dir: Path, dof: int) -> list[str]:
 
     from skinny_mj.plant import body
 
-    ym = paper_c.load(paper_c.Config(dof=dof, real_movement=None), "ym").angles
+    ym = paper_c.load(paper_c.MOVEMENTS["ym"], dof).angles
     elbows = paper_c.elbow_dofs(dof)
     folded = np.abs(ym[:, elbows] - ym[0, elbows]).max(axis=1) > np.radians(5.0)
     lines = []
@@ -190,10 +190,10 @@ def _measure_mirrors() -> list[str]:
 
     lines = []
     for dof in (4, 8):
-        cfg = paper_c.Config(dof=dof, real_movement=None)
-        ymca = paper_c.load(cfg, "ymca").angles
+        ymca = paper_c.load(paper_c.MOVEMENTS["ymca"], dof).angles
         for name in ("mirror-right", "mirror-left"):
-            most, frac = range_excursion(paper_c.load(cfg, name).angles, ymca)
+            most, frac = range_excursion(paper_c.load(paper_c.MOVEMENTS[name], dof).angles,
+                                         ymca)
             beyond = [f"{j} {np.degrees(most[i]):.1f} deg ({frac[i]:.0%} of steps)"
                       for i, j in enumerate(body.dof_names(dof)) if most[i] > 0]
             lines.append(f"{dof} DOF, {name}: beyond YMCA's range: "

@@ -73,3 +73,28 @@ def test_the_command_line_refuses_bad_input_in_one_line(args):
     with pytest.raises(SystemExit) as e:
         main(args)
     assert "\n" not in str(e.value)
+
+
+def test_the_mirrors_measure_runs_on_both_bodies():
+    lines = main(["mirrors"]).splitlines()
+    assert [line.split(",")[0] for line in lines] == [
+        "4 DOF", "4 DOF", "8 DOF", "8 DOF"]
+    assert all("beyond YMCA's range:" in line for line in lines)
+
+
+def test_the_c7_measure_reads_a_sweeps_y_runs(tmp_path):
+    """A Y-trained run whose produced YM angles miss YM in the elbows alone: all of its
+    error is the elbows'."""
+    import json
+
+    from skinny_mj.experiments.paper_c import study as paper_c
+
+    ym = paper_c.load(paper_c.MOVEMENTS["ym"], 4).angles
+    produced = ym.copy()
+    produced[:, paper_c.elbow_dofs(4)] += 0.1
+    (tmp_path / "runs").mkdir()
+    run = {"experiment": "paper-c", "row": "y", "row_index": 1, "run_index": 0, "seed": 7,
+           "status": "ok", "metrics": {"angles__ym": produced.tolist()}}
+    (tmp_path / "runs" / "y-7.json").write_text(json.dumps(run))
+    (line,) = main(["c7", str(tmp_path), "4"]).splitlines()
+    assert line.startswith("seed 7:") and "elbows' share of the YM error 1.000" in line
