@@ -51,7 +51,9 @@ from __future__ import annotations
 
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.experiments.dynamic import general
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.presets import preset_fields
 
 NAME = "dynamic"
 #: The movements: YMCA, the recorded-like YMCA (never still, marker noise) and the
@@ -168,6 +170,44 @@ def _rows() -> tuple[Row, ...]:
         out.append(_row(f"3d-{mv}-fel-arm-long", {"plant.dof": 8, "movement.trajectory": traj,
                                                   **ARM_FEL, **ARM_3D},
                         ARM_EPOCHS, 2))
+    return (*out, *_general_rows())
+
+
+#: The torque ``general`` preset's candidates (``--rows general``), each the 2D preset
+#: before them (``2d-general-first``: 15 s of slow babbling) with one change
+_SLOW = "vmin=0.5,vmax=4"  # the first preset's babbling speeds (rad/s)
+GENERAL_VARIANTS: dict[str, dict] = {
+    "babble60": {"movement.trajectory": f"babble:seed=0,duration=60,{_SLOW}"},
+    "babble120": {"movement.trajectory": f"babble:seed=0,duration=120,{_SLOW}"},
+    "babble60+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=60,{_SLOW}+ymca"},
+    "limits60": {"movement.trajectory": f"babble:seed=0,duration=60,{_SLOW},limits=0.5,"
+                                        "holds=0.2"},
+    "n500": {"esn.n_reservoir": 500},
+    "ridge1": {"esn.readout": "ridge", "esn.ridge_lambda": 1.0},
+    "washout1": {"test.washout_cycles": 1},
+    "scale4": {"movement.full_scale_factor": 4.0},
+}
+
+
+def _general_row(row_id: str, overrides: dict, seeds_of: str | None = None) -> Row:
+    """A row tested on the unseen clips (:func:`general.run_batch`), joint-angle signals."""
+    learns = _learns(overrides) or "rule" not in overrides
+    row = _row(row_id, {"plant.signals": "joint", **overrides},
+               overrides.get("rule.epochs", ARM_EPOCHS) if learns else None)
+    return Row(row.id, row.overrides, seeds_of=seeds_of, params={"tests": tuple(general.TESTS)},
+               quick={**row.quick, "tests": ("md_02-feasible", "ymca")},
+               run_batch=general.run_batch)
+
+
+def _general_rows() -> tuple[Row, ...]:
+    """Appended after every earlier row: computed torque on the test columns (the floor),
+    the first torque preset, its candidates, the preset of each body."""
+    first = preset_fields("general", "torque")
+    out = [_general_row(f"{bd}-general-arm-ct", {"plant.dof": dof, **ARM_CONTROLLERS["arm-ct"]})
+           for bd, dof in BODIES.items()]
+    out.append(_general_row("2d-general-first", first))
+    out += [_general_row(f"2d-general-{v}", {**first, **changes}, seeds_of="2d-general-first")
+            for v, changes in GENERAL_VARIANTS.items()]
     return tuple(out)
 
 
