@@ -186,7 +186,19 @@ GENERAL_VARIANTS: dict[str, dict] = {
     "ridge1": {"esn.readout": "ridge", "esn.ridge_lambda": 1.0},
     "washout1": {"test.washout_cycles": 1},
     "scale4": {"movement.full_scale_factor": 4.0},
+    "babble60-fast": {"movement.trajectory": "babble:seed=0,duration=60"},
+    "babble60-fast+ymca": {"movement.trajectory": "set:babble:seed=0,duration=60+ymca"},
+    "babble120+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=120,{_SLOW}+ymca"},
+    "babble240+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=240,{_SLOW}+ymca"},
+    "limits60+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=60,{_SLOW},"
+                                             "limits=0.5,holds=0.2+ymca"},
+    "limits120+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=120,{_SLOW},"
+                                              "limits=0.5,holds=0.2+ymca"},
 }
+
+
+#: The 3D candidates (the 2D screen's best movements)
+GENERAL_3D = ("babble60+ymca", "babble120+ymca")
 
 
 def _general_row(row_id: str, overrides: dict, seeds_of: str | None = None) -> Row:
@@ -202,12 +214,17 @@ def _general_row(row_id: str, overrides: dict, seeds_of: str | None = None) -> R
 def _general_rows() -> tuple[Row, ...]:
     """Appended after every earlier row: computed torque on the test columns (the floor),
     the first torque preset, its candidates, the preset of each body."""
-    first = preset_fields("general", "torque")
+    first = {"plant.dof": 4, "movement.trajectory": f"babble:seed=0,duration=15,{_SLOW}",
+             **ARM_FEL}
     out = [_general_row(f"{bd}-general-arm-ct", {"plant.dof": dof, **ARM_CONTROLLERS["arm-ct"]})
            for bd, dof in BODIES.items()]
     out.append(_general_row("2d-general-first", first))
     out += [_general_row(f"2d-general-{v}", {**first, **changes}, seeds_of="2d-general-first")
             for v, changes in GENERAL_VARIANTS.items()]
+    # 3D: the 3D arm rows' ESN (N = 500) and learning cycles, on the 2D screen's best movements
+    first3 = {**first, "plant.dof": 8, **ARM_3D, "rule.cycles": ARM_3D_CYCLES}
+    out += [_general_row(f"3d-general-{v}", {**first3, **GENERAL_VARIANTS[v]})
+            for v in GENERAL_3D]
     return tuple(out)
 
 
