@@ -19,6 +19,7 @@ diverged).
 from __future__ import annotations
 
 import functools
+import statistics
 import time
 
 from skinny_mj.engine.experiment import RunFailed
@@ -80,3 +81,48 @@ def run_batch(config: TrainConfig, row, seeds: list[int]) -> list:
         if result is not None and result.failed[r]:
             outs[r] = RunFailed(f"epoch {result.fail_epoch[r]}: {result.fail_reason[r]}")
     return outs
+
+
+#: The goal for the ESN alone (K = 0) on the unseen clips, position NRMSE: a target to
+#: measure against, not a number tuned to
+GOAL = 0.02
+
+
+def _cell(v: list[float]) -> str:
+    if not v:
+        return "—"
+    return f"{statistics.fmean(v):.4f} ± {statistics.stdev(v) if len(v) > 1 else 0.0:.4f}"
+
+
+def report_lines(out_dir, rows: tuple[str, ...], bodies: dict[str, int]) -> list[str]:
+    """A markdown table of the general rows swept (position NRMSE per test column, mean ±
+    sd over the ok runs), each body's computed-torque floor first, then the goal per
+    preset row."""
+    from skinny_mj.experiments.claims import values
+
+    lines = []
+    for bd, dof in bodies.items():
+        mine = [r for r in rows if r.startswith(f"{bd}-general")]
+        mine.sort(key=lambda r: not r.endswith("-arm-ct"))  # the floor first
+        if not any(values(out_dir, r, "train_wall_s") for r in mine):
+            continue
+        head = " | ".join(f"{c} @ {speed_of(c, dof):g}" for c in TESTS)
+        lines += [f"torque general, {bd}: position NRMSE per test column (the ESN alone, "
+                  "K = 0; the arm-ct row: computed torque alone, the floor)",
+                  f"| row | n | {head} |", "|---|---|" + "---|" * len(TESTS)]
+        for r in mine:
+            n = len(values(out_dir, r, "train_wall_s"))
+            if n:
+                cells = " | ".join(_cell(values(out_dir, r, f"{c}__position_nrmse"))
+                                   for c in TESTS)
+                lines.append(f"| {r} | {n} | {cells} |")
+        preset = f"{bd}-general"
+        for c in CLIP_COLUMNS:
+            v = values(out_dir, preset, f"{c}__position_nrmse")
+            floor = values(out_dir, f"{bd}-general-arm-ct", f"{c}__position_nrmse")
+            if v:
+                lines.append(f"goal {bd} torque general preset on unseen {c} (@ "
+                             f"{speed_of(c, dof):g}) <= {GOAL}: {_cell(v)}, "
+                             f"{sum(x <= GOAL for x in v)} / {len(v)} runs; computed "
+                             f"torque {_cell(floor)}")
+    return lines

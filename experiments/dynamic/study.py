@@ -49,11 +49,12 @@ position NRMSE; earlier goals (limit-scaled PD teacher) <= 0.03 (2D) and <= 0.06
 
 from __future__ import annotations
 
+from skinny_mj.experiments.dynamic import general
+
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
-from skinny_mj.experiments.dynamic import general
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.presets import preset_fields
+from skinny_mj.training.presets import TORQUE_GENERAL, preset_fields
 
 NAME = "dynamic"
 #: The movements: YMCA, the recorded-like YMCA (never still, marker noise) and the
@@ -225,19 +226,27 @@ def _general_rows() -> tuple[Row, ...]:
     first3 = {**first, "plant.dof": 8, **ARM_3D, "rule.cycles": ARM_3D_CYCLES}
     out += [_general_row(f"3d-general-{v}", {**first3, **GENERAL_VARIANTS[v]})
             for v in GENERAL_3D]
+    # the presets (`skinny train --preset general --actuation torque --dof D`), on the
+    # first 2D preset's seeds in 2D
+    out += [_general_row(f"{bd}-general", preset_fields("general", "torque", dof=dof),
+                         seeds_of="2d-general-first" if dof == 4 else None)
+            for bd, dof in BODIES.items() if dof in TORQUE_GENERAL]
     return tuple(out)
 
 
 def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
     """``table``, ``robust``, ``kinematic``, each per body (``table-2d``, ...), the
-    arm-dynamics rows' (``arm-table``, ``arm-robust``, ...), and each body's rows."""
+    arm-dynamics rows' (``arm-table``, ``arm-robust``, ...), the torque general preset's
+    (``general``, ``general-2d``, ...), and each body's rows."""
     out: dict[str, tuple[str, ...]] = {}
     for row in rows:
         kind = "kinematic" if row.id.endswith("kinematic") else \
             "robust" if any(p in row.id for p in PERTURBATIONS) else "table"
-        arm = "arm" in row.id.split("-")
+        general = row.id[3:].startswith("general")
+        arm = "arm" in row.id.split("-") and not general
         for g in (kind, f"{kind}-{row.id[:2]}", row.id[:2],
-                  *((f"arm-{kind}", f"arm-{kind}-{row.id[:2]}") if arm else ())):
+                  *((f"arm-{kind}", f"arm-{kind}-{row.id[:2]}") if arm else ()),
+                  *(("general", f"general-{row.id[:2]}") if general else ())):
             out[g] = (*out.get(g, ()), row.id)
     return out
 
@@ -275,6 +284,9 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 
 
 ROWS = _rows()
+#: ``--quick`` sweeps every row but the torque general preset's candidates (its floor and
+#: presets stay)
+QUICK_ROWS = tuple(r.id for r in ROWS if "-general-" not in r.id or r.id.endswith("-arm-ct"))
 STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, runs=10, groups=_groups(ROWS),
     # every row on the torque twin with Cartesian signals; the md02 rows' movement is
@@ -283,6 +295,6 @@ STUDY = Study(
                                  "movement.trajectory": CLIP}),
     run_batch=run_batch, columns=TABLE_COLUMNS,
     # a smoke test, not a reproduction: 2 runs, 2 epochs of each FEL row
-    quick=Quick(runs=2), takes=("movement", "signals"),
+    quick=Quick(runs=2, rows=QUICK_ROWS), takes=("movement", "signals"),
     report="skinny_mj.experiments.dynamic.report:report",
 )
