@@ -198,6 +198,11 @@ GENERAL_VARIANTS: dict[str, dict] = {
 }
 
 
+#: Candidates on the 2D preset's movement (60 s of slow babbling, then YMCA)
+GENERAL_LATE: dict[str, dict] = {
+    "babble60+ymca-n500": {**GENERAL_VARIANTS["babble60+ymca"], "esn.n_reservoir": 500},
+    "babble60+ymca-epochs30": {**GENERAL_VARIANTS["babble60+ymca"], "rule.epochs": 30},
+}
 #: The 3D candidates (the 2D screen's best movements)
 GENERAL_3D = ("babble60+ymca", "babble120+ymca")
 
@@ -231,6 +236,9 @@ def _general_rows() -> tuple[Row, ...]:
     out += [_general_row(f"{bd}-general", preset_fields("general", "torque", dof=dof),
                          seeds_of="2d-general-first" if dof == 4 else None)
             for bd, dof in BODIES.items() if dof in TORQUE_GENERAL]
+    # appended after the presets, so every row above keeps its seeds
+    out += [_general_row(f"2d-general-{v}", {**first, **changes}, seeds_of="2d-general-first")
+            for v, changes in GENERAL_LATE.items()]
     return tuple(out)
 
 
