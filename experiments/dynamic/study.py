@@ -239,6 +239,9 @@ def _general_rows() -> tuple[Row, ...]:
     # appended after the presets, so every row above keeps its seeds
     out += [_general_row(f"2d-general-{v}", {**first, **changes}, seeds_of="2d-general-first")
             for v, changes in GENERAL_LATE.items()]
+    # the 2D preset as it is on the 3D arm (N = 200, 3 learning cycles)
+    out.append(_general_row("3d-general-babble60+ymca-n200", {
+        **first, "plant.dof": 8, **GENERAL_VARIANTS["babble60+ymca"]}))
     return tuple(out)
 
 
