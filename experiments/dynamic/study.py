@@ -198,10 +198,16 @@ GENERAL_VARIANTS: dict[str, dict] = {
 }
 
 
-#: Candidates on the 2D preset's movement (60 s of slow babbling, then YMCA)
+#: Later candidates, row id -> the first preset's changes, in the order they were added
+#: (appended after the presets, so no earlier row's seeds move): on the 2D preset's
+#: movement (60 s of slow babbling, then YMCA), and the 2D preset as it is on the 3D arm
+#: (N = 200, 3 learning cycles)
+_PRESET_MOVE = {"movement.trajectory": f"set:babble:seed=0,duration=60,{_SLOW}+ymca"}
 GENERAL_LATE: dict[str, dict] = {
-    "babble60+ymca-n500": {**GENERAL_VARIANTS["babble60+ymca"], "esn.n_reservoir": 500},
-    "babble60+ymca-epochs30": {**GENERAL_VARIANTS["babble60+ymca"], "rule.epochs": 30},
+    "2d-general-babble60+ymca-n500": {**_PRESET_MOVE, "esn.n_reservoir": 500},
+    "2d-general-babble60+ymca-epochs30": {**_PRESET_MOVE, "rule.epochs": 30},
+    "3d-general-babble60+ymca-n200": {**_PRESET_MOVE, "plant.dof": 8},
+    "2d-general-babble60+ymca-n100": {**_PRESET_MOVE, "esn.n_reservoir": 100},
 }
 #: The 3D candidates (the 2D screen's best movements)
 GENERAL_3D = ("babble60+ymca", "babble120+ymca")
@@ -236,12 +242,9 @@ def _general_rows() -> tuple[Row, ...]:
     out += [_general_row(f"{bd}-general", preset_fields("general", "torque", dof=dof),
                          seeds_of="2d-general-first" if dof == 4 else None)
             for bd, dof in BODIES.items() if dof in TORQUE_GENERAL]
-    # appended after the presets, so every row above keeps its seeds
-    out += [_general_row(f"2d-general-{v}", {**first, **changes}, seeds_of="2d-general-first")
-            for v, changes in GENERAL_LATE.items()]
-    # the 2D preset as it is on the 3D arm (N = 200, 3 learning cycles)
-    out.append(_general_row("3d-general-babble60+ymca-n200", {
-        **first, "plant.dof": 8, **GENERAL_VARIANTS["babble60+ymca"]}))
+    out += [_general_row(row_id, {**first, **changes},
+                         seeds_of="2d-general-first" if row_id.startswith("2d") else None)
+            for row_id, changes in GENERAL_LATE.items()]
     return tuple(out)
 
 
