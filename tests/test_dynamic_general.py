@@ -65,3 +65,18 @@ def test_a_learned_row_trains_once_and_tests_every_column():
             assert out[f"{col}__position_nrmse"] > 0
             assert out[f"{col}__max_torque_ratio"] <= 1 + 1e-9
     assert outs[0]["ymca__position_nrmse"] != outs[1]["ymca__position_nrmse"]  # two seeds
+
+
+def test_the_preset_row_is_what_skinny_train_preset_general_trains():
+    from skinny_mj.cli.config_files import train_config
+    from skinny_mj.cli.parser import build_parser
+
+    cfg, _ = _row("2d-general")
+    cli, _ = train_config(build_parser().parse_args(
+        ["train", "--preset", "general", "--actuation", "torque"]))
+    assert cfg == cli
+    # a 3D body without its own preset takes the 2D one's settings on the 3D arm
+    late, _ = _row("3d-general-babble60+ymca-n200")
+    cli3, _ = train_config(build_parser().parse_args(
+        ["train", "--preset", "general", "--actuation", "torque", "--dof", "8"]))
+    assert late == cli3
