@@ -155,7 +155,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "general-3d-cartesian --trajectory CLIP.amc --asf SKELETON.asf. "
                    "With --actuation torque: the torque twin's general (2D, joint angles), 60 s "
                    "of babbling at 0.5-4 rad/s (within the torque limits) then YMCA, the "
-                   "inertia-scaled PD teacher and the forgetting readout")
+                   "inertia-scaled PD teacher, 30 epochs, the forgetting readout")
 
     p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
     p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny "
