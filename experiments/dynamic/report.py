@@ -8,6 +8,7 @@ import statistics
 from pathlib import Path
 
 from skinny_mj.experiments.claims import values
+from skinny_mj.experiments.dynamic import general
 from skinny_mj.experiments.dynamic.study import (
     ARM_GOALS,
     BODIES,
@@ -137,6 +138,7 @@ def report(results, plan, out_dir: Path) -> str:
     lines += arm_report(out_dir, bodies)
     lines += learning_curves(results, tuple(f"{bd}-ymca-fel-arm" for bd in bodies))
     rows = [p.row.id for p in plan.rows]
+    lines += general.report_lines(out_dir, tuple(rows), {bd: BODIES[bd] for bd in bodies})
     ratios = [x for r in rows for x in values(out_dir, r, "max_torque_ratio")]
     warns = [x for r in rows for x in values(out_dir, r, "warnings")]
     if ratios:

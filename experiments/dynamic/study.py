@@ -49,9 +49,12 @@ position NRMSE; earlier goals (limit-scaled PD teacher) <= 0.03 (2D) and <= 0.06
 
 from __future__ import annotations
 
+from skinny_mj.experiments.dynamic import general
+
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.presets import TORQUE_GENERAL, preset_fields
 
 NAME = "dynamic"
 #: The movements: YMCA, the recorded-like YMCA (never still, marker noise) and the
@@ -168,19 +171,96 @@ def _rows() -> tuple[Row, ...]:
         out.append(_row(f"3d-{mv}-fel-arm-long", {"plant.dof": 8, "movement.trajectory": traj,
                                                   **ARM_FEL, **ARM_3D},
                         ARM_EPOCHS, 2))
+    return (*out, *_general_rows())
+
+
+#: The torque ``general`` preset's candidates (``--rows general``), each the 2D preset
+#: before them (``2d-general-first``: 15 s of slow babbling) with one change
+_SLOW = "vmin=0.5,vmax=4"  # the first preset's babbling speeds (rad/s)
+GENERAL_VARIANTS: dict[str, dict] = {
+    "babble60": {"movement.trajectory": f"babble:seed=0,duration=60,{_SLOW}"},
+    "babble120": {"movement.trajectory": f"babble:seed=0,duration=120,{_SLOW}"},
+    "babble60+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=60,{_SLOW}+ymca"},
+    "limits60": {"movement.trajectory": f"babble:seed=0,duration=60,{_SLOW},limits=0.5,"
+                                        "holds=0.2"},
+    "n500": {"esn.n_reservoir": 500},
+    "ridge1": {"esn.readout": "ridge", "esn.ridge_lambda": 1.0},
+    "washout1": {"test.washout_cycles": 1},
+    "scale4": {"movement.full_scale_factor": 4.0},
+    "babble60-fast": {"movement.trajectory": "babble:seed=0,duration=60"},
+    "babble60-fast+ymca": {"movement.trajectory": "set:babble:seed=0,duration=60+ymca"},
+    "babble120+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=120,{_SLOW}+ymca"},
+    "babble240+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=240,{_SLOW}+ymca"},
+    "limits60+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=60,{_SLOW},"
+                                             "limits=0.5,holds=0.2+ymca"},
+    "limits120+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=120,{_SLOW},"
+                                              "limits=0.5,holds=0.2+ymca"},
+}
+
+
+#: Later candidates, row id -> the first preset's changes, in the order they were added
+#: (appended after the presets, so no earlier row's seeds move): on the 2D preset's
+#: movement (60 s of slow babbling, then YMCA), and the 2D preset as it is on the 3D arm
+#: (N = 200, 3 learning cycles)
+_PRESET_MOVE = {"movement.trajectory": f"set:babble:seed=0,duration=60,{_SLOW}+ymca"}
+GENERAL_LATE: dict[str, dict] = {
+    "2d-general-babble60+ymca-n500": {**_PRESET_MOVE, "esn.n_reservoir": 500},
+    "2d-general-babble60+ymca-epochs30": {**_PRESET_MOVE, "rule.epochs": 30},
+    "3d-general-babble60+ymca-n200": {**_PRESET_MOVE, "plant.dof": 8},
+    "2d-general-babble60+ymca-n100": {**_PRESET_MOVE, "esn.n_reservoir": 100},
+}
+#: The 3D candidates (the 2D screen's best movements)
+GENERAL_3D = ("babble60+ymca", "babble120+ymca")
+
+
+def _general_row(row_id: str, overrides: dict, seeds_of: str | None = None) -> Row:
+    """A row tested on the unseen clips (:func:`general.run_batch`), joint-angle signals."""
+    learns = _learns(overrides) or "rule" not in overrides
+    row = _row(row_id, {"plant.signals": "joint", **overrides},
+               overrides.get("rule.epochs", ARM_EPOCHS) if learns else None)
+    return Row(row.id, row.overrides, seeds_of=seeds_of, params={"tests": tuple(general.TESTS)},
+               quick={**row.quick, "tests": ("md_02-feasible", "ymca")},
+               run_batch=general.run_batch)
+
+
+def _general_rows() -> tuple[Row, ...]:
+    """Appended after every earlier row: computed torque on the test columns (the floor),
+    the first torque preset, its candidates, the preset of each body."""
+    first = {"plant.dof": 4, "movement.trajectory": f"babble:seed=0,duration=15,{_SLOW}",
+             **ARM_FEL}
+    out = [_general_row(f"{bd}-general-arm-ct", {"plant.dof": dof, **ARM_CONTROLLERS["arm-ct"]})
+           for bd, dof in BODIES.items()]
+    out.append(_general_row("2d-general-first", first))
+    out += [_general_row(f"2d-general-{v}", {**first, **changes}, seeds_of="2d-general-first")
+            for v, changes in GENERAL_VARIANTS.items()]
+    # 3D: the 3D arm rows' ESN (N = 500) and learning cycles, on the 2D screen's best movements
+    first3 = {**first, "plant.dof": 8, **ARM_3D, "rule.cycles": ARM_3D_CYCLES}
+    out += [_general_row(f"3d-general-{v}", {**first3, **GENERAL_VARIANTS[v]})
+            for v in GENERAL_3D]
+    # the presets (`skinny train --preset general --actuation torque --dof D`), on the
+    # first 2D preset's seeds in 2D
+    out += [_general_row(f"{bd}-general", preset_fields("general", "torque", dof=dof),
+                         seeds_of="2d-general-first" if dof == 4 else None)
+            for bd, dof in BODIES.items() if dof in TORQUE_GENERAL]
+    out += [_general_row(row_id, {**first, **changes},
+                         seeds_of="2d-general-first" if row_id.startswith("2d") else None)
+            for row_id, changes in GENERAL_LATE.items()]
     return tuple(out)
 
 
 def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
     """``table``, ``robust``, ``kinematic``, each per body (``table-2d``, ...), the
-    arm-dynamics rows' (``arm-table``, ``arm-robust``, ...), and each body's rows."""
+    arm-dynamics rows' (``arm-table``, ``arm-robust``, ...), the torque general preset's
+    (``general``, ``general-2d``, ...), and each body's rows."""
     out: dict[str, tuple[str, ...]] = {}
     for row in rows:
         kind = "kinematic" if row.id.endswith("kinematic") else \
             "robust" if any(p in row.id for p in PERTURBATIONS) else "table"
-        arm = "arm" in row.id.split("-")
+        general = row.id[3:].startswith("general")
+        arm = "arm" in row.id.split("-") and not general
         for g in (kind, f"{kind}-{row.id[:2]}", row.id[:2],
-                  *((f"arm-{kind}", f"arm-{kind}-{row.id[:2]}") if arm else ())):
+                  *((f"arm-{kind}", f"arm-{kind}-{row.id[:2]}") if arm else ()),
+                  *(("general", f"general-{row.id[:2]}") if general else ())):
             out[g] = (*out.get(g, ()), row.id)
     return out
 
@@ -218,6 +298,10 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 
 
 ROWS = _rows()
+#: ``--quick`` sweeps every row but the torque general preset's candidates (its floor, the
+#: first preset, whose seeds the 2D preset takes, and the presets stay)
+QUICK_ROWS = tuple(r.id for r in ROWS if "-general-" not in r.id or r.id.endswith("-arm-ct")
+                   or r.id == "2d-general-first")
 STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, runs=10, groups=_groups(ROWS),
     # every row on the torque twin with Cartesian signals; the md02 rows' movement is
@@ -226,6 +310,6 @@ STUDY = Study(
                                  "movement.trajectory": CLIP}),
     run_batch=run_batch, columns=TABLE_COLUMNS,
     # a smoke test, not a reproduction: 2 runs, 2 epochs of each FEL row
-    quick=Quick(runs=2), takes=("movement", "signals"),
+    quick=Quick(runs=2, rows=QUICK_ROWS), takes=("movement", "signals"),
     report="skinny_mj.experiments.dynamic.report:report",
 )

@@ -153,9 +153,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "generalization --rows general`. Trained ones ship: skinny test --model "
                    "general-2d-joint|general-3d-joint|general-2d-cartesian|"
                    "general-3d-cartesian --trajectory CLIP.amc --asf SKELETON.asf. "
-                   "With --actuation torque: the torque twin's general, 15 s of babbling at "
-                   "0.5-4 rad/s (within the torque limits), the inertia-scaled PD teacher "
-                   "and the forgetting readout")
+                   "With --actuation torque: the torque twin's general (2D, joint angles), 60 s "
+                   "of babbling at 0.5-4 rad/s (within the torque limits) then YMCA, the "
+                   "inertia-scaled PD teacher, 30 epochs, the forgetting readout")
 
     p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
     p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny "

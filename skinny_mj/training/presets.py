@@ -11,11 +11,15 @@ angle between the two segments, so a Cartesian target fixes it too. All train on
 models ship with the package (:data:`SHIPPED`): ``skinny test --model general-3d-cartesian
 --trajectory CLIP.amc --asf SKELETON.asf`` runs one without training.
 
-With ``--actuation torque`` the same name picks the torque twin's ``general``
-(:data:`TORQUE_PRESETS`): babbling slow enough for the motors' torque limits, learned by
-FEL with the inertia-scaled PD teacher and the forgetting readout. The shipped clips
-need more torque than the motors have at full speed; test it on them slowed down,
-``skinny test --model .../model.npz --trajectory md_02.amc --speed 0.18``.
+With ``--actuation torque`` the same name picks the torque twin's ``general`` of the
+body (:data:`TORQUE_GENERAL`, ``--dof 4|8``, joint-angle signals): motor babbling in
+desired joint angles, slow enough for the motors' torque limits, then YMCA, learned by
+FEL with the inertia-scaled PD teacher and the forgetting readout; chosen in the dynamic
+study (``skinny experiment dynamic --rows general``, docs/results/dynamic.md). The
+shipped clips need more torque than the motors have at full speed: test it on them as
+shipped and slowed down to what the motors can do, ``skinny test --model
+.../model.npz --trajectory md_02.amc --speed 0.18`` (the speeds per body:
+:data:`skinny_mj.experiments.dynamic.general.FEASIBLE_SPEED`).
 """
 
 from __future__ import annotations
@@ -26,8 +30,8 @@ from typing import Any
 
 from skinny_mj.errors import SkinnyInputError
 
-__all__ = ["GENERAL", "PRESETS", "TORQUE_PRESETS", "SHIPPED", "preset_fields", "describe",
-           "model_name", "model_path"]
+__all__ = ["GENERAL", "PRESETS", "TORQUE_GENERAL", "TORQUE_PRESETS", "SHIPPED",
+           "preset_fields", "describe", "model_name", "model_path"]
 
 _LIMITS30 = "babble:seed=0,duration=30,limits=0.5,holds=0.2"
 #: The joint-angle presets' keys (2D and 3D alike).
@@ -81,19 +85,24 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {"general": GENERAL[4, "joint"]
 SHIPPED: dict[str, tuple[int, str]] = {
     f"general-{'2d' if dof == 4 else '3d'}-{signals}": (dof, signals) for dof, signals in GENERAL}
 
-#: The same names for ``--actuation torque``.
-TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
-    "general": (
-        "torque twin, 2D, joint-angle signals, trained on 15 s of motor babbling with "
-        "peak speeds 0.5-4 rad/s (every step within the torque limits, peak "
-        "|tau|/limit 0.43), FEL with the inertia-scaled PD teacher, beta = 1, 3 cycles "
-        "x 15 epochs, readout on the normal equations with forgetting",
-        {"plant.dof": 4, "plant.signals": "joint", "actuation": "torque",
-         "movement.trajectory": "babble:seed=0,duration=15,vmin=0.5,vmax=4",
-         "actuation.feedback": "inertia-pd", "rule.fit": "forgetting", "rule.beta": 1.0,
-         "rule.cycles": 3, "rule.epochs": 15},
-    ),
+#: ``general`` for ``--actuation torque``, per body (dof): (one-line reason, the dotted
+#: TrainConfig keys). Joint-angle signals; the teacher and readout of the dynamic study's
+#: ``fel-arm`` rows (inertia-scaled PD, beta = 1, forgetting readout).
+_TORQUE_FEL = {"actuation": "torque", "plant.signals": "joint",
+               "actuation.feedback": "inertia-pd", "rule.fit": "forgetting", "rule.beta": 1.0}
+TORQUE_GENERAL: dict[int, tuple[str, dict[str, Any]]] = {
+    4: ("torque twin, 2D, joint-angle signals, trained on 60 s of motor babbling at peak "
+        "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
+        "inertia-scaled PD teacher, beta = 1, 3 cycles x 30 epochs, readout on the normal "
+        "equations with forgetting: row 2d-general-babble60+ymca-epochs30 of `skinny "
+        "experiment dynamic --rows general` (unseen md_02 at 0.18x speed 0.0201, md_03 at "
+        "0.27x 0.0162, 10 seeds)",
+        {"plant.dof": 4, **_TORQUE_FEL,
+         "movement.trajectory": "set:babble:seed=0,duration=60,vmin=0.5,vmax=4+ymca",
+         "rule.cycles": 3, "rule.epochs": 30}),
 }
+#: The same names for ``--actuation torque`` (``general``: the 2D body's).
+TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {"general": TORQUE_GENERAL[4]}
 
 
 def _table(actuation: str) -> dict[str, tuple[str, dict[str, Any]]]:
@@ -104,13 +113,15 @@ def _entry(name: str, actuation: str, dof: Any, signals: Any) -> tuple[str, dict
     table = _table(actuation)
     if name not in table:
         raise SkinnyInputError(f"unknown preset {name!r}; known: {', '.join(table)}")
-    if actuation == "torque" or name != "general" or (dof is None and signals is None):
+    if name != "general" or (dof is None and (signals is None or actuation == "torque")):
         return table[name]
     try:
-        key = (4 if dof is None else int(dof), "joint" if signals is None else str(signals))
+        dof = 4 if dof is None else int(dof)
     except (TypeError, ValueError):  # a bad dof is the config's own error, said there
         return table[name]
-    return GENERAL.get(key, table[name])
+    if actuation == "torque":  # one per body, on joint-angle signals
+        return TORQUE_GENERAL.get(dof, table[name])
+    return GENERAL.get((dof, "joint" if signals is None else str(signals)), table[name])
 
 
 def preset_fields(name: str, actuation: str = "velocity", *, dof: Any = None,

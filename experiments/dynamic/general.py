@@ -1,0 +1,128 @@
+"""The torque twin's ``general`` preset: trained once, tested on movements it never saw.
+
+A row of :mod:`skinny_mj.experiments.dynamic.study` whose ``params["tests"]`` names test
+columns (:data:`TESTS`) runs :func:`run_batch`: it trains the row's seeds in lockstep
+(nothing, for a controller alone such as computed torque, ``arm-ct``: its columns are the
+floor a learned controller is measured against), then tests them at the row's K on every
+column. The shipped CMU clips need more torque than the motors have at full speed
+(:func:`skinny_mj.training.torque.feasibility`), so each is a column twice: as shipped
+(``md_02``, ``md_03``) and slowed to the fastest speed at which no step of its inverse
+dynamics exceeds a limit (``md_02-feasible``; :data:`FEASIBLE_SPEED`, per body).
+
+Metrics per run: per column ``<col>__position_nrmse`` (test, K as the row's
+``test.gain``), ``<col>__max_torque_ratio`` (max |commanded| or |applied| torque over
+the limit) and ``<col>__limit_overshoot_rad``; the training movement's own
+``train_position_nrmse`` (last epoch); ``n_test_failed`` (columns on which the run
+diverged).
+"""
+
+from __future__ import annotations
+
+import functools
+import statistics
+import time
+
+from skinny_mj.engine.experiment import RunFailed
+from skinny_mj.training.config import TrainConfig
+
+#: Fastest speed (a factor of the clip's own, on a 0.01 grid from 0.6 down) at and below
+#: which no step of the clip's inverse dynamics exceeds a torque limit, per body (dof).
+FEASIBLE_SPEED = {(4, "md_02.amc"): 0.18, (4, "md_03.amc"): 0.27,
+                  (8, "md_02.amc"): 0.45, (8, "md_03.amc"): 0.44}
+#: Test column id -> (movement, speed: a factor, or None for the body's feasible speed).
+TESTS = {"md_02": ("md_02.amc", 1.0), "md_03": ("md_03.amc", 1.0),
+         "md_02-feasible": ("md_02.amc", None), "md_03-feasible": ("md_03.amc", None),
+         "ymca": ("ymca", 1.0)}
+#: The unseen clips' columns the preset's goal is read on.
+CLIP_COLUMNS = ("md_02", "md_03", "md_02-feasible", "md_03-feasible")
+
+
+def speed_of(column: str, dof: int) -> float:
+    """The speed factor test column ``column`` plays its movement at on body ``dof``."""
+    movement, speed = TESTS[column]
+    return FEASIBLE_SPEED[dof, movement] if speed is None else speed
+
+
+@functools.lru_cache(maxsize=32)
+def load_test(column: str, dof: int):
+    """Test column ``column``'s movement for body ``dof`` (cached)."""
+    from skinny_mj.trajectories import load_movement
+
+    return load_movement(TESTS[column][0], dof, speed=speed_of(column, dof))[0]
+
+
+def run_batch(config: TrainConfig, row, seeds: list[int]) -> list:
+    """Train the row's R networks once in lockstep (nothing for a controller alone), then
+    test them on every column of ``row.params["tests"]``."""
+    from skinny_mj.training.loop import build_run, evaluate, train_run
+
+    start = time.perf_counter()
+    dof = config.plant.dof
+    run = build_run(config, seeds)
+    result = train_run(run).fel
+    train_wall = (time.perf_counter() - start) / len(seeds)
+    outs: list = [{"train_wall_s": train_wall, "n_test_failed": 0,
+                   **({} if result is None else
+                      {"train_position_nrmse": float(result.position_nrmse[r, -1])})}
+                  for r in range(len(seeds))]
+    for col in row.params["tests"]:
+        for out, test in zip(outs, evaluate(run, load_test(col, dof)), strict=True):
+            if test.failed:
+                out["n_test_failed"] += 1
+                continue
+            tq = test.torque["metrics"]
+            out.update({f"{col}__position_nrmse": test.position_nrmse,
+                        f"{col}__max_torque_ratio": max(tq["max_commanded_ratio"],
+                                                         tq["max_applied_ratio"]),
+                        f"{col}__limit_overshoot_rad": tq["limit_overshoot_rad"]})
+    wall = (time.perf_counter() - start) / len(seeds)
+    for r, out in enumerate(outs):
+        out["wall_s"] = wall
+        if result is not None and result.failed[r]:
+            outs[r] = RunFailed(f"epoch {result.fail_epoch[r]}: {result.fail_reason[r]}")
+    return outs
+
+
+#: The goal for the ESN alone (K = 0) on the unseen clips, position NRMSE: a target to
+#: measure against, not a number tuned to
+GOAL = 0.02
+
+
+def _cell(v: list[float]) -> str:
+    if not v:
+        return "—"
+    return f"{statistics.fmean(v):.4f} ± {statistics.stdev(v) if len(v) > 1 else 0.0:.4f}"
+
+
+def report_lines(out_dir, rows: tuple[str, ...], bodies: dict[str, int]) -> list[str]:
+    """A markdown table of the general rows swept (position NRMSE per test column, mean ±
+    sd over the ok runs), each body's computed-torque floor first, then the goal per
+    preset row."""
+    from skinny_mj.experiments.claims import values
+
+    lines = []
+    for bd, dof in bodies.items():
+        mine = [r for r in rows if r.startswith(f"{bd}-general")]
+        mine.sort(key=lambda r: not r.endswith("-arm-ct"))  # the floor first
+        if not any(values(out_dir, r, "train_wall_s") for r in mine):
+            continue
+        head = " | ".join(f"{c} @ {speed_of(c, dof):g}" for c in TESTS)
+        lines += [f"torque general, {bd}: position NRMSE per test column (the ESN alone, "
+                  "K = 0; the arm-ct row: computed torque alone, the floor)",
+                  f"| row | n | {head} |", "|---|---|" + "---|" * len(TESTS)]
+        for r in mine:
+            n = len(values(out_dir, r, "train_wall_s"))
+            if n:
+                cells = " | ".join(_cell(values(out_dir, r, f"{c}__position_nrmse"))
+                                   for c in TESTS)
+                lines.append(f"| {r} | {n} | {cells} |")
+        preset = f"{bd}-general"
+        for c in CLIP_COLUMNS:
+            v = values(out_dir, preset, f"{c}__position_nrmse")
+            floor = values(out_dir, f"{bd}-general-arm-ct", f"{c}__position_nrmse")
+            if v:
+                lines.append(f"goal {bd} torque general preset on unseen {c} (@ "
+                             f"{speed_of(c, dof):g}) <= {GOAL}: {_cell(v)}, "
+                             f"{sum(x <= GOAL for x in v)} / {len(v)} runs; computed "
+                             f"torque {_cell(floor)}")
+    return lines

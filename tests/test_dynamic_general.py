@@ -1,0 +1,84 @@
+"""The torque ``general`` preset's rows of the dynamic study: trained once, tested on the
+unseen clips as shipped and slowed to the speed their inverse dynamics fit the limits."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+
+def _row(row_id, **tests):
+    from skinny_mj.experiments.dynamic import study as dynamic
+
+    from skinny_mj.engine.plan import plan
+
+    p = plan(dynamic.STUDY)
+    row = next(r.row for r in p.rows if r.row.id == row_id)
+    return p.config(row_id), row
+
+
+@pytest.mark.parametrize("dof", [4, 8])
+def test_feasible_speeds_fit_the_limits_and_full_speed_does_not(dof):
+    from skinny_mj.experiments.dynamic import general
+
+    from skinny_mj.training.torque import feasibility
+
+    for col in ("md_02", "md_03"):
+        assert not bool(feasibility(dof, general.load_test(col, dof))["feasible"])
+        slowed = general.load_test(f"{col}-feasible", dof)
+        assert bool(feasibility(dof, slowed)["feasible"])
+        full = general.load_test(col, dof)
+        assert math.isclose(len(slowed) / len(full), 1 / general.speed_of(f"{col}-feasible", dof),
+                            rel_tol=0.02)
+
+
+def test_computed_torque_floor_is_lower_on_the_feasible_clip():
+    import dataclasses
+
+    from skinny_mj.experiments.dynamic import general
+
+    cfg, row = _row("2d-general-arm-ct")
+    assert cfg.method == "none" and cfg.torque.feedback == "ct"
+    row = dataclasses.replace(row, params={"tests": ("md_03", "md_03-feasible")})
+    (out,) = general.run_batch(cfg, row, [0])
+    assert out["n_test_failed"] == 0 and "train_position_nrmse" not in out
+    # the same controller: the slowed clip, within the limits, is tracked far better
+    assert out["md_03-feasible__position_nrmse"] < 0.2 * out["md_03__position_nrmse"]
+    assert out["md_03-feasible__max_torque_ratio"] <= 1 + 1e-9
+
+
+def test_a_learned_row_trains_once_and_tests_every_column():
+    import dataclasses
+
+    from skinny_mj.experiments.dynamic import general
+
+    cfg, row = _row("2d-general-first")
+    cfg = cfg.override({"rule.epochs": 1, "rule.cycles": 1, "esn.n_reservoir": 20,
+                        "movement.trajectory": "babble:seed=0,duration=1,vmin=0.5,vmax=4"})
+    row = dataclasses.replace(row, params={"tests": ("md_03-feasible", "ymca")})
+    outs = general.run_batch(cfg, row, [0, 1])
+    assert len(outs) == 2
+    for out in outs:
+        assert math.isfinite(out["train_position_nrmse"])
+        for col in ("md_03-feasible", "ymca"):
+            assert out[f"{col}__position_nrmse"] > 0
+            assert out[f"{col}__max_torque_ratio"] <= 1 + 1e-9
+    assert outs[0]["ymca__position_nrmse"] != outs[1]["ymca__position_nrmse"]  # two seeds
+
+
+def test_the_preset_row_is_what_skinny_train_preset_general_trains():
+    from skinny_mj.cli.config_files import train_config
+    from skinny_mj.cli.parser import build_parser
+
+    cfg, _ = _row("2d-general")
+    cli, _ = train_config(build_parser().parse_args(
+        ["train", "--preset", "general", "--actuation", "torque"]))
+    assert cfg == cli
+    # a 3D body without its own preset takes the 2D one's settings on the 3D arm (the
+    # 3D row: with 15 epochs)
+    late, _ = _row("3d-general-babble60+ymca-n200")
+    cli3, _ = train_config(build_parser().parse_args(
+        ["train", "--preset", "general", "--actuation", "torque", "--dof", "8",
+         "--epochs", "15"]))
+    assert late == cli3
