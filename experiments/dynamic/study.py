@@ -256,11 +256,11 @@ def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
     for row in rows:
         kind = "kinematic" if row.id.endswith("kinematic") else \
             "robust" if any(p in row.id for p in PERTURBATIONS) else "table"
-        general = row.id[3:].startswith("general")
-        arm = "arm" in row.id.split("-") and not general
+        is_general = row.id[3:].startswith("general")
+        arm = "arm" in row.id.split("-") and not is_general
         for g in (kind, f"{kind}-{row.id[:2]}", row.id[:2],
                   *((f"arm-{kind}", f"arm-{kind}-{row.id[:2]}") if arm else ()),
-                  *(("general", f"general-{row.id[:2]}") if general else ())):
+                  *(("general", f"general-{row.id[:2]}") if is_general else ())):
             out[g] = (*out.get(g, ()), row.id)
     return out
 

@@ -37,6 +37,7 @@ import argparse
 import json
 
 import numpy as np
+from skinny_mj.controllers.metrics import rmse_per_signal
 from skinny_mj.experiments import paper_c_3d
 from skinny_mj.experiments.paper_c import study as paper_c
 from skinny_mj.experiments.paper_c.elbows import jacobian
@@ -54,8 +55,7 @@ CURVE_EPOCHS = (0, 5, 10, 15, 20, 30, 50, 100, 149)
 def per_joint_error(true_signals: np.ndarray, desired: np.ndarray) -> np.ndarray:
     """(R, n_dof) RMS over t = 1..T-1 of the normalized angle error / 2 (position NRMSE's
     per-signal term) for true_signals (R, T, n_dof) and desired (T, n_dof)."""
-    diff = np.asarray(true_signals)[:, 1:] - desired[1:]
-    return np.sqrt(np.mean(diff**2, axis=1)) / 2.0
+    return rmse_per_signal(np.asarray(true_signals)[:, 1:], desired[1:]) / 2.0
 
 
 def signal_per_command(run) -> np.ndarray:
