@@ -171,7 +171,7 @@ def _rows() -> tuple[Row, ...]:
         out.append(_row(f"3d-{mv}-fel-arm-long", {"plant.dof": 8, "movement.trajectory": traj,
                                                   **ARM_FEL, **ARM_3D},
                         ARM_EPOCHS, 2))
-    return (*out, *_general_rows())
+    return (*out, *_general_rows(), *_rec_3d_rows(), *_general_3d_late())
 
 
 #: The torque ``general`` preset's candidates (``--rows general``), each the 2D preset
@@ -248,12 +248,87 @@ def _general_rows() -> tuple[Row, ...]:
     return tuple(out)
 
 
+#: The recorded-like 3D YMCA's screen (``--rows rec-3d``): ``3d-rec-fel-arm`` with the
+#: changes of each candidate, on that row's seeds (paired), in the order they were screened;
+#: ``omega``: the inertia-scaled PD teacher's poles (the row's: 5 rad/s), ``inscale``: the
+#: ESN's input scaling (1), ``scale``: the full-scale factor of the velocity inputs (2)
+_OMEGA = "actuation.omega"
+_INSCALE, _SCALE, _CYCLES = "esn.input_scaling", "movement.full_scale_factor", "rule.cycles"
+_RIDGE = {"esn.readout": "ridge"}
+REC_3D_SCREEN: dict[str, dict] = {
+    "vscale-ymca": {"movement.max_speed_from": YMCA}, "scale1": {_SCALE: 1.0},
+    "forget0.9": {"rule.forgetting": 0.9}, "cycles10": {_CYCLES: 10},
+    "n1000": {"esn.n_reservoir": 1000}, "inscale0.5": {_INSCALE: 0.5},
+    "inscale2": {_INSCALE: 2.0}, "sr0.9": {"esn.spectral_radius": 0.9},
+    "ridge1e-3": {**_RIDGE, "esn.ridge_lambda": 1e-3},
+    "ridge1e-1": {**_RIDGE, "esn.ridge_lambda": 1e-1},
+    "omega10": {_OMEGA: 10.0}, "gff": {"actuation.gravity_feedforward": True},
+    "omega15": {_OMEGA: 15.0}, "omega10+scale1": {_OMEGA: 10.0, _SCALE: 1.0},
+    "scale0.5": {_SCALE: 0.5}, "omega10+inscale0.5": {_OMEGA: 10.0, _INSCALE: 0.5},
+    "omega20": {_OMEGA: 20.0}, "omega15+scale1": {_OMEGA: 15.0, _SCALE: 1.0},
+    "scale1+inscale0.5": {_SCALE: 1.0, _INSCALE: 0.5},
+    "omega10+cycles10": {_OMEGA: 10.0, _CYCLES: 10},
+    "omega25": {_OMEGA: 25.0}, "omega20+inscale0.5": {_OMEGA: 20.0, _INSCALE: 0.5},
+    "omega30": {_OMEGA: 30.0}, "omega20+cycles10": {_OMEGA: 20.0, _CYCLES: 10},
+    "omega20+scale1": {_OMEGA: 20.0, _SCALE: 1.0},
+    "omega15+inscale0.5": {_OMEGA: 15.0, _INSCALE: 0.5},
+    "omega10+inscale0.5+cycles10": {_OMEGA: 10.0, _INSCALE: 0.5, _CYCLES: 10},
+    "omega20+ridge1e-1": {_OMEGA: 20.0, **_RIDGE, "esn.ridge_lambda": 1e-1},
+    "omega20+forget0.9": {_OMEGA: 20.0, "rule.forgetting": 0.9},
+    "omega20+n1000": {_OMEGA: 20.0, "esn.n_reservoir": 1000},
+    "omega20+epochs30": {_OMEGA: 20.0, "rule.epochs": 30},
+}
+#: The screen's choice (the lowest mean position NRMSE over the row's first 3 seeds, see
+#: docs/results/dynamic.md): the teacher's poles at 20 rad/s (omega dt = 0.4 at 50 Hz)
+REC_3D_CHOICE = "omega20"
+
+
+def _rec_3d_rows() -> tuple[Row, ...]:
+    """Appended after every earlier row, on the seeds of ``3d-rec-fel-arm``: the screen's
+    candidates (group ``rec-3d``) and the inertia-scaled PD alone with the chosen poles
+    (``3d-rec-arm-pd-omega20``, the learner's "x better than its teacher")."""
+    base = {"plant.dof": 8, "movement.trajectory": RECORDED, **ARM_FEL, **ARM_3D,
+            "rule.cycles": ARM_3D_CYCLES}
+    out = []
+    for v, changes in REC_3D_SCREEN.items():
+        row = _row(f"3d-rec-fel-arm-{v}", {**base, **changes},
+                   changes.get("rule.epochs", ARM_EPOCHS))
+        out.append(Row(row.id, row.overrides, seeds_of="3d-rec-fel-arm", group="rec-3d",
+                       quick=row.quick))
+    pd = {"plant.dof": 8, "movement.trajectory": RECORDED, **ARM_CONTROLLERS["arm-pd"], **ARM_3D,
+          **REC_3D_SCREEN[REC_3D_CHOICE]}
+    out.append(Row(f"3d-rec-arm-pd-{REC_3D_CHOICE}", pd, seeds_of="3d-rec-fel-arm",
+                   group="rec-3d"))
+    return tuple(out)
+
+
+#: Later 3D general candidates, row id -> the changes of ``3d-general-babble60+ymca`` (60 s
+#: of slow babbling, then YMCA; the 3D arm rows' ESN, N = 500, 6 cycles), on its seeds: the
+#: teacher's poles the recorded-like 3D YMCA's screen chose, with that ESN or the 2D
+#: preset's (N = 200, 3 cycles)
+_CHOSEN = REC_3D_SCREEN[REC_3D_CHOICE]
+GENERAL_3D_LATE: dict[str, dict] = {
+    "3d-general-babble60+ymca-omega20": _CHOSEN,
+    "3d-general-babble60+ymca-omega20-n200": {**_CHOSEN, "esn.n_reservoir": 200,
+                                              _CYCLES: 3},
+}
+
+
+def _general_3d_late() -> tuple[Row, ...]:
+    base = {"plant.dof": 8, **ARM_FEL, **ARM_3D, _CYCLES: ARM_3D_CYCLES, **_PRESET_MOVE}
+    return tuple(_general_row(row_id, {**base, **changes}, seeds_of="3d-general-babble60+ymca")
+                 for row_id, changes in GENERAL_3D_LATE.items())
+
+
 def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
     """``table``, ``robust``, ``kinematic``, each per body (``table-2d``, ...), the
     arm-dynamics rows' (``arm-table``, ``arm-robust``, ...), the torque general preset's
     (``general``, ``general-2d``, ...), and each body's rows."""
     out: dict[str, tuple[str, ...]] = {}
     for row in rows:
+        if row.group is not None:  # a screen's row: its own group and its body's
+            out[row.id[:2]] = (*out.get(row.id[:2], ()), row.id)
+            continue
         kind = "kinematic" if row.id.endswith("kinematic") else \
             "robust" if any(p in row.id for p in PERTURBATIONS) else "table"
         is_general = row.id[3:].startswith("general")
@@ -299,9 +374,9 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 
 ROWS = _rows()
 #: ``--quick`` sweeps every row but the torque general preset's candidates (its floor, the
-#: first preset, whose seeds the 2D preset takes, and the presets stay)
-QUICK_ROWS = tuple(r.id for r in ROWS if "-general-" not in r.id or r.id.endswith("-arm-ct")
-                   or r.id == "2d-general-first")
+#: first preset, whose seeds the 2D preset takes, and the presets stay) and the screens' rows
+QUICK_ROWS = tuple(r.id for r in ROWS if r.group is None and (
+    "-general-" not in r.id or r.id.endswith("-arm-ct") or r.id == "2d-general-first"))
 STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, runs=10, groups=_groups(ROWS),
     # every row on the torque twin with Cartesian signals; the md02 rows' movement is
