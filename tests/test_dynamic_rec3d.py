@@ -29,8 +29,9 @@ def test_screen_rows_are_their_base_with_their_changes_on_its_seeds():
         row_id = f"3d-rec-fel-arm-{v}"
         assert row_id in screen
         assert _changed(p, row_id, "3d-rec-fel-arm") == changes
-    chosen = dynamic.REC_3D_SCREEN[dynamic.REC_3D_CHOICE]
-    assert _changed(p, f"3d-rec-arm-pd-{dynamic.REC_3D_CHOICE}", "3d-rec-arm-pd") == chosen
+    omega = dynamic.REC_3D_SCREEN[dynamic.REC_3D_CHOICE]["actuation.omega"]
+    assert _changed(p, f"3d-rec-arm-pd-omega{omega:g}", "3d-rec-arm-pd") == {
+        "actuation.omega": omega}
     for row_id, changes in dynamic.GENERAL_3D_LATE.items():
         assert _changed(p, row_id, "3d-general-babble60+ymca") == changes
     # paired: the engine gives a row with seeds_of its twin's seeds (tests/test_three_d.py)
@@ -56,9 +57,10 @@ def test_the_chosen_poles_make_the_teacher_alone_track_the_recorded_ymca_closer(
 
     dynamic, p = _plan()
     err = {}
-    for row_id in ("3d-rec-arm-pd", f"3d-rec-arm-pd-{dynamic.REC_3D_CHOICE}"):
+    chosen = f"3d-rec-arm-pd-omega{dynamic.REC_3D_SCREEN[dynamic.REC_3D_CHOICE]['actuation.omega']:g}"
+    for row_id in ("3d-rec-arm-pd", chosen):
         (out,) = train_batch(p.config(row_id), [0])
         assert not out.failed
         err[row_id] = out.metrics["test"]["position_nrmse"]
     assert np.isfinite(list(err.values())).all()
-    assert err[f"3d-rec-arm-pd-{dynamic.REC_3D_CHOICE}"] < 0.5 * err["3d-rec-arm-pd"]
+    assert err[chosen] < 0.5 * err["3d-rec-arm-pd"]
