@@ -309,12 +309,20 @@ def _rec_3d_rows() -> tuple[Row, ...]:
 
 #: Later 3D general candidates, row id -> the changes of ``3d-general-babble60+ymca`` (60 s
 #: of slow babbling, then YMCA; the 3D arm rows' ESN, N = 500, 6 cycles), on its seeds: the
-#: teacher's poles the recorded-like 3D YMCA's screen chose, with that ESN or the 2D
-#: preset's (N = 200, 3 cycles)
+#: teacher's poles (and forgetting) the recorded-like 3D YMCA's screen chose, with that ESN
+#: or the 2D preset's (N = 200, 3 cycles), then more epochs, more babbling, the poles
+#: alone, N = 100
 _CHOSEN = REC_3D_SCREEN[REC_3D_CHOICE]
+_N200 = {"esn.n_reservoir": 200, _CYCLES: 3}
 GENERAL_3D_LATE: dict[str, dict] = {
     f"3d-general-babble60+ymca-{REC_3D_CHOICE}": _CHOSEN,
-    f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n200": {**_CHOSEN, "esn.n_reservoir": 200,
+    f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n200": {**_CHOSEN, **_N200},
+    f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n200-epochs30": {**_CHOSEN, **_N200,
+                                                                "rule.epochs": 30},
+    f"3d-general-babble120+ymca-{REC_3D_CHOICE}-n200": {**_CHOSEN, **_N200,
+                                                        **GENERAL_VARIANTS["babble120+ymca"]},
+    "3d-general-babble60+ymca-omega20-n200": {_OMEGA: 20.0, **_N200},
+    f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n100": {**_CHOSEN, "esn.n_reservoir": 100,
                                                        _CYCLES: 3},
 }
 
