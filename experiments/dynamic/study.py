@@ -54,7 +54,7 @@ from skinny_mj.experiments.dynamic import general
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.presets import TORQUE_GENERAL, preset_fields
+from skinny_mj.training.presets import preset_fields
 
 NAME = "dynamic"
 #: The movements: YMCA, the recorded-like YMCA (never still, marker noise) and the
@@ -237,11 +237,10 @@ def _general_rows() -> tuple[Row, ...]:
     first3 = {**first, "plant.dof": 8, **ARM_3D, "rule.cycles": ARM_3D_CYCLES}
     out += [_general_row(f"3d-general-{v}", {**first3, **GENERAL_VARIANTS[v]})
             for v in GENERAL_3D]
-    # the presets (`skinny train --preset general --actuation torque --dof D`), on the
-    # first 2D preset's seeds in 2D
-    out += [_general_row(f"{bd}-general", preset_fields("general", "torque", dof=dof),
-                         seeds_of="2d-general-first" if dof == 4 else None)
-            for bd, dof in BODIES.items() if dof in TORQUE_GENERAL]
+    # the 2D preset (`skinny train --preset general --actuation torque`), on the first 2D
+    # preset's seeds (the 3D one is appended last: _general_3d_late)
+    out.append(_general_row("2d-general", preset_fields("general", "torque", dof=4),
+                            seeds_of="2d-general-first"))
     out += [_general_row(row_id, {**first, **changes},
                          seeds_of="2d-general-first" if row_id.startswith("2d") else None)
             for row_id, changes in GENERAL_LATE.items()]
@@ -328,9 +327,13 @@ GENERAL_3D_LATE: dict[str, dict] = {
 
 
 def _general_3d_late() -> tuple[Row, ...]:
+    """The later 3D candidates, then the 3D preset (``skinny train --preset general
+    --actuation torque --dof 8``), all on the seeds of ``3d-general-babble60+ymca``."""
     base = {"plant.dof": 8, **ARM_FEL, **ARM_3D, _CYCLES: ARM_3D_CYCLES, **_PRESET_MOVE}
-    return tuple(_general_row(row_id, {**base, **changes}, seeds_of="3d-general-babble60+ymca")
-                 for row_id, changes in GENERAL_3D_LATE.items())
+    rows = {**{row_id: {**base, **changes} for row_id, changes in GENERAL_3D_LATE.items()},
+            "3d-general": preset_fields("general", "torque", dof=8)}
+    return tuple(_general_row(row_id, overrides, seeds_of="3d-general-babble60+ymca")
+                 for row_id, overrides in rows.items())
 
 
 def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
@@ -387,8 +390,9 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 
 ROWS = _rows()
 #: ``--quick`` sweeps every row but the torque general preset's candidates (its floor, the
-#: first preset, whose seeds the 2D preset takes, and the presets stay) and the screens' rows
-QUICK_ROWS = tuple(r.id for r in ROWS if r.group is None and (
+#: first preset, whose seeds the 2D preset takes, and the 2D preset stay), the screens'
+#: rows and the 3D preset (added after the quick sweep was fixed)
+QUICK_ROWS = tuple(r.id for r in ROWS if r.group is None and r.id != "3d-general" and (
     "-general-" not in r.id or r.id.endswith("-arm-ct") or r.id == "2d-general-first"))
 STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, runs=10, groups=_groups(ROWS),
