@@ -57,7 +57,8 @@ def test_the_chosen_poles_make_the_teacher_alone_track_the_recorded_ymca_closer(
 
     dynamic, p = _plan()
     err = {}
-    chosen = f"3d-rec-arm-pd-omega{dynamic.REC_3D_SCREEN[dynamic.REC_3D_CHOICE]['actuation.omega']:g}"
+    omega = dynamic.REC_3D_SCREEN[dynamic.REC_3D_CHOICE]["actuation.omega"]
+    chosen = f"3d-rec-arm-pd-omega{omega:g}"
     for row_id in ("3d-rec-arm-pd", chosen):
         (out,) = train_batch(p.config(row_id), [0])
         assert not out.failed

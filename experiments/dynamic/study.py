@@ -31,6 +31,11 @@ Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` 
 - ``kinematic``: ``2d-ymca-kinematic`` is the velocity-servo run of paper E's schedule,
   for the wall-time ratio.
 
+- ``rec-3d``: ``3d-rec-fel-arm`` with one change or a few (the teacher's poles, forgetting,
+  inputs, reservoir, cycles) on its seeds: the screen that chose
+  ``3d-rec-fel-arm-omega20+forget0.9``.
+- ``general``: the torque ``general`` preset's rows (:mod:`skinny_mj.experiments.dynamic.general`).
+
 Groups ``2d`` and ``3d`` hold each body's rows (``--rows 3d``). ``--movement`` replaces
 the md_02 excerpt of the ``md02`` rows; ``--signals`` the position signals of every row
 (default Cartesian).
