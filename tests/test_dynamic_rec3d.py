@@ -34,16 +34,20 @@ def test_screen_rows_are_their_base_with_their_changes_on_its_seeds():
         "actuation.omega": omega}
     for row_id, changes in dynamic.GENERAL_3D_LATE.items():
         assert _changed(p, row_id, "3d-general-babble60+ymca") == changes
+    ymca = f"3d-ymca-fel-arm-{dynamic.REC_3D_CHOICE}"
+    assert _changed(p, ymca, "3d-ymca-fel-arm") == dynamic.REC_3D_SCREEN[dynamic.REC_3D_CHOICE]
     # paired: the engine gives a row with seeds_of its twin's seeds (tests/test_three_d.py)
     seeds_of = {r.row_id: r.seeds_of for r in p.experiment().rows}
     assert {seeds_of[r] for r in screen} == {"3d-rec-fel-arm"}
+    assert seeds_of[ymca] == "3d-ymca-fel-arm"
     assert {seeds_of[r] for r in dynamic.GENERAL_3D_LATE} == {"3d-general-babble60+ymca"}
 
 
 def test_new_rows_come_last_and_stay_out_of_quick():
     dynamic, p = _plan()
     ids = [r.row.id for r in p.rows]
-    new = [*p.groups()["rec-3d"], *dynamic.GENERAL_3D_LATE, "3d-general"]
+    new = [*p.groups()["rec-3d"], *p.groups()["ymca-3d"], *dynamic.GENERAL_3D_LATE,
+           "3d-general"]
     assert ids[-len(new):] == new  # appended: no earlier row's seeds move
     quick = {r.row.id for r in _plan(quick=True)[1].rows}
     assert not quick & set(new)  # (the 3D preset too: the quick sweep stays as it was)

@@ -294,7 +294,8 @@ REC_3D_CHOICE = "omega20+forget0.9"
 def _rec_3d_rows() -> tuple[Row, ...]:
     """Appended after every earlier row, on the seeds of ``3d-rec-fel-arm``: the screen's
     candidates (group ``rec-3d``) and the inertia-scaled PD alone with the chosen poles
-    (``3d-rec-arm-pd-omega20``: the learner against its teacher alone)."""
+    (``3d-rec-arm-pd-omega20``: the learner against its teacher alone); then the choice on
+    the 3D YMCA, on the seeds of ``3d-ymca-fel-arm``."""
     base = {"plant.dof": 8, "movement.trajectory": RECORDED, **ARM_FEL, **ARM_3D,
             "rule.cycles": ARM_3D_CYCLES}
     out = []
@@ -308,6 +309,11 @@ def _rec_3d_rows() -> tuple[Row, ...]:
           _OMEGA: omega}
     out.append(Row(f"3d-rec-arm-pd-omega{omega:g}", pd, seeds_of="3d-rec-fel-arm",
                    group="rec-3d"))
+    # the choice on the 3D YMCA, on the seeds of its row (group ymca-3d)
+    ymca = _row(f"3d-ymca-fel-arm-{REC_3D_CHOICE}", {**base, "movement.trajectory": YMCA,
+                                                      **REC_3D_SCREEN[REC_3D_CHOICE]}, ARM_EPOCHS)
+    out.append(Row(ymca.id, ymca.overrides, seeds_of="3d-ymca-fel-arm", group="ymca-3d",
+                   quick=ymca.quick))
     return tuple(out)
 
 
