@@ -91,14 +91,13 @@ SHIPPED: dict[str, tuple[int, str]] = {
 _TORQUE_FEL = {"actuation": "torque", "plant.signals": "joint",
                "actuation.feedback": "inertia-pd", "rule.fit": "forgetting", "rule.beta": 1.0}
 TORQUE_GENERAL: dict[int, tuple[str, dict[str, Any]]] = {
-    4: ("torque twin, 2D, joint-angle signals, trained on 60 s of motor babbling at peak "
+    4: ("torque twin, 2D, joint-angle signals, trained on 240 s of motor babbling at peak "
         "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
         "inertia-scaled PD teacher, beta = 1, 3 cycles x 30 epochs, readout on the normal "
-        "equations with forgetting: row 2d-general-babble60+ymca-epochs30 of `skinny "
-        "experiment dynamic --rows general` (unseen md_02 at 0.18x speed 0.0201, md_03 at "
-        "0.27x 0.0162, 10 seeds)",
+        "equations with forgetting: row 2d-general of `skinny experiment dynamic --rows "
+        "general` (unseen md_02 at 0.18x speed 0.0163, md_03 at 0.27x 0.0116, 10 seeds)",
         {"plant.dof": 4, **_TORQUE_FEL,
-         "movement.trajectory": "set:babble:seed=0,duration=60,vmin=0.5,vmax=4+ymca",
+         "movement.trajectory": "set:babble:seed=0,duration=240,vmin=0.5,vmax=4+ymca",
          "rule.cycles": 3, "rule.epochs": 30}),
     8: ("torque twin, 3D, joint-angle signals, trained on 120 s of motor babbling at peak "
         "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
