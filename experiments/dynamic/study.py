@@ -334,6 +334,8 @@ GENERAL_3D_LATE: dict[str, dict] = {
     "3d-general-babble60+ymca-omega20-n200": {_OMEGA: 20.0, **_N200},
     f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n100": {**_CHOSEN, "esn.n_reservoir": 100,
                                                        _CYCLES: 3},
+    f"3d-general-babble240+ymca-{REC_3D_CHOICE}-n200": {**_CHOSEN, **_N200,
+                                                        **GENERAL_VARIANTS["babble240+ymca"]},
 }
 
 
