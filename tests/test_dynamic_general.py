@@ -81,5 +81,5 @@ def test_the_preset_row_is_what_skinny_train_preset_general_trains():
     cli3, _ = train_config(build_parser().parse_args(
         ["train", "--preset", "general", "--actuation", "torque", "--dof", "8"]))
     assert cfg3 == cli3 and row3.seeds_of == "3d-general-babble60+ymca"
-    assert cfg3 == _row("3d-general-babble120+ymca-omega20+forget0.9-n200")[0]
+    assert cfg3 == _row("3d-general-babble240+ymca-omega20+forget0.9-n200")[0]
     assert (cfg3.plant.dof, cfg3.actuation.omega, cfg3.esn.n_reservoir) == (8, 20.0, 200)
