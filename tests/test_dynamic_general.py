@@ -75,8 +75,11 @@ def test_the_preset_row_is_what_skinny_train_preset_general_trains():
     cli, _ = train_config(build_parser().parse_args(
         ["train", "--preset", "general", "--actuation", "torque"]))
     assert cfg == cli
-    # a 3D body without its own preset takes the 2D one's settings on the 3D arm
+    # the 3D body's own preset: its row, on the 3D candidates' seeds, and the candidate
+    # it was chosen as
+    cfg3, row3 = _row("3d-general")
     cli3, _ = train_config(build_parser().parse_args(
-        ["train", "--preset", "general", "--actuation", "torque", "--dof", "8",
-         "--epochs", "15"]))
-    assert cli3 == cli.override({"plant.dof": 8, "rule.epochs": 15})
+        ["train", "--preset", "general", "--actuation", "torque", "--dof", "8"]))
+    assert cfg3 == cli3 and row3.seeds_of == "3d-general-babble60+ymca"
+    assert cfg3 == _row("3d-general-babble240+ymca-omega20+forget0.9-n200")[0]
+    assert (cfg3.plant.dof, cfg3.actuation.omega, cfg3.esn.n_reservoir) == (8, 20.0, 200)

@@ -34,16 +34,18 @@ def test_torque_general_sets_its_fields_and_the_velocity_preset_is_untouched():
         preset_fields("nope", "torque")
 
 
-def test_torque_general_babbling_is_within_the_torque_limits():
+@pytest.mark.parametrize("dof", [4, 8])
+def test_torque_general_babbling_is_within_the_torque_limits(dof):
     from skinny_mj.training.presets import preset_fields
     from skinny_mj.training.torque import feasibility
     from skinny_mj.trajectories.library import load_movement
 
-    fields = preset_fields("general", "torque")
-    traj, _ = load_movement(fields["movement.trajectory"], fields["plant.dof"])
-    assert bool(feasibility(fields["plant.dof"], traj)["feasible"])
-    full_speed, _ = load_movement("md_02.amc", 4)  # the shipped clip is not, at full speed
-    assert not bool(feasibility(4, full_speed)["feasible"])
+    fields = preset_fields("general", "torque", dof=dof)
+    assert fields["plant.dof"] == dof  # each body its own preset
+    traj, _ = load_movement(fields["movement.trajectory"], dof)
+    assert bool(feasibility(dof, traj)["feasible"])
+    full_speed, _ = load_movement("md_02.amc", dof)  # the shipped clip is not, at full speed
+    assert not bool(feasibility(dof, full_speed)["feasible"])
 
 
 @pytest.mark.slow  # the CLI end to end (imports matplotlib and rerun)

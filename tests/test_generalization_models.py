@@ -78,8 +78,10 @@ def test_general_preset_defaults_to_2d_joint_and_the_torque_one_is_apart():
     assert _train_config(["train", "--preset", "general", "--signals", "cartesian"]) == \
         _train_config(["train", "--preset", "general", "--dof", "4", "--signals",
                        "cartesian"])
-    torque = preset_fields("general", "torque", dof=8, signals="cartesian")
+    torque = preset_fields("general", "torque", dof=4, signals="cartesian")
     assert torque == preset_fields("general", "torque") and torque["actuation"] == "torque"
+    torque3 = preset_fields("general", "torque", dof=8, signals="cartesian")  # one per body
+    assert (torque3["plant.dof"], torque3["plant.signals"]) == (8, "joint")
     with pytest.raises(SkinnyInputError):
         _train_config(["train", "--preset", "general", "plant.dof=x"])
 

@@ -31,6 +31,11 @@ Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` 
 - ``kinematic``: ``2d-ymca-kinematic`` is the velocity-servo run of paper E's schedule,
   for the wall-time ratio.
 
+- ``rec-3d``: ``3d-rec-fel-arm`` with one change or a few (the teacher's poles, forgetting,
+  inputs, reservoir, cycles) on its seeds: the screen that chose
+  ``3d-rec-fel-arm-omega20+forget0.9``.
+- ``general``: the torque ``general`` preset's rows (:mod:`skinny_mj.experiments.dynamic.general`).
+
 Groups ``2d`` and ``3d`` hold each body's rows (``--rows 3d``). ``--movement`` replaces
 the md_02 excerpt of the ``md02`` rows; ``--signals`` the position signals of every row
 (default Cartesian).
@@ -54,7 +59,7 @@ from skinny_mj.experiments.dynamic import general
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.presets import TORQUE_GENERAL, preset_fields
+from skinny_mj.training.presets import preset_fields
 
 NAME = "dynamic"
 #: The movements: YMCA, the recorded-like YMCA (never still, marker noise) and the
@@ -171,7 +176,7 @@ def _rows() -> tuple[Row, ...]:
         out.append(_row(f"3d-{mv}-fel-arm-long", {"plant.dof": 8, "movement.trajectory": traj,
                                                   **ARM_FEL, **ARM_3D},
                         ARM_EPOCHS, 2))
-    return (*out, *_general_rows())
+    return (*out, *_general_rows(), *_rec_3d_rows(), *_general_3d_late())
 
 
 #: The torque ``general`` preset's candidates (``--rows general``), each the 2D preset
@@ -237,15 +242,111 @@ def _general_rows() -> tuple[Row, ...]:
     first3 = {**first, "plant.dof": 8, **ARM_3D, "rule.cycles": ARM_3D_CYCLES}
     out += [_general_row(f"3d-general-{v}", {**first3, **GENERAL_VARIANTS[v]})
             for v in GENERAL_3D]
-    # the presets (`skinny train --preset general --actuation torque --dof D`), on the
-    # first 2D preset's seeds in 2D
-    out += [_general_row(f"{bd}-general", preset_fields("general", "torque", dof=dof),
-                         seeds_of="2d-general-first" if dof == 4 else None)
-            for bd, dof in BODIES.items() if dof in TORQUE_GENERAL]
+    # the 2D preset (`skinny train --preset general --actuation torque`), on the first 2D
+    # preset's seeds (the 3D one is appended last: _general_3d_late)
+    out.append(_general_row("2d-general", preset_fields("general", "torque", dof=4),
+                            seeds_of="2d-general-first"))
     out += [_general_row(row_id, {**first, **changes},
                          seeds_of="2d-general-first" if row_id.startswith("2d") else None)
             for row_id, changes in GENERAL_LATE.items()]
     return tuple(out)
+
+
+#: The recorded-like 3D YMCA's screen (``--rows rec-3d``): ``3d-rec-fel-arm`` with the
+#: changes of each candidate, on that row's seeds (paired), in the order they were screened;
+#: ``omega``: the inertia-scaled PD teacher's poles (the row's: 5 rad/s), ``inscale``: the
+#: ESN's input scaling (1), ``scale``: the full-scale factor of the velocity inputs (2)
+_OMEGA = "actuation.omega"
+_INSCALE, _SCALE, _CYCLES = "esn.input_scaling", "movement.full_scale_factor", "rule.cycles"
+_RIDGE = {"esn.readout": "ridge"}
+REC_3D_SCREEN: dict[str, dict] = {
+    "vscale-ymca": {"movement.max_speed_from": YMCA}, "scale1": {_SCALE: 1.0},
+    "forget0.9": {"rule.forgetting": 0.9}, "cycles10": {_CYCLES: 10},
+    "n1000": {"esn.n_reservoir": 1000}, "inscale0.5": {_INSCALE: 0.5},
+    "inscale2": {_INSCALE: 2.0}, "sr0.9": {"esn.spectral_radius": 0.9},
+    "ridge1e-3": {**_RIDGE, "esn.ridge_lambda": 1e-3},
+    "ridge1e-1": {**_RIDGE, "esn.ridge_lambda": 1e-1},
+    "omega10": {_OMEGA: 10.0}, "gff": {"actuation.gravity_feedforward": True},
+    "omega15": {_OMEGA: 15.0}, "omega10+scale1": {_OMEGA: 10.0, _SCALE: 1.0},
+    "scale0.5": {_SCALE: 0.5}, "omega10+inscale0.5": {_OMEGA: 10.0, _INSCALE: 0.5},
+    "omega20": {_OMEGA: 20.0}, "omega15+scale1": {_OMEGA: 15.0, _SCALE: 1.0},
+    "scale1+inscale0.5": {_SCALE: 1.0, _INSCALE: 0.5},
+    "omega10+cycles10": {_OMEGA: 10.0, _CYCLES: 10},
+    "omega25": {_OMEGA: 25.0}, "omega20+inscale0.5": {_OMEGA: 20.0, _INSCALE: 0.5},
+    "omega30": {_OMEGA: 30.0}, "omega20+cycles10": {_OMEGA: 20.0, _CYCLES: 10},
+    "omega20+scale1": {_OMEGA: 20.0, _SCALE: 1.0},
+    "omega15+inscale0.5": {_OMEGA: 15.0, _INSCALE: 0.5},
+    "omega10+inscale0.5+cycles10": {_OMEGA: 10.0, _INSCALE: 0.5, _CYCLES: 10},
+    "omega20+ridge1e-1": {_OMEGA: 20.0, **_RIDGE, "esn.ridge_lambda": 1e-1},
+    "omega20+forget0.9": {_OMEGA: 20.0, "rule.forgetting": 0.9},
+    "omega20+n1000": {_OMEGA: 20.0, "esn.n_reservoir": 1000},
+    "omega20+epochs30": {_OMEGA: 20.0, "rule.epochs": 30},
+    "omega20+forget0.9+ridge1e-1": {_OMEGA: 20.0, "rule.forgetting": 0.9, **_RIDGE,
+                                    "esn.ridge_lambda": 1e-1},
+    "omega20+forget0.95": {_OMEGA: 20.0, "rule.forgetting": 0.95},
+}
+#: The screen's choice (the lowest mean position NRMSE over the row's first 3 seeds, see
+#: docs/results/dynamic.md): the teacher's poles at 20 rad/s (omega dt = 0.4 at 50 Hz) and
+#: the readout's statistics kept with forgetting 0.9 per learning cycle (the row's: 0.8)
+REC_3D_CHOICE = "omega20+forget0.9"
+
+
+def _rec_3d_rows() -> tuple[Row, ...]:
+    """Appended after every earlier row, on the seeds of ``3d-rec-fel-arm``: the screen's
+    candidates (group ``rec-3d``) and the inertia-scaled PD alone with the chosen poles
+    (``3d-rec-arm-pd-omega20``: the learner against its teacher alone); then the choice on
+    the 3D YMCA, on the seeds of ``3d-ymca-fel-arm``."""
+    base = {"plant.dof": 8, "movement.trajectory": RECORDED, **ARM_FEL, **ARM_3D,
+            "rule.cycles": ARM_3D_CYCLES}
+    out = []
+    for v, changes in REC_3D_SCREEN.items():
+        row = _row(f"3d-rec-fel-arm-{v}", {**base, **changes},
+                   changes.get("rule.epochs", ARM_EPOCHS))
+        out.append(Row(row.id, row.overrides, seeds_of="3d-rec-fel-arm", group="rec-3d",
+                       quick=row.quick))
+    omega = REC_3D_SCREEN[REC_3D_CHOICE][_OMEGA]
+    pd = {"plant.dof": 8, "movement.trajectory": RECORDED, **ARM_CONTROLLERS["arm-pd"], **ARM_3D,
+          _OMEGA: omega}
+    out.append(Row(f"3d-rec-arm-pd-omega{omega:g}", pd, seeds_of="3d-rec-fel-arm",
+                   group="rec-3d"))
+    # the choice on the 3D YMCA, on the seeds of its row (group ymca-3d)
+    ymca = _row(f"3d-ymca-fel-arm-{REC_3D_CHOICE}", {**base, "movement.trajectory": YMCA,
+                                                      **REC_3D_SCREEN[REC_3D_CHOICE]}, ARM_EPOCHS)
+    out.append(Row(ymca.id, ymca.overrides, seeds_of="3d-ymca-fel-arm", group="ymca-3d",
+                   quick=ymca.quick))
+    return tuple(out)
+
+
+#: Later 3D general candidates, row id -> the changes of ``3d-general-babble60+ymca`` (60 s
+#: of slow babbling, then YMCA; the 3D arm rows' ESN, N = 500, 6 cycles), on its seeds: the
+#: teacher's poles (and forgetting) the recorded-like 3D YMCA's screen chose, with that ESN
+#: or the 2D preset's (N = 200, 3 cycles), then more epochs, more babbling, the poles
+#: alone, N = 100
+_CHOSEN = REC_3D_SCREEN[REC_3D_CHOICE]
+_N200 = {"esn.n_reservoir": 200, _CYCLES: 3}
+GENERAL_3D_LATE: dict[str, dict] = {
+    f"3d-general-babble60+ymca-{REC_3D_CHOICE}": _CHOSEN,
+    f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n200": {**_CHOSEN, **_N200},
+    f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n200-epochs30": {**_CHOSEN, **_N200,
+                                                                "rule.epochs": 30},
+    f"3d-general-babble120+ymca-{REC_3D_CHOICE}-n200": {**_CHOSEN, **_N200,
+                                                        **GENERAL_VARIANTS["babble120+ymca"]},
+    "3d-general-babble60+ymca-omega20-n200": {_OMEGA: 20.0, **_N200},
+    f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n100": {**_CHOSEN, "esn.n_reservoir": 100,
+                                                       _CYCLES: 3},
+    f"3d-general-babble240+ymca-{REC_3D_CHOICE}-n200": {**_CHOSEN, **_N200,
+                                                        **GENERAL_VARIANTS["babble240+ymca"]},
+}
+
+
+def _general_3d_late() -> tuple[Row, ...]:
+    """The later 3D candidates, then the 3D preset (``skinny train --preset general
+    --actuation torque --dof 8``), all on the seeds of ``3d-general-babble60+ymca``."""
+    base = {"plant.dof": 8, **ARM_FEL, **ARM_3D, _CYCLES: ARM_3D_CYCLES, **_PRESET_MOVE}
+    rows = {**{row_id: {**base, **changes} for row_id, changes in GENERAL_3D_LATE.items()},
+            "3d-general": preset_fields("general", "torque", dof=8)}
+    return tuple(_general_row(row_id, overrides, seeds_of="3d-general-babble60+ymca")
+                 for row_id, overrides in rows.items())
 
 
 def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
@@ -254,6 +355,9 @@ def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
     (``general``, ``general-2d``, ...), and each body's rows."""
     out: dict[str, tuple[str, ...]] = {}
     for row in rows:
+        if row.group is not None:  # a screen's row: its own group and its body's
+            out[row.id[:2]] = (*out.get(row.id[:2], ()), row.id)
+            continue
         kind = "kinematic" if row.id.endswith("kinematic") else \
             "robust" if any(p in row.id for p in PERTURBATIONS) else "table"
         is_general = row.id[3:].startswith("general")
@@ -299,9 +403,10 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 
 ROWS = _rows()
 #: ``--quick`` sweeps every row but the torque general preset's candidates (its floor, the
-#: first preset, whose seeds the 2D preset takes, and the presets stay)
-QUICK_ROWS = tuple(r.id for r in ROWS if "-general-" not in r.id or r.id.endswith("-arm-ct")
-                   or r.id == "2d-general-first")
+#: first preset, whose seeds the 2D preset takes, and the 2D preset stay), the screens'
+#: rows and the 3D preset (added after the quick sweep was fixed)
+QUICK_ROWS = tuple(r.id for r in ROWS if r.group is None and r.id != "3d-general" and (
+    "-general-" not in r.id or r.id.endswith("-arm-ct") or r.id == "2d-general-first"))
 STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, runs=10, groups=_groups(ROWS),
     # every row on the torque twin with Cartesian signals; the md02 rows' movement is
