@@ -55,6 +55,17 @@ position NRMSE; earlier goals (limit-scaled PD teacher) <= 0.03 (2D) and <= 0.06
 from __future__ import annotations
 
 from skinny_mj.experiments.dynamic import general
+from skinny_mj.experiments.dynamic.candidates import (  # noqa: F401 (re-exported)
+    GENERAL_3D,
+    GENERAL_3D_LATE,
+    GENERAL_LATE,
+    GENERAL_VARIANTS,
+    OMEGA,
+    PRESET_MOVE,
+    REC_3D_CHOICE,
+    REC_3D_SCREEN,
+    SLOW,
+)
 
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
@@ -179,45 +190,6 @@ def _rows() -> tuple[Row, ...]:
     return (*out, *_general_rows(), *_rec_3d_rows(), *_general_3d_late())
 
 
-#: The torque ``general`` preset's candidates (``--rows general``), each the 2D preset
-#: before them (``2d-general-first``: 15 s of slow babbling) with one change
-_SLOW = "vmin=0.5,vmax=4"  # the first preset's babbling speeds (rad/s)
-GENERAL_VARIANTS: dict[str, dict] = {
-    "babble60": {"movement.trajectory": f"babble:seed=0,duration=60,{_SLOW}"},
-    "babble120": {"movement.trajectory": f"babble:seed=0,duration=120,{_SLOW}"},
-    "babble60+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=60,{_SLOW}+ymca"},
-    "limits60": {"movement.trajectory": f"babble:seed=0,duration=60,{_SLOW},limits=0.5,"
-                                        "holds=0.2"},
-    "n500": {"esn.n_reservoir": 500},
-    "ridge1": {"esn.readout": "ridge", "esn.ridge_lambda": 1.0},
-    "washout1": {"test.washout_cycles": 1},
-    "scale4": {"movement.full_scale_factor": 4.0},
-    "babble60-fast": {"movement.trajectory": "babble:seed=0,duration=60"},
-    "babble60-fast+ymca": {"movement.trajectory": "set:babble:seed=0,duration=60+ymca"},
-    "babble120+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=120,{_SLOW}+ymca"},
-    "babble240+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=240,{_SLOW}+ymca"},
-    "limits60+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=60,{_SLOW},"
-                                             "limits=0.5,holds=0.2+ymca"},
-    "limits120+ymca": {"movement.trajectory": f"set:babble:seed=0,duration=120,{_SLOW},"
-                                              "limits=0.5,holds=0.2+ymca"},
-}
-
-
-#: Later candidates, row id -> the first preset's changes, in the order they were added
-#: (appended after the presets, so no earlier row's seeds move): on the 2D preset's
-#: movement (60 s of slow babbling, then YMCA), and the 2D preset as it is on the 3D arm
-#: (N = 200, 3 learning cycles)
-_PRESET_MOVE = {"movement.trajectory": f"set:babble:seed=0,duration=60,{_SLOW}+ymca"}
-GENERAL_LATE: dict[str, dict] = {
-    "2d-general-babble60+ymca-n500": {**_PRESET_MOVE, "esn.n_reservoir": 500},
-    "2d-general-babble60+ymca-epochs30": {**_PRESET_MOVE, "rule.epochs": 30},
-    "3d-general-babble60+ymca-n200": {**_PRESET_MOVE, "plant.dof": 8},
-    "2d-general-babble60+ymca-n100": {**_PRESET_MOVE, "esn.n_reservoir": 100},
-}
-#: The 3D candidates (the 2D screen's best movements)
-GENERAL_3D = ("babble60+ymca", "babble120+ymca")
-
-
 def _general_row(row_id: str, overrides: dict, seeds_of: str | None = None) -> Row:
     """A row tested on the unseen clips (:func:`general.run_batch`), joint-angle signals."""
     learns = _learns(overrides) or "rule" not in overrides
@@ -231,7 +203,7 @@ def _general_row(row_id: str, overrides: dict, seeds_of: str | None = None) -> R
 def _general_rows() -> tuple[Row, ...]:
     """Appended after every earlier row: computed torque on the test columns (the floor),
     the first torque preset, its candidates, the preset of each body."""
-    first = {"plant.dof": 4, "movement.trajectory": f"babble:seed=0,duration=15,{_SLOW}",
+    first = {"plant.dof": 4, "movement.trajectory": f"babble:seed=0,duration=15,{SLOW}",
              **ARM_FEL}
     out = [_general_row(f"{bd}-general-arm-ct", {"plant.dof": dof, **ARM_CONTROLLERS["arm-ct"]})
            for bd, dof in BODIES.items()]
@@ -252,45 +224,6 @@ def _general_rows() -> tuple[Row, ...]:
     return tuple(out)
 
 
-#: The recorded-like 3D YMCA's screen (``--rows rec-3d``): ``3d-rec-fel-arm`` with the
-#: changes of each candidate, on that row's seeds (paired), in the order they were screened;
-#: ``omega``: the inertia-scaled PD teacher's poles (the row's: 5 rad/s), ``inscale``: the
-#: ESN's input scaling (1), ``scale``: the full-scale factor of the velocity inputs (2)
-_OMEGA = "actuation.omega"
-_INSCALE, _SCALE, _CYCLES = "esn.input_scaling", "movement.full_scale_factor", "rule.cycles"
-_RIDGE = {"esn.readout": "ridge"}
-REC_3D_SCREEN: dict[str, dict] = {
-    "vscale-ymca": {"movement.max_speed_from": YMCA}, "scale1": {_SCALE: 1.0},
-    "forget0.9": {"rule.forgetting": 0.9}, "cycles10": {_CYCLES: 10},
-    "n1000": {"esn.n_reservoir": 1000}, "inscale0.5": {_INSCALE: 0.5},
-    "inscale2": {_INSCALE: 2.0}, "sr0.9": {"esn.spectral_radius": 0.9},
-    "ridge1e-3": {**_RIDGE, "esn.ridge_lambda": 1e-3},
-    "ridge1e-1": {**_RIDGE, "esn.ridge_lambda": 1e-1},
-    "omega10": {_OMEGA: 10.0}, "gff": {"actuation.gravity_feedforward": True},
-    "omega15": {_OMEGA: 15.0}, "omega10+scale1": {_OMEGA: 10.0, _SCALE: 1.0},
-    "scale0.5": {_SCALE: 0.5}, "omega10+inscale0.5": {_OMEGA: 10.0, _INSCALE: 0.5},
-    "omega20": {_OMEGA: 20.0}, "omega15+scale1": {_OMEGA: 15.0, _SCALE: 1.0},
-    "scale1+inscale0.5": {_SCALE: 1.0, _INSCALE: 0.5},
-    "omega10+cycles10": {_OMEGA: 10.0, _CYCLES: 10},
-    "omega25": {_OMEGA: 25.0}, "omega20+inscale0.5": {_OMEGA: 20.0, _INSCALE: 0.5},
-    "omega30": {_OMEGA: 30.0}, "omega20+cycles10": {_OMEGA: 20.0, _CYCLES: 10},
-    "omega20+scale1": {_OMEGA: 20.0, _SCALE: 1.0},
-    "omega15+inscale0.5": {_OMEGA: 15.0, _INSCALE: 0.5},
-    "omega10+inscale0.5+cycles10": {_OMEGA: 10.0, _INSCALE: 0.5, _CYCLES: 10},
-    "omega20+ridge1e-1": {_OMEGA: 20.0, **_RIDGE, "esn.ridge_lambda": 1e-1},
-    "omega20+forget0.9": {_OMEGA: 20.0, "rule.forgetting": 0.9},
-    "omega20+n1000": {_OMEGA: 20.0, "esn.n_reservoir": 1000},
-    "omega20+epochs30": {_OMEGA: 20.0, "rule.epochs": 30},
-    "omega20+forget0.9+ridge1e-1": {_OMEGA: 20.0, "rule.forgetting": 0.9, **_RIDGE,
-                                    "esn.ridge_lambda": 1e-1},
-    "omega20+forget0.95": {_OMEGA: 20.0, "rule.forgetting": 0.95},
-}
-#: The screen's choice (the lowest mean position NRMSE over the row's first 3 seeds, see
-#: docs/results/dynamic.md): the teacher's poles at 20 rad/s (omega dt = 0.4 at 50 Hz) and
-#: the readout's statistics kept with forgetting 0.9 per learning cycle (the row's: 0.8)
-REC_3D_CHOICE = "omega20+forget0.9"
-
-
 def _rec_3d_rows() -> tuple[Row, ...]:
     """Appended after every earlier row, on the seeds of ``3d-rec-fel-arm``: the screen's
     candidates (group ``rec-3d``) and the inertia-scaled PD alone with the chosen poles
@@ -304,9 +237,9 @@ def _rec_3d_rows() -> tuple[Row, ...]:
                    changes.get("rule.epochs", ARM_EPOCHS))
         out.append(Row(row.id, row.overrides, seeds_of="3d-rec-fel-arm", group="rec-3d",
                        quick=row.quick))
-    omega = REC_3D_SCREEN[REC_3D_CHOICE][_OMEGA]
+    omega = REC_3D_SCREEN[REC_3D_CHOICE][OMEGA]
     pd = {"plant.dof": 8, "movement.trajectory": RECORDED, **ARM_CONTROLLERS["arm-pd"], **ARM_3D,
-          _OMEGA: omega}
+          OMEGA: omega}
     out.append(Row(f"3d-rec-arm-pd-omega{omega:g}", pd, seeds_of="3d-rec-fel-arm",
                    group="rec-3d"))
     # the choice on the 3D YMCA, on the seeds of its row (group ymca-3d)
@@ -317,32 +250,10 @@ def _rec_3d_rows() -> tuple[Row, ...]:
     return tuple(out)
 
 
-#: Later 3D general candidates, row id -> the changes of ``3d-general-babble60+ymca`` (60 s
-#: of slow babbling, then YMCA; the 3D arm rows' ESN, N = 500, 6 cycles), on its seeds: the
-#: teacher's poles (and forgetting) the recorded-like 3D YMCA's screen chose, with that ESN
-#: or the 2D preset's (N = 200, 3 cycles), then more epochs, more babbling, the poles
-#: alone, N = 100
-_CHOSEN = REC_3D_SCREEN[REC_3D_CHOICE]
-_N200 = {"esn.n_reservoir": 200, _CYCLES: 3}
-GENERAL_3D_LATE: dict[str, dict] = {
-    f"3d-general-babble60+ymca-{REC_3D_CHOICE}": _CHOSEN,
-    f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n200": {**_CHOSEN, **_N200},
-    f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n200-epochs30": {**_CHOSEN, **_N200,
-                                                                "rule.epochs": 30},
-    f"3d-general-babble120+ymca-{REC_3D_CHOICE}-n200": {**_CHOSEN, **_N200,
-                                                        **GENERAL_VARIANTS["babble120+ymca"]},
-    "3d-general-babble60+ymca-omega20-n200": {_OMEGA: 20.0, **_N200},
-    f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n100": {**_CHOSEN, "esn.n_reservoir": 100,
-                                                       _CYCLES: 3},
-    f"3d-general-babble240+ymca-{REC_3D_CHOICE}-n200": {**_CHOSEN, **_N200,
-                                                        **GENERAL_VARIANTS["babble240+ymca"]},
-}
-
-
 def _general_3d_late() -> tuple[Row, ...]:
     """The later 3D candidates, then the 3D preset (``skinny train --preset general
     --actuation torque --dof 8``), all on the seeds of ``3d-general-babble60+ymca``."""
-    base = {"plant.dof": 8, **ARM_FEL, **ARM_3D, _CYCLES: ARM_3D_CYCLES, **_PRESET_MOVE}
+    base = {"plant.dof": 8, **ARM_FEL, **ARM_3D, "rule.cycles": ARM_3D_CYCLES, **PRESET_MOVE}
     rows = {**{row_id: {**base, **changes} for row_id, changes in GENERAL_3D_LATE.items()},
             "3d-general": preset_fields("general", "torque", dof=8)}
     return tuple(_general_row(row_id, overrides, seeds_of="3d-general-babble60+ymca")
