@@ -29,8 +29,8 @@ DOCUMENTED_WALL = {
                "2026-12-01 (docs/RESULTS.md)",
     "paper-b": "80 runs in 3 min 35 s with --workers 2 on a shared 2-core machine, "
                "2026-12-01 (docs/RESULTS.md)",
-    "paper-c": "80 runs in 6 min 37 s with --workers 2 on a 2-core machine, 2026-11-23 "
-               "(docs/RESULTS.md)",
+    "paper-c": "80 runs in 36 min 33 s with --workers 1 on a shared 2-core machine (2046 s "
+               "of CPU time), 2026-12-02 (docs/compute.md)",
     "paper-d": "250 runs in 3 min 01 s with --workers 2 on a shared 2-core machine, "
                "2026-12-01 (docs/RESULTS.md)",
     "dynamic": "340 runs (the 34 rows it had then) in 28 min 22 s with --workers 1 on a shared "
