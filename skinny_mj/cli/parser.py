@@ -147,15 +147,16 @@ def build_parser() -> argparse.ArgumentParser:
                    "given as well override its settings. general: the inverse model for "
                    "unseen movements, one per --dof and --signals (default: 2D, joint "
                    "angles): motor babbling over every joint's whole range, its limits "
-                   "and rests, full scale 4x its fastest speed (3D Cartesian: 15 s of "
+                   "and rests, full scale 4x its fastest speed (3D Cartesian: 240 s of "
                    "babbling then YMCA, 2x), paper E exp. 5 schedule; the configuration "
                    "with the lowest error on real dance it never saw in `skinny experiment "
                    "generalization --rows general`. Trained ones ship: skinny test --model "
                    "general-2d-joint|general-3d-joint|general-2d-cartesian|"
                    "general-3d-cartesian --trajectory CLIP.amc --asf SKELETON.asf. "
-                   "With --actuation torque: the torque twin's general (2D, joint angles), 60 s "
-                   "of babbling at 0.5-4 rad/s (within the torque limits) then YMCA, the "
-                   "inertia-scaled PD teacher, 30 epochs, the forgetting readout")
+                   "With --actuation torque: the torque twin's general, one per --dof (joint "
+                   "angles): 240 s of babbling at 0.5-4 rad/s (within the torque limits) then "
+                   "YMCA, the inertia-scaled PD teacher (3D: poles at 20 rad/s, forgetting "
+                   "0.9), the forgetting readout")
 
     p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
     p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny "

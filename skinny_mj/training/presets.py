@@ -87,18 +87,19 @@ SHIPPED: dict[str, tuple[int, str]] = {
 
 #: ``general`` for ``--actuation torque``, per body (dof): (one-line reason, the dotted
 #: TrainConfig keys). Joint-angle signals; the teacher and readout of the dynamic study's
-#: ``fel-arm`` rows (inertia-scaled PD, beta = 1, forgetting readout).
+#: ``fel-arm`` rows (inertia-scaled PD, beta = 1, forgetting readout); 240 s of slow
+#: babbling, then YMCA, 3 learning cycles per epoch.
 _TORQUE_FEL = {"actuation": "torque", "plant.signals": "joint",
-               "actuation.feedback": "inertia-pd", "rule.fit": "forgetting", "rule.beta": 1.0}
+               "actuation.feedback": "inertia-pd", "rule.fit": "forgetting", "rule.beta": 1.0,
+               "movement.trajectory": "set:babble:seed=0,duration=240,vmin=0.5,vmax=4+ymca",
+               "rule.cycles": 3}
 TORQUE_GENERAL: dict[int, tuple[str, dict[str, Any]]] = {
     4: ("torque twin, 2D, joint-angle signals, trained on 240 s of motor babbling at peak "
         "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
         "inertia-scaled PD teacher, beta = 1, 3 cycles x 30 epochs, readout on the normal "
         "equations with forgetting: row 2d-general of `skinny experiment dynamic --rows "
         "general` (unseen md_02 at 0.18x speed 0.0163, md_03 at 0.27x 0.0116, 10 seeds)",
-        {"plant.dof": 4, **_TORQUE_FEL,
-         "movement.trajectory": "set:babble:seed=0,duration=240,vmin=0.5,vmax=4+ymca",
-         "rule.cycles": 3, "rule.epochs": 30}),
+        {"plant.dof": 4, **_TORQUE_FEL, "rule.epochs": 30}),
     8: ("torque twin, 3D, joint-angle signals, trained on 240 s of motor babbling at peak "
         "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
         "inertia-scaled PD teacher at poles of 20 rad/s, beta = 1, 3 cycles x 15 epochs, "
@@ -106,9 +107,7 @@ TORQUE_GENERAL: dict[int, tuple[str, dict[str, Any]]] = {
         "3d-general-babble240+ymca-omega20+forget0.9-n200 of `skinny experiment dynamic "
         "--rows general`, the same as row 3d-general (unseen md_02 at 0.45x speed 0.0189, "
         "md_03 at 0.44x 0.0142, 10 seeds)",
-        {"plant.dof": 8, **_TORQUE_FEL,
-         "movement.trajectory": "set:babble:seed=0,duration=240,vmin=0.5,vmax=4+ymca",
-         "rule.cycles": 3, "rule.epochs": 15, "actuation.omega": 20.0,
+        {"plant.dof": 8, **_TORQUE_FEL, "rule.epochs": 15, "actuation.omega": 20.0,
          "rule.forgetting": 0.9}),
 }
 #: The same names for ``--actuation torque`` (``general``: the 2D body's).
