@@ -184,6 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--speed", type=float, default=1.0)
     e.add_argument("--reps", type=_positive_int, default=1)
     e.add_argument("--out", type=Path, required=True, help="FILE.npz or FILE.csv")
+    e.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
 
     p = sub.add_parser("experiment", help="reproduce a paper's table and figures (a sweep)",
                        add_help=False)
@@ -268,6 +269,13 @@ def build_parser() -> argparse.ArgumentParser:
         sub.choices[name].add_argument(
             "--quiet", "-q", action="store_true",
             help="no progress bar (also off when stderr is not a terminal)")
+    for name in ("demo", "track", "train", "test"):  # a run's folder
+        sub.choices[name].add_argument(
+            "--overwrite", action="store_true", help="replace the run already in --out "
+            "(without it, an --out holding files is refused; a folder of other files always is)")
+    for name in ("bench", "render"):
+        sub.choices[name].add_argument("--overwrite", action="store_true",
+                                       help="replace --out if it exists")
     parser.subcommands = sub.choices  # name -> sub-command parser (for given_options)
     return parser
 

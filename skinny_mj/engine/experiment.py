@@ -85,7 +85,6 @@ Output layout::
 
 from __future__ import annotations
 
-import datetime as _dt
 import functools
 import os
 import re
@@ -102,6 +101,7 @@ from skinny_mj.engine.stats import aggregate, load_run, markdown_table
 from skinny_mj.engine.sweep import RunFailed, execute_batch, execute_run, iter_dask, iter_joblib
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
+from skinny_mj.preflight import new_folder
 
 __all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "select_rows",
            "run_sweep", "aggregate", "markdown_table", "execute_run", "execute_batch",
@@ -259,8 +259,9 @@ def _batches(specs: list[RunSpec], size: int) -> list[list[RunSpec]]:
 
 
 def default_out_dir(experiment_name: str, root: str | Path = "results") -> Path:
-    """``results/<experiment>/<UTC timestamp>``."""
-    return Path(root) / experiment_name / _dt.datetime.now(_dt.UTC).strftime("%Y%m%d-%H%M%S")
+    """A new folder ``results/<experiment>/<UTC timestamp>``, made now: a sweep started
+    in the same second gets ``<timestamp>-2`` (:func:`skinny_mj.preflight.new_folder`)."""
+    return new_folder(Path(root) / experiment_name)
 
 
 def _key(job: RunSpec | list[RunSpec]) -> str:
@@ -297,7 +298,8 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     Parameters
     ----------
     experiment : the sweep (all its rows).
-    out_dir : output folder; default ``results/<name>/<timestamp>``.
+    out_dir : output folder; default a new ``results/<name>/<timestamp>`` (made now,
+        never another sweep's).
     rows : row ids and group names to run (default: all); seeds do not depend on it.
     runs : runs per row (default ``experiment.runs``).
     workers : parallel processes (default: all cores); 1 runs in this process.

@@ -88,10 +88,12 @@ def _entries(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir() if p.name != LOCK_NAME)
 
 
-def choose_out_dir(out: str | Path | None, default: Path, *, resume: bool,
-                   overwrite: bool) -> Path:
+def choose_out_dir(out: str | Path | None, default: Path | None, *, resume: bool,
+                   overwrite: bool) -> Path | None:
     """The folder a ``skinny experiment`` writes, refused (:class:`SkinnyInputError`)
-    before any run when it would lose results in silence; see the module docstring."""
+    before any run when it would lose results in silence; see the module docstring.
+    Without ``out``: ``default`` (None: the caller makes a new folder when the sweep
+    starts, :func:`skinny_mj.engine.experiment.default_out_dir`)."""
     if resume and overwrite:
         raise SkinnyInputError("give --resume (continue the sweep in --out) or --overwrite "
                                "(replace it), not both")
