@@ -13,6 +13,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from skinny_mj.cli.logs import LEVELS, to_stderr
 from skinny_mj.errors import SkinnyInputError
 
 
@@ -118,6 +119,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="skinny",
         description="Skinny-MJ: echo state networks learn to make a MuJoCo torso imitate YMCA.",
     )
+    parser.add_argument("--log-level", choices=LEVELS,
+                        default="warning", help="the diagnostics shown on stderr (warnings, "
+                        "notes; info: progress too); results go to stdout whatever the level")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("demo", help="train with the defaults (paper E, exp. 5) and show the result")
@@ -316,6 +320,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
     os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
     previous = _on_sigterm(_terminate)
+    restore_logs = to_stderr(args.log_level)  # diagnostics: plain lines on stderr
     try:
         if args.command == "experiment" and args.name == "list":  # reads the studies' source
             from skinny_mj.cli.study_help import list_text  # only: no NumPy, no study
@@ -353,6 +358,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     finally:
         _on_sigterm(previous)
+        restore_logs()
 
 
 if __name__ == "__main__":

@@ -86,6 +86,7 @@ Output layout::
 from __future__ import annotations
 
 import functools
+import logging
 import os
 import re
 import sys
@@ -102,6 +103,8 @@ from skinny_mj.engine.sweep import RunFailed, execute_batch, execute_run, iter_d
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
 from skinny_mj.preflight import new_folder
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "select_rows",
            "run_sweep", "aggregate", "markdown_table", "execute_run", "execute_batch",
@@ -275,17 +278,17 @@ def _run_specs(experiment: Experiment, runs: int, selected: Sequence[Row]) -> li
             if row.row_id in chosen and (row.runs is None or k < row.runs)]
 
 
-def _report(bar: Any, records: list[dict[str, Any]]) -> None:
-    """One line per batch that fell back, per errored run and per failed run."""
+def _report(records: list[dict[str, Any]]) -> None:
+    """A warning per batch that fell back, per errored run and per failed run."""
     if records and records[0].get("fallback"):
-        bar.write(f"row {records[0]['row']}: run_batch raised {records[0]['fallback']}; "
-                  "ran its seeds one by one", file=sys.stderr)
+        _log.warning("row %s: run_batch raised %s; ran its seeds one by one",
+                     records[0]["row"], records[0]["fallback"])
     for rec in records:
         name = f"{rec['row']}-{rec['seed']}.json"
         if rec["status"] == "error":
-            bar.write(f"run {name} errored (a bug, not data): {rec['error']}", file=sys.stderr)
+            _log.warning("run %s errored (a bug, not data): %s", name, rec["error"])
         elif rec["status"] == "failed":
-            bar.write(f"run {name} failed (diverged): {rec['fail_reason']}", file=sys.stderr)
+            _log.warning("run %s failed (diverged): %s", name, rec["fail_reason"])
 
 
 def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
@@ -322,7 +325,7 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     selected = select_rows(experiment, rows)
     if rows is None and experiment.unavailable:
         for row_id, why in experiment.unavailable.items():
-            print(f"{experiment.name}: row {row_id} left out: it {why}", file=sys.stderr)
+            _log.warning("%s: row %s left out: it %s", experiment.name, row_id, why)
     runs = experiment.runs if runs is None else int(runs)
     if runs < 1:
         raise SkinnyInputError(f"runs must be >= 1, got {runs}")
@@ -353,8 +356,13 @@ def _sweep(experiment: Experiment, out_dir: Path, selected: Sequence[Row], runs:
 
     specs = _run_specs(experiment, runs, selected)
     if resume:  # an errored run (a bug) runs again; ok and failed runs are data
+        n_all = len(specs)
         specs = [s for s in specs if not (runs_dir / s.filename).is_file()
                  or load_run(runs_dir / s.filename)["status"] == "error"]
+        _log.info("%s: %d of %d runs already in %s are kept", experiment.name,
+                  n_all - len(specs), n_all, runs_dir)
+    _log.info("%s: %d runs of %d row(s) on %s -> %s", experiment.name, len(specs),
+              len(selected), scheduler or f"{workers} worker(s)", out_dir)
     jobs: list = specs
     fn: Callable[[Any], Any] = functools.partial(
         execute_run, experiment.run_one, experiment_name=experiment.name)
@@ -384,7 +392,7 @@ def _sweep(experiment: Experiment, out_dir: Path, selected: Sequence[Row], runs:
                 # The parent writes every file, so remote Dask workers need no shared disk.
                 atomic_write_json(runs_dir / f"{record['row']}-{record['seed']}.json", record)
                 bar.update(1)
-            _report(bar, records)
+            _report(records)
 
     results = aggregate(out_dir)
     atomic_write_text(out_dir / "table.md",
