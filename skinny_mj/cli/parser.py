@@ -80,6 +80,25 @@ class _ExperimentHelp(argparse.Action):
 
 
 
+class _Version(argparse.Action):
+    """``skinny --version``: ``skinny <version>`` of the installed distribution, read
+    when asked (importlib.metadata), so that building the parser reads no metadata."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs):  # noqa: ANN001
+        super().__init__(option_strings, dest=dest, default=argparse.SUPPRESS, nargs=0,
+                         **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):  # noqa: ANN001
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            number = version("skinny-mj")
+        except PackageNotFoundError:  # run from a source tree that pip never installed
+            number = "unknown (not installed)"
+        print(f"skinny {number}")
+        parser.exit()
+
+
 def _dof(text: str) -> int:
     """argparse type of ``--dof``: a body's dof (4, 8 or one another package registered),
     else a one-line usage error naming the known ones."""
@@ -119,6 +138,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="skinny",
         description="Skinny-MJ: echo state networks learn to make a MuJoCo torso imitate YMCA.",
     )
+    parser.add_argument("--version", action=_Version, help="print skinny's version and exit")
     parser.add_argument("--log-level", choices=LEVELS,
                         default="warning", help="the diagnostics shown on stderr (warnings, "
                         "notes; info: progress too); results go to stdout whatever the level")
