@@ -18,6 +18,7 @@ import pytest
 from skinny_mj import preflight
 from skinny_mj.cli.parser import main
 from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.folder import LOCK_NAME
 
 TINY = ["--reservoir", "20", "--cycles", "1", "--epochs", "1", "--quiet"]
 MODEL = "general-2d-joint"  # a shipped model: `skinny test` needs no training first
@@ -214,6 +215,27 @@ def test_two_default_sweeps_in_the_same_second_get_two_folders(tmp_path, monkeyp
     folders = sorted(p.name for p in (tmp_path / "results" / "fake").iterdir())
     assert folders == ["20261204-061500", "20261204-061500-2", "20261204-061500-3"]
     assert "results: results/fake/20261204-061500-2" in capsys.readouterr().out
+
+
+def test_a_sweep_written_into_out_since_the_command_started_is_kept(tmp_path, monkeypatch,
+                                                                     capsys):
+    """Two sweeps given the same new --out: the lock keeps them apart while both run,
+    and the check made again under the lock keeps the later from replacing the earlier."""
+    from skinny_mj import memory
+    from skinny_mj.engine import registry
+
+    module = types.ModuleType("fake_study")
+    module.build = lambda **options: _fake()  # type: ignore[attr-defined]
+    monkeypatch.setattr(registry, "get", lambda name: module)
+    out = tmp_path / "sweep"
+
+    def another_sweep_ends_meanwhile(*args, **kwargs):
+        run_sweep(_fake(), out, workers=1, progress=False)
+
+    monkeypatch.setattr(memory, "check_sweep", another_sweep_ends_meanwhile)
+    code = main(["experiment", "fake", "--workers", "1", "--quiet", "--out", str(out)])
+    _refused(capsys, code, str(out), "already holds a sweep")
+    assert (out / "results.json").is_file() and not (out / LOCK_NAME).exists()
 
 
 # -- exit codes: the path given (2) or the machine (1) ------------------------------------------

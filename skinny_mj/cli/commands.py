@@ -436,6 +436,8 @@ def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any
         out = default_out_dir(exp.name, DEFAULT_RESULTS)
     start = time.perf_counter()
     with folder.sweep_lock(out):  # held until the report is written
+        folder.choose_out_dir(out, None, resume=args.resume,  # again: another sweep may
+                              overwrite=overwrite)  # have written there and ended since
         if overwrite:
             folder.clear_sweep(out)
         results = run_sweep(exp, out, rows=rows, runs=runs, workers=args.workers,
