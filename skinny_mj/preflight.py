@@ -186,13 +186,14 @@ def timestamp() -> str:
     return _dt.datetime.now(_dt.UTC).strftime("%Y%m%d-%H%M%S")
 
 
-def new_folder(parent: str | Path) -> Path:
-    """Make and return ``parent/<timestamp>``, or ``<timestamp>-2``, ``-3``, ... when
-    another run already took it: each ``mkdir`` is exclusive, so two runs started in
-    the same second (two processes, two machines on one shared disk) never share one."""
+def new_folder(parent: str | Path, stamp: str | None = None) -> Path:
+    """Make and return ``parent/<stamp>`` (default: :func:`timestamp` now), or
+    ``<stamp>-2``, ``-3``, ... when another run already took it: each ``mkdir`` is
+    exclusive, so two runs started in the same second (two processes, two machines on
+    one shared disk) never share one."""
     parent = Path(parent)
     parent.mkdir(parents=True, exist_ok=True)
-    stem = timestamp()
+    stem = timestamp() if stamp is None else stamp
     for k in itertools.count(1):
         path = parent / (stem if k == 1 else f"{stem}-{k}")
         try:
@@ -205,9 +206,10 @@ def new_folder(parent: str | Path) -> Path:
 
 @contextlib.contextmanager
 def run_folder(out: str | Path | None, default_parent: str | Path, *,
-               overwrite: bool = False) -> Iterator[Path]:
+               overwrite: bool = False, stamp: str | None = None) -> Iterator[Path]:
     """The folder a run writes its files into inside this block: ``out`` or, when None,
-    a :func:`new_folder` under ``default_parent``.
+    a :func:`new_folder` under ``default_parent`` (named ``stamp``: the time the command
+    started, or ``stamp-2``... if another run took that name since).
 
     Call it when the run is computed (the writes come last). ``out`` is checked again
     (:func:`check_run_folder`: another run may have written there since the command
@@ -216,7 +218,7 @@ def run_folder(out: str | Path | None, default_parent: str | Path, *,
     (:func:`cleaned_on_failure`; a new folder is removed).
     """
     if out is None:
-        path = new_folder(default_parent)
+        path = new_folder(default_parent, stamp)
         try:
             yield path
         except BaseException:

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj import preflight
 from skinny_mj.cli.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
@@ -28,20 +29,23 @@ from skinny_mj.training.config import Movement
 DEFAULT_RESULTS = Path("results")
 
 
-def _out_dir(args: argparse.Namespace, kind: str) -> Path | None:
+def _out_dir(args: argparse.Namespace, kind: str) -> Path:
     """``--out``, refused before the work if it holds results and no ``--overwrite``
-    (exit 2), and checked writable (a read-only or full disk: exit 1); None for the
-    default, a new folder ``results/<kind>/<time>`` made when the run is written
-    (:func:`_writing`)."""
+    (exit 2), and checked writable (a read-only or full disk: exit 1); by default
+    ``results/<kind>/<time the command started>``, made (unique) when the run is
+    written (:func:`_writing`)."""
     if args.out is None:
-        check_writable(DEFAULT_RESULTS / kind)
-        return None
+        return check_writable(DEFAULT_RESULTS / kind / preflight.timestamp())
     return check_writable(check_run_folder(args.out, args.overwrite))
 
 
-def _writing(args: argparse.Namespace, out: Path | None, kind: str):
-    """The folder to write the computed run into (:func:`skinny_mj.preflight.run_folder`)."""
-    return run_folder(out, DEFAULT_RESULTS / kind, overwrite=args.overwrite)
+def _writing(args: argparse.Namespace, out: Path):
+    """The folder to write the computed run into: ``out`` from :func:`_out_dir`, or for
+    the default a new folder of that name, ``-2`` if another run took it since
+    (:func:`skinny_mj.preflight.run_folder`)."""
+    if args.out is None:
+        return run_folder(None, out.parent, stamp=out.name)
+    return run_folder(out, out.parent, overwrite=args.overwrite)
 
 
 def _flag_config(args: argparse.Namespace, groups, base=None):
@@ -122,7 +126,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         "max_speed_rad_s": [float(v) for v in env.task.max_speed_rad_s],
         "clipped_samples": int(report.clipped_samples), "retarget": report.to_dict(),
     }
-    with _writing(args, out, "track") as out:
+    with _writing(args, out) as out:
         _recording(out / "run.rrd", dof=dof, signals=signals,
                    desired_angles=traj.angles, actual_angles=np.array(angles),
                    commands=np.array(commands), desired_signals=desired,
@@ -177,8 +181,8 @@ def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
             "seed": int(outcome.seed), "preset": preset}
 
 
-def _train_and_write(cfg, seed: int, args: argparse.Namespace, out: Path | None, kind: str,
-                     title: str, preset: str | None = None):
+def _train_and_write(cfg, seed: int, args: argparse.Namespace, out: Path, title: str,
+                     preset: str | None = None):
     """Train, then write the run (:func:`_write_run`); the outcome and the folder."""
     from skinny_mj.training.loop import train
 
@@ -187,7 +191,7 @@ def _train_and_write(cfg, seed: int, args: argparse.Namespace, out: Path | None,
         outcome = train(cfg, seed, progress=bar)
     finally:
         bar.close()
-    with _writing(args, out, kind) as out:
+    with _writing(args, out) as out:
         _write_run(out, outcome, title, preset)
     return outcome, out
 
@@ -202,7 +206,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg, seed = train_config(args)
     out = _out_dir(args, "train")
     check_train(cfg)
-    outcome, out = _train_and_write(cfg, seed, args, out, "train",
+    outcome, out = _train_and_write(cfg, seed, args, out,
                                     f"{cfg.method} on {cfg.movement.trajectory}",
                                     preset=getattr(args, "preset", None))
     m = outcome.metrics
@@ -226,7 +230,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print("paper E experiment 5 - new method, beta = 0.1, 3 learning cycles x 10 epochs, "
           "feedback gain K 1 -> 0, then a test with the feedback controller off.")
     start = time.perf_counter()
-    outcome, out = _train_and_write(cfg, args.seed, args, out, "demo", "demo: paper E exp. 5")
+    outcome, out = _train_and_write(cfg, args.seed, args, out, "demo: paper E exp. 5")
     wall = time.perf_counter() - start
     m = outcome.metrics
     paper = registry.get("paper-e").row("5").paper
@@ -301,7 +305,7 @@ def cmd_test(args: argparse.Namespace) -> int:
         metrics["imitation"] = {**imitation_metrics(test, dof),
                                 "saturated": saturation(traj.angles, traj.dt, run.max_speed_rad_s)}
     ro = test.rollout
-    with _writing(args, out, "test") as out:
+    with _writing(args, out) as out:
         _recording(out / "run.rrd", dof=dof, signals=signals, desired_angles=traj.angles,
                    actual_angles=ro.angles[0], commands=ro.commands[0],
                    desired_signals=test.desired, actual_signals=ro.true_signals[0],

@@ -1,7 +1,9 @@
 """The ``skinny`` command line.
 
 Every sub-command imports what it needs when it runs, so ``skinny --help`` is quick.
-User errors (bad files, names, parameters) end with one line on stderr and exit code 2.
+User errors (bad files, names, parameters, an ``--out`` that holds results or cannot be a
+folder) end with one line on stderr and exit code 2; the machine's (a read-only or full
+disk, no rendering backend) with one line and exit code 1.
 """
 
 from __future__ import annotations

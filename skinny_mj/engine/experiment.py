@@ -76,7 +76,7 @@ under the table that the means exclude failed runs.
 
 While a sweep runs, ``out/sweep.lock`` (its pid, host and start time) keeps a second
 sweep out of the folder (:mod:`skinny_mj.engine.folder`; a lock whose process died on
-this host is taken over, with a line on stderr).
+this host is taken over, with a warning of the ``skinny_mj`` logger).
 
 Output layout::
 
