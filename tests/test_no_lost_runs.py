@@ -97,6 +97,15 @@ def test_overwrite_by_a_failed_run_leaves_no_older_model_beside_it(tmp_path, cap
     assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "notes.txt"]
 
 
+def test_test_overwrite_never_deletes_the_model_it_tests(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["train", *TINY, "--out", str(out)]) == 0
+    before = _contents(out)
+    code = main(["test", "--model", str(out / "model.npz"), "--out", str(out), "--overwrite"])
+    _refused(capsys, code, "model.npz", "--overwrite would delete the --model")
+    assert _contents(out) == before
+
+
 def test_an_empty_or_hidden_only_folder_is_taken(tmp_path, monkeypatch, capsys):
     out = tmp_path / "run"
     out.mkdir()

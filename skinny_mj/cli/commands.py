@@ -276,6 +276,9 @@ def cmd_test(args: argparse.Namespace) -> int:
 
     asked = _flag_config(args, TEST_FLAGS)  # the test's movement and sensor noise
     out = _out_dir(args, "test")
+    if args.overwrite and args.out is not None and path.resolve().parent == out.resolve():
+        raise SkinnyInputError("--overwrite would delete the --model itself (it is in --out); "
+                               "choose another --out", path=path)
     traj, report = _load_movement(asked.movement, dof,
                                   memory.check_test(esn.cfg, dof, body.n_signals(dof, signals)))
     saved = meta.get("config") if isinstance(meta.get("config"), dict) else {}
