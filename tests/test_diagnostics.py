@@ -107,7 +107,7 @@ def test_log_level_error_hides_the_warnings_and_info_shows_progress(tmp_path, mo
     assert _sweep(monkeypatch, tmp_path / "quiet", "--log-level", "error") == 0
     assert capsys.readouterr().err == ""
     assert _sweep(monkeypatch, tmp_path / "loud", "--log-level", "info") == 0
-    assert f"fake: 4 runs of 2 row(s) on 1 worker(s) -> {tmp_path / 'loud'}" in \
+    assert f"fake: 4 run(s) of 2 row(s) on 1 worker(s) -> {tmp_path / 'loud'}" in \
         capsys.readouterr().err
 
 

@@ -359,9 +359,9 @@ def _sweep(experiment: Experiment, out_dir: Path, selected: Sequence[Row], runs:
         n_all = len(specs)
         specs = [s for s in specs if not (runs_dir / s.filename).is_file()
                  or load_run(runs_dir / s.filename)["status"] == "error"]
-        _log.info("%s: %d of %d runs already in %s are kept", experiment.name,
+        _log.info("%s: %d of %d run(s) already in %s are kept", experiment.name,
                   n_all - len(specs), n_all, runs_dir)
-    _log.info("%s: %d runs of %d row(s) on %s -> %s", experiment.name, len(specs),
+    _log.info("%s: %d run(s) of %d row(s) on %s -> %s", experiment.name, len(specs),
               len(selected), scheduler or f"{workers} worker(s)", out_dir)
     jobs: list = specs
     fn: Callable[[Any], Any] = functools.partial(
