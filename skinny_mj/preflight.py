@@ -1,23 +1,43 @@
-"""Checks a command makes before any long work: can it write its output, can it render.
+"""Checks a command makes before any long work: can it write its output, can it render,
+would it write over earlier results; and the new folder a run without ``--out`` writes.
 
-Each failure is a :class:`~skinny_mj.errors.SkinnyEnvironmentError` (the CLI prints one
-line and exits 1), raised before the training or the sweep starts rather than after it.
+Who is at fault decides the exit code. A path the user gave that cannot be used as given
+(an ``--out`` that already holds results, a file where a folder is needed or the other way
+round, a folder under a file) is input: :class:`~skinny_mj.errors.SkinnyInputError`, exit 2.
+A machine that refuses a good path (read-only, no permission, full disk, no rendering
+backend) is the environment: :class:`~skinny_mj.errors.SkinnyEnvironmentError`, exit 1.
+Either is one line, raised before the training or the sweep starts rather than after it.
+
+No run is lost in silence (:func:`check_run_folder`, :func:`check_new_file`,
+:func:`new_folder`):
+
+- an ``--out`` folder that holds files is refused unless ``--overwrite``, and even then
+  unless it holds a run (:data:`RUN_FILES`): ``--overwrite`` replaces those files only, once
+  the new run is computed, never a folder of other files;
+- an ``--out`` file that exists is refused unless ``--overwrite``;
+- without ``--out``, a run writes a folder made for it, ``results/<kind>/<UTC time>``,
+  created with an exclusive ``mkdir``: a second run started in the same second gets
+  ``<time>-2``, a third ``<time>-3``, and so on.
+
 Nothing here imports mujoco: :func:`check_gl` must run before the first import.
 """
 
 from __future__ import annotations
 
 import contextlib
+import datetime as _dt
 import errno
+import itertools
 import os
 import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
-from skinny_mj.errors import SkinnyEnvironmentError
+from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 
-__all__ = ["GL_BACKENDS", "MIN_FREE_BYTES", "check_gl", "check_writable", "check_writable_file",
-           "check_free_space", "cleaned_on_failure"]
+__all__ = ["GL_BACKENDS", "MIN_FREE_BYTES", "RUN_FILES", "check_gl", "check_writable",
+           "check_writable_file", "check_free_space", "cleaned_on_failure", "check_run_folder",
+           "check_new_file", "timestamp", "new_folder", "run_folder"]
 
 #: MUJOCO_GL values mujoco accepts on Linux (mujoco/rendering/classic/gl_context.py);
 #: any other value makes ``import mujoco`` itself raise.
@@ -48,9 +68,11 @@ def check_writable(folder: str | Path) -> Path:
 
     Raises
     ------
+    SkinnyInputError
+        If ``folder`` or an ancestor is a file (ENOTDIR): the path cannot be a folder.
     SkinnyEnvironmentError
-        If an ancestor is a file (ENOTDIR), the file system is read-only, the folder is
-        not writable, or the disk is full; the message names the folder and the reason.
+        If the file system is read-only, the folder is not writable, or the disk is
+        full; either message names the folder and the reason.
     """
     from skinny_mj.io import atomic_write_bytes
 
@@ -69,9 +91,9 @@ def check_writable(folder: str | Path) -> Path:
         raise
     except OSError as exc:
         reason = exc.strerror or str(exc)
-        raise SkinnyEnvironmentError(
-            f"cannot write the output folder {folder} ({reason}: {existing}); "
-            "choose another --out") from None
+        error = SkinnyInputError if exc.errno == errno.ENOTDIR else SkinnyEnvironmentError
+        raise error(f"cannot write the output folder {folder} ({reason}: {existing}); "
+                    "choose another --out") from None
     return folder
 
 
@@ -80,7 +102,7 @@ def check_writable_file(path: str | Path, option: str = "--out") -> Path:
     checks one, and ``path`` itself not a folder), before the work that makes it."""
     path = Path(path)
     if path.is_dir():
-        raise SkinnyEnvironmentError(f"{option} {path} is a folder; give a file name")
+        raise SkinnyInputError(f"{option} {path} is a folder; give a file name")
     check_writable(path.parent if str(path.parent) else Path("."))
     return path
 
@@ -118,3 +140,94 @@ def check_free_space(folder: str | Path, need_bytes: int) -> None:
         raise SkinnyEnvironmentError(
             f"the disk holding {folder} is full: {free / 2**20:.2f} MiB free, "
             f"{need_bytes / 2**20:.2f} MiB needed; free some space or choose another --out")
+
+
+#: The files a run writes (``skinny train``, ``demo``, ``test``, ``track``): a folder that
+#: holds one of them holds a run, which ``--overwrite`` may replace.
+RUN_FILES = ("metrics.json", "model.npz", "run.rrd", "learning_curve.png")
+
+
+def _visible(folder: Path) -> list[str]:
+    """The names in ``folder`` but hidden ones (``.DS_Store``, an atomic write's leftover)."""
+    return sorted(p.name for p in folder.iterdir() if not p.name.startswith("."))
+
+
+def check_run_folder(out: str | Path, overwrite: bool, option: str = "--out") -> Path:
+    """Refuse (:class:`SkinnyInputError`) a run's output folder ``out`` that would lose
+    results in silence: a file, a folder holding files (unless ``overwrite`` and they
+    include a run's), see the module docstring."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise SkinnyInputError(f"{option} is a file, not a folder; choose a folder", path=out)
+    entries = _visible(out) if out.is_dir() else []
+    if not entries:
+        return out
+    if not set(entries) & set(RUN_FILES):
+        raise SkinnyInputError(f"{option} is a folder that holds other files and no run; "
+                               "choose a new or empty folder", path=out)
+    if not overwrite:
+        raise SkinnyInputError(f"{option} already holds a run; replace it with --overwrite, "
+                               "or choose a new folder", path=out)
+    return out
+
+
+def check_new_file(path: str | Path, overwrite: bool, option: str = "--out") -> Path:
+    """Refuse (:class:`SkinnyInputError`) an output file that exists, unless ``overwrite``;
+    then check it can be written (:func:`check_writable_file`)."""
+    path = Path(path)
+    if path.exists() and not path.is_dir() and not overwrite:
+        raise SkinnyInputError(f"{option} already exists; replace it with --overwrite, or "
+                               "choose another name", path=path)
+    return check_writable_file(path, option)
+
+
+def timestamp() -> str:
+    """The current UTC time to the second, as a default folder's name: ``20261204-061500``."""
+    return _dt.datetime.now(_dt.UTC).strftime("%Y%m%d-%H%M%S")
+
+
+def new_folder(parent: str | Path, stamp: str | None = None) -> Path:
+    """Make and return ``parent/<stamp>`` (default: :func:`timestamp` now), or
+    ``<stamp>-2``, ``-3``, ... when another run already took it: each ``mkdir`` is
+    exclusive, so two runs started in the same second (two processes, two machines on
+    one shared disk) never share one."""
+    parent = Path(parent)
+    parent.mkdir(parents=True, exist_ok=True)
+    stem = timestamp() if stamp is None else stamp
+    for k in itertools.count(1):
+        path = parent / (stem if k == 1 else f"{stem}-{k}")
+        try:
+            path.mkdir()
+        except FileExistsError:
+            continue
+        return path
+    raise AssertionError("unreachable")  # itertools.count never ends
+
+
+@contextlib.contextmanager
+def run_folder(out: str | Path | None, default_parent: str | Path, *,
+               overwrite: bool = False, stamp: str | None = None) -> Iterator[Path]:
+    """The folder a run writes its files into inside this block: ``out`` or, when None,
+    a :func:`new_folder` under ``default_parent`` (named ``stamp``: the time the command
+    started, or ``stamp-2``... if another run took that name since).
+
+    Call it when the run is computed (the writes come last). ``out`` is checked again
+    (:func:`check_run_folder`: another run may have written there since the command
+    started); with ``overwrite`` the old run's :data:`RUN_FILES` are removed first, so a
+    failed run never sits beside an older model. A block that raises leaves nothing
+    (:func:`cleaned_on_failure`; a new folder is removed).
+    """
+    if out is None:
+        path = new_folder(default_parent, stamp)
+        try:
+            yield path
+        except BaseException:
+            shutil.rmtree(path, ignore_errors=True)
+            raise
+        return
+    out = check_run_folder(out, overwrite)
+    if out.is_dir() and overwrite:
+        for name in RUN_FILES:
+            (out / name).unlink(missing_ok=True)
+    with cleaned_on_failure(out) as path:
+        yield path

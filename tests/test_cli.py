@@ -34,6 +34,15 @@ def test_every_command_has_help(command, capsys):
     assert "usage: skinny" in capsys.readouterr().out
 
 
+def test_version_prints_the_installed_distributions(capsys):
+    from importlib.metadata import version
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--version"])
+    assert exit_info.value.code == 0
+    assert capsys.readouterr().out == f"skinny {version('skinny-mj')}\n"
+
+
 @pytest.mark.parametrize("dof", [4, 8])
 def test_track_ymca_writes_metrics_and_recording(dof, tmp_path, capsys):
     out = tmp_path / "track"

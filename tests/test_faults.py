@@ -51,7 +51,7 @@ def test_output_under_a_file_fails_before_training(tmp_path, monkeypatch, capsys
     (tmp_path / "plain").write_text("x")
     monkeypatch.setattr("skinny_mj.training.loop.train", _never)
     code = main(["train", "--epochs", "1", "--out", str(tmp_path / "plain" / "run")])
-    _one_line_error(capsys, code, 1, "Not a directory")
+    _one_line_error(capsys, code, 2, "Not a directory")  # the path given: input
 
 
 @pytest.mark.parametrize("error", [errno.EACCES, errno.EROFS, errno.ENOSPC])

@@ -224,10 +224,10 @@ def test_the_generation_estimate_grows_with_steps_runs_and_rls():
 
 
 # -- outputs ----------------------------------------------------------------------------------
-def test_bench_out_unwritable_is_refused_before_the_bench(capsys, tmp_path):
+def test_bench_out_under_a_file_is_refused_before_the_bench(capsys, tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("x")
-    assert main(["bench", "--quick", "--out", str(blocker / "b.json")]) == 1
+    assert main(["bench", "--quick", "--out", str(blocker / "b.json")]) == 2  # input
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and str(blocker) in err and ".skinny-write-probe" not in err
 

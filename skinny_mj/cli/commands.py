@@ -1,7 +1,8 @@
 """The handlers behind ``skinny``'s sub-commands (the parser lives in :mod:`skinny_mj.cli.parser`).
 
 Every command computes first and writes last, each file atomically, so a command that
-fails on bad input leaves nothing half-written in ``--out``.
+fails on bad input leaves nothing half-written in ``--out``; and none writes over earlier
+results unless told to (``--overwrite``; :mod:`skinny_mj.preflight`).
 """
 
 from __future__ import annotations
@@ -15,11 +16,12 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj import preflight
 from skinny_mj.cli.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
 from skinny_mj.memory import check_export, check_train
-from skinny_mj.preflight import check_writable, check_writable_file, cleaned_on_failure
+from skinny_mj.preflight import check_new_file, check_run_folder, check_writable, run_folder
 from skinny_mj.progress import Progress as _Progress
 from skinny_mj.progress import progress_on as _progress_on
 from skinny_mj.training.config import Movement
@@ -27,16 +29,23 @@ from skinny_mj.training.config import Movement
 DEFAULT_RESULTS = Path("results")
 
 
-def _timestamped(kind: str) -> Path:
-    from datetime import datetime
-
-    return DEFAULT_RESULTS / kind / datetime.now().strftime("%Y%m%d-%H%M%S")
-
-
 def _out_dir(args: argparse.Namespace, kind: str) -> Path:
-    """``--out`` (default ``results/<kind>/<time>``), checked writable before the work
-    (a read-only, full or file-blocked folder is an environment error, exit 1)."""
-    return check_writable(Path(args.out) if args.out is not None else _timestamped(kind))
+    """``--out``, refused before the work if it holds results and no ``--overwrite``
+    (exit 2), and checked writable (a read-only or full disk: exit 1); by default
+    ``results/<kind>/<time the command started>``, made (unique) when the run is
+    written (:func:`_writing`)."""
+    if args.out is None:
+        return check_writable(DEFAULT_RESULTS / kind / preflight.timestamp())
+    return check_writable(check_run_folder(args.out, args.overwrite))
+
+
+def _writing(args: argparse.Namespace, out: Path):
+    """The folder to write the computed run into: ``out`` from :func:`_out_dir`, or for
+    the default a new folder of that name, ``-2`` if another run took it since
+    (:func:`skinny_mj.preflight.run_folder`)."""
+    if args.out is None:
+        return run_folder(None, out.parent, stamp=out.name)
+    return run_folder(out, out.parent, overwrite=args.overwrite)
 
 
 def _flag_config(args: argparse.Namespace, groups, base=None):
@@ -117,7 +126,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         "max_speed_rad_s": [float(v) for v in env.task.max_speed_rad_s],
         "clipped_samples": int(report.clipped_samples), "retarget": report.to_dict(),
     }
-    with cleaned_on_failure(out):
+    with _writing(args, out) as out:
         _recording(out / "run.rrd", dof=dof, signals=signals,
                    desired_angles=traj.angles, actual_angles=np.array(angles),
                    commands=np.array(commands), desired_signals=desired,
@@ -172,18 +181,19 @@ def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
             "seed": int(outcome.seed), "preset": preset}
 
 
-def _train_and_write(cfg, seed: int, out: Path, title: str, quiet: bool = False,
+def _train_and_write(cfg, seed: int, args: argparse.Namespace, out: Path, title: str,
                      preset: str | None = None):
+    """Train, then write the run (:func:`_write_run`); the outcome and the folder."""
     from skinny_mj.training.loop import train
 
-    bar = _Progress(title, quiet)
+    bar = _Progress(title, args.quiet)
     try:
         outcome = train(cfg, seed, progress=bar)
     finally:
         bar.close()
-    with cleaned_on_failure(out):
+    with _writing(args, out) as out:
         _write_run(out, outcome, title, preset)
-    return outcome
+    return outcome, out
 
 
 def _fmt(v: float | None) -> str:
@@ -196,8 +206,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg, seed = train_config(args)
     out = _out_dir(args, "train")
     check_train(cfg)
-    outcome = _train_and_write(cfg, seed, out, f"{cfg.method} on {cfg.movement.trajectory}",
-                               quiet=args.quiet, preset=getattr(args, "preset", None))
+    outcome, out = _train_and_write(cfg, seed, args, out,
+                                    f"{cfg.method} on {cfg.movement.trajectory}",
+                                    preset=getattr(args, "preset", None))
     m = outcome.metrics
     if outcome.failed:
         print(f"skinny train: run failed: {m.get('fail_reason')} (details in {out}/metrics.json)",
@@ -219,7 +230,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print("paper E experiment 5 - new method, beta = 0.1, 3 learning cycles x 10 epochs, "
           "feedback gain K 1 -> 0, then a test with the feedback controller off.")
     start = time.perf_counter()
-    outcome = _train_and_write(cfg, args.seed, out, "demo: paper E exp. 5", quiet=args.quiet)
+    outcome, out = _train_and_write(cfg, args.seed, args, out, "demo: paper E exp. 5")
     wall = time.perf_counter() - start
     m = outcome.metrics
     paper = registry.get("paper-e").row("5").paper
@@ -265,6 +276,9 @@ def cmd_test(args: argparse.Namespace) -> int:
 
     asked = _flag_config(args, TEST_FLAGS)  # the test's movement and sensor noise
     out = _out_dir(args, "test")
+    if args.overwrite and args.out is not None and path.resolve().parent == out.resolve():
+        raise SkinnyInputError("--overwrite would delete the --model itself (it is in --out); "
+                               "choose another --out", path=path)
     traj, report = _load_movement(asked.movement, dof,
                                   memory.check_test(esn.cfg, dof, body.n_signals(dof, signals)))
     saved = meta.get("config") if isinstance(meta.get("config"), dict) else {}
@@ -294,7 +308,7 @@ def cmd_test(args: argparse.Namespace) -> int:
         metrics["imitation"] = {**imitation_metrics(test, dof),
                                 "saturated": saturation(traj.angles, traj.dt, run.max_speed_rad_s)}
     ro = test.rollout
-    with cleaned_on_failure(out):
+    with _writing(args, out) as out:
         _recording(out / "run.rrd", dof=dof, signals=signals, desired_angles=traj.angles,
                    actual_angles=ro.angles[0], commands=ro.commands[0],
                    desired_signals=test.desired, actual_signals=ro.true_signals[0],
@@ -342,11 +356,11 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
             for line in torque_training.feasibility_report(args.dof, traj):
                 print(line)
         return 0
+    out = check_new_file(args.out, args.overwrite)
     traj, _ = _load_movement(Movement(args.name, asf=args.asf, speed=args.speed,
                                       reps=args.reps), args.dof,
                              check_export(args.dof, args.out))
-    out = Path(args.out)
-    traj.save(out)
+    traj.save(check_new_file(out, args.overwrite))  # again: another command may have written it
     print(f"wrote {traj.name}: {len(traj)} steps, {args.dof} DOF -> {out}")
     return 0
 
@@ -354,13 +368,14 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
 def cmd_render(args: argparse.Namespace) -> int:
     from skinny_mj.plant.render import render_png
 
-    check_writable_file(args.out)
+    check_new_file(args.out, args.overwrite)
     angles = None
     if args.trajectory is not None:
         traj, _ = _load_movement(Movement(args.trajectory), args.dof)
         if not 0 <= args.frame < len(traj):
             raise SkinnyInputError(f"--frame must be in [0, {len(traj) - 1}], got {args.frame}")
         angles = traj.angles[args.frame]
+    check_new_file(args.out, args.overwrite)  # again: another command may have written it
     path = render_png(args.dof, args.out, width=args.width, height=args.height, angles=angles)
     print(f"wrote {path}")
     return 0
@@ -418,13 +433,18 @@ def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any
     from skinny_mj.memory import check_sweep
 
     overwrite = bool(getattr(args, "overwrite", False))
-    out = folder.choose_out_dir(args.out, default_out_dir(exp.name), resume=args.resume,
+    out = folder.choose_out_dir(args.out, None, resume=args.resume,
                                 overwrite=overwrite)  # nothing lost in silence
-    check_writable(out)  # before the sweep, not after its first run
-    folder.check_unlocked(out)
+    check_writable(DEFAULT_RESULTS / exp.name if out is None else out)  # before the sweep
+    if out is not None:
+        folder.check_unlocked(out)
     check_sweep(module, exp, rows, runs, args.workers, args.scheduler)
+    if out is None:  # made now: two sweeps started in the same second get two folders
+        out = default_out_dir(exp.name, DEFAULT_RESULTS)
     start = time.perf_counter()
     with folder.sweep_lock(out):  # held until the report is written
+        folder.choose_out_dir(out, None, resume=args.resume,  # again: another sweep may
+                              overwrite=overwrite)  # have written there and ended since
         if overwrite:
             folder.clear_sweep(out)
         results = run_sweep(exp, out, rows=rows, runs=runs, workers=args.workers,
@@ -451,7 +471,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from skinny_mj.cli import bench
 
     if args.out is not None:  # before the bench, not after it
-        check_writable_file(args.out)
+        check_new_file(args.out, args.overwrite)
     from skinny_mj.memory import check_bench
 
     check_bench(args.workers, args.quick)
@@ -459,6 +479,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
                                  show=_progress_on(args.quiet))
     print(bench.table(figures))
     if args.out is not None:
-        atomic_write_json(Path(args.out), figures)
+        atomic_write_json(check_new_file(args.out, args.overwrite), figures)
         print(f"wrote {args.out}")
     return 0

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
+import logging
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,6 +24,8 @@ from typing import Any
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import DERIVED, TrainConfig
 from skinny_mj.training.legacy import is_legacy
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["read_json", "read_train_file", "file_config", "train_config", "SweepInvocation",
            "sweep_invocation", "apply_sweep_config", "check_experiment",
@@ -186,13 +188,12 @@ def check_experiment(inv: SweepInvocation | None, experiment: Any) -> None:
 
 
 def warn_if_rebuilt_differs(inv: SweepInvocation | None, out_dir: str | Path) -> None:
-    """One line on stderr when the sweep just run (its ``out_dir/config.json``) is not
+    """A warning (logging) when the sweep just run (its ``out_dir/config.json``) is not
     the one the file recorded: flags changed it, or the code did since."""
     if inv is None:
         return
     now = read_json(Path(out_dir) / "config.json")
     changed = [k for k in ("config", "rows", "base_seed") if inv.recorded.get(k) != now.get(k)]
     if changed:
-        print(f"skinny experiment: warning: {', '.join(changed)} differ from the config "
-              "file's (flags given, or the code changed): this is not an exact repeat",
-              file=sys.stderr)
+        _log.warning("%s differ from the config file's (flags given, or the code changed): "
+                     "this is not an exact repeat", ", ".join(changed))

@@ -1,7 +1,9 @@
 """The ``skinny`` command line.
 
 Every sub-command imports what it needs when it runs, so ``skinny --help`` is quick.
-User errors (bad files, names, parameters) end with one line on stderr and exit code 2.
+User errors (bad files, names, parameters, an ``--out`` that holds results or cannot be a
+folder) end with one line on stderr and exit code 2; the machine's (a read-only or full
+disk, no rendering backend) with one line and exit code 1.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from skinny_mj.cli.logs import LEVELS, to_stderr
 from skinny_mj.errors import SkinnyInputError
 
 
@@ -79,6 +82,25 @@ class _ExperimentHelp(argparse.Action):
 
 
 
+class _Version(argparse.Action):
+    """``skinny --version``: ``skinny <version>`` of the installed distribution, read
+    when asked (importlib.metadata), so that building the parser reads no metadata."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs):  # noqa: ANN001
+        super().__init__(option_strings, dest=dest, default=argparse.SUPPRESS, nargs=0,
+                         **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):  # noqa: ANN001
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            number = version("skinny-mj")
+        except PackageNotFoundError:  # run from a source tree that pip never installed
+            number = "unknown (not installed)"
+        print(f"skinny {number}")
+        parser.exit()
+
+
 def _dof(text: str) -> int:
     """argparse type of ``--dof``: a body's dof (4, 8 or one another package registered),
     else a one-line usage error naming the known ones."""
@@ -118,6 +140,10 @@ def build_parser() -> argparse.ArgumentParser:
         prog="skinny",
         description="Skinny-MJ: echo state networks learn to make a MuJoCo torso imitate YMCA.",
     )
+    parser.add_argument("--version", action=_Version, help="print skinny's version and exit")
+    parser.add_argument("--log-level", choices=LEVELS,
+                        default="warning", help="the diagnostics shown on stderr (warnings, "
+                        "notes; info: progress too); results go to stdout whatever the level")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("demo", help="train with the defaults (paper E, exp. 5) and show the result")
@@ -184,6 +210,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--speed", type=float, default=1.0)
     e.add_argument("--reps", type=_positive_int, default=1)
     e.add_argument("--out", type=Path, required=True, help="FILE.npz or FILE.csv")
+    e.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
 
     p = sub.add_parser("experiment", help="reproduce a paper's table and figures (a sweep)",
                        add_help=False)
@@ -268,6 +295,13 @@ def build_parser() -> argparse.ArgumentParser:
         sub.choices[name].add_argument(
             "--quiet", "-q", action="store_true",
             help="no progress bar (also off when stderr is not a terminal)")
+    for name in ("demo", "track", "train", "test"):  # a run's folder
+        sub.choices[name].add_argument(
+            "--overwrite", action="store_true", help="replace the run already in --out "
+            "(without it, an --out holding files is refused; a folder of other files always is)")
+    for name in ("bench", "render"):
+        sub.choices[name].add_argument("--overwrite", action="store_true",
+                                       help="replace --out if it exists")
     parser.subcommands = sub.choices  # name -> sub-command parser (for given_options)
     return parser
 
@@ -308,6 +342,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
     os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
     previous = _on_sigterm(_terminate)
+    restore_logs = to_stderr(args.log_level)  # diagnostics: plain lines on stderr
     try:
         if args.command == "experiment" and args.name == "list":  # reads the studies' source
             from skinny_mj.cli.study_help import list_text  # only: no NumPy, no study
@@ -345,6 +380,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     finally:
         _on_sigterm(previous)
+        restore_logs()
 
 
 if __name__ == "__main__":
