@@ -9,6 +9,9 @@ and 95 % of the bias samples). The arms sit side by side; the
 time axis runs 30 % past the movement's end so the legend (top right) covers no data.
 The limits stay in the recording (``/torques/<dof>/limit_*``) but are not drawn in N m:
 they would squash the traces; the command plot shows them as +-1.
+
+:func:`read_layout` and :func:`read_styles` read the saved blueprint and the series styles
+back from a recording with rerun's own reader, so the look can be checked without a viewer.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 
 DESIRED_RGB = (40, 120, 230)
@@ -189,26 +193,30 @@ class SavedView:
 
     def shows(self, entities: Sequence[str]) -> list[str]:
         """Those of ``entities`` the view's query includes: ``+ PATH`` the entity itself,
-        ``+ PATH/**`` it and everything under it, ``- ...`` excludes, the last rule that
-        matches decides (rerun's entity filter, without its ``/*`` and properties)."""
+        ``+ PATH/**`` it and everything under it, ``- ...`` excludes; of the rules that
+        match, the most specific decides (an exact path, else the longest subtree), as in
+        rerun's entity filter (here without its ``/*`` and properties)."""
         rules = []
         for expr in self.query:
-            sign, path = (expr[0], expr[1:].strip()) if expr[:1] in "+-" else ("+", expr)
-            path = path.replace("$origin", self.origin.rstrip("/")) or "/"
+            sign, path = (expr[0], expr[1:].strip()) if expr[:1] in ("+", "-") else ("+", expr)
+            path = path.strip().replace("$origin", self.origin.rstrip("/")) or "/"
             if "*" in path.removesuffix("/**"):
                 raise ValueError(f"unsupported entity filter {expr!r}")
             rules.append((sign == "+", path))
 
-        def matches(entity: str, path: str) -> bool:
-            if path.endswith("/**"):
-                base = path[:-3] or "/"
-                return base == "/" or entity == base or entity.startswith(base + "/")
-            return entity == path
+        def specificity(entity: str, path: str) -> tuple[int, int] | None:
+            """(exact?, length of the subtree's root) of a match, None for no match."""
+            if not path.endswith("/**"):
+                return (1, len(path)) if entity == path else None
+            base = path[:-3].rstrip("/")
+            inside = not base or entity == base or entity.startswith(base + "/")
+            return (0, len(base)) if inside else None
 
         shown = []
         for entity in entities:
-            verdict = [include for include, path in rules if matches(entity, path)]
-            if verdict and verdict[-1]:
+            matched = [(rank, include) for include, path in rules
+                       if (rank := specificity(entity, path)) is not None]
+            if matched and max(matched)[1]:
                 shown.append(entity)
         return shown
 
@@ -242,7 +250,7 @@ def _blueprint_rows(path: str | Path) -> dict[str, dict[str, list]]:
     reader = RrdReader(str(path))
     stores = reader.blueprints()
     if not stores:
-        raise ValueError(f"{path} holds no blueprint")
+        raise SkinnyInputError("holds no blueprint", path=path)
     rows: dict[str, dict[str, list]] = {}
     for chunk in reader.stream(store=stores[0]):
         batch = chunk.to_record_batch()

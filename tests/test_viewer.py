@@ -200,6 +200,13 @@ def _last_time_s(path: Path, entity: str) -> float:
                if c.entity_path == entity and not c.is_static)
 
 
+def test_a_views_entity_filter_reads_as_rerun_does():
+    view = layout.SavedView("v", "TimeSeries", "/a", ("+ $origin/**", "- /a/b/**", "+ /a/b/c"))
+    entities = ["/a", "/a/x", "/a/b", "/a/b/d", "/a/b/c", "/ab", "/z"]
+    assert view.shows(entities) == ["/a", "/a/x", "/a/b/c"]  # the most specific rule wins
+    assert layout.SavedView("v", "3D", "/", ("$origin/**",)).shows(entities) == entities
+
+
 @pytest.mark.parametrize("torque", [False, True])
 def test_saved_layout_has_the_views_in_their_places(run_3d, torque_3d, torque):
     saved = layout.read_layout(torque_3d if torque else run_3d)
