@@ -206,9 +206,9 @@ def screenshot(recording: str | Path, png: str | Path, *, at_s: float,
     manager) is driven through rerun's viewer-control API: open the file, wait until
     nothing is loading and the ``time`` timeline is known, pause the cursor at ``at_s``,
     then take screenshots until two in a row are identical (every chunk the views need
-    has arrived and been drawn, the start-up notifications have gone). The viewer logs
-    errors only (``RUST_LOG=error``), so its warnings (software rasterizer, Docker) raise
-    no notification over the views.
+    has arrived and been drawn). The viewer logs errors only (``RUST_LOG=error``), so its
+    warnings (software rasterizer, Docker) raise no notification over the views; the one
+    it always shows, its gRPC address, is gone from the headless viewer within 2 s.
 
     Returns ``{"window": png, view name: png's name + "-<i>" for the i-th of views}``.
 
