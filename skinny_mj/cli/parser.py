@@ -279,7 +279,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, required=True)
 
     p = sub.add_parser("view", help="open a recording (or a results folder's) in the rerun "
-                       "viewer; headless, print the command")
+                       "viewer; headless, print the command (or save a --screenshot)")
     p.add_argument("path", type=Path, help="a .rrd file or a folder holding some")
     p.add_argument("--web", action="store_true",
                    help="serve the web viewer (on --bind: 127.0.0.1, this machine only)")
@@ -290,6 +290,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="address the viewer listens on (default 127.0.0.1: this machine only; "
                    "0.0.0.0: every interface)")
     p.add_argument("--dry-run", action="store_true", help="print the viewer command only")
+    p.add_argument("--screenshot", type=Path, metavar="OUT.png",
+                   help="save the viewer's picture of the recording to OUT.png instead (no "
+                   "display needed: a headless viewer, drawing with Vulkan)")
+    p.add_argument("--at", type=float, default=0.0, metavar="SECONDS",
+                   help="with --screenshot: the time cursor's place, s (default 0)")
 
     for name in ("demo", "train", "experiment", "sweep", "bench"):  # the long commands
         sub.choices[name].add_argument(
