@@ -165,3 +165,33 @@ def test_bench_table_shows_why_a_value_misses_its_goal():
                if line.startswith("torque_over_kinematic"))
     assert row.split() == ["torque_over_kinematic", "2.0004", "<=", "2", "NO"]
 
+
+# -- skinny trajectory list: every source of a movement, in columns that hold -------------
+def test_trajectory_list_names_every_source(capsys):
+    from skinny_mj.trajectories import SAMPLE_ASF, SAMPLE_CLIPS, names
+
+    assert main(["trajectory", "list"]) == 0
+    out = capsys.readouterr().out
+    words = out.split()
+    for name in names():
+        assert name in words, name
+    for clip in SAMPLE_CLIPS:
+        assert f"{clip}.amc" in words
+    assert SAMPLE_ASF.name in out
+    for kind in (".npz", ".csv", ".amc", ".bvh", "babble:seed=", "set:", "@start="):
+        assert kind in out, kind
+
+
+def test_trajectory_list_columns_hold_for_long_names():
+    from skinny_mj.cli.movement_list import MAX_NAME, columns
+
+    rows = [("a", "short"), ("ymca-recorded-unit2d", "x " * 60),
+            ("n" * (MAX_NAME + 5), "a name longer than the column")]
+    lines = columns(rows, width=60)
+    assert all(len(line) <= 60 for line in lines if "n" * MAX_NAME not in line)
+    starts = {line.index("short") if "short" in line else None for line in lines} - {None}
+    assert starts == {lines[1].index("x")}  # descriptions start in one column
+    long_at = lines.index("  " + "n" * (MAX_NAME + 5))  # a long name on its own line
+    below = lines[long_at + 1:]
+    assert " ".join(line.strip() for line in below) == "a name longer than the column"
+    assert {len(line) - len(line.lstrip()) for line in below} == starts

@@ -168,7 +168,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("trajectory", help="list or export movements")
     tsub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    tsub.add_parser("list", help="list the built-in movements")
+    tsub.add_parser("list", help="every movement source: the named movements, the shipped "
+                    "clips, the file kinds, babble: and set:")
     w = tsub.add_parser("show", help="a movement's statistics (still steps, peak speeds, "
                         "unreachable targets, tremor band)")
     w.add_argument("name")
