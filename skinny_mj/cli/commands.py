@@ -234,7 +234,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(f"|{'-' * 24}|{'-' * 16}|{'-' * 20}|")
     for name, ours, theirs in rows:
         print(f"| {name:22} | {ours:>14} | {theirs:>18} |")
-    print(f"\nRecording: {out / 'run.rrd'}  (open it with: rerun {out / 'run.rrd'})")
+    print(f"\nRecording: {out / 'run.rrd'}  (open it with: skinny view {out})")
     print(f"Also: {out / 'metrics.json'}, {out / 'learning_curve.png'}, {out / 'model.npz'}")
     if outcome.failed:
         print(f"the run failed: {m.get('fail_reason')}", file=sys.stderr)
