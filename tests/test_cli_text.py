@@ -164,6 +164,9 @@ def test_bench_table_shows_why_a_value_misses_its_goal():
     row = next(line for line in bench.table(figures).splitlines()
                if line.startswith("torque_over_kinematic"))
     assert row.split() == ["torque_over_kinematic", "2.0004", "<=", "2", "NO"]
+    assert "--quick" not in bench.table(figures)
+    figures["quick"] = True  # one epoch per row: a smoke test, and the table says so
+    assert "torque_over_kinematic times one epoch" in bench.table(figures)
 
 
 # -- skinny trajectory list: every source of a movement, in columns that hold -------------

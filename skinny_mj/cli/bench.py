@@ -297,7 +297,7 @@ def run(quick: bool = False, workers: int | None = None,
     tick = progress or (lambda name: None)
     reps = 2 if quick else 5
     steps = 100 if quick else 312
-    figures: dict[str, Any] = {"load_avg_start": os.getloadavg()}
+    figures: dict[str, Any] = {"quick": quick, "load_avg_start": os.getloadavg()}
     tick(RUN_STEPS[0])
     figures["esn_run_vs_reservoirpy"] = [
         esn_run_vs_reservoirpy(n, 300 if quick else 1000, reps) for n in (200, 1000)]

@@ -98,6 +98,10 @@ def table(figures: dict) -> str:
         lines.append(f"{'  same, over batch-model physics':<30} {strict:>{width}.3g} {'-':>8}  "
                      "(the R-robot model the fast path steps: a stricter floor)")
     lines += floor_lines(figures.get("esn_run_vs_reservoirpy", []))
+    if figures.get("quick"):
+        lines.append("--quick: short timings, few trials; torque_over_kinematic times one "
+                     "epoch of each row, not the rows' 15 and 10, so it is a smoke test, not "
+                     "that goal's figure")
     start, end = figures["load_avg_start"], figures["load_avg_end"]
     lines.append(f"load average (1 min) {start[0]:.2f} -> {end[0]:.2f} on "
                  f"{figures['cpu_count']} CPUs: ratios are timed interleaved, "
