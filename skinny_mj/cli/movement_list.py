@@ -11,6 +11,7 @@ from __future__ import annotations
 import shutil
 import textwrap
 from collections.abc import Iterable
+from pathlib import Path
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
@@ -95,7 +96,7 @@ def _named_rows() -> list[tuple[str, str]]:
     return rows
 
 
-def _frames(path) -> int:
+def _frames(path: Path) -> int:
     """Frames of an Acclaim .amc: each starts with a line holding its number alone."""
     with open(path) as f:
         return sum(1 for line in f if line.strip().isdigit())
@@ -111,15 +112,15 @@ def list_text(width: int | None = None) -> str:
     lines += ["", *_heading(f"Shipped motion capture (CMU subject 05, modern dance, "
                             f"{CMU_FPS:g} Hz; a bare name or the path; retargeted onto "
                             "dof 4 or 8 by joint angles):", width)]
-    lines += columns([(f"{clip}.amc", f"{_frames(sample_clip(clip))} frames, "
-                       f"{_frames(sample_clip(clip)) / CMU_FPS:.2f} s; skeleton "
+    frames = {clip: _frames(sample_clip(clip)) for clip in SAMPLE_CLIPS}
+    lines += columns([(f"{clip}.amc", f"{n} frames, {n / CMU_FPS:.2f} s; skeleton "
                        f"{SAMPLE_ASF.name}, beside it, so no --asf is needed")
-                      for clip in SAMPLE_CLIPS], width)
+                      for clip, n in frames.items()], width)
     lines += ["", "Files (a path):"]
     lines += columns([
         ("FILE.npz, FILE.csv", "joint angles over time (`skinny trajectory export` writes "
                                "them)"),
-        ("FILE.amc --asf SKELETON.asf", "Acclaim motion capture, any CMU subject (without "
+        ("FILE.amc --asf SUBJECT.asf", "Acclaim motion capture, any CMU subject (without "
                                         "--asf: the single .asf beside the .amc)"),
         ("FILE.bvh", "BVH motion capture"),
         ("FILE@start=S,duration=D", "an excerpt of any file above, in seconds: "
