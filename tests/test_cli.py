@@ -138,7 +138,7 @@ def test_demo_prints_the_table_and_where_the_recording_is(tmp_path):
     result = run_cli("demo", "--out", str(out))
     assert result.returncode == 0, result.stderr
     assert "test position NRMSE" in result.stdout and "paper" in result.stdout
-    assert f"rerun {out / 'run.rrd'}" in result.stdout
+    assert f"skinny view {out}" in result.stdout
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["config"]["rule"] == "new" and metrics["config"]["learning_cycles"] == 3
     assert metrics["test"]["position_nrmse"] < 0.1

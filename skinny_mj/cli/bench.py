@@ -15,7 +15,8 @@ average at the start and end is recorded with the figures. Goals:
 | ``mackey_glass`` N = 1000, log10 NRMSE_84 | <= -4.5 |
 
 The speed figures are here; the accuracy one (Mackey-Glass) is in
-:mod:`skinny_mj.cli.bench_mackey_glass`.
+:mod:`skinny_mj.cli.bench_mackey_glass`, the goals and the printed table in
+:mod:`skinny_mj.cli.bench_summary`.
 """
 
 from __future__ import annotations
@@ -31,20 +32,14 @@ from typing import Any
 
 import numpy as np
 
-from skinny_mj.cli.bench_floor import esn_state_floor, floor_lines, separate_robots
+from skinny_mj.cli.bench_floor import esn_state_floor, separate_robots
 from skinny_mj.cli.bench_mackey_glass import mackey_glass
+from skinny_mj.cli.bench_summary import BENCH_EXTRA, GOALS, summary, table
 from skinny_mj.cli.bench_timing import interleaved
 
-GOALS = {
-    "esn_run_vs_reservoirpy_N200": (">=", 2.0),
-    "esn_run_vs_reservoirpy_N1000": (">=", 3.0),
-    "control_step_over_physics": ("<=", 3.0),
-    "lockstep_speedup": (">=", 3.0),
-    "fast_vs_naive": (">=", 6.0),
-    "paper_e_full_s": ("<=", 20.0),
-    "torque_over_kinematic": ("<=", 2.0),
-    "mackey_glass_log10_nrmse84": ("<=", -4.5),
-}
+__all__ = ["GOALS", "RUN_STEPS", "control_step_over_physics", "esn_run_vs_reservoirpy",
+           "fast_vs_naive", "lockstep_speedup", "paper_e_full_s", "run", "run_with_bar",
+           "summary", "table", "torque_over_kinematic"]
 N_RUNS = 20  # R of the lockstep figures
 
 
@@ -68,7 +63,7 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
         import reservoirpy
         from reservoirpy.nodes import Reservoir
     except ImportError:
-        return {"skipped": "reservoirpy not installed: pip install 'skinny-mj[bench]'"}
+        return {"skipped": f"needs reservoirpy, the bench extra: {BENCH_EXTRA}"}
     n_in = 16
     esn = ESN(ESNConfig(n_inputs=n_in, n_outputs=4, n_reservoir=n_reservoir), seed=0)
     # reservoirpy takes W as CSR, the format ours multiplies by
@@ -302,7 +297,7 @@ def run(quick: bool = False, workers: int | None = None,
     tick = progress or (lambda name: None)
     reps = 2 if quick else 5
     steps = 100 if quick else 312
-    figures: dict[str, Any] = {"load_avg_start": os.getloadavg()}
+    figures: dict[str, Any] = {"quick": quick, "load_avg_start": os.getloadavg()}
     tick(RUN_STEPS[0])
     figures["esn_run_vs_reservoirpy"] = [
         esn_run_vs_reservoirpy(n, 300 if quick else 1000, reps) for n in (200, 1000)]
@@ -315,7 +310,7 @@ def run(quick: bool = False, workers: int | None = None,
     tick(RUN_STEPS[4])
     figures["mackey_glass"] = mackey_glass(1000, 2 if quick else 10)
     tick(RUN_STEPS[5])
-    figures["paper_e_full_s"] = ({"skipped": "--quick"} if quick
+    figures["paper_e_full_s"] = ({"skipped": "not run with --quick"} if quick
                                  else paper_e_full_s(workers))
     tick(RUN_STEPS[6])
     figures["torque_over_kinematic"] = (torque_over_kinematic(2, 1, epochs=1) if quick
@@ -339,54 +334,3 @@ def run_with_bar(quick: bool = False, workers: int | None = None, show: bool = T
             bar.update(RUN_STEPS.index(name) - bar.n)
 
         return run(quick=quick, workers=workers, progress=tick)
-
-
-def summary(figures: dict) -> dict[str, dict]:
-    """Each goal's measured value and whether it is met (None: skipped)."""
-    def get(path: list) -> float | None:
-        node: Any = figures
-        for key in path:
-            if isinstance(node, dict) and key in node:
-                node = node[key]
-            elif isinstance(node, list) and isinstance(key, int) and key < len(node):
-                node = node[key]
-            else:
-                return None
-        return float(node) if isinstance(node, int | float) else None
-
-    values = {
-        "esn_run_vs_reservoirpy_N200": get(["esn_run_vs_reservoirpy", 0, "ratio"]),
-        "esn_run_vs_reservoirpy_N1000": get(["esn_run_vs_reservoirpy", 1, "ratio"]),
-        "control_step_over_physics": get(["control_step_over_physics", "ratio"]),
-        "lockstep_speedup": get(["lockstep_speedup", "ratio"]),
-        "fast_vs_naive": get(["fast_vs_naive", "ratio"]),
-        "paper_e_full_s": get(["paper_e_full_s", "wall_s"]),
-        "torque_over_kinematic": get(["torque_over_kinematic", "ratio"]),
-        "mackey_glass_log10_nrmse84": get(["mackey_glass", "ours_log10_nrmse84"]),
-    }
-    out = {}
-    for key, value in values.items():
-        op, goal = GOALS[key]
-        met = None if value is None else (value >= goal if op == ">=" else value <= goal)
-        out[key] = {"value": value, "goal": f"{op} {goal:g}", "met": met}
-    return out
-
-
-def table(figures: dict) -> str:
-    """The summary as a plain-text table, with the machine load."""
-    lines = [f"{'figure':<30} {'measured':>10} {'goal':>8}  met",
-             "-" * 56]
-    for key, row in figures["summary"].items():
-        value = "skipped" if row["value"] is None else f"{row['value']:.3g}"
-        met = {True: "yes", False: "NO", None: "-"}[row["met"]]
-        lines.append(f"{key:<30} {value:>10} {row['goal']:>8}  {met}")
-    strict = figures.get("control_step_over_physics", {}).get("ratio_vs_batch_physics")
-    if strict is not None:
-        lines.append(f"{'  same, over batch-model physics':<30} {strict:>10.3g} {'-':>8}  "
-                     "(the R-robot model the fast path steps: a stricter floor)")
-    lines += floor_lines(figures.get("esn_run_vs_reservoirpy", []))
-    start, end = figures["load_avg_start"], figures["load_avg_end"]
-    lines.append(f"load average (1 min) {start[0]:.2f} -> {end[0]:.2f} on "
-                 f"{figures['cpu_count']} CPUs: ratios are timed interleaved, "
-                 "absolute times shift with load")
-    return "\n".join(lines)

@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj.cli.bench_summary import BENCH_EXTRA
+
 MG_HORIZON = 84
 
 
@@ -95,7 +97,7 @@ def mackey_glass(n_reservoir: int, trials: int, washout: int = 1000, train: int 
     try:
         import reservoirpy
     except ImportError:
-        out["reservoirpy"] = "skipped: reservoirpy not installed"
+        out["reservoirpy"] = f"skipped: needs reservoirpy, the bench extra: {BENCH_EXTRA}"
         return out
     start = time.perf_counter()
     with warnings.catch_warnings():  # its ridge solve warns on ill-conditioned Gram matrices

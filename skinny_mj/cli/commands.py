@@ -245,7 +245,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(f"|{'-' * 24}|{'-' * 16}|{'-' * 20}|")
     for name, ours, theirs in rows:
         print(f"| {name:22} | {ours:>14} | {theirs:>18} |")
-    print(f"\nRecording: {out / 'run.rrd'}  (open it with: rerun {out / 'run.rrd'})")
+    print(f"\nRecording: {out / 'run.rrd'}  (open it with: skinny view {out})")
     print(f"Also: {out / 'metrics.json'}, {out / 'learning_curve.png'}, {out / 'model.npz'}")
     if outcome.failed:
         print(f"the run failed: {m.get('fail_reason')}", file=sys.stderr)
@@ -332,13 +332,10 @@ def cmd_test(args: argparse.Namespace) -> int:
 
 # -- trajectory / render ----------------------------------------------------------------
 def cmd_trajectory(args: argparse.Namespace) -> int:
-    from skinny_mj.trajectories import get, names
-
     if args.action == "list":
-        for name in names():
-            traj = get(name, 4)
-            print(f"{name:14} {len(traj):5d} steps  {traj.duration_s:6.2f} s")
-        print("speed variants: NAME@0.5, NAME@1.5 (or --speed); repetitions: --reps N")
+        from skinny_mj.cli.movement_list import list_text
+
+        print(list_text())
         return 0
     if args.action == "show":
         from skinny_mj.training.imitation import movement_stats

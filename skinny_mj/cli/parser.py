@@ -176,9 +176,10 @@ def build_parser() -> argparse.ArgumentParser:
                    "and rests, full scale 4x its fastest speed (3D Cartesian: 240 s of "
                    "babbling then YMCA, 2x), paper E exp. 5 schedule; the configuration "
                    "with the lowest error on real dance it never saw in `skinny experiment "
-                   "generalization --rows general`. Trained ones ship: skinny test --model "
-                   "general-2d-joint|general-3d-joint|general-2d-cartesian|"
-                   "general-3d-cartesian --trajectory CLIP.amc --asf SKELETON.asf. "
+                   "generalization --rows general`. Trained ones ship (general-2d-joint, "
+                   "general-3d-joint, general-2d-cartesian, general-3d-cartesian): skinny "
+                   "test --model general-2d-joint --trajectory md_02.amc (a shipped clip; "
+                   "another CMU clip: --trajectory CLIP.amc --asf SUBJECT.asf). "
                    "With --actuation torque: the torque twin's general, one per --dof (joint "
                    "angles): 240 s of babbling at 0.5-4 rad/s (within the torque limits) then "
                    "YMCA, the inertia-scaled PD teacher (3D: poles at 20 rad/s, forgetting "
@@ -194,7 +195,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("trajectory", help="list or export movements")
     tsub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    tsub.add_parser("list", help="list the built-in movements")
+    tsub.add_parser("list", help="every movement source: the named movements, the shipped "
+                    "clips, the file kinds, babble: and set:")
     w = tsub.add_parser("show", help="a movement's statistics (still steps, peak speeds, "
                         "unreachable targets, tremor band)")
     w.add_argument("name")
