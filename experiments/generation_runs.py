@@ -98,9 +98,9 @@ def run_ours(method: str, cfg: ESNConfig, seeds: list[int],
 
 def estimate(method: str, cfg: ESNConfig, n_fit: int, n_free: int, runs: int):
     """The memory one batch of ``runs`` seeds of row ``method`` needs
-    (:func:`skinny_mj.memory.generation_estimate`; reservoirpy's rows run one seed at a
+    (:func:`skinny_mj.training.memory.generation_estimate`; reservoirpy's rows run one seed at a
     time, counted as ours)."""
-    from skinny_mj.memory import generation_estimate
+    from skinny_mj.training.memory import generation_estimate
 
     cycles = {"new": CYCLES, "new-blend": CYCLES, "new-conv": MAX_CYCLES}.get(method, 1)
     return generation_estimate(cfg.n_reservoir, cfg.n_inputs, cfg.n_outputs, n_fit, n_free,

@@ -113,8 +113,8 @@ def estimate_bytes(config: TrainConfig, row: Row, runs: int):
     before), float64 observations, actions and five scalars per step; the networks'
     float32 weights, gradients and Adam's two moments (a target copy: weights only).
     ESN + FEL rows: None (their training configuration says)."""
-    from skinny_mj.memory import Estimate
     from skinny_mj.plant import body
+    from skinny_mj.preflight import Estimate
 
     p, dof = row.params, config.plant.dof
     learner = p["learner"]

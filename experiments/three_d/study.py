@@ -99,7 +99,7 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 
 def trainings(config: TrainConfig, row: Row) -> dict[str, TrainConfig]:
     """The TrainConfigs the paper's own row trains, for the sweep's memory estimate."""
-    from skinny_mj.memory import row_configs
+    from skinny_mj.engine.memory import row_configs
 
     exp, paper_row = paper_of(config, row)
     found = row_configs(registry.get(PAPERS[row.params["paper"]]), exp, paper_row)

@@ -15,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj.cli.memory import check_export, check_train
 from skinny_mj.cli.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
-from skinny_mj.memory import check_export, check_train
 from skinny_mj.preflight import check_writable, check_writable_file, cleaned_on_failure
 from skinny_mj.progress import Progress as _Progress
 from skinny_mj.progress import progress_on as _progress_on
@@ -53,7 +53,7 @@ def _load_movement(mv, dof: int, check=None):
     """The movement ``mv`` (a :class:`skinny_mj.training.config.Movement`); ``check(steps, cause)``
     first sees its length x reps (one repetition loaded), so a run too big for the
     memory is refused before it is."""
-    from skinny_mj.memory import steps_cause
+    from skinny_mj.training.memory import steps_cause
     from skinny_mj.trajectories import load_movement
 
     kw = {"asf": mv.asf, "speed": mv.speed, "retarget": mv.retarget}
@@ -83,7 +83,7 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
 
 # -- track ------------------------------------------------------------------------------
 def cmd_track(args: argparse.Namespace) -> int:
-    from skinny_mj import memory
+    from skinny_mj.cli import memory
     from skinny_mj.cli.config_flags import TRACK_FLAGS
     from skinny_mj.controllers.metrics import position_nrmse
     from skinny_mj.plant import body
@@ -260,7 +260,7 @@ def cmd_test(args: argparse.Namespace) -> int:
     if not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
         raise SkinnyInputError("model has no Skinny metadata (dof, signals, max speed)", path=path)
     dof, signals = int(meta["dof"]), str(meta["signals"])
-    from skinny_mj import memory
+    from skinny_mj.cli import memory
     from skinny_mj.plant import body
 
     asked = _flag_config(args, TEST_FLAGS)  # the test's movement and sensor noise
@@ -412,10 +412,10 @@ def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any
                       options: dict[str, Any], invocation: Any) -> int:
     """Run ``exp`` into ``--out`` (checked first), then its report; exit 1 on errored runs."""
     from skinny_mj.cli import config_files as cf
+    from skinny_mj.cli.memory import check_sweep
     from skinny_mj.engine import folder
     from skinny_mj.engine.experiment import default_out_dir, run_sweep
     from skinny_mj.io import atomic_write_text
-    from skinny_mj.memory import check_sweep
 
     overwrite = bool(getattr(args, "overwrite", False))
     out = folder.choose_out_dir(args.out, default_out_dir(exp.name), resume=args.resume,
@@ -452,7 +452,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
     if args.out is not None:  # before the bench, not after it
         check_writable_file(args.out)
-    from skinny_mj.memory import check_bench
+    from skinny_mj.cli.memory import check_bench
 
     check_bench(args.workers, args.quick)
     figures = bench.run_with_bar(quick=args.quick, workers=args.workers,

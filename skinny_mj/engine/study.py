@@ -138,7 +138,7 @@ class Study:
     ``tiny``: the contract test's shrink (default :data:`TINY`); ``cost(config, row) ->
     float``: one run's relative cost, for the schedule (default: the training's
     :func:`~skinny_mj.training.config.relative_cost`); ``memory(config, row, runs)``: the
-    bytes a lockstep batch of a custom run needs (a :class:`skinny_mj.memory.Estimate`;
+    bytes a lockstep batch of a custom run needs (a :class:`skinny_mj.preflight.Estimate`;
     None: its ``trainings``' estimate); ``unavailable() -> {row id: why}``: rows this
     machine cannot run (an optional package missing).
     """

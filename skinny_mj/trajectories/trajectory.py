@@ -374,7 +374,7 @@ def excerpt(traj: Trajectory, start_s: float, duration_s: float | None) -> Traje
 def _check_size(steps: int, dof: int, cause: str) -> None:
     """Refuse (one line) a movement of ``steps`` steps the memory cannot hold: its angles,
     the interpolation's or tiling's copies, explicit desired signals (about 6 arrays)."""
-    from skinny_mj.memory import Estimate, check
+    from skinny_mj.preflight import Estimate, check
 
     check(Estimate({"movement": steps * (dof + 1) * 8 * 6}, {"movement": cause}),
           "the movement")
