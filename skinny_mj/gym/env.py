@@ -40,6 +40,10 @@ RENDER_CAMERA = "front"
 def resolve_trajectory(trajectory: Any, dof: int) -> Any:
     """A movement name or file (:func:`skinny_mj.trajectories.load_movement`), an object
     with ``.angles`` (T, dof) rad / ``.dt`` / ``.dof``, or None (the synthesized YMCA)."""
+    if trajectory is None:
+        from skinny_mj.trajectories import get
+
+        return get("ymca", dof)
     if isinstance(trajectory, str):
         from skinny_mj.trajectories import load_movement
 
