@@ -22,7 +22,7 @@ import importlib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from skinny_mj.engine.experiment import Experiment, RunFailed
 from skinny_mj.engine.experiment import Row as EngineRow
@@ -32,8 +32,9 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training import overrides
 from skinny_mj.training.config import TrainConfig, relative_cost
 
-if TYPE_CHECKING:  # (the study module imports this one when a study is built)
-    from skinny_mj.engine.study import Metric, Row, RunBatch, Study
+# The study's types (skinny_mj.engine.study's Study, Row, Metric, RunBatch), named for the
+# reader only: the study module imports this one to build its sweep, not the other way round.
+Study = Row = Metric = RunBatch = Any
 
 __all__ = ["Plan", "Results", "plan", "train_metrics", "read_metric"]
 
