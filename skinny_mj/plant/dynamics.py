@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from skinny_mj.plant import body
 from skinny_mj.plant.physics import Layout
@@ -123,6 +122,8 @@ class Dynamics:
         (``tests/test_dynamics.py`` states how closely); the true target of a torque
         inverse model.
         """
+        from scipy.interpolate import CubicSpline  # here: scipy.interpolate takes ~0.25 s
+
         angles = np.asarray(angles, float)
         t = dt * np.arange(len(angles))
         spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
@@ -144,6 +145,8 @@ class Dynamics:
         0), J (exact for a torque held over the step). ``feasible`` (a 0-d bool array):
         no step of any DOF over its limit.
         """
+        from scipy.interpolate import CubicSpline  # here: scipy.interpolate takes ~0.25 s
+
         angles = np.asarray(angles, float)
         tau = self.trajectory_torques_nm(angles, dt)
         ratio = np.abs(tau) / self.torque_limits_nm()

@@ -35,7 +35,6 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from skinny_mj.controllers.torque_arm import ArmGains, DesiredMotion
 from skinny_mj.controllers.torque_arm_loop import ArmLoop
@@ -82,6 +81,8 @@ def torque_limits_nm(dof: int) -> np.ndarray:
 def desired_velocities_rad_s(angles: np.ndarray, dt: float) -> np.ndarray:
     """(T, n_dof) joint velocities, rad/s, of the clamped cubic spline through ``angles``
     (T, n_dof) rad (at rest at both ends, as ``trajectory_torques_nm`` assumes)."""
+    from scipy.interpolate import CubicSpline  # here: scipy.interpolate takes ~0.25 s
+
     angles = np.asarray(angles, float)
     t = dt * np.arange(len(angles))
     return CubicSpline(t, angles, axis=0, bc_type="clamped")(t, 1)
@@ -111,6 +112,8 @@ def n_extra_inputs(cfg: TrainConfig) -> int:
 def desired_motion(dof: int, trajectory, with_id: bool = False) -> DesiredMotion:
     """The :class:`DesiredMotion` of ``trajectory`` for a held-torque loop: the clamped
     cubic spline's states, mid-step samples and (``with_id``) held inverse dynamics."""
+    from scipy.interpolate import CubicSpline  # here: scipy.interpolate takes ~0.25 s
+
     angles, dt = np.asarray(trajectory.angles, float), trajectory.dt
     t = dt * np.arange(len(angles))
     spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
