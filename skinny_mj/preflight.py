@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
+from skinny_mj.io import atomic_write_bytes
 
 __all__ = ["GL_BACKENDS", "MIN_FREE_BYTES", "check_gl", "check_writable", "check_writable_file",
            "check_free_space", "cleaned_on_failure", "Estimate", "available_bytes", "check",
@@ -58,8 +59,6 @@ def check_writable(folder: str | Path) -> Path:
         If an ancestor is a file (ENOTDIR), the file system is read-only, the folder is
         not writable, or the disk is full; the message names the folder and the reason.
     """
-    from skinny_mj.io import atomic_write_bytes
-
     folder = Path(folder)
     existing = folder
     while not existing.exists() and existing != existing.parent:

@@ -7,9 +7,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from skinny_mj.engine import registry
+from skinny_mj.engine.experiment import default_batch_size, default_workers, select_rows
 from skinny_mj.engine.memory import sweep_estimate
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.preflight import Estimate, check
+from skinny_mj.preflight import Estimate, check, check_writable_file
 from skinny_mj.training.memory import steps_cause, test_estimate, track_estimate, train_estimate
 
 _F8 = 8  # bytes per float64
@@ -46,8 +48,6 @@ def check_sweep(module: Any, experiment: Any, rows: Any, runs: int | None,
                 workers: int | None, scheduler: str | None) -> None:
     """Refuse a sweep whose largest row, times the workers running at once, does not
     fit; on a remote Dask cluster the memory is the cluster's (no check here)."""
-    from skinny_mj.engine.experiment import default_batch_size, default_workers, select_rows
-
     if scheduler is not None and scheduler != "local":
         return
     selected = select_rows(experiment, rows)
@@ -65,8 +65,6 @@ def check_export(dof: int, out: Any) -> Any:
     """Check ``skinny trajectory export``'s ``out`` (a writable .npz or .csv), and return
     ``check(steps, cause)`` for its memory: the repeated angles, the resampled and clipped
     copies and the file's text."""
-    from skinny_mj.preflight import check_writable_file
-
     if Path(out).suffix.lower() not in (".npz", ".csv"):
         raise SkinnyInputError("export writes .npz or .csv", path=out)
     check_writable_file(out)
@@ -82,7 +80,6 @@ def check_bench(workers: int | None, quick: bool) -> None:
     (not with ``--quick``), a sweep on ``workers`` processes: checked as a sweep is."""
     if quick:
         return
-    from skinny_mj.engine import registry
 
     module = registry.get("paper-e")
     rows = list(getattr(module, "TABLE_1", ())) or None

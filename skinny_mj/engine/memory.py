@@ -8,6 +8,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from skinny_mj.preflight import Estimate
+from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.memory import steps_cause, train_estimate
 
 __all__ = ["row_configs", "row_estimate", "sweep_estimate"]
@@ -16,8 +17,6 @@ __all__ = ["row_configs", "row_estimate", "sweep_estimate"]
 def row_configs(module: Any, experiment: Any, row: Any) -> list[Any]:
     """The TrainConfigs one run of ``row`` trains, as the study says
     (:meth:`skinny_mj.engine.study.Study.train_configs`)."""
-    from skinny_mj.training.config import TrainConfig
-
     fn = getattr(module, "train_configs", None)  # none: a test's stand-in, no estimate
     out = {} if fn is None else fn(experiment.config, row)
     return [c for c in out.values() if isinstance(c, TrainConfig)]

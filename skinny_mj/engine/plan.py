@@ -27,6 +27,7 @@ from typing import Any
 from skinny_mj.engine.experiment import Experiment, RunFailed
 from skinny_mj.engine.experiment import Row as EngineRow
 from skinny_mj.engine.options import movement_changes
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.engine.sweep import one_of_batch
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training import overrides
@@ -96,8 +97,6 @@ class Results(dict):
 
     def runs(self, row_id: str | None = None, status: str | None = "ok") -> list[dict]:
         """The run records of ``row_id`` (None: every row) with ``status`` (None: any)."""
-        from skinny_mj.engine.stats import load_runs
-
         return [r for r in load_runs(self.out_dir) if row_id in (None, r["row"])
                 and status in (None, r["status"])]
 

@@ -19,7 +19,10 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from skinny_mj.controllers.feedback import jacobian_error
+from skinny_mj.controllers.torque_arm import ArmState
 from skinny_mj.plant import body
+from skinny_mj.plant.model import load_batch_model
 from skinny_mj.plant.physics import Layout
 
 
@@ -185,8 +188,6 @@ class BatchArmState:
     """
 
     def __init__(self, plant, gravity: bool = False, nominal: bool = False):
-        from skinny_mj.plant.model import load_batch_model
-
         self.plant, self.n_runs = plant, plant.n_runs
         self.model = load_batch_model(plant.n_dof, plant.n_runs, "torque") if nominal \
             else plant.model
@@ -202,8 +203,6 @@ class BatchArmState:
 
     def sensed_angles(self, sensed: np.ndarray) -> np.ndarray:
         """(R, n) joint angles as the position sensors see them, rad."""
-        from skinny_mj.controllers.feedback import jacobian_error
-
         plant = self.plant
         noise = np.asarray(sensed, float) - plant.true_signals()
         if plant.signals == "joint":
@@ -239,8 +238,6 @@ class BatchArmState:
         return sd.qfrc_bias.reshape(self.n_runs, -1)[:, self.adr].copy()
 
     def __call__(self, sensed: np.ndarray):
-        from skinny_mj.controllers.torque_arm import ArmState
-
         plant, d = self.plant, self._data()
         bias = plant.bias_torque_nm() if self._own is None else \
             d.qfrc_bias.reshape(self.n_runs, -1)[:, self.adr].copy()

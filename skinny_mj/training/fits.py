@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from skinny_mj import plugins
+from skinny_mj.controllers.ridge_select import RidgeSelector
 from skinny_mj.errors import SkinnyInputError
 
 __all__ = ["Fit", "FITS", "FIT_GROUP", "register_fit", "make_rule", "known", "check",
@@ -52,8 +53,6 @@ def _cycle(cfg: Any, esn: Any, steps: int) -> None:
 
 
 def _ridge_select(cfg: Any, esn: Any, steps: int) -> Any:
-    from skinny_mj.controllers.ridge_select import RidgeSelector
-
     return RidgeSelector(esn, cfg.rule.epochs)
 
 
