@@ -13,10 +13,24 @@ from typing import Any
 __version__ = "0.1.0"
 
 _LAZY = {
-    "load": ("skinny_mj.plant.task", "load"),
     "Trajectory": ("skinny_mj.trajectories", "Trajectory"),
     "SkinnyInputError": ("skinny_mj.errors", "SkinnyInputError"),
 }
+
+
+def load(dof: int = 4, signals: str = "cartesian", trajectory: Any = None, *args: Any,
+         **kwargs: Any) -> Any:
+    """Skinny imitating ``trajectory`` (None: the synthesized YMCA), as a dm_control
+    ``control.Environment``: :func:`skinny_mj.plant.task.load`, whose other arguments
+    (``actuation``, ``sensor_noise``, ``seed``, ``max_speed_rad_s``, ``speed_factor``)
+    it passes on. The plant has no movement of its own; this package supplies the default.
+    """
+    from skinny_mj import trajectories  # here, not above: importing skinny_mj stays light
+    from skinny_mj.plant import task
+
+    if trajectory is None:
+        trajectory = trajectories.get("ymca", dof)
+    return task.load(dof, signals, trajectory, *args, **kwargs)
 
 
 def __getattr__(name: str) -> Any:
@@ -26,4 +40,4 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module 'skinny_mj' has no attribute {name!r}")
 
 
-__all__ = sorted(_LAZY)
+__all__ = sorted([*_LAZY, "load"])

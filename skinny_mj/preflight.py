@@ -19,6 +19,10 @@ No run is lost in silence (:func:`check_run_folder`, :func:`check_new_file`,
   created with an exclusive ``mkdir``: a second run started in the same second gets
   ``<time>-2``, a third ``<time>-3``, and so on.
 
+Memory: memory too small for a run is a :class:`~skinny_mj.errors.SkinnyInputError`
+naming the parameter that makes it big (exit 2; :func:`check` against an :class:`Estimate`,
+which the training, the engine and the command line make from the shapes they allocate).
+
 Nothing here imports mujoco: :func:`check_gl` must run before the first import.
 """
 
@@ -31,13 +35,16 @@ import itertools
 import os
 import shutil
 from collections.abc import Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
+from skinny_mj.io import atomic_write_bytes
 
 __all__ = ["GL_BACKENDS", "MIN_FREE_BYTES", "RUN_FILES", "check_gl", "check_writable",
            "check_writable_file", "check_free_space", "cleaned_on_failure", "check_run_folder",
-           "check_new_file", "timestamp", "new_folder", "run_folder"]
+           "check_new_file", "timestamp", "new_folder", "run_folder", "Estimate",
+           "available_bytes", "check", "fmt_bytes"]
 
 #: MUJOCO_GL values mujoco accepts on Linux (mujoco/rendering/classic/gl_context.py);
 #: any other value makes ``import mujoco`` itself raise.
@@ -74,8 +81,6 @@ def check_writable(folder: str | Path) -> Path:
         If the file system is read-only, the folder is not writable, or the disk is
         full; either message names the folder and the reason.
     """
-    from skinny_mj.io import atomic_write_bytes
-
     folder = Path(folder)
     existing = folder
     while not existing.exists() and existing != existing.parent:
@@ -231,3 +236,80 @@ def run_folder(out: str | Path | None, default_parent: str | Path, *,
             (out / name).unlink(missing_ok=True)
     with cleaned_on_failure(out) as path:
         yield path
+
+
+# -- memory ------------------------------------------------------------------------------
+def fmt_bytes(n: float) -> str:
+    """``n`` bytes in the largest binary unit that keeps it >= 1 (``1.5 GiB``)."""
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if abs(n) < 1024 or unit == "PiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    raise AssertionError("unreachable")
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Bytes a run (or a sweep) needs: ``parts`` (label -> bytes) and, per part, the
+    parameter that makes it grow (``causes``: label -> e.g. ``"--reservoir 20000"``)."""
+
+    parts: dict[str, int]
+    causes: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def total(self) -> int:
+        return int(sum(self.parts.values()))
+
+    @property
+    def culprit(self) -> str:
+        """The parameter behind the largest part."""
+        label = max(self.parts, key=lambda k: self.parts[k])
+        return self.causes.get(label, label)
+
+    def scaled(self, factor: int, cause: str) -> Estimate:
+        """``factor`` copies at once (e.g. parallel workers), ``cause`` added to each."""
+        return Estimate({k: v * factor for k, v in self.parts.items()},
+                        {k: f"{self.causes.get(k, k)}, {cause}" for k in self.parts})
+
+
+def available_bytes() -> int | None:
+    """Memory this process may still use: ``MemAvailable`` of ``/proc/meminfo`` (or
+    psutil's ``available`` off Linux), lowered to a cgroup's headroom (``memory.max``
+    less ``memory.current``, cgroup v2) where one is set; None if nothing says."""
+    free: int | None = None
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                free = int(line.split()[1]) * 1024
+                break
+    except (OSError, ValueError, IndexError):
+        free = None
+    if free is None:
+        try:
+            import psutil
+
+            free = int(psutil.virtual_memory().available)
+        except Exception:  # no psutil, or it cannot read this system
+            return None
+    try:
+        limit = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        used = int(Path("/sys/fs/cgroup/memory.current").read_text().strip())
+        if limit != "max":
+            free = min(free, max(0, int(limit) - used))
+    except (OSError, ValueError):
+        pass
+    return free
+
+
+def check(estimate: Estimate, what: str, *, available: int | None = None,
+          hint: str = "") -> None:
+    """Refuse (:class:`SkinnyInputError`) when ``estimate`` exceeds the memory available.
+
+    ``what`` names the run ("the training"); ``available`` defaults to
+    :func:`available_bytes` (unknown: no check)."""
+    free = available_bytes() if available is None else available
+    if free is None or estimate.total <= free:
+        return
+    raise SkinnyInputError(
+        f"{what} needs about {fmt_bytes(estimate.total)} of memory ({estimate.culprit}), "
+        f"more than the {fmt_bytes(free)} available{'; ' + hint if hint else ''}")

@@ -230,7 +230,7 @@ def test_a_sweep_written_into_out_since_the_command_started_is_kept(tmp_path, mo
                                                                      capsys):
     """Two sweeps given the same new --out: the lock keeps them apart while both run,
     and the check made again under the lock keeps the later from replacing the earlier."""
-    from skinny_mj import memory
+    from skinny_mj.cli import commands
     from skinny_mj.engine import registry
 
     module = types.ModuleType("fake_study")
@@ -241,7 +241,7 @@ def test_a_sweep_written_into_out_since_the_command_started_is_kept(tmp_path, mo
     def another_sweep_ends_meanwhile(*args, **kwargs):
         run_sweep(_fake(), out, workers=1, progress=False)
 
-    monkeypatch.setattr(memory, "check_sweep", another_sweep_ends_meanwhile)
+    monkeypatch.setattr(commands, "check_sweep", another_sweep_ends_meanwhile)
     code = main(["experiment", "fake", "--workers", "1", "--quiet", "--out", str(out)])
     _refused(capsys, code, str(out), "already holds a sweep")
     assert (out / "results.json").is_file() and not (out / LOCK_NAME).exists()

@@ -9,6 +9,7 @@ import pytest
 from absl.testing import absltest
 from dm_env import test_utils
 
+import skinny_mj
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.plant.adapters import BatchPlant
@@ -174,10 +175,12 @@ def test_random_commands_never_pass_the_range(dof):
     assert all(w.number == 0 for w in plant.data.warning)
 
 
-def test_default_trajectory_is_ymca():
+def test_the_default_trajectory_is_ymca_and_the_packages_not_the_plants():
     trajectories = pytest.importorskip("skinny_mj.trajectories")
-    env = load(4)
+    env = skinny_mj.load(4)
     np.testing.assert_array_equal(env.task.setup.angles, trajectories.get("ymca", 4).angles)
+    with pytest.raises(SkinnyInputError, match="needs a trajectory"):
+        load(4)
 
 
 @pytest.mark.parametrize(

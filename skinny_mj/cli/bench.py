@@ -36,6 +36,12 @@ from skinny_mj.cli.bench_floor import esn_state_floor, separate_robots
 from skinny_mj.cli.bench_mackey_glass import mackey_glass
 from skinny_mj.cli.bench_summary import BENCH_EXTRA, GOALS, summary, table
 from skinny_mj.cli.bench_timing import interleaved
+from skinny_mj.controllers import fel
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.engine import registry
+from skinny_mj.engine.experiment import default_workers, run_sweep
+from skinny_mj.plant.ideal import max_speeds
+from skinny_mj.trajectories import excerpt, get
 
 __all__ = ["GOALS", "RUN_STEPS", "control_step_over_physics", "esn_run_vs_reservoirpy",
            "fast_vs_naive", "lockstep_speedup", "paper_e_full_s", "run", "run_with_bar",
@@ -44,8 +50,6 @@ N_RUNS = 20  # R of the lockstep figures
 
 
 def _movement(n_steps: int):
-    from skinny_mj.trajectories import excerpt, get
-
     traj = get("ymca", 4)
     return excerpt(traj, 0.0, n_steps * traj.dt) if n_steps < len(traj) - 1 else traj
 
@@ -57,8 +61,6 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
     Also our R = 20 lockstep throughput (run-steps/s), the rate a sweep sees, and
     reservoirpy's time over the floor (:mod:`skinny_mj.cli.bench_floor`): the most any loop
     on SciPy's sparse product can gain over reservoirpy."""
-    from skinny_mj.controllers.esn import ESN, ESNConfig
-
     try:
         import reservoirpy
         from reservoirpy.nodes import Reservoir
@@ -102,9 +104,7 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
 
 
 def _lockstep_parts(n_runs: int, n_steps: int, seed: int = 0):
-    from skinny_mj.controllers.esn import ESN
     from skinny_mj.plant.adapters import BatchPlant
-    from skinny_mj.plant.ideal import max_speeds
     from skinny_mj.training.loop import TrainConfig
 
     traj = _movement(n_steps)
@@ -131,7 +131,6 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
     import mujoco
     from mujoco import rollout as mj_rollout
 
-    from skinny_mj.controllers import fel
     _, _, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
     plant.reset()
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -181,8 +180,6 @@ def lockstep_speedup(epochs: int, repeats: int) -> dict:
 def fast_vs_naive(n_steps: int, repeats: int) -> dict:
     """Per run-step cost: the naive path (dm_control ``env.step`` through ``EnvPlant``
     and a one-run Python ESN, ``fel.rollout``) vs the fast path (R = 20 lockstep)."""
-    from skinny_mj.controllers import fel
-    from skinny_mj.controllers.esn import ESN
     from skinny_mj.plant.adapters import EnvPlant
     from skinny_mj.plant.task import load
 
@@ -207,7 +204,6 @@ def torque_over_kinematic(n_runs: int, repeats: int, epochs: int | None = None) 
     cycles) over ``2d-ymca-kinematic`` (the velocity servo, paper E's 10 epochs of 5
     cycles), ``n_runs`` seeds in lockstep each, timed interleaved (best of ``repeats``);
     ``epochs`` shortens both to that many (a smoke test of this figure)."""
-    from skinny_mj.engine import registry
     from skinny_mj.training.loop import train_batch
 
     study = registry.get("dynamic")
@@ -230,9 +226,6 @@ def paper_e_full_s(workers: int | None = None, quick: bool = False,
     cores) through the engine's fast path, with the peak resident memory of this
     process and of the largest worker. ``quick`` runs ``build(quick=True)`` instead (a
     smoke test of this figure, not the figure)."""
-    from skinny_mj.engine import registry
-    from skinny_mj.engine.experiment import default_workers, run_sweep
-
     module = registry.get("paper-e")
     if only is None:
         only = tuple(getattr(module, "TABLE_1", {"1": 0, "2": 0, "3": 0, "4": 0, "5": 0,

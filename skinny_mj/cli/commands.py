@@ -17,14 +17,38 @@ from typing import Any
 import numpy as np
 
 from skinny_mj import preflight
+from skinny_mj.cli import config_files as cf
+from skinny_mj.cli import memory
+from skinny_mj.cli.config_files import file_config, train_config
+from skinny_mj.cli.config_flags import TEST_FLAGS, TRACK_FLAGS, changes, flag_names, given
+from skinny_mj.cli.memory import check_bench, check_export, check_sweep, check_train
 from skinny_mj.cli.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
+from skinny_mj.controllers.esn import ESN, read_metadata
+from skinny_mj.controllers.metrics import position_nrmse
+from skinny_mj.engine import folder, protocols, registry
+from skinny_mj.engine.experiment import default_out_dir, run_sweep
+from skinny_mj.engine.grid import grid_study
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.io import atomic_write_json
-from skinny_mj.memory import check_export, check_train
-from skinny_mj.preflight import check_new_file, check_run_folder, check_writable, run_folder
+from skinny_mj.io import atomic_write_json, atomic_write_text
+from skinny_mj.plant import body
+from skinny_mj.plant.ideal import IdealController
+from skinny_mj.plant.render import render_png
+from skinny_mj.plots import learning_curve_png
+from skinny_mj.preflight import (
+    check_new_file,
+    check_run_folder,
+    check_writable,
+    run_folder,
+)
 from skinny_mj.progress import Progress as _Progress
 from skinny_mj.progress import progress_on as _progress_on
-from skinny_mj.training.config import Movement
+from skinny_mj.recording import record_test, write_recording
+from skinny_mj.training.config import Movement, TrainConfig
+from skinny_mj.training.imitation import imitation_metrics, movement_stats, saturation
+from skinny_mj.training.memory import steps_cause
+from skinny_mj.training.presets import model_path
+from skinny_mj.trajectories import load_movement
+from skinny_mj.trajectories.library import SET_PREFIX, set_pieces
 
 DEFAULT_RESULTS = Path("results")
 
@@ -51,9 +75,6 @@ def _writing(args: argparse.Namespace, out: Path):
 def _flag_config(args: argparse.Namespace, groups, base=None):
     """``base`` (default ``TrainConfig()``) with the config flags of ``groups`` given in
     ``args`` (:mod:`skinny_mj.cli.config_flags`)."""
-    from skinny_mj.cli.config_flags import changes, flag_names, given
-    from skinny_mj.training.config import TrainConfig
-
     base = TrainConfig() if base is None else base
     return base.override(changes(base, given(args, groups), flag_names(groups)))
 
@@ -62,9 +83,6 @@ def _load_movement(mv, dof: int, check=None):
     """The movement ``mv`` (a :class:`skinny_mj.training.config.Movement`); ``check(steps, cause)``
     first sees its length x reps (one repetition loaded), so a run too big for the
     memory is refused before it is."""
-    from skinny_mj.memory import steps_cause
-    from skinny_mj.trajectories import load_movement
-
     kw = {"asf": mv.asf, "speed": mv.speed, "retarget": mv.retarget}
     if check is not None:
         one, report = load_movement(mv.trajectory, dof, reps=1, **kw)
@@ -78,9 +96,6 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
                desired_signals, actual_signals, sensed_signals=None, title: str = "",
                metadata: dict | None = None, curves: dict | None = None,
                torques: dict | None = None) -> Path:
-    from skinny_mj.plant import body
-    from skinny_mj.recording import write_recording
-
     return write_recording(
         path, dt=body.CONTROL_DT_S, dof=dof, dof_names=list(body.dof_names(dof)),
         signal_names=list(body.signal_names(dof, signals)), desired_angles=desired_angles,
@@ -92,11 +107,6 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
 
 # -- track ------------------------------------------------------------------------------
 def cmd_track(args: argparse.Namespace) -> int:
-    from skinny_mj import memory
-    from skinny_mj.cli.config_flags import TRACK_FLAGS
-    from skinny_mj.controllers.metrics import position_nrmse
-    from skinny_mj.plant import body
-    from skinny_mj.plant.ideal import IdealController
     from skinny_mj.plant.task import load
 
     cfg = _flag_config(args, TRACK_FLAGS)
@@ -143,9 +153,6 @@ def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> Non
     """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png; for a
     failed (diverged) run only metrics.json, which says why. The model's metadata says
     what it was trained on (``training``: movement, its pieces, steps, seconds, preset)."""
-    from skinny_mj.plots import learning_curve_png
-    from skinny_mj.recording import record_test
-
     if outcome.failed:
         atomic_write_json(out / "metrics.json", outcome.metrics)
         return
@@ -170,8 +177,6 @@ def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> Non
 def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
     """What a model was trained on: the movement, its pieces (a ``set:``),
     steps and seconds per cycle, repetitions, the seed and the preset."""
-    from skinny_mj.trajectories.library import SET_PREFIX, set_pieces
-
     mv, steps = outcome.config.movement, int(outcome.metrics["steps_per_cycle"])
     name = str(mv.trajectory)
     pieces = set_pieces(name) if name.lower().startswith(SET_PREFIX) else [name]
@@ -201,8 +206,6 @@ def _fmt(v: float | None) -> str:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from skinny_mj.cli.config_files import train_config
-
     cfg, seed = train_config(args)
     out = _out_dir(args, "train")
     check_train(cfg)
@@ -220,7 +223,6 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from skinny_mj.engine import registry
     from skinny_mj.training.loop import TrainConfig
 
     cfg = TrainConfig()  # paper E, experiment 5
@@ -254,10 +256,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_test(args: argparse.Namespace) -> int:
-    from skinny_mj.cli.config_flags import TEST_FLAGS
-    from skinny_mj.controllers.esn import ESN, read_metadata
     from skinny_mj.training.loop import TrainConfig, evaluate, run_of, run_streams
-    from skinny_mj.training.presets import model_path
 
     path = model_path(args.model)  # a shipped model's name, or a file
     if not path.is_file():
@@ -271,8 +270,6 @@ def cmd_test(args: argparse.Namespace) -> int:
     if not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
         raise SkinnyInputError("model has no Skinny metadata (dof, signals, max speed)", path=path)
     dof, signals = int(meta["dof"]), str(meta["signals"])
-    from skinny_mj import memory
-    from skinny_mj.plant import body
 
     asked = _flag_config(args, TEST_FLAGS)  # the test's movement and sensor noise
     out = _out_dir(args, "test")
@@ -302,7 +299,6 @@ def cmd_test(args: argparse.Namespace) -> int:
     if test.torque is not None:  # torque body: limits, |torque|, work, MuJoCo warnings
         metrics["test"]["torque"] = test.torque["metrics"]
     if not test.failed and cfg.torque is None:  # DTW, within 5°, lag
-        from skinny_mj.training.imitation import imitation_metrics, saturation
 
         # beside "test" (which stays the train command's own test dict, key for key)
         metrics["imitation"] = {**imitation_metrics(test, dof),
@@ -338,8 +334,6 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
         print(list_text())
         return 0
     if args.action == "show":
-        from skinny_mj.training.imitation import movement_stats
-
         traj, _ = _load_movement(Movement(args.name, asf=args.asf, retarget=args.retarget),
                                  args.dof)
         print(f"{traj.name} (dof {args.dof}, explicit desired signals: "
@@ -363,8 +357,6 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    from skinny_mj.plant.render import render_png
-
     check_new_file(args.out, args.overwrite)
     angles = None
     if args.trajectory is not None:
@@ -382,18 +374,14 @@ def cmd_render(args: argparse.Namespace) -> int:
 def cmd_experiment(args: argparse.Namespace) -> int:
     """Build the experiment with the CLI's options (each None = the paper's default), run
     the selected rows, write table/claims/report; exit 1 if any run errored (a bug)."""
-    from skinny_mj.engine import registry
-
     module = registry.get(args.name)  # `experiment list` is answered by the parser's main
     rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
     options = {"quick": bool(args.quick), "movement": args.movement,
                "asf": None if args.asf is None else str(args.asf), "dof": args.dof,
                "signals": args.signals, "protocol": args.protocol}
-    from skinny_mj.cli import config_files as cf  # --config: the file's options, rows, runs
 
     options, rows, runs, invocation = cf.apply_sweep_config(args, options, rows)
     if options["protocol"] is not None:  # readings of unstated settings, on the study's base
-        from skinny_mj.engine import protocols
 
         module = protocols.apply(options["protocol"], module, args.name)
     exp = module.build(**{k: v for k, v in options.items() if k != "protocol"})
@@ -404,10 +392,6 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``skinny sweep KEY=V1,V2 ...``: a grid over config keys (:mod:`skinny_mj.engine.grid`)
     on the experiment engine, from TrainConfig's defaults, a config file or a study's row."""
-    from skinny_mj.cli.config_files import file_config
-    from skinny_mj.engine import registry
-    from skinny_mj.engine.grid import grid_study
-
     study = None
     if args.study is not None:
         study = registry.get(args.study)
@@ -423,12 +407,6 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any, runs: Any,
                       options: dict[str, Any], invocation: Any) -> int:
     """Run ``exp`` into ``--out`` (checked first), then its report; exit 1 on errored runs."""
-    from skinny_mj.cli import config_files as cf
-    from skinny_mj.engine import folder
-    from skinny_mj.engine.experiment import default_out_dir, run_sweep
-    from skinny_mj.io import atomic_write_text
-    from skinny_mj.memory import check_sweep
-
     overwrite = bool(getattr(args, "overwrite", False))
     out = folder.choose_out_dir(args.out, None, resume=args.resume,
                                 overwrite=overwrite)  # nothing lost in silence
@@ -465,11 +443,10 @@ def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any
 
 # -- bench ------------------------------------------------------------------------------
 def cmd_bench(args: argparse.Namespace) -> int:
-    from skinny_mj.cli import bench
+    from skinny_mj.cli import bench  # here: the bench's imports cost every command ~0.09 s
 
     if args.out is not None:  # before the bench, not after it
         check_new_file(args.out, args.overwrite)
-    from skinny_mj.memory import check_bench
 
     check_bench(args.workers, args.quick)
     figures = bench.run_with_bar(quick=args.quick, workers=args.workers,

@@ -21,9 +21,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from skinny_mj.cli.config_flags import TRAIN_FLAGS, changes, flag_names, given, pairs
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import DERIVED, TrainConfig
 from skinny_mj.training.legacy import is_legacy
+from skinny_mj.training.presets import preset_fields
 
 _log = logging.getLogger(__name__)
 
@@ -91,16 +93,12 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     """The run ``skinny train`` was asked for, and its seed: ``TrainConfig()``, then
     ``--preset``'s keys, then ``--config FILE``'s (and its seed), then the flags and
     ``KEY=VALUE`` overrides given (:mod:`skinny_mj.cli.config_flags`)."""
-    from skinny_mj.cli.config_flags import TRAIN_FLAGS, changes, flag_names, given, pairs
-
     flags, keyed = given(args, TRAIN_FLAGS), pairs(getattr(args, "overrides", None) or [])
     texts = {**flags, **keyed}
     names = {k: f for k, f in flag_names(TRAIN_FLAGS).items() if k in flags and k not in keyed}
     cfg, seed = TrainConfig(), None
     preset = getattr(args, "preset", None)
     if preset is not None:
-        from skinny_mj.training.presets import preset_fields
-
         fields = preset_fields(preset, str(texts.get("actuation", "velocity")),
                                dof=texts.get("plant.dof"), signals=texts.get("plant.signals"))
         cfg = cfg.override(fields)

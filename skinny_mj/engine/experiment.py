@@ -88,7 +88,6 @@ from __future__ import annotations
 import functools
 import logging
 import os
-import re
 import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -99,7 +98,16 @@ import numpy as np
 
 from skinny_mj.engine.folder import prepare_out_dir, sweep_lock
 from skinny_mj.engine.stats import aggregate, load_run, markdown_table
-from skinny_mj.engine.sweep import RunFailed, execute_batch, execute_run, iter_dask, iter_joblib
+from skinny_mj.engine.sweep import (
+    SAFE_NAME,
+    Row,
+    RunFailed,
+    RunSpec,
+    execute_batch,
+    execute_run,
+    iter_dask,
+    iter_joblib,
+)
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
 from skinny_mj.preflight import new_folder
@@ -109,30 +117,6 @@ _log = logging.getLogger(__name__)
 __all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "select_rows",
            "run_sweep", "aggregate", "markdown_table", "execute_run", "execute_batch",
            "default_out_dir", "default_workers", "default_batch_size"]
-
-_SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+=-]*$")  # no "..", no hidden file
-
-
-@dataclass(frozen=True)
-class Row:
-    """One row of a paper's table: its id, the parameters that differ, the paper's values.
-
-    ``runs``: this row's run count if not the experiment's (``--runs N`` caps it at N);
-    ``seeds_of``: a row whose seeds this row takes (a paired comparison), None its own.
-    """
-
-    row_id: str
-    params: Mapping[str, Any] = field(default_factory=dict)
-    paper: Mapping[str, float] = field(default_factory=dict)
-    runs: int | None = None
-    seeds_of: str | None = None
-
-    def __post_init__(self) -> None:
-        if not _SAFE_NAME.match(self.row_id):
-            raise SkinnyInputError(f"row id {self.row_id!r} must be a plain file-name word")
-        if self.runs is not None and self.runs < 1:
-            raise SkinnyInputError(f"row {self.row_id!r}: runs must be >= 1, got {self.runs}")
-
 
 @dataclass(frozen=True)
 class Experiment:
@@ -167,7 +151,7 @@ class Experiment:
     report: Callable[[Mapping[str, Any], Path], str] | None = None
 
     def __post_init__(self) -> None:
-        if not _SAFE_NAME.match(self.name):
+        if not SAFE_NAME.match(self.name):
             raise SkinnyInputError(f"experiment name {self.name!r} must be a plain word")
         ids = [r.row_id for r in self.rows]
         if not ids or len(set(ids)) != len(ids):
@@ -184,21 +168,6 @@ class Experiment:
                     f"and not be a row id itself (members {list(members)}, rows {ids})")
         object.__setattr__(self, "rows", tuple(self.rows))
         object.__setattr__(self, "groups", groups)
-
-
-@dataclass(frozen=True)
-class RunSpec:
-    """One (row, run) pair with its derived seed; ``row_index`` is the row's place in
-    the experiment's full ``rows``."""
-
-    row: Row
-    row_index: int
-    run_index: int
-    seed: int
-
-    @property
-    def filename(self) -> str:
-        return f"{self.row.row_id}-{self.seed}.json"
 
 
 def run_seed(base_seed: int, row_index: int, run_index: int) -> int:

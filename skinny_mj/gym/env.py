@@ -33,6 +33,7 @@ from gymnasium import spaces
 from gymnasium.utils import seeding
 
 from skinny_mj.plant.task import Setup, finite_actions, load
+from skinny_mj.trajectories import get, load_movement
 
 RENDER_CAMERA = "front"
 
@@ -40,9 +41,9 @@ RENDER_CAMERA = "front"
 def resolve_trajectory(trajectory: Any, dof: int) -> Any:
     """A movement name or file (:func:`skinny_mj.trajectories.load_movement`), an object
     with ``.angles`` (T, dof) rad / ``.dt`` / ``.dof``, or None (the synthesized YMCA)."""
+    if trajectory is None:
+        return get("ymca", dof)
     if isinstance(trajectory, str):
-        from skinny_mj.trajectories import load_movement
-
         return load_movement(trajectory, dof)[0]
     return trajectory
 

@@ -78,10 +78,9 @@ def prepare(
     body.check_actuation(actuation)
     if not (np.isfinite(sensor_noise) and sensor_noise >= 0):
         raise SkinnyInputError(f"sensor_noise must be finite and >= 0, got {sensor_noise!r}")
-    if trajectory is None:
-        from skinny_mj import trajectories
-
-        trajectory = trajectories.get("ymca", dof)
+    if trajectory is None:  # the plant has no movement of its own (it imports none)
+        raise SkinnyInputError("the plant needs a trajectory; skinny_mj.load's default is "
+                               "the synthesized YMCA, skinny_mj.trajectories.get('ymca', dof)")
     if getattr(trajectory, "dof", dof) != dof:
         raise SkinnyInputError(f"trajectory has dof={trajectory.dof}, the plant dof={dof}")
     angles = np.asarray(trajectory.angles, dtype=float)
@@ -241,8 +240,9 @@ def load(
     ----------
     dof : 4 (2D) or 8 (3D).
     signals : "joint" (normalized angles) or "cartesian" (normalized segment vectors).
-    trajectory : object with ``.angles`` (T, dof) rad, ``.dt`` (0.02 s) and ``.dof``;
-        None = the synthesized YMCA (``skinny_mj.trajectories.get("ymca", dof)``).
+    trajectory : object with ``.angles`` (T, dof) rad, ``.dt`` (0.02 s) and ``.dof``
+        (required: :func:`skinny_mj.load` defaults to the synthesized YMCA,
+        ``skinny_mj.trajectories.get("ymca", dof)``).
     actuation : "velocity" (the kinematic servo; action = normalized joint velocity) or
         "torque" (motor twin; action = normalized torque, ctrl x gear N m).
     sensor_noise : std of the Gaussian noise on the sensed signals (normalized units).

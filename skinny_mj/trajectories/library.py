@@ -28,8 +28,12 @@ import numpy as np
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.trajectories import patterns
+from skinny_mj.trajectories.asf_amc import load_asf_amc
 from skinny_mj.trajectories.babble import babble, bridge, parse_babble_name
+from skinny_mj.trajectories.bvh import load_bvh
+from skinny_mj.trajectories.human import ymca_recorded
 from skinny_mj.trajectories.retarget import RetargetReport, clip_report, range_excess
+from skinny_mj.trajectories.retarget import retarget as retarget_clip
 from skinny_mj.trajectories.samples import SAMPLE_CLIPS, sample_clip
 from skinny_mj.trajectories.trajectory import Trajectory, excerpt
 from skinny_mj.trajectories.ymca import letter_end_steps, ymca
@@ -74,8 +78,6 @@ def _mirror(side: str) -> Callable[[int], Trajectory]:
 def _recorded(unit_2d: bool) -> Callable[[int], Trajectory]:
     def make(dof: int) -> Trajectory:
         """The recorded-like YMCA (``skinny_mj.trajectories.human``), default seed."""
-        from skinny_mj.trajectories.human import ymca_recorded
-
         return ymca_recorded(dof, unit_2d=unit_2d)
 
     return make
@@ -230,15 +232,9 @@ def load_movement(
         report = clip_report(excess, dof, source=str(path), source_fps=1.0 / raw.dt)
         traj = clipped
     else:
-        from skinny_mj.trajectories.retarget import retarget as retarget_clip
-
         if suffix == ".amc":
-            from skinny_mj.trajectories.asf_amc import load_asf_amc
-
             clip = load_asf_amc(Path(asf) if asf is not None else _find_asf(path), path, fps=fps)
         else:
-            from skinny_mj.trajectories.bvh import load_bvh
-
             clip = load_bvh(path, fps=fps)
         traj, report = retarget_clip(clip, dof, cutoff_hz=cutoff_hz, window_s=window,
                                      targets=retarget)
