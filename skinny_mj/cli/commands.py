@@ -28,6 +28,7 @@ from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.engine import folder, protocols, registry
 from skinny_mj.engine.experiment import default_out_dir, run_sweep
 from skinny_mj.engine.grid import grid_study
+from skinny_mj.engine.stats import SMOKE_NOTE
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
 from skinny_mj.plant import body
@@ -429,6 +430,8 @@ def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any
         wall = time.perf_counter() - start
         claims = exp.report(results, out) if exp.report is not None else ""
         summary = (out / "table.md").read_text()
+        if claims and options.get("quick"):  # a smoke test's verdicts mean nothing
+            claims = f"{SMOKE_NOTE}\n\n{claims}"
         if claims:  # a study without a report has no claims
             summary += f"\n## Claims\n{claims}\n"
             atomic_write_text(out / "claims.md", f"## Claims\n{claims}\n")
@@ -437,6 +440,9 @@ def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any
     n_error = int(results.get("n_error", 0))
     if n_error:
         print(f"{n_error} run(s) errored (bugs, not data): see {out / 'runs'}/*.json")
+    if options.get("quick"):
+        print("smoke test (--quick): these numbers and verdicts mean nothing about the "
+              "claims; run without --quick for those")
     print(f"results: {out}")
     return 1 if n_error else 0
 

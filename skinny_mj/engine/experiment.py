@@ -311,8 +311,12 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
         "rows": [r.row_id for r in selected]}}
     with sweep_lock(out_dir):  # one sweep at a time in a folder
         prepare_out_dir(experiment, out_dir, runs, resume, invocation)
-        return _sweep(experiment, out_dir, selected, runs, workers, resume, scheduler,
-                      progress, batch_size)
+        results = _sweep(experiment, out_dir, selected, runs, workers, resume, scheduler,
+                         progress, batch_size)
+        atomic_write_text(out_dir / "table.md",  # a --quick sweep's says it is a smoke test
+                          markdown_table(results, experiment.table_columns,
+                                         smoke=bool((options or {}).get("quick"))) + "\n")
+        return results
 
 
 def _sweep(experiment: Experiment, out_dir: Path, selected: Sequence[Row], runs: int,
@@ -363,7 +367,4 @@ def _sweep(experiment: Experiment, out_dir: Path, selected: Sequence[Row], runs:
                 bar.update(1)
             _report(records)
 
-    results = aggregate(out_dir)
-    atomic_write_text(out_dir / "table.md",
-                      markdown_table(results, experiment.table_columns) + "\n")
-    return results
+    return aggregate(out_dir)

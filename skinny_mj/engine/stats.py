@@ -210,13 +210,21 @@ def failed_cell(row: Mapping[str, Any]) -> str:
     return cell
 
 
+#: Said in a ``--quick`` sweep's table, claims and output.
+SMOKE_NOTE = ("**Smoke test (--quick):** a few short runs per row, to show the pipeline "
+              "runs end to end. Its numbers and verdicts mean nothing about the claims; "
+              "run the study without --quick for those.")
+
+
 def markdown_table(results: Mapping[str, Any],
-                   columns: Sequence[str] | Mapping[str, str] | None = None) -> str:
+                   columns: Sequence[str] | Mapping[str, str] | None = None, *,
+                   smoke: bool = False) -> str:
     """Our mean (variance) beside the paper's value for each metric column, a
     ``failed / n`` column, and a line under the table saying what the means exclude.
 
     ``columns``: metric names, or ``{metric: header}``; default every metric seen.
-    A paper value ``<metric>_var`` is shown as the paper's variance.
+    A paper value ``<metric>_var`` is shown as the paper's variance. ``smoke``: the
+    sweep was a ``--quick`` one; :data:`SMOKE_NOTE` stands under the title.
     """
     rows = list(results["rows"])
     if columns is None:
@@ -228,8 +236,10 @@ def markdown_table(results: Mapping[str, Any],
     head = ["row", "failed / n"]
     for label in headers.values():
         head += [f"{label} (ours: mean (var))", f"{label} (paper)"]
-    lines = [f"### {results.get('experiment', '')}", "",
-             "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines = [f"### {results.get('experiment', '')}", ""]
+    if smoke:
+        lines += [SMOKE_NOTE, ""]
+    lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for row in rows:
         cells = [row["row"], failed_cell(row)]
         for metric in headers:
