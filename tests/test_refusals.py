@@ -311,3 +311,50 @@ def test_a_movement_too_long_for_the_memory_is_refused_before_it_is_made():
     with pytest.raises(SkinnyInputError, match=r"10000000000 repetitions of ymca"):
         traj.repeat(10**10)
     assert len(traj.resample(0.5)) == 626 and len(traj.repeat(3)) == 939  # ordinary sizes
+
+
+# -- a body's MJCF ----------------------------------------------------------------------------
+def _edited_models(tmp_path: Path, edit) -> Path:
+    """A copy of the shipped models folder with ``edit(text) -> text`` applied to
+    ``skinny_2d.xml``."""
+    import shutil
+
+    from skinny_mj.plant.model import models_dir
+
+    folder = tmp_path / "models"
+    shutil.copytree(models_dir(), folder)
+    robot = folder / "skinny_2d.xml"
+    robot.write_text(edit(robot.read_text()))
+    return folder
+
+
+def _drop_line(needle: str):
+    return lambda text: "\n".join(ln for ln in text.splitlines() if needle not in ln)
+
+
+@pytest.mark.parametrize("edit,says", [
+    (lambda text: text[:1500], "skinny_2d.xml:26: not well-formed XML"),  # truncated
+    (lambda text: "", "skinny_2d.xml: empty file"),
+    (lambda text: text.replace('<joint name="right_shoulder_abduction"',
+                               '<joint foo="1" name="right_shoulder_abduction"'),
+     "skinny_2d.xml:26: MJCF error: Schema violation: unrecognized attribute: 'foo'"),
+    (lambda text: text.replace('class="shoulder_abduction" axis="0 1 0"',
+                               'class="shoulder_abduction" axis="0 0 0"', 1),
+     "skinny_2d.xml:26: MJCF error: axis too small"),
+    (_drop_line('<velocity name="right_shoulder_abduction"'),
+     "skinny_2d.xml: the MJCF does not match the 2D body's spec (skinny_mj.plant.body): "
+     "no actuator 'right_shoulder_abduction'"),
+    (_drop_line('<site name="left_wrist"'), "no site 'left_wrist'"),
+])
+def test_a_broken_mjcf_is_one_line_naming_file_and_line(edit, says, tmp_path, monkeypatch,
+                                                       capsys):
+    from skinny_mj.plant.model import MODELS_ENV_VAR, load_model
+
+    monkeypatch.setenv(MODELS_ENV_VAR, str(_edited_models(tmp_path, edit)))
+    err = _one_line_exit_2(["track", "--out", str(tmp_path / "o")], capsys)
+    assert says in err
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(SkinnyInputError, match="skinny_2d.xml"):
+        load_model(4)
+    with pytest.raises(SkinnyInputError, match="skinny_2d.xml"):
+        load_model(4, "torque")
