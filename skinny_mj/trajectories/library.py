@@ -110,10 +110,12 @@ def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajec
     ``speed`` other than 1 is an error. The speed change comes before the repetitions.
     """
     _check_dof(dof)
-    base, _, suffix = str(name).strip().lower().partition("@")
+    base, at, suffix = str(name).strip().lower().partition("@")
     babbling = parse_babble_name(base)
     if base not in names() and babbling is None:
         raise SkinnyInputError(f"unknown movement {name!r}; valid names: {', '.join(names())}")
+    if at and not suffix:
+        raise SkinnyInputError(f"{name!r} has no speed after '@' (use e.g. 'ymca@0.5')")
     if suffix:
         if speed != 1.0:
             raise SkinnyInputError(f"{name!r} has a speed suffix; do not also pass speed={speed}")
@@ -200,6 +202,9 @@ def load_movement(
     if retarget not in ("angles", "positions"):
         raise SkinnyInputError(f"retarget must be 'angles' or 'positions', got {retarget!r}")
     _check_dof(dof)
+    if not str(name_or_path).strip():
+        raise SkinnyInputError("empty movement name: give a name (`skinny trajectory "
+                               "list`) or a file")
     if str(name_or_path).strip().lower().startswith(SET_PREFIX):
         traj, report = training_set(str(name_or_path), dof, asf=asf, fps=fps,
                                     cutoff_hz=cutoff_hz, retarget=retarget)
@@ -212,6 +217,8 @@ def load_movement(
             traj = get(text, dof, speed=speed, reps=reps)
             excess = range_excess(traj.angles, dof)
             return traj, clip_report(excess, dof, source=text, source_fps=1.0 / traj.dt)
+        if Path(text).is_dir():
+            raise SkinnyInputError("a folder, not a movement file", path=text)
         raise SkinnyInputError(
             "unknown movement file type (use .npz, .csv, .amc with .asf, or .bvh)", path=text
         )
@@ -219,6 +226,8 @@ def load_movement(
     if not path.is_file() and str(path.parent) == "." and path.stem in SAMPLE_CLIPS \
             and suffix == ".amc":
         path = sample_clip(path.stem)  # a bare shipped clip name: md_02.amc, md_03.amc
+    if path.is_dir():
+        raise SkinnyInputError("a folder, not a movement file", path=path)
     if not path.is_file():
         raise SkinnyInputError("no such file", path=path)
     if suffix in (".npz", ".csv"):

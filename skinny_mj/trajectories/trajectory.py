@@ -154,7 +154,7 @@ class Trajectory:
         from scipy.interpolate import PchipInterpolator
 
         n = max(2, int(round(len(self) / speed)))
-        _check_size(n, self.dof, f"speed {speed:g}: {n} steps of {self.name}")
+        check_size(n, self.dof, f"speed {speed:g}: {n} steps of {self.name}")
         src = np.arange(len(self), dtype=float)
         dst = np.linspace(0.0, len(self) - 1.0, n)
         angles = PchipInterpolator(src, self.angles, axis=0)(dst)
@@ -167,7 +167,7 @@ class Trajectory:
             raise SkinnyInputError(f"repetitions must be an integer >= 1, got {n!r}")
         if n == 1:
             return self
-        _check_size(int(n) * len(self), self.dof, f"{n} repetitions of {self.name}")
+        check_size(int(n) * len(self), self.dof, f"{n} repetitions of {self.name}")
         return self._map(np.tile(self.angles, (int(n), 1)), f"{self.name}x{n}",
                          lambda v: np.tile(v, (int(n), 1)))
 
@@ -371,7 +371,7 @@ def excerpt(traj: Trajectory, start_s: float, duration_s: float | None) -> Traje
                      lambda v: v[start : start + n])
 
 
-def _check_size(steps: int, dof: int, cause: str) -> None:
+def check_size(steps: int, dof: int, cause: str) -> None:
     """Refuse (one line) a movement of ``steps`` steps the memory cannot hold: its angles,
     the interpolation's or tiling's copies, explicit desired signals (about 6 arrays)."""
     from skinny_mj.memory import Estimate, check
