@@ -11,6 +11,7 @@ on reset, so episode k of an environment continues episode k-1's stream.
 from __future__ import annotations
 
 import collections
+import os
 from dataclasses import dataclass
 from typing import Any
 
@@ -63,6 +64,23 @@ class Setup:
     dt: float = CONTROL_DT_S
 
 
+def _number(name: str, value: Any) -> float:
+    if isinstance(value, bool):
+        raise SkinnyInputError(f"{name} must be a number, got {value!r}")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise SkinnyInputError(f"{name} must be a number, got {value!r}") from None
+
+
+def check_seed(seed: Any) -> int:
+    """``seed`` as an int if it is a whole number >= 0 (a Generator's seed), else a
+    :class:`SkinnyInputError`."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise SkinnyInputError(f"seed must be a whole number >= 0, got {seed!r}")
+    return int(seed)
+
+
 def prepare(
     dof: int,
     signals: str,
@@ -76,12 +94,11 @@ def prepare(
     body.check_dof(dof)
     body.check_signals(signals)
     body.check_actuation(actuation)
+    sensor_noise = _number("sensor_noise", sensor_noise)
+    speed_factor = _number("speed_factor", speed_factor)
     if not (np.isfinite(sensor_noise) and sensor_noise >= 0):
         raise SkinnyInputError(f"sensor_noise must be finite and >= 0, got {sensor_noise!r}")
-    if trajectory is None:
-        from skinny_mj import trajectories
-
-        trajectory = trajectories.get("ymca", dof)
+    trajectory = resolve_trajectory(trajectory, dof)
     if getattr(trajectory, "dof", dof) != dof:
         raise SkinnyInputError(f"trajectory has dof={trajectory.dof}, the plant dof={dof}")
     angles = np.asarray(trajectory.angles, dtype=float)
@@ -97,7 +114,11 @@ def prepare(
             raise SkinnyInputError(f"speed_factor must be > 0, got {speed_factor!r}")
         speed = max_speeds(angles, dt, speed_factor)
     else:
-        speed = np.broadcast_to(np.asarray(max_speed_rad_s, dtype=float), (dof,)).copy()
+        try:
+            speed = np.broadcast_to(np.asarray(max_speed_rad_s, dtype=float), (dof,)).copy()
+        except (TypeError, ValueError):
+            raise SkinnyInputError(f"max_speed_rad_s must be a number or {dof} numbers, "
+                                   f"got {max_speed_rad_s!r}") from None
         if not np.all(np.isfinite(speed) & (speed > 0)):
             raise SkinnyInputError(f"max_speed_rad_s must be finite and > 0, got {speed}")
     speed.flags.writeable = False  # the plant's full scale: its own, read-only copy
@@ -115,6 +136,28 @@ def prepare(
         max_speed_rad_s=speed,
         dt=dt,
     )
+
+
+def resolve_trajectory(trajectory: Any, dof: int) -> Any:
+    """The movement a ``trajectory`` argument names: None (the synthesized YMCA), any
+    name or file the command line's ``--trajectory`` takes (``"ymca@0.5"``,
+    ``"babble:seed=3"``, ``"set:ymca+md_03.amc"``, ``"clip.csv@start=2"``; see
+    :func:`skinny_mj.trajectories.load_movement`), a (T, dof) array of angles in rad, or
+    an object with ``.angles`` (T, dof) rad, ``.dt`` and ``.dof`` (a
+    :class:`~skinny_mj.trajectories.Trajectory`). Anything else is a
+    :class:`SkinnyInputError`."""
+    from skinny_mj import trajectories
+
+    if trajectory is None:
+        return trajectories.get("ymca", dof)
+    if isinstance(trajectory, str | os.PathLike):
+        return trajectories.load_movement(trajectory, dof)[0]
+    if isinstance(trajectory, np.ndarray):
+        return trajectories.Trajectory(trajectory)
+    if not hasattr(trajectory, "angles"):
+        raise SkinnyInputError(f"trajectory must be a movement name or file, (T, {dof}) "
+                               f"angles or a Trajectory, got {type(trajectory).__name__}")
+    return trajectory
 
 
 def widen_ctrlrange(model, actuator_ids: np.ndarray, setup: Setup) -> None:
@@ -241,8 +284,10 @@ def load(
     ----------
     dof : 4 (2D) or 8 (3D).
     signals : "joint" (normalized angles) or "cartesian" (normalized segment vectors).
-    trajectory : object with ``.angles`` (T, dof) rad, ``.dt`` (0.02 s) and ``.dof``;
-        None = the synthesized YMCA (``skinny_mj.trajectories.get("ymca", dof)``).
+    trajectory : a movement name or file as ``skinny train --trajectory`` takes
+        (``"ym"``, ``"ymca@0.5"``, ``"babble:seed=3"``, ``"set:A+B"``, ``"clip.npz"``), an
+        object with ``.angles`` (T, dof) rad, ``.dt`` (0.02 s) and ``.dof``, or (T, dof)
+        angles; None = the synthesized YMCA (see :func:`resolve_trajectory`).
     actuation : "velocity" (the kinematic servo; action = normalized joint velocity) or
         "torque" (motor twin; action = normalized torque, ctrl x gear N m).
     sensor_noise : std of the Gaussian noise on the sensed signals (normalized units).
@@ -257,6 +302,7 @@ def load(
     Environment with episodes of T - 1 control steps of 0.02 s; ``env.task`` exposes
     ``max_speed_rad_s``, ``signals``, ``setup``.
     """
+    check_seed(seed)
     setup = prepare(dof, signals, trajectory, actuation, sensor_noise, max_speed_rad_s,
                     speed_factor)
     physics = SkinnyPhysics.load(dof, actuation)
