@@ -358,3 +358,25 @@ def test_a_broken_mjcf_is_one_line_naming_file_and_line(edit, says, tmp_path, mo
         load_model(4)
     with pytest.raises(SkinnyInputError, match="skinny_2d.xml"):
         load_model(4, "torque")
+
+
+# -- motion capture's skeleton -----------------------------------------------------------------
+def test_an_amc_without_its_subjects_skeleton_is_refused_and_the_one_used_is_said(
+        tmp_path, capsys):
+    import shutil
+
+    data = Path(__file__).parent / "data"
+    shutil.copy(data / "tiny.amc", tmp_path / "86_02.amc")
+    shutil.copy(data / "tiny.asf", tmp_path / "12.asf")  # another subject's skeleton
+    argv = ["trajectory", "show", str(tmp_path / "86_02.amc")]
+    err = _one_line_exit_2(argv, capsys)
+    assert "86_02.amc: no skeleton 86.asf of its subject; beside it: 12.asf" in err
+    assert "--asf" in err
+    assert main([*argv, "--asf", str(tmp_path / "12.asf")]) == 0
+    assert capsys.readouterr().err.strip() == \
+        f"skinny trajectory: 86_02.amc: skeleton {tmp_path / '12.asf'} (given)"
+    shutil.copy(data / "tiny.asf", tmp_path / "86.asf")
+    assert main(argv) == 0
+    assert capsys.readouterr().err.strip() == (f"skinny trajectory: 86_02.amc: skeleton "
+                                               f"{tmp_path / '86.asf'} (beside it, by the "
+                                               "clip's subject)")

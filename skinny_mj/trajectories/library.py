@@ -20,6 +20,7 @@ Two generated names (not in :func:`names`, which lists the fixed movements):
 from __future__ import annotations
 
 import dataclasses
+import logging
 from collections.abc import Callable
 from pathlib import Path
 
@@ -30,7 +31,7 @@ from skinny_mj.plant import body
 from skinny_mj.trajectories import patterns
 from skinny_mj.trajectories.babble import babble, bridge, parse_babble_name
 from skinny_mj.trajectories.retarget import RetargetReport, clip_report, range_excess
-from skinny_mj.trajectories.samples import SAMPLE_CLIPS, sample_clip
+from skinny_mj.trajectories.samples import SAMPLE_CLIPS, SUBJECT_SKELETONS, sample_clip
 from skinny_mj.trajectories.trajectory import Trajectory, excerpt
 from skinny_mj.trajectories.ymca import letter_end_steps, ymca
 
@@ -136,13 +137,37 @@ def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajec
     return traj.with_name(label)
 
 
-def _find_asf(amc: Path) -> Path:
-    found = sorted(amc.parent.glob("*.asf")) + sorted(amc.parent.glob("*.ASF"))
-    found = sorted(set(found))
-    if len(found) != 1:
-        what = "no .asf" if not found else f"{len(found)} .asf files"
-        raise SkinnyInputError(f"{what} beside the .amc; pass the skeleton with asf=", path=amc)
-    return found[0]
+_log = logging.getLogger(__name__)
+_SKELETONS_SAID: set[tuple[str, str]] = set()  # (clip, skeleton) pairs already logged
+
+
+def find_asf(amc: Path) -> Path:
+    """The skeleton of the CMU clip ``amc``, beside it and named by its subject, the
+    clip's name up to the first "_" (``86_02.amc``: ``86.asf``; the shipped clips:
+    :data:`~skinny_mj.trajectories.samples.SUBJECT_SKELETONS`). Without one (another
+    subject's skeleton is never taken), a :class:`SkinnyInputError` asking for ``--asf``."""
+    subject = amc.stem.split("_")[0].lower()
+    wanted = {subject, SUBJECT_SKELETONS.get(subject, subject)}
+    skeletons = sorted(p for p in amc.parent.glob("*") if p.suffix.lower() == ".asf")
+    found = [p for p in skeletons if p.stem.lower() in wanted]
+    if len(found) == 1:
+        return found[0]
+    if found:
+        what = f"{len(found)} skeletons of subject {subject!r} ({', '.join(p.name for p in found)})"
+    else:
+        others = f"; beside it: {', '.join(p.name for p in skeletons)}" if skeletons else ""
+        what = f"no skeleton {subject}.asf of its subject{others}"
+    raise SkinnyInputError(f"{what}: pass the clip's skeleton with --asf (asf= in Python)",
+                           path=amc)
+
+
+def _say_skeleton(amc: Path, asf: Path, given: bool) -> None:
+    """Log (once per pair, level INFO; the command line prints it) which skeleton an
+    .amc was read with."""
+    if (str(amc), str(asf)) not in _SKELETONS_SAID:
+        _SKELETONS_SAID.add((str(amc), str(asf)))
+        _log.info("%s: skeleton %s (%s)", amc.name, asf,
+                  "given" if given else "beside it, by the clip's subject")
 
 
 _FILE_SUFFIXES = (".npz", ".csv", ".amc", ".bvh")
@@ -190,7 +215,7 @@ def load_movement(
     retarget: str = "angles",
 ) -> tuple[Trajectory, RetargetReport]:
     """Any movement: a library name, a ``.npz``/``.csv`` trajectory, ``.amc`` (+ ``asf``,
-    or the single ``.asf`` in the same folder) or ``.bvh`` motion capture.
+    or its subject's skeleton beside it, :func:`find_asf`) or ``.bvh`` motion capture.
 
     Returns the trajectory (clipped into the joint ranges, at ``speed``, ``reps`` times)
     and a :class:`RetargetReport` saying how much was clipped (zero for library names).
@@ -244,13 +269,16 @@ def load_movement(
         if suffix == ".amc":
             from skinny_mj.trajectories.asf_amc import load_asf_amc
 
-            clip = load_asf_amc(Path(asf) if asf is not None else _find_asf(path), path, fps=fps)
+            skeleton = Path(asf) if asf is not None else find_asf(path)
+            clip = load_asf_amc(skeleton, path, fps=fps)
         else:
             from skinny_mj.trajectories.bvh import load_bvh
 
             clip = load_bvh(path, fps=fps)
         traj, report = retarget_clip(clip, dof, cutoff_hz=cutoff_hz, window_s=window,
                                      targets=retarget)
+        if suffix == ".amc":
+            _say_skeleton(path, skeleton, asf is not None)
     traj = traj.resample(speed).repeat(reps)
     return traj, report
 
