@@ -97,6 +97,15 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _rows(text: str) -> str:
+    """argparse type of ``--rows``: at least one row id or group (an empty value, as from
+    an unset shell variable, would otherwise mean every row)."""
+    if not [r for r in text.split(",") if r.strip()]:
+        raise argparse.ArgumentTypeError(f"{text!r} names no row: give row ids or groups, "
+                                         "or leave --rows out to run every row")
+    return text
+
+
 _UNSET = object()
 
 
@@ -208,8 +217,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "(default: the paper's)")
     p.add_argument("--signals", choices=("joint", "cartesian"),
                    help="the networks' position signals (default: the paper's)")
-    p.add_argument("--rows", help="comma-separated row ids and groups to run (default: all); "
-                   "seeds are the full sweep's")
+    p.add_argument("--rows", type=_rows, help="comma-separated row ids and groups to run "
+                   "(default: all); seeds are the full sweep's")
     p.add_argument("--config", type=Path, help="repeat a sweep: its config.json (options, "
                    "rows, runs); flags given as well override them")
     p.add_argument("--protocol", help="run the study under a named set of readings of the "
@@ -230,7 +239,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "metrics.json or a bare config (instead of TrainConfig's defaults)")
     p.add_argument("--quick", action="store_true", help="a smoke test: the --study's own "
                    "--quick for its row, else 2 epochs; 2 runs per row unless --runs")
-    p.add_argument("--rows", help="comma-separated row ids to run (default: all)")
+    p.add_argument("--rows", type=_rows, help="comma-separated row ids to run (default: all)")
     p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
     p.add_argument("--out", type=Path, help="output folder (default: results/sweep/<time>)")
     p.add_argument("--resume", action="store_true", help="continue the sweep in --out")
