@@ -89,9 +89,17 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     """The run ``skinny train`` was asked for, and its seed: ``TrainConfig()``, then
     ``--preset``'s keys, then ``--config FILE``'s (and its seed), then the flags and
     ``KEY=VALUE`` overrides given (:mod:`skinny_mj.cli.config_flags`)."""
-    from skinny_mj.cli.config_flags import TRAIN_FLAGS, changes, flag_names, given, pairs
+    from skinny_mj.cli.config_flags import (
+        TRAIN_FLAGS,
+        changes,
+        check_no_conflict,
+        flag_names,
+        given,
+        pairs,
+    )
 
     flags, keyed = given(args, TRAIN_FLAGS), pairs(getattr(args, "overrides", None) or [])
+    check_no_conflict(flags, keyed, flag_names(TRAIN_FLAGS))
     texts = {**flags, **keyed}
     names = {k: f for k, f in flag_names(TRAIN_FLAGS).items() if k in flags and k not in keyed}
     cfg, seed = TrainConfig(), None
