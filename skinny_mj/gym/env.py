@@ -113,6 +113,10 @@ class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
     ):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        if render_mode is not None:
+            from skinny_mj.plant.render import check_rendering
+
+            check_rendering()  # MUJOCO_GL=disabled: one line saying how to turn it on
         self.render_mode = render_mode
         self.width, self.height = int(width), int(height)
         self.dm_control_env = load(dof, signals, resolve_trajectory(trajectory, dof),
