@@ -26,7 +26,11 @@ FLAGS = settings(max_examples=200, deadline=None, database=None)
 
 
 def _one_line_exit_2(argv, capsys) -> str:
-    assert main(argv) == 2
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's usage error
+        code = exc.code
+    assert code == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "Traceback" not in err, err
     return err
@@ -380,3 +384,28 @@ def test_an_amc_without_its_subjects_skeleton_is_refused_and_the_one_used_is_sai
     assert capsys.readouterr().err.strip() == (f"skinny trajectory: 86_02.amc: skeleton "
                                                f"{tmp_path / '86.asf'} (beside it, by the "
                                                "clip's subject)")
+
+
+# -- bad values on the command line: exit 2, one line naming the culprit -----------------------
+@pytest.mark.parametrize("argv,culprit", [
+    (["experiment", "paper-e", "--quick", "--rows", ""], "--rows: '' names no row"),
+    (["experiment", "paper-e", "--quick", "--rows", " , "], "--rows: ' , ' names no row"),
+    (["sweep", "esn.spectral_radius=0.5,0.9", "--rows", ""], "--rows: '' names no row"),
+    (["train", "--epochs", "1", "rule.epochs=2"], "--epochs 1 and rule.epochs=2"),
+    (["train", "--dof", "8", "plant.dof=4"], "--dof 8 and plant.dof=4"),
+    (["train", "rule.epochs=1", "rule.epochs=2"], "rule.epochs=1 and rule.epochs=2"),
+])
+def test_cli_refuses_a_bad_value_in_one_line_naming_it(argv, culprit, capsys, tmp_path,
+                                                       monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    err = _one_line_exit_2([*argv, "--out", str(tmp_path / "o")], capsys)
+    assert culprit in err, err
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize("gl", ["disabled", "off"])
+def test_render_with_rendering_off_says_how_to_turn_it_on(gl, capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("MUJOCO_GL", gl)
+    err = _one_line_exit_2(["render", "--out", str(tmp_path / "x.png")], capsys)
+    assert f"rendering is off (MUJOCO_GL={gl})" in err and "MUJOCO_GL=egl" in err
+    assert list(tmp_path.iterdir()) == []
