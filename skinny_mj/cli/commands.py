@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -244,22 +243,11 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def cmd_test(args: argparse.Namespace) -> int:
     from skinny_mj.cli.config_flags import TEST_FLAGS
-    from skinny_mj.controllers.esn import ESN, read_metadata
     from skinny_mj.training.loop import TrainConfig, evaluate, run_of, run_streams
-    from skinny_mj.training.presets import model_path
+    from skinny_mj.training.model_file import check_model, read_model
 
-    path = model_path(args.model)  # a shipped model's name, or a file
-    if not path.is_file():
-        raise SkinnyInputError("no such model file", path=path)
-    try:
-        meta = read_metadata(path)
-        esn = ESN.load(path)
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as err:  # BadZipFile: "PK.."
-        raise SkinnyInputError(f"not a model written by `skinny train` ({err})",
-                               path=path) from None
-    if not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
-        raise SkinnyInputError("model has no Skinny metadata (dof, signals, max speed)", path=path)
-    dof, signals = int(meta["dof"]), str(meta["signals"])
+    path, esn, meta = read_model(args.model)  # a shipped model's name, or a file
+    dof, signals = meta["dof"], meta["signals"]
     from skinny_mj import memory
     from skinny_mj.plant import body
 
@@ -274,8 +262,8 @@ def cmd_test(args: argparse.Namespace) -> int:
             "plant.sensor_noise": asked.plant.sensor_noise})
     except SkinnyInputError as err:
         raise SkinnyInputError(f"model metadata holds a bad config ({err})", path=path) from None
-    run = run_of(cfg, esn, np.asarray(meta["max_speed_rad_s"], dtype=float), traj,
-                 [run_streams(args.seed).plant_seed])
+    check_model(esn, cfg, path)  # a model of another body, an edited file
+    run = run_of(cfg, esn, meta["max_speed_rad_s"], traj, [run_streams(args.seed).plant_seed])
     (test,) = evaluate(run)
     metrics: dict[str, Any] = {
         "model": str(path), "trained_on": meta.get("trained_on"),
