@@ -37,6 +37,8 @@ SWEEP_OPTIONS = ("quick", "movement", "asf", "dof", "signals", "protocol")
 def read_json(path: str | Path) -> dict[str, Any]:
     """A JSON object from ``path``; anything else is a :class:`SkinnyInputError`."""
     path = Path(path)
+    if path.is_dir():
+        raise SkinnyInputError("a folder, not a config file", path=path)
     if not path.is_file():
         raise SkinnyInputError("no such config file", path=path)
     try:

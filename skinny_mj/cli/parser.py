@@ -106,6 +106,16 @@ def _rows(text: str) -> str:
     return text
 
 
+def _scheduler(text: str) -> str:
+    """argparse type of ``--scheduler``: ``local`` or a Dask address."""
+    from skinny_mj.engine.sweep import check_scheduler
+
+    try:
+        return check_scheduler(text)
+    except SkinnyInputError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
 _UNSET = object()
 
 
@@ -209,7 +219,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--overwrite", action="store_true", help="replace the sweep already in "
                    "--out (without it, a non-empty --out is refused)")
     p.add_argument("--quick", action="store_true", help="a smoke test: few runs, few epochs")
-    p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
+    p.add_argument("--scheduler", type=_scheduler,
+                   help="Dask scheduler: `local` or tcp://HOST:PORT")
     p.add_argument("--movement", help="train/test every row on another movement (name or "
                    "file; default: the paper's); recorded in config.json, the name stays")
     p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc --movement")
@@ -244,7 +255,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="output folder (default: results/sweep/<time>)")
     p.add_argument("--resume", action="store_true", help="continue the sweep in --out")
     p.add_argument("--overwrite", action="store_true", help="replace the sweep in --out")
-    p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
+    p.add_argument("--scheduler", type=_scheduler,
+                   help="Dask scheduler: `local` or tcp://HOST:PORT")
 
     p = sub.add_parser("bench", help="measure the fast path: ratios vs reservoirpy, physics, "
                        "the naive loop (prints a table)")
