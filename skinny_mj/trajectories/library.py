@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import numbers
 from collections.abc import Callable
 from pathlib import Path
 
@@ -183,8 +184,11 @@ def split_excerpt(text: str) -> tuple[str, tuple[float, float | None] | None]:
     (a library name such as ``ymca@1.5``, a plain path) comes back unchanged with None.
     """
     base, at, spec = str(text).rpartition("@")
-    if not at or Path(base).suffix.lower() not in _FILE_SUFFIXES or "=" not in spec:
+    if not at or Path(base).suffix.lower() not in _FILE_SUFFIXES or Path(text).exists():
         return str(text), None
+    if "=" not in spec:
+        raise SkinnyInputError(f"bad excerpt {spec!r} in {text!r}: use "
+                               "PATH@start=SECONDS,duration=SECONDS")
     values: dict[str, float] = {}
     for item in spec.split(","):
         key, eq, value = (part.strip() for part in item.partition("="))
@@ -226,6 +230,10 @@ def load_movement(
     """
     if retarget not in ("angles", "positions"):
         raise SkinnyInputError(f"retarget must be 'angles' or 'positions', got {retarget!r}")
+    for name, value in (("fps", fps), ("cutoff_hz", cutoff_hz)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Real)
+                                  or not (np.isfinite(value) and value > 0)):
+            raise SkinnyInputError(f"{name} must be a number > 0, got {value!r}")
     _check_dof(dof)
     if not str(name_or_path).strip():
         raise SkinnyInputError("empty movement name: give a name (`skinny trajectory "
@@ -257,6 +265,10 @@ def load_movement(
         raise SkinnyInputError("no such file", path=path)
     if suffix in (".npz", ".csv"):
         raw = Trajectory.load(path, dof=dof)
+        if len(raw) < 2 or abs(raw.dt - body.CONTROL_DT_S) > 1e-9:
+            raise SkinnyInputError(f"{len(raw)} step(s) every {raw.dt:g} s: a movement is at "
+                                   f"least 2 steps every {body.CONTROL_DT_S:g} s (50 Hz)",
+                                   path=path)
         if window is not None:
             raw = excerpt(raw, *window)
         clipped, _ = raw.clip_to_range()

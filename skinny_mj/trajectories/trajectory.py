@@ -235,6 +235,8 @@ class Trajectory:
     def load(cls, path: str | Path, dof: int | None = None) -> Trajectory:
         """Read a ``.npz`` or ``.csv`` trajectory; ``dof`` (if given) must match the file."""
         path = Path(path)
+        if path.is_dir():
+            raise SkinnyInputError("a folder, not a trajectory file", path=path)
         if not path.is_file():
             raise SkinnyInputError("no such trajectory file", path=path)
         suffix = path.suffix.lower()
@@ -301,7 +303,7 @@ def _parse_comment(text: str) -> dict[str, str]:
 
 def _load_csv(path: Path) -> Trajectory:
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
+        lines = path.read_text(encoding="utf-8-sig").splitlines()  # a spreadsheet's BOM
     except (OSError, UnicodeDecodeError) as exc:
         raise SkinnyInputError(f"cannot read ({exc})", path=path) from None
     meta: dict[str, str] = {}
