@@ -409,3 +409,127 @@ def test_render_with_rendering_off_says_how_to_turn_it_on(gl, capsys, tmp_path, 
     err = _one_line_exit_2(["render", "--out", str(tmp_path / "x.png")], capsys)
     assert f"rendering is off (MUJOCO_GL={gl})" in err and "MUJOCO_GL=egl" in err
     assert list(tmp_path.iterdir()) == []
+
+
+# -- a hidden set of bad inputs: files, names, specs, models -----------------------------------
+@pytest.fixture(scope="module")
+def bad(tmp_path_factory) -> Path:
+    """A folder of damaged inputs (``{bad}`` in the argv below)."""
+    import json
+
+    from skinny_mj.trajectories.samples import SAMPLE_ASF
+
+    root = tmp_path_factory.mktemp("bad")
+    Trajectory(ymca(8).angles[:40], name="t8").save(root / "t8.npz")
+    Trajectory(ymca(4).angles[:40], name="t4").save(root / "t4.csv")
+    lines = (root / "t4.csv").read_text().splitlines()
+    (root / "onerow.csv").write_text("\n".join(lines[:3]) + "\n")
+    (root / "dt01.csv").write_text("\n".join(lines).replace("dt=0.02", "dt=0.01") + "\n")
+    (root / "bom.csv").write_text("\n".join(lines) + "\n", encoding="utf-8-sig")
+    (root / "empty.npz").write_bytes(b"")
+    (root / "empty.asf").write_text("")
+    (root / "folder.npz").mkdir()
+    (root / "folder.json").mkdir()
+    (root / "86_02.amc").write_text((Path(__file__).parent / "data" / "tiny.amc").read_text())
+    (root / "moderndance.asf").write_text(SAMPLE_ASF.read_text())  # subject md's, not 86's
+    with np.load(_shipped("general-2d-joint")) as data:
+        arrays = dict(data)
+    meta = json.loads(str(arrays["metadata"]))
+
+    def model(name: str, **changes) -> None:
+        np.savez(root / name, **{**arrays, "metadata": np.array(json.dumps({**meta, **changes}))})
+
+    model("dof5.npz", dof=5)
+    model("speeds.npz", max_speed_rad_s=[1.0, 2.0])
+    model("dof8.npz", dof=8, max_speed_rad_s=meta["max_speed_rad_s"] * 2)
+    model("forward.npz", config={**meta["config"], "forward": "parallel"})
+    np.savez(root / "cfg.npz", **{**arrays, "config": np.array(json.dumps([1, 2]))})
+    return root
+
+
+def _shipped(name: str) -> Path:
+    from skinny_mj.training.presets import model_path
+
+    return model_path(name)
+
+
+@pytest.mark.parametrize("argv,culprit", [
+    # movement files and names
+    (["track", "--trajectory", "{bad}/t8.npz"], "t8.npz: DOF mismatch: file has 8 DOFs"),
+    (["track", "--trajectory", "{bad}/onerow.csv"], "onerow.csv: 1 step(s)"),
+    (["track", "--trajectory", "{bad}/dt01.csv"], "dt01.csv: 40 step(s) every 0.01 s"),
+    (["track", "--trajectory", "{bad}/empty.npz"], "empty.npz: not a readable trajectory"),
+    (["track", "--trajectory", "{bad}/folder.npz"], "folder.npz: a folder, not a movement"),
+    (["track", "--trajectory", ""], "empty movement name"),
+    (["track", "--trajectory", "ymca@"], "'ymca@' has no speed after '@'"),
+    (["track", "--trajectory", "ymca@0"], "speed must be in (0, 10], got 0"),
+    (["track", "--trajectory", "{bad}/t4.csv@start"], "bad excerpt 'start'"),
+    (["track", "--trajectory", "{bad}/t4.csv@start=-1"], "needs start >= 0"),
+    (["track", "--trajectory", "{bad}/t4.csv@start=0.5,duration=100"], "is outside 't4'"),
+    (["track", "--trajectory", "babble:seed=-1"], "babble seed must be a whole number"),
+    (["track", "--trajectory", "babble:duration=1e12"], "babble duration 1e+12 s"),
+    (["track", "--trajectory", "babble:vmin=5,vmax=1"], "0 < vmin <= vmax"),
+    (["track", "--trajectory", "set:ymca++y"], "bad training set 'set:ymca++y'"),
+    (["track", "--trajectory", "set:ymca+nope"], "unknown movement 'nope'"),
+    (["track", "--trajectory", "{bad}/86_02.amc"], "86_02.amc: no skeleton 86.asf"),
+    (["track", "--trajectory", "md_02.amc", "--asf", "{bad}/empty.asf"], "empty.asf: file is"),
+    (["track", "--trajectory", "md_02.amc", "--asf", "{bad}/folder.npz"], "folder.npz: a fold"),
+    # models for `skinny test`
+    (["test", "--model", "{bad}/empty.npz"], "empty.npz: not a model written by `skinny train`"),
+    (["test", "--model", "{bad}/folder.npz"], "folder.npz: a folder, not a model file"),
+    (["test", "--model", "general-9d"], "general-9d: no such model file (shipped models:"),
+    (["test", "--model", "{bad}/dof5.npz"], "dof5.npz: model metadata: dof must be"),
+    (["test", "--model", "{bad}/speeds.npz"], "speeds.npz: model metadata: max_speed_rad_s"),
+    (["test", "--model", "{bad}/dof8.npz"], "dof8.npz: the network has 8 inputs and 4 outputs"),
+    (["test", "--model", "{bad}/forward.npz"], "forward.npz: the model was trained with a "
+                                               "forward model"),
+    (["test", "--model", "{bad}/cfg.npz"], "cfg.npz: not a model written by `skinny train`"),
+    (["test", "--model", "general-2d-joint", "--trajectory", "{bad}/t8.npz"], "DOF mismatch"),
+    # configs, studies, rows, schedulers
+    (["train", "--config", "{bad}/folder.json"], "folder.json: a folder, not a config file"),
+    (["train", "--config", "{bad}/t4.csv"], "t4.csv: not a JSON config file"),
+    (["train", "esn.spectral_radius=nan"], "esn.spectral_radius must be a number"),
+    (["experiment", "paper-zz"], "unknown experiment 'paper-zz'"),
+    (["experiment", "paper-e", "--quick", "--rows", "nope"], "has no row or group 'nope'"),
+    (["experiment", "paper-e", "--quick", "--scheduler", "bogus"], "--scheduler: scheduler mu"),
+    (["experiment", "paper-e", "--quick", "--movement", "{bad}/t8.npz"], "DOF mismatch"),
+    (["sweep", "esn.spectral_radius=0.5", "--study", "paper-e", "--row", "nope"], "no row 'nope'"),
+])
+def test_cli_refuses_a_hidden_set_of_bad_inputs_in_one_line(argv, culprit, bad, capsys,
+                                                            tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    argv = [a.format(bad=bad) for a in argv]
+    err = _one_line_exit_2([*argv, "--out", str(tmp_path / "o")], capsys)
+    assert culprit in err, err
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_a_csv_saved_with_a_byte_order_mark_reads(bad):
+    assert Trajectory.load(bad / "bom.csv").angles.shape == (40, 4)
+
+
+@pytest.mark.parametrize("call,culprit", [
+    (lambda bad: __import__("skinny_mj").load(trajectory="ymca@"), "no speed after '@'"),
+    (lambda bad: __import__("skinny_mj").load(trajectory=bad / "folder.npz"), "a folder"),
+    (lambda bad: __import__("skinny_mj").load(seed=-1), "seed must be a whole number >= 0"),
+    (lambda bad: __import__("skinny_mj").load(sensor_noise=None), "sensor_noise must be a n"),
+    (lambda bad: __import__("skinny_mj").load(max_speed_rad_s="fast"), "max_speed_rad_s must"),
+    (lambda bad: _load_movement("md_02.amc", fps=0), "fps must be a number > 0, got 0"),
+    (lambda bad: _load_movement("md_02.amc", fps=float("nan")), "fps must be a number > 0"),
+    (lambda bad: _load_movement("md_02.amc", cutoff_hz=0), "cutoff_hz must be a number > 0"),
+    (lambda bad: _load_movement(bad / "86_02.amc"), "no skeleton 86.asf"),
+    (lambda bad: _load_movement("babble:duration=1e12"), "more than the"),
+    (lambda bad: Trajectory.load(bad / "folder.npz"), "a folder, not a trajectory file"),
+])
+def test_the_python_api_refuses_the_same_inputs_with_a_skinny_input_error(call, culprit, bad):
+    if culprit == "more than the" and memory.available_bytes() is None:
+        pytest.skip("this system does not say how much memory is free")
+    with pytest.raises(SkinnyInputError) as caught:
+        call(bad)
+    assert isinstance(caught.value, ValueError) and culprit in str(caught.value)
+
+
+def _load_movement(name, **kwargs):
+    from skinny_mj.trajectories import load_movement
+
+    return load_movement(name, 4, **kwargs)
