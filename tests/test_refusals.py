@@ -474,6 +474,11 @@ def _shipped(name: str) -> Path:
     (["track", "--trajectory", "{bad}/86_02.amc"], "86_02.amc: no skeleton 86.asf"),
     (["track", "--trajectory", "md_02.amc", "--asf", "{bad}/empty.asf"], "empty.asf: file is"),
     (["track", "--trajectory", "md_02.amc", "--asf", "{bad}/folder.npz"], "folder.npz: a fold"),
+    (["track", "--trajectory", "ymca", "--asf", "{bad}/empty.asf"], "and the movement 'ymca' "
+                                                                    "has none: leave --asf out"),
+    (["train", "--asf", "{bad}/empty.asf"], "the movement 'ymca' has none"),
+    (["track", "--trajectory", "set:ymca+y", "--asf", "{bad}/empty.asf"], "has none"),
+    (["experiment", "paper-e", "--quick", "--asf", "{bad}/empty.asf"], "give the clip as the"),
     # models for `skinny test`
     (["test", "--model", "{bad}/empty.npz"], "empty.npz: not a model written by `skinny train`"),
     (["test", "--model", "{bad}/folder.npz"], "folder.npz: a folder, not a model file"),

@@ -54,7 +54,9 @@ def _load_movement(mv, dof: int, check=None):
     memory is refused before it is."""
     from skinny_mj.memory import steps_cause
     from skinny_mj.trajectories import load_movement
+    from skinny_mj.trajectories.library import check_asf
 
+    check_asf(mv.trajectory, mv.asf)  # not silently unused
     kw = {"asf": mv.asf, "speed": mv.speed, "retarget": mv.retarget}
     if check is not None:
         one, report = load_movement(mv.trajectory, dof, reps=1, **kw)
@@ -368,6 +370,10 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     from skinny_mj.cli import config_files as cf  # --config: the file's options, rows, runs
 
     options, rows, runs, invocation = cf.apply_sweep_config(args, options, rows)
+    if options["asf"] is not None:  # a skeleton for --movement CLIP.amc only
+        from skinny_mj.trajectories.library import check_asf
+
+        check_asf(options["movement"], options["asf"])
     if options["protocol"] is not None:  # readings of unstated settings, on the study's base
         from skinny_mj.engine import protocols
 

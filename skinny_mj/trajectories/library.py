@@ -311,6 +311,21 @@ def set_pieces(name: str) -> list[str]:
     return pieces
 
 
+def check_asf(movement: str | Path | None, asf: str | Path | None) -> None:
+    """Refuse a skeleton (``--asf``) given for a movement with no ``.amc`` clip in it,
+    which would silently go unused."""
+    if asf is None:
+        return
+    text = "" if movement is None else str(movement)
+    if not text.strip():
+        raise SkinnyInputError(f"--asf {asf} is the skeleton of an .amc clip: give the clip "
+                               "as the movement too")
+    pieces = set_pieces(text) if text.strip().lower().startswith(SET_PREFIX) else [text]
+    if not any(split_excerpt(p)[0].strip().lower().endswith(".amc") for p in pieces):
+        raise SkinnyInputError(f"--asf {asf} is the skeleton of an .amc clip, and the "
+                               f"movement {text!r} has none: leave --asf out")
+
+
 def training_set(name: str, dof: int, *, asf: str | Path | None = None,
                  fps: float | None = None, cutoff_hz: float = 6.0, retarget: str = "angles"
                  ) -> tuple[Trajectory, RetargetReport]:
