@@ -538,3 +538,11 @@ def _load_movement(name, **kwargs):
     from skinny_mj.trajectories import load_movement
 
     return load_movement(name, 4, **kwargs)
+
+
+def test_render_refuses_a_frame_without_a_movement(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("MUJOCO_GL", "egl")  # past the rendering check; nothing is drawn
+    err = _one_line_exit_2(["render", "--frame", "5", "--out", str(tmp_path / "x.png")],
+                           capsys)
+    assert "--frame 5 needs --trajectory" in err
+    assert list(tmp_path.iterdir()) == []
