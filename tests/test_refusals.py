@@ -479,6 +479,9 @@ def _shipped(name: str) -> Path:
     (["train", "--asf", "{bad}/empty.asf"], "the movement 'ymca' has none"),
     (["track", "--trajectory", "set:ymca+y", "--asf", "{bad}/empty.asf"], "has none"),
     (["experiment", "paper-e", "--quick", "--asf", "{bad}/empty.asf"], "give the clip as the"),
+    (["track", "--trajectory", "ymca", "--retarget", "positions"], "--retarget positions "
+                                                                    "reads motion capture"),
+    (["train", "--retarget", "positions"], "and the movement 'ymca' has none"),
     # models for `skinny test`
     (["test", "--model", "{bad}/empty.npz"], "empty.npz: not a model written by `skinny train`"),
     (["test", "--model", "{bad}/folder.npz"], "folder.npz: a folder, not a model file"),
@@ -546,3 +549,9 @@ def test_render_refuses_a_frame_without_a_movement(capsys, tmp_path, monkeypatch
                            capsys)
     assert "--frame 5 needs --trajectory" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_memory_refusal_says_a_huge_need_in_a_readable_number():
+    assert memory.fmt_bytes(1.5 * 1024**3) == "1.5 GiB"
+    assert memory.fmt_bytes(222 * 1024**5) == "222.0 PiB"
+    assert memory.fmt_bytes(1e300) == "8.88e+284 PiB"  # not 285 digits

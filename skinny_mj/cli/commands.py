@@ -56,7 +56,7 @@ def _load_movement(mv, dof: int, check=None):
     from skinny_mj.trajectories import load_movement
     from skinny_mj.trajectories.library import check_asf
 
-    check_asf(mv.trajectory, mv.asf)  # not silently unused
+    check_asf(mv.trajectory, mv.asf, mv.retarget)  # not silently unused
     kw = {"asf": mv.asf, "speed": mv.speed, "retarget": mv.retarget}
     if check is not None:
         one, report = load_movement(mv.trajectory, dof, reps=1, **kw)

@@ -122,10 +122,10 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
         fields, seed = read_train_file(path)
         cfg = _make(fields, path, cfg)
     cfg = cfg.override(changes(cfg, texts, names))
-    if "movement.asf" in texts:  # a skeleton given for a movement with no .amc clip
-        from skinny_mj.trajectories.library import check_asf
+    if {"movement.asf", "movement.retarget"} & texts.keys():  # not for a movement without
+        from skinny_mj.trajectories.library import check_asf  # motion capture
 
-        check_asf(cfg.movement.trajectory, cfg.movement.asf)
+        check_asf(cfg.movement.trajectory, cfg.movement.asf, cfg.movement.retarget)
     if getattr(args, "seed", None) is not None:
         seed = int(args.seed)
     return cfg, 0 if seed is None else seed

@@ -311,19 +311,25 @@ def set_pieces(name: str) -> list[str]:
     return pieces
 
 
-def check_asf(movement: str | Path | None, asf: str | Path | None) -> None:
-    """Refuse a skeleton (``--asf``) given for a movement with no ``.amc`` clip in it,
-    which would silently go unused."""
-    if asf is None:
-        return
+def check_asf(movement: str | Path | None, asf: str | Path | None,
+              retarget: str = "angles") -> None:
+    """Refuse a skeleton (``--asf``) given for a movement with no ``.amc`` clip in it, or
+    ``retarget="positions"`` for one with no motion capture: either would silently go
+    unused."""
     text = "" if movement is None else str(movement)
-    if not text.strip():
+    if asf is not None and not text.strip():
         raise SkinnyInputError(f"--asf {asf} is the skeleton of an .amc clip: give the clip "
                                "as the movement too")
+    if asf is None and retarget == "angles":
+        return
     pieces = set_pieces(text) if text.strip().lower().startswith(SET_PREFIX) else [text]
-    if not any(split_excerpt(p)[0].strip().lower().endswith(".amc") for p in pieces):
+    suffixes = {Path(split_excerpt(p)[0].strip()).suffix.lower() for p in pieces}
+    if asf is not None and ".amc" not in suffixes:
         raise SkinnyInputError(f"--asf {asf} is the skeleton of an .amc clip, and the "
                                f"movement {text!r} has none: leave --asf out")
+    if retarget == "positions" and not suffixes & {".amc", ".bvh"}:
+        raise SkinnyInputError(f"--retarget positions reads motion capture (.amc, .bvh), and "
+                               f"the movement {text!r} has none: leave it out")
 
 
 def training_set(name: str, dof: int, *, asf: str | Path | None = None,
