@@ -172,7 +172,7 @@ def test_amc_finds_its_subjects_skeleton_beside_it_and_no_other(tmp_path, caplog
     with pytest.raises(SkinnyInputError, match="no skeleton 86.asf .*beside it: 12.asf.*--asf"):
         load_movement(tmp_path / "86_02.amc", 4)
     shutil.copy(DATA / "tiny.asf", tmp_path / "86.asf")
-    with caplog.at_level("INFO", logger="skinny_mj"):
+    with caplog.at_level("WARNING", logger="skinny_mj"):
         traj, _ = load_movement(tmp_path / "86_02.amc", 4)
     assert len(traj) == 10
     assert f"86_02.amc: skeleton {tmp_path / '86.asf'} (beside it" in caplog.text

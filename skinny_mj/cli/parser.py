@@ -7,7 +7,6 @@ User errors (bad files, names, parameters) end with one line on stderr and exit 
 from __future__ import annotations
 
 import argparse
-import logging
 import os
 import signal
 import sys
@@ -321,23 +320,10 @@ def _on_sigterm(handler: object) -> object:
     return current
 
 
-def _notes_on_stderr(command: str) -> logging.Handler:
-    """What the package logs at INFO (which skeleton an .amc was read with) as
-    ``skinny COMMAND: ...`` lines on stderr, until the handler is removed."""
-    handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter(f"skinny {command}: %(message)s"))
-    handler.setLevel(logging.INFO)
-    logging.getLogger("skinny_mj").addHandler(handler)
-    return handler
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
-    package_log = logging.getLogger("skinny_mj")
-    notes, level = _notes_on_stderr(args.command), package_log.level
-    package_log.setLevel(logging.INFO)
     if args.command == "experiment" and args.config is not None:
         args.given = given_options(argv)  # which flags override the file
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
@@ -380,8 +366,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     finally:
         _on_sigterm(previous)
-        package_log.removeHandler(notes)
-        package_log.setLevel(level)
 
 
 if __name__ == "__main__":

@@ -163,12 +163,14 @@ def find_asf(amc: Path) -> Path:
 
 
 def _say_skeleton(amc: Path, asf: Path, given: bool) -> None:
-    """Log (once per pair, level INFO; the command line prints it) which skeleton an
-    .amc was read with."""
+    """Log which skeleton an .amc was read with, once per pair: a warning (shown on
+    stderr by default) when it was found beside the clip, info when it was given."""
     if (str(amc), str(asf)) not in _SKELETONS_SAID:
         _SKELETONS_SAID.add((str(amc), str(asf)))
-        _log.info("%s: skeleton %s (%s)", amc.name, asf,
-                  "given" if given else "beside it, by the clip's subject")
+        if given:
+            _log.info("%s: skeleton %s (given)", amc.name, asf)
+        else:
+            _log.warning("%s: skeleton %s (beside it, by the clip's subject)", amc.name, asf)
 
 
 _FILE_SUFFIXES = (".npz", ".csv", ".amc", ".bvh")
