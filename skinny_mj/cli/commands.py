@@ -342,11 +342,10 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    from skinny_mj.plant.render import check_rendering, render_png
-
-    check_rendering()  # MUJOCO_GL=disabled: say so before any work
-    if args.trajectory is None and args.frame != 0:
+    if args.trajectory is None and args.frame != 0:  # not silently the rest pose
         raise SkinnyInputError(f"--frame {args.frame} needs --trajectory (a movement's frame)")
+    from skinny_mj.plant.render import render_png
+
     check_writable_file(args.out)
     angles = None
     if args.trajectory is not None:
