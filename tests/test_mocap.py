@@ -176,8 +176,10 @@ def test_amc_finds_its_subjects_skeleton_beside_it_and_no_other(tmp_path, caplog
         traj, _ = load_movement(tmp_path / "86_02.amc", 4)
     assert len(traj) == 10
     assert f"86_02.amc: skeleton {tmp_path / '86.asf'} (beside it" in caplog.text
-    traj, _ = load_movement(tmp_path / "86_02.amc", 4, asf=tmp_path / "12.asf")  # given
+    with caplog.at_level("INFO", logger="skinny_mj"):
+        traj, _ = load_movement(tmp_path / "86_02.amc", 4, asf=tmp_path / "12.asf")  # given
     assert len(traj) == 10
+    assert f"86_02.amc: skeleton {tmp_path / '12.asf'} (given)" in caplog.messages
     shutil.copy(DATA / "tiny.amc", tmp_path / "md_05.amc")  # the shipped clips' subject
     shutil.copy(DATA / "tiny.asf", tmp_path / "moderndance.asf")
     assert len(load_movement(tmp_path / "md_05.amc", 4)[0]) == 10
