@@ -349,6 +349,8 @@ def _drop_line(needle: str):
      "skinny_2d.xml: the MJCF does not match the 2D body's spec (skinny_mj.plant.body): "
      "no actuator 'right_shoulder_abduction'"),
     (_drop_line('<site name="left_wrist"'), "no site 'left_wrist'"),
+    (lambda text: text.replace("skinny_defaults.xml", "nope.xml"),
+     "nope.xml: cannot read the file: No such file or directory (included by skinny_2d.xml)"),
 ])
 def test_a_broken_mjcf_is_one_line_naming_file_and_line(edit, says, tmp_path, monkeypatch,
                                                        capsys):

@@ -47,7 +47,7 @@ def _guarded(path: Path, read: Callable):
 def mjcf_error(path: Path, err: BaseException) -> SkinnyInputError:
     """The one-line error for MuJoCo's ``err`` on reading ``path``: the innermost file
     that fails on its own, with its line where one is known."""
-    files = _files(path)
+    files, parents = _files(path)
     for f in files:  # well-formed XML first: ElementTree knows the line of any file
         try:
             ET.parse(f)
@@ -59,7 +59,8 @@ def mjcf_error(path: Path, err: BaseException) -> SkinnyInputError:
             return SkinnyInputError(f"not well-formed XML: {what} (column {column})",
                                     path=f, line=line)
         except OSError as bad:
-            return SkinnyInputError(f"cannot read the file ({bad.strerror})", path=f)
+            by = f" (included by {parents[f].name})" if f in parents else ""
+            return SkinnyInputError(f"cannot read the file: {bad.strerror}{by}", path=f)
     for f in reversed(files[1:]):  # an included file that fails alone
         try:
             mujoco.MjSpec.from_file(str(f)).compile()
@@ -70,10 +71,11 @@ def mjcf_error(path: Path, err: BaseException) -> SkinnyInputError:
     return SkinnyInputError(f"MJCF error: {_text(err)}", path=path, line=_line(err))
 
 
-def _files(path: Path) -> list[Path]:
+def _files(path: Path) -> tuple[list[Path], dict[Path, Path]]:
     """``path`` and the files it includes (MuJoCo resolves an include against the
-    main file's folder), outermost first; what cannot be parsed is left unexpanded."""
-    out, todo = [], [Path(path)]
+    main file's folder), outermost first, and each included file's includer; what
+    cannot be parsed is left unexpanded."""
+    out, todo, parents = [], [Path(path)], {}
     while todo:
         f = todo.pop(0)
         if f in out:
@@ -83,9 +85,12 @@ def _files(path: Path) -> list[Path]:
             root = ET.parse(f).getroot()
         except (ET.ParseError, OSError):
             continue
-        todo += [Path(path).parent / inc.get("file", "") for inc in root.iter("include")
-                 if inc.get("file")]
-    return out
+        for inc in root.iter("include"):
+            if inc.get("file"):
+                child = Path(path).parent / inc.get("file")
+                parents.setdefault(child, f)
+                todo.append(child)
+    return out, parents
 
 
 def _line(err: BaseException) -> int | None:
