@@ -183,6 +183,11 @@ def test_amc_finds_its_subjects_skeleton_beside_it_and_no_other(tmp_path, caplog
     shutil.copy(DATA / "tiny.amc", tmp_path / "md_05.amc")  # the shipped clips' subject
     shutil.copy(DATA / "tiny.asf", tmp_path / "moderndance.asf")
     assert len(load_movement(tmp_path / "md_05.amc", 4)[0]) == 10
+    caplog.clear()
+    with caplog.at_level("INFO", logger="skinny_mj"):
+        load_movement("md_03.amc", 4)  # a shipped clip: its own skeleton, said quietly
+    assert [(r.levelname, r.getMessage().endswith("(the shipped clips')"))
+            for r in caplog.records] in ([], [("INFO", True)])  # once per process
 
 
 def test_fps_override_changes_duration():

@@ -32,7 +32,12 @@ from skinny_mj.plant import body
 from skinny_mj.trajectories import patterns
 from skinny_mj.trajectories.babble import babble, bridge, parse_babble_name
 from skinny_mj.trajectories.retarget import RetargetReport, clip_report, range_excess
-from skinny_mj.trajectories.samples import SAMPLE_CLIPS, SUBJECT_SKELETONS, sample_clip
+from skinny_mj.trajectories.samples import (
+    SAMPLE_ASF,
+    SAMPLE_CLIPS,
+    SUBJECT_SKELETONS,
+    sample_clip,
+)
 from skinny_mj.trajectories.trajectory import Trajectory, excerpt
 from skinny_mj.trajectories.ymca import letter_end_steps, ymca
 
@@ -164,13 +169,17 @@ def find_asf(amc: Path) -> Path:
 
 def _say_skeleton(amc: Path, asf: Path, given: bool) -> None:
     """Log which skeleton an .amc was read with, once per pair: a warning (shown on
-    stderr by default) when it was found beside the clip, info when it was given."""
-    if (str(amc), str(asf)) not in _SKELETONS_SAID:
-        _SKELETONS_SAID.add((str(amc), str(asf)))
-        if given:
-            _log.info("%s: skeleton %s (given)", amc.name, asf)
-        else:
-            _log.warning("%s: skeleton %s (beside it, by the clip's subject)", amc.name, asf)
+    stderr by default) when it was found beside a clip of the user's, info when it was
+    given or is the shipped clips' own."""
+    if (str(amc), str(asf)) in _SKELETONS_SAID:
+        return
+    _SKELETONS_SAID.add((str(amc), str(asf)))
+    if given:
+        _log.info("%s: skeleton %s (given)", amc.name, asf)
+    elif asf.resolve() == SAMPLE_ASF.resolve():
+        _log.info("%s: skeleton %s (the shipped clips')", amc.name, asf)
+    else:
+        _log.warning("%s: skeleton %s (beside it, by the clip's subject)", amc.name, asf)
 
 
 _FILE_SUFFIXES = (".npz", ".csv", ".amc", ".bvh")
