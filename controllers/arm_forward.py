@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.metrics import nrmse
 
 SHARING = ("none", "predictions", "commands")
 
@@ -126,7 +127,5 @@ class ArmForwardModels:
 
     def prediction_nrmse(self, ro) -> np.ndarray:
         """(R,) the lagging arm's prediction NRMSE against its noise-free positions."""
-        from skinny_mj.controllers.metrics import nrmse
-
         return nrmse(ro.predictions[:, 1:, self.lag_signals],
                      ro.true_signals[:, 1:, self.lag_signals])

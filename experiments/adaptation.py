@@ -55,10 +55,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from skinny_mj.controllers import fel
+from skinny_mj.controllers.metrics import position_nrmse
+from skinny_mj.controllers.online import OnlineRLS
 from skinny_mj.experiments.claims import claim_lines
 
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.plant import body
+from skinny_mj.plots import learning_curve_png
 from skinny_mj.training.config import TrainConfig
 
 NAME = "adaptation"
@@ -105,11 +110,6 @@ def _row(change: str, learner: str) -> Row:
 def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Train the row's networks in lockstep, then perform cycle after cycle (pre,
     changed, undone) with the row's learner."""
-    from skinny_mj.controllers import fel
-    from skinny_mj.controllers.metrics import position_nrmse
-    from skinny_mj.controllers.online import OnlineRLS
-
-    from skinny_mj.plant import body
     from skinny_mj.plant.perturb import PerturbedPlant
     from skinny_mj.training import torque
     from skinny_mj.training.loop import PhysicsBatchError, build_run, train_run
@@ -180,8 +180,6 @@ def forearm_floor(config: TrainConfig, forearm: float) -> float:
     """Position NRMSE of the arm whose forearm is ``forearm`` x as long moving exactly
     along the desired angles of ``config``'s movement: the part of the ``forearm`` rows'
     error that no joint motion can remove."""
-    from skinny_mj.controllers.metrics import position_nrmse
-
     from skinny_mj.plant.perturb import forearm_rows
     from skinny_mj.training.parts import load_trajectory
 
@@ -203,8 +201,6 @@ def _curves(runs: list, rows: dict[str, str], key: str = "curve") -> dict[str, n
 def report(results, plan, out_dir: Path) -> str:
     """Error over cycles per change (mean ± sd over runs, per learner), the drift test,
     the forearm's floor, the claims."""
-    from skinny_mj.plots import learning_curve_png
-
     out_dir = Path(out_dir)
     p = plan.params
     pre, n_change, gain = p["pre_cycles"], p["change_cycles"], p["gain"]

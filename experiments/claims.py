@@ -25,8 +25,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from skinny_mj.experiments.paper_c import study as paper_c
 
 from skinny_mj.engine.stats import load_runs
+from skinny_mj.plant import body
 
 _STATS = {"min": np.min, "max": np.max, "mean": np.mean, "median": np.median}
 _OPS = {"<": operator.lt, ">": operator.gt, "<=": operator.le, ">=": operator.ge}
@@ -160,10 +162,6 @@ def range_excursion(angles: np.ndarray, reference: np.ndarray, tol: float = np.r
 def _measure_c7(out_dir: Path, dof: int) -> list[str]:
     """C7: the Y-trained networks' YM error per joint (their kept ``angles__ym``), and
     on the steps where YM's elbows have folded by more than 5 degrees vs the rest."""
-    from skinny_mj.experiments.paper_c import study as paper_c
-
-    from skinny_mj.plant import body
-
     ym = paper_c.load(paper_c.MOVEMENTS["ym"], dof).angles
     elbows = paper_c.elbow_dofs(dof)
     folded = np.abs(ym[:, elbows] - ym[0, elbows]).max(axis=1) > np.radians(5.0)
@@ -184,10 +182,6 @@ def _measure_c7(out_dir: Path, dof: int) -> list[str]:
 
 def _measure_mirrors() -> list[str]:
     """C1 in 3D: how far each mirror movement's arms leave the ranges YMCA covers."""
-    from skinny_mj.experiments.paper_c import study as paper_c
-
-    from skinny_mj.plant import body
-
     lines = []
     for dof in (4, 8):
         ymca = paper_c.load(paper_c.MOVEMENTS["ymca"], dof).angles

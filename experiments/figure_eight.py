@@ -31,6 +31,7 @@ import numpy as np
 from skinny_mj.controllers.esn import ESNConfig
 from skinny_mj.controllers.generation import figure_eight
 from skinny_mj.experiments import generation_runs as common
+from skinny_mj.experiments.claims import claim_lines
 
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
@@ -92,8 +93,6 @@ def estimate_bytes(config: TrainConfig, row: Row, runs: int):
 
 
 def report(results, plan, out_dir: Path) -> str:
-    from skinny_mj.experiments.claims import claim_lines
-
     short = claim_lines(Path(out_dir), [
         ("figure-eight, short training sequence: the new β method run to convergence runs "
          "free longer than the ordinary fit (the thesis: it 'needs shorter training "

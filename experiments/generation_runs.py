@@ -33,7 +33,10 @@ from skinny_mj.controllers import generation as gen
 from skinny_mj.controllers.esn import ESN, ESNConfig
 from skinny_mj.experiments.claims import claim_lines
 
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.engine.study import Row
+from skinny_mj.plots import boxplot_png
+from skinny_mj.training.memory import generation_estimate
 
 #: Row order fixes each row's seeds (the engine's per-row seeds): new rows go last.
 METHODS = ("ordinary", "new", "new-blend", "force", "reservoirpy", "new-conv")
@@ -98,10 +101,8 @@ def run_ours(method: str, cfg: ESNConfig, seeds: list[int],
 
 def estimate(method: str, cfg: ESNConfig, n_fit: int, n_free: int, runs: int):
     """The memory one batch of ``runs`` seeds of row ``method`` needs
-    (:func:`skinny_mj.memory.generation_estimate`; reservoirpy's rows run one seed at a
+    (:func:`skinny_mj.training.memory.generation_estimate`; reservoirpy's rows run one seed at a
     time, counted as ours)."""
-    from skinny_mj.memory import generation_estimate
-
     cycles = {"new": CYCLES, "new-blend": CYCLES, "new-conv": MAX_CYCLES}.get(method, 1)
     return generation_estimate(cfg.n_reservoir, cfg.n_inputs, cfg.n_outputs, n_fit, n_free,
                                1 if method == "reservoirpy" else runs,
@@ -148,9 +149,6 @@ def claims_for(kind: str) -> list:
 def report(results, plan, out_dir: Path, kind: str, extra: list[str] | None = None) -> str:
     """Box plots of horizon and free-run NRMSE per row of the sweep's ``plan``, and the
     claims."""
-    from skinny_mj.engine.stats import load_runs
-    from skinny_mj.plots import boxplot_png
-
     out_dir = Path(out_dir)
     runs = load_runs(out_dir)
     ids = [p.row.id for p in plan.rows]

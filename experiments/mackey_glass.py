@@ -26,6 +26,7 @@ import numpy as np
 from skinny_mj.controllers.mackey_glass import mackey_glass
 from skinny_mj.experiments import generation_runs as common
 
+from skinny_mj.cli.bench_mackey_glass import esn_config, mackey_glass_reservoirpy
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
 
@@ -51,8 +52,6 @@ def _with_nrmse84(m: dict, free: np.ndarray, target: np.ndarray, scale: float) -
 def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """The row's fit of every seed's series (in lockstep; reservoirpy one by one), then
     free runs."""
-    from skinny_mj.cli.bench_mackey_glass import esn_config
-
     p = row.params
     if p["method"] == "reservoirpy":
         return [_reservoirpy(p, s) for s in seeds]
@@ -70,8 +69,6 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 
 
 def _reservoirpy(p: Mapping[str, Any], seed: int) -> dict:
-    from skinny_mj.cli.bench_mackey_glass import mackey_glass_reservoirpy
-
     series = _series(p, common.streams(seed)[0])
     n_fit = p["washout"] + p["train"]
     scale = float(series[p["washout"]:n_fit].std())
@@ -89,8 +86,6 @@ def _reservoirpy(p: Mapping[str, Any], seed: int) -> dict:
 
 def estimate_bytes(config: TrainConfig, row: Row, runs: int):
     """The memory a batch of ``runs`` seeds of ``row`` needs (the sweep's check)."""
-    from skinny_mj.cli.bench_mackey_glass import esn_config
-
     p = row.params
     return common.estimate(p["method"], esn_config(p["reservoir"]), p["washout"] + p["train"],
                            p["free"], runs)

@@ -27,9 +27,12 @@ from pathlib import Path
 
 import numpy as np
 from skinny_mj.controllers.fel import run_mean
+from skinny_mj.controllers.forward_model import rollout_prediction_error
+from skinny_mj.experiments.claims import values
 
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.plots import line_sweep_png
 from skinny_mj.training.config import TrainConfig
 
 NAME = "paper-a"
@@ -100,8 +103,6 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     model during the last epoch". A closed-loop test with K = 0 (on the training plant,
     its noise stream continuing) is recorded as an extra (``test_*``).
     """
-    from skinny_mj.controllers.forward_model import rollout_prediction_error
-
     from skinny_mj.training.loop import build_run, evaluate, train_run
 
     start = time.perf_counter()
@@ -135,8 +136,6 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 # -- report -------------------------------------------------------------------------
 def _by_delay(out_dir: Path, metric: str) -> tuple[list[int], dict[str, dict[int, list]]]:
     """Delays present and arch -> delay -> values of ``metric`` over ok runs."""
-    from skinny_mj.experiments.claims import values
-
     found: dict[str, dict[int, list]] = {}
     for arch in ARCHITECTURES:
         for d in DELAYS:
@@ -251,8 +250,6 @@ def claims(out_dir: Path) -> list[str]:
 def report(results, plan, out_dir: Path) -> str:
     """Figures (error, feedback share, prediction error vs delay; paper Fig. 4/5/6) and
     the paper's claims, checked."""
-    from skinny_mj.plots import line_sweep_png
-
     out_dir = Path(out_dir)
     figures = (("performance_nrmse", "performance error (NRMSE, last epoch, K = 0.65)",
                 "fig4_error"),

@@ -26,12 +26,17 @@ from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments.claims import values
 
 from skinny_mj.engine.experiment import RunFailed
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.io import atomic_path
 from skinny_mj.plant.body import CONTROL_DT_S
+from skinny_mj.plots import boxplot_png, pyplot
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.trajectories.patterns import PATTERNS, PREFIX
+from skinny_mj.trajectories import get
+from skinny_mj.trajectories.patterns import PATTERNS, PREFIX, Movement
 
 NAME = "paper-b"
 #: The leader's test speeds (paper B §3, Fig. 3); 1.0 = the trained speed.
@@ -79,8 +84,6 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 
     from skinny_mj.plant.bimanual import arm_dofs, phase_lag_deg
     from skinny_mj.training.loop import build_run, evaluate, train_run
-    from skinny_mj.trajectories import get
-    from skinny_mj.trajectories.patterns import Movement
 
     start = time.perf_counter()
     run = build_run(config, seeds)
@@ -124,8 +127,6 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 
 # -- report: figures and claims -------------------------------------------------------
 def _stat(out_dir: Path, row: str, metric: str, stat=np.median) -> float | None:
-    from skinny_mj.experiments.claims import values
-
     v = values(out_dir, row, metric)
     return float(stat(v)) if v else None
 
@@ -134,8 +135,6 @@ def _roughness(out_dir: Path, row: str, tag: str = "x1") -> float | None:
     """Median over runs of RMS(Δ² actual) / RMS(Δ² desired) of the lagging shoulder
     (from the stored traces): 1 = as smooth as the target, larger = jerkier. Unlike the
     motor NRMSE it does not depend on the pattern's command scale."""
-    from skinny_mj.engine.stats import load_runs
-
     vals = []
     for run in load_runs(out_dir):
         if run.get("row") == row and run.get("status") == "ok":
@@ -203,9 +202,6 @@ def claims(out_dir: Path) -> list[str]:
 
 
 def _fig3(path: Path, row: str, traces: dict) -> None:
-    from skinny_mj.io import atomic_path
-    from skinny_mj.plots import pyplot
-
     plt = pyplot()
     fig, axes = plt.subplots(len(SPEEDS), 1, figsize=(7.0, 2.2 * len(SPEEDS)))
     for ax, s in zip(axes, SPEEDS, strict=True):
@@ -226,9 +222,6 @@ def _fig3(path: Path, row: str, traces: dict) -> None:
 
 def report(results: dict, plan, out_dir: Path) -> str:
     """Fig. 3-style traces (first ok run per pattern), a box plot, the claims."""
-    from skinny_mj.engine.stats import load_runs
-    from skinny_mj.plots import boxplot_png
-
     out_dir = Path(out_dir)
     runs = sorted((r for r in load_runs(out_dir) if r.get("status") == "ok"),
                   key=lambda r: r["run_index"])
@@ -237,7 +230,6 @@ def report(results: dict, plan, out_dir: Path) -> str:
         if run["row"] not in done and "traces" in run["metrics"]:
             _fig3(out_dir / f"fig3_{run['row']}.png", run["row"], run["metrics"]["traces"])
             done.add(run["row"])
-    from skinny_mj.experiments.claims import values
 
     groups = {f"{r} {_tag(s)}": values(out_dir, r, f"relative_error_{_tag(s)}")
               for r in PAPER_SAYS for s in SPEEDS}

@@ -33,8 +33,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from skinny_mj.experiments.claims import claim_lines, values
 
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.plant import body
+from skinny_mj.plots import boxplot_png, pyplot, save_figure
+from skinny_mj.recording import record_test
 from skinny_mj.training.config import TrainConfig
 
 if TYPE_CHECKING:  # the training loop is imported where it runs: `--help` needs no MuJoCo
@@ -145,8 +150,6 @@ def _row(row_id: str, method: str, noise: bool, reps: int) -> Row:
 def _average_run(out_dir: Path, row_id: str) -> dict | None:
     """The ok run of ``row_id`` whose TT test position NRMSE is nearest the row's mean
     (the paper's Figure 4 shows "one average run")."""
-    from skinny_mj.engine.stats import load_runs
-
     runs = [r for r in load_runs(out_dir) if r.get("row") == row_id and r.get("status") == "ok"
             and r["metrics"].get("tt_position_test") is not None]
     if not runs:
@@ -157,8 +160,6 @@ def _average_run(out_dir: Path, row_id: str) -> dict | None:
 
 def _record(path: Path, outcome: TrainOutcome, row_id: str) -> None:
     """The TT test of one run as an ``.rrd`` (rerun) recording."""
-    from skinny_mj.recording import record_test
-
     record_test(path, outcome,
                 f"paper D exp {row_id}, true-target test, average run (seed {outcome.seed})",
                 {"row": row_id, "config": outcome.config.to_dict()})
@@ -171,8 +172,6 @@ def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
     (config, seed)); also writes each one's ``.rrd``. Rows: experiments; columns:
     elbow, wrist (x, y, z each). ``reproduced`` collects, per re-trained run, whether
     it reproduced the run file's TT test position NRMSE exactly."""
-    from skinny_mj.plant import body
-    from skinny_mj.plots import pyplot, save_figure
     from skinny_mj.training.loop import train
 
     reproduced = [] if reproduced is None else reproduced
@@ -235,8 +234,6 @@ CLAIMS = [
 
 
 def _relative_gain(out_dir: Path, metric: str, better: str, worse: str) -> float | None:
-    from skinny_mj.experiments.claims import values
-
     a, b = values(out_dir, better, metric), values(out_dir, worse, metric)
     if not a or not b:
         return None
@@ -245,10 +242,6 @@ def _relative_gain(out_dir: Path, metric: str, better: str, worse: str) -> float
 
 def report(results: dict, plan: Any, out_dir: Path) -> str:
     """Figure 3 (box plots beside the paper's means), Figure 4 and the paper's claims."""
-    from skinny_mj.experiments.claims import claim_lines, values
-
-    from skinny_mj.plots import boxplot_png
-
     out_dir = Path(out_dir)
     for metric in ("tt_position_test", "tt_motor_test", "fel_position_test"):
         groups = {f"exp {r}": values(out_dir, r, metric) for r in EXPERIMENTS}

@@ -30,6 +30,9 @@ from skinny_mj.experiments.claims import claim_lines
 from skinny_mj.experiments.paper_e import study as paper_e
 
 from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.plots import boxplot_png
+from skinny_mj.recording import record_test
+from skinny_mj.trajectories import sample_clip
 
 NAME = "ridge-vs-new"
 #: md_02's excerpt: seconds 3 to 9.26 (313 steps at 50 Hz, as one YMCA).
@@ -43,8 +46,6 @@ RIDGE = {"esn.readout": "ridge", "rule.fit": "ridge-select"}
 
 def md02_movement() -> str:
     """The md_02 excerpt as a movement string (the shipped clip's installed path)."""
-    from skinny_mj.trajectories import sample_clip
-
     return f"{sample_clip('md_02')}{MD02_EXCERPT}"
 
 
@@ -97,8 +98,6 @@ def claims(mv: str) -> list:
 def report(results, plan, out_dir: Path) -> str:
     """Box plots of test position NRMSE per movement, claims, one recording per
     movement of the median ridge1 and row-5 runs."""
-    from skinny_mj.plots import boxplot_png
-
     lines = []
     for mv in ("ymca", "md02"):
         rows = [p.row for p in plan.rows if p.row.group == mv]
@@ -117,7 +116,6 @@ def report(results, plan, out_dir: Path) -> str:
 
 def _recordings(out_dir: Path, results, plan, mv: str) -> list[str]:
     """The median run of ``<mv>-ridge1`` and ``<mv>-5`` re-trained and recorded."""
-    from skinny_mj.recording import record_test
     from skinny_mj.training.loop import train
 
     lines = []

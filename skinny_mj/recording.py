@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from skinny_mj.errors import SkinnyInputError
+from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.io import atomic_path
 from skinny_mj.plant import body
 from skinny_mj.preflight import check_free_space
@@ -261,8 +261,6 @@ FLUSH_TIMEOUT_S = 120.0
 def _io(path: Path, call: Any, *args: Any, **kwargs: Any) -> None:
     """``call(*args, **kwargs)``, rerun's write failures (a RuntimeError: full disk, dead
     writer thread, timeout) turned into one-line environment errors naming ``path``."""
-    from skinny_mj.errors import SkinnyEnvironmentError
-
     try:
         call(*args, **kwargs)
     except RuntimeError as exc:

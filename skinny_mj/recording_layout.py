@@ -9,15 +9,22 @@ and 95 % of the bias samples). The arms sit side by side; the
 time axis runs 30 % past the movement's end so the legend (top right) covers no data.
 The limits stay in the recording (``/torques/<dof>/limit_*``) but are not drawn in N m:
 they would squash the traces; the command plot shows them as +-1.
+
+:func:`read_layout` and :func:`read_styles` read the saved blueprint and the series styles
+back from a recording with rerun's own reader, so the look can be checked without a viewer.
 """
 
 from __future__ import annotations
 
 import uuid
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 
 DESIRED_RGB = (40, 120, 230)
@@ -161,3 +168,173 @@ def blueprint(has_curves: bool, application_id: str, dof_names: Sequence[str],
     return rrb.Blueprint(root, rrb.BlueprintPanel(state="collapsed"),
                          rrb.SelectionPanel(state="collapsed"),
                          rrb.TimePanel(state="collapsed", timeline="time"))
+
+
+# -- reading the look back from a recording ----------------------------------------------
+@dataclass(frozen=True)
+class SavedView:
+    """One view of a recording's saved blueprint, as rerun stores it.
+
+    ``kind`` is rerun's view class (``TimeSeries``, ``3D``, ``TextDocument``); ``query``
+    the view's entity filter (``+ /a/b``, ``+ $origin/**``); ``time_range_s`` the time
+    axis (s), ``value_range`` the value axis, ``legend`` the legend's corner, ``eye`` the
+    3D view's eye (``position``, ``look_target``, ``eye_up`` in world m), each None where
+    the blueprint leaves the viewer's default.
+    """
+
+    name: str
+    kind: str
+    origin: str
+    query: tuple[str, ...]
+    time_range_s: tuple[float, float] | None = None
+    value_range: tuple[float, float] | None = None
+    legend: str | None = None
+    eye: Mapping[str, tuple[float, ...]] | None = None
+
+    def shows(self, entities: Sequence[str]) -> list[str]:
+        """Those of ``entities`` the view's query includes: ``+ PATH`` the entity itself,
+        ``+ PATH/**`` it and everything under it, ``- ...`` excludes; of the rules that
+        match, the most specific decides (an exact path, else the longest subtree), as in
+        rerun's entity filter (here without its ``/*`` and properties)."""
+        rules = []
+        for expr in self.query:
+            sign, path = (expr[0], expr[1:].strip()) if expr[:1] in ("+", "-") else ("+", expr)
+            path = path.strip().replace("$origin", self.origin.rstrip("/")) or "/"
+            if "*" in path.removesuffix("/**"):
+                raise ValueError(f"unsupported entity filter {expr!r}")
+            rules.append((sign == "+", path))
+
+        def specificity(entity: str, path: str) -> tuple[int, int] | None:
+            """(exact?, length of the subtree's root) of a match, None for no match."""
+            if not path.endswith("/**"):
+                return (1, len(path)) if entity == path else None
+            base = path[:-3].rstrip("/")
+            inside = not base or entity == base or entity.startswith(base + "/")
+            return (0, len(base)) if inside else None
+
+        shown = []
+        for entity in entities:
+            matched = [(rank, include) for include, path in rules
+                       if (rank := specificity(entity, path)) is not None]
+            if matched and max(matched)[1]:
+                shown.append(entity)
+        return shown
+
+
+@dataclass(frozen=True)
+class SavedContainer:
+    """A container of the saved blueprint: ``kind`` (``Horizontal``, ``Vertical``,
+    ``Tabs``, ``Grid``), its shares and its children (views by name, or containers)."""
+
+    kind: str
+    shares: tuple[float, ...]
+    children: tuple[SavedContainer | str, ...]
+
+
+@dataclass(frozen=True)
+class SavedLayout:
+    """A recording's saved default blueprint: the views by name, the tree of containers
+    (``root``), the panels' states (``blueprint_panel``, ``selection_panel``,
+    ``time_panel`` -> ``Collapsed``, ...) and the timeline the time panel starts on."""
+
+    views: Mapping[str, SavedView]
+    root: SavedContainer
+    panels: Mapping[str, str]
+    timeline: str | None
+
+
+def _blueprint_rows(path: str | Path) -> dict[str, dict[str, list]]:
+    """Blueprint entity -> {``Archetype:field``: its values} (the latest row of each)."""
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(str(path))
+    stores = reader.blueprints()
+    if not stores:
+        raise SkinnyInputError("holds no blueprint", path=path)
+    rows: dict[str, dict[str, list]] = {}
+    for chunk in reader.stream(store=stores[0]):
+        batch = chunk.to_record_batch()
+        order = np.argsort(batch.column("blueprint").to_numpy(), kind="stable")
+        for name in batch.schema.names:
+            if ":" in name:
+                values = batch.column(name).to_pylist()
+                rows.setdefault(chunk.entity_path, {})[name] = values[order[-1]]
+    return rows
+
+
+def read_layout(path: str | Path) -> SavedLayout:
+    """The default blueprint saved in the recording ``path`` (what the viewer opens on),
+    read back with rerun's own reader."""
+    import rerun.blueprint as rrb
+
+    rows = _blueprint_rows(path)
+
+    def one(entity: str, field: str, default=None):
+        values = rows.get(entity, {}).get(field)
+        return values[0] if values else default
+
+    views = {}
+    for entity in rows:
+        if not entity.startswith("/view/") or entity.count("/") != 2:
+            continue
+        time_axis = one(f"{entity}/TimeAxis", "TimeAxis:view_range")
+        value_axis = one(f"{entity}/ScalarAxis", "ScalarAxis:range")
+        corner = one(f"{entity}/PlotLegend", "PlotLegend:corner")
+        eye = {k: tuple(one(f"{entity}/EyeControls3D", f"EyeControls3D:{k}"))
+               for k in ("position", "look_target", "eye_up")
+               if one(f"{entity}/EyeControls3D", f"EyeControls3D:{k}") is not None}
+        view = SavedView(
+            name=one(entity, "ViewBlueprint:display_name", ""),
+            kind=one(entity, "ViewBlueprint:class_identifier", ""),
+            origin=one(entity, "ViewBlueprint:space_origin", "/"),
+            query=tuple(rows.get(f"{entity}/ViewContents", {}).get("ViewContents:query", ())),
+            time_range_s=None if time_axis is None else
+            (time_axis["start"] / 1e9, time_axis["end"] / 1e9),
+            value_range=None if value_axis is None else tuple(value_axis),
+            legend=None if corner is None else rrb.Corner2D(corner).name,
+            eye=eye or None)
+        views[entity.removeprefix("/")] = view
+
+    def container(ref: str) -> SavedContainer | str:
+        if ref.startswith("view/"):
+            return views[ref].name
+        entity = f"/{ref}"
+        shares = (rows[entity].get("ContainerBlueprint:col_shares")
+                  or rows[entity].get("ContainerBlueprint:row_shares") or ())
+        kind = rrb.components.ContainerKind(one(entity, "ContainerBlueprint:container_kind"))
+        return SavedContainer(kind.name, tuple(shares), tuple(
+            container(c) for c in rows[entity].get("ContainerBlueprint:contents", ())))
+
+    root = one("/viewport", "ViewportBlueprint:root_container")
+    panels = {}
+    for panel, field in (("blueprint_panel", "PanelBlueprint:state"),
+                         ("selection_panel", "PanelBlueprint:state"),
+                         ("time_panel", "TimePanelBlueprint:state")):
+        state = one(f"/{panel}", field)
+        if state is not None:
+            panels[panel] = rrb.components.PanelState(state).name
+    return SavedLayout(
+        views={v.name: v for v in views.values()},
+        root=container(f"container/{uuid.UUID(bytes=bytes(root))}"),
+        panels=panels, timeline=one("/time_panel", "TimePanelBlueprint:timeline"))
+
+
+def read_styles(path: str | Path) -> dict[str, dict[str, Any]]:
+    """Every entity's static look in the recording ``path``: entity -> {``colors``:
+    [(r, g, b), ...], ``names``, ``widths`` (series), ``radii`` (3D) where logged}."""
+    from rerun.chunk import RrdReader
+
+    styles: dict[str, dict[str, Any]] = {}
+    for chunk in RrdReader(str(path)).stream():
+        if not chunk.is_static:
+            continue
+        batch = chunk.to_record_batch()
+        for name in batch.schema.names:
+            archetype, _, field = name.partition(":")
+            if field not in ("colors", "names", "widths", "radii"):
+                continue
+            values = [v for row in batch.column(name).to_pylist() if row for v in row]
+            if field == "colors":  # rerun packs 0xRRGGBBAA
+                values = [((c >> 24) & 255, (c >> 16) & 255, (c >> 8) & 255) for c in values]
+            styles.setdefault(chunk.entity_path, {})[field] = values
+    return styles

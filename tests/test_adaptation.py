@@ -12,6 +12,7 @@ from skinny_mj.experiments import adaptation
 from skinny_mj.plant import body
 from skinny_mj.plant.adapters import BatchPlant
 from skinny_mj.plant.perturb import PerturbedPlant, forearm_rows
+from skinny_mj.trajectories import get
 
 Q = np.array([[0.3, 0.8, -0.2, 0.5], [1.0, 0.2, 0.4, 1.1]])  # two poses, rad
 
@@ -28,8 +29,8 @@ def _posed(plant, q=Q):
 
 
 def test_longer_forearm_is_longer_and_the_controller_keeps_the_nominal_jacobian():
-    nominal = _posed(BatchPlant(4, "cartesian", n_runs=2))
-    plant = PerturbedPlant(BatchPlant(4, "cartesian", n_runs=2))
+    nominal = _posed(BatchPlant(4, "cartesian", get("ymca", 4), n_runs=2))
+    plant = PerturbedPlant(BatchPlant(4, "cartesian", get("ymca", 4), n_runs=2))
     plant.set(forearm=1.2)
     _posed(plant)
     for r in range(2):  # every copy: the right forearm 1.2 x, the rest as it was
@@ -56,8 +57,8 @@ def test_longer_forearm_is_longer_and_the_controller_keeps_the_nominal_jacobian(
 
 
 def test_torque_payload_adds_mass_at_the_right_hand_and_heavier_links_scale_the_arms():
-    nominal = _posed(BatchPlant(4, "cartesian", n_runs=2, actuation="torque"))
-    plant = PerturbedPlant(BatchPlant(4, "cartesian", n_runs=2, actuation="torque"))
+    nominal = _posed(BatchPlant(4, "cartesian", get("ymca", 4), n_runs=2, actuation="torque"))
+    plant = PerturbedPlant(BatchPlant(4, "cartesian", get("ymca", 4), n_runs=2, actuation="torque"))
     m0 = plant.model.body_mass.copy()
     hands = [plant.model.body(f"r{r}/right_hand").id for r in range(2)]
     plant.set(payload_kg=1.0)
@@ -80,8 +81,9 @@ def test_torque_payload_adds_mass_at_the_right_hand_and_heavier_links_scale_the_
 
 
 def test_defaults_pass_through_bit_for_bit_and_the_old_rows_keep_their_seeds():
-    bare = _posed(BatchPlant(4, "cartesian", n_runs=2, seeds=[5, 6]))
-    wrapped = PerturbedPlant(_posed(BatchPlant(4, "cartesian", n_runs=2, seeds=[5, 6])))
+    bare = _posed(BatchPlant(4, "cartesian", get("ymca", 4), n_runs=2, seeds=[5, 6]))
+    wrapped = PerturbedPlant(_posed(BatchPlant(4, "cartesian", get("ymca", 4), n_runs=2,
+                                               seeds=[5, 6])))
     wrapped.set()  # all defaults: no body change
     cmd = np.full((2, 4), 0.3)
     assert np.array_equal(wrapped.step(cmd), bare.step(cmd))

@@ -34,6 +34,15 @@ def test_every_command_has_help(command, capsys):
     assert "usage: skinny" in capsys.readouterr().out
 
 
+def test_version_prints_the_installed_distributions(capsys):
+    from importlib.metadata import version
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--version"])
+    assert exit_info.value.code == 0
+    assert capsys.readouterr().out == f"skinny {version('skinny-mj')}\n"
+
+
 @pytest.mark.parametrize("dof", [4, 8])
 def test_track_ymca_writes_metrics_and_recording(dof, tmp_path, capsys):
     out = tmp_path / "track"
@@ -129,7 +138,7 @@ def test_demo_prints_the_table_and_where_the_recording_is(tmp_path):
     result = run_cli("demo", "--out", str(out))
     assert result.returncode == 0, result.stderr
     assert "test position NRMSE" in result.stdout and "paper" in result.stdout
-    assert f"rerun {out / 'run.rrd'}" in result.stdout
+    assert f"skinny view {out}" in result.stdout
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["config"]["rule"] == "new" and metrics["config"]["learning_cycles"] == 3
     assert metrics["test"]["position_nrmse"] < 0.1

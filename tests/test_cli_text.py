@@ -126,3 +126,75 @@ def test_measured_time_per_run_comes_from_earlier_sweeps(tmp_path):
             {"n": n, "n_error": 0, "wall_s": {"mean": w, "total": w * n}} for w, n in rows]}))
     said = measured_here("paper-e", tmp_path)
     assert said.startswith("3.0 s of one worker per run, mean of 40 runs in 2 earlier")
+
+
+# -- skinny bench: a skipped figure says what to install; a value at its goal's edge ------
+def test_bench_names_the_extra_a_skipped_figure_needs(monkeypatch):
+    import sys as _sys
+
+    from skinny_mj.cli import bench
+
+    monkeypatch.setitem(_sys.modules, "reservoirpy", None)  # as if not installed
+    figure = bench.esn_run_vs_reservoirpy(20, 5, 1)
+    assert "reservoirpy" in figure["skipped"] and 'pip install -e ".[bench]"' in figure["skipped"]
+    figures = {"esn_run_vs_reservoirpy": [figure, figure], "load_avg_start": (1.0,) * 3,
+               "load_avg_end": (1.0,) * 3, "cpu_count": 2}
+    figures["summary"] = bench.summary(figures)
+    row = next(line for line in bench.table(figures).splitlines()
+               if line.startswith("esn_run_vs_reservoirpy_N200"))
+    assert "skipped" in row and 'pip install -e ".[bench]"' in row
+
+
+@pytest.mark.parametrize(("value", "op", "goal", "printed"), [
+    (2.0004, "<=", 2.0, "2.0004"), (1.99999, "<=", 2.0, "1.99999"), (2.0, "<=", 2.0, "2"),
+    (2.9999996, ">=", 3.0, "2.9999996"), (3.0 + 1e-12, ">=", 3.0, repr(3.0 + 1e-12)),
+    (12.04, ">=", 6.0, "12"), (-5.4712, "<=", -4.5, "-5.47")])
+def test_bench_prints_a_value_at_its_goals_edge_in_full(value, op, goal, printed):
+    from skinny_mj.cli.bench_summary import shown
+
+    assert shown(value, op, goal) == printed
+
+
+def test_bench_table_shows_why_a_value_misses_its_goal():
+    from skinny_mj.cli import bench
+
+    figures = {"torque_over_kinematic": {"ratio": 2.0004}, "load_avg_start": (1.0,) * 3,
+               "load_avg_end": (1.0,) * 3, "cpu_count": 2}
+    figures["summary"] = bench.summary(figures)
+    row = next(line for line in bench.table(figures).splitlines()
+               if line.startswith("torque_over_kinematic"))
+    assert row.split() == ["torque_over_kinematic", "2.0004", "<=", "2", "NO"]
+    assert "--quick" not in bench.table(figures)
+    figures["quick"] = True  # one epoch per row: a smoke test, and the table says so
+    assert "torque_over_kinematic times one epoch" in bench.table(figures)
+
+
+# -- skinny trajectory list: every source of a movement, in columns that hold -------------
+def test_trajectory_list_names_every_source(capsys):
+    from skinny_mj.trajectories import SAMPLE_ASF, SAMPLE_CLIPS, names
+
+    assert main(["trajectory", "list"]) == 0
+    out = capsys.readouterr().out
+    words = out.split()
+    for name in names():
+        assert name in words, name
+    for clip in SAMPLE_CLIPS:
+        assert f"{clip}.amc" in words
+    assert SAMPLE_ASF.name in out
+    for kind in (".npz", ".csv", ".amc", ".bvh", "babble:seed=", "set:", "@start="):
+        assert kind in out, kind
+
+
+def test_trajectory_list_columns_hold_for_long_names():
+    from skinny_mj.cli.movement_list import MAX_NAME, columns
+
+    rows = [("a", "short"), ("ymca-recorded-unit2d", "x " * 60),
+            ("n" * (MAX_NAME + 5), "a name longer than the column")]
+    lines = columns(rows, width=60)
+    assert all(len(line) <= 60 for line in lines if "n" * MAX_NAME not in line)
+    starts = {line.index("short") if "short" in line else None for line in lines} - {None}
+    assert starts == {lines[1].index("x")}  # descriptions start in one column
+    long_at = lines.index("  " + "n" * (MAX_NAME + 5))  # a long name on its own line
+    below = lines[long_at + 1:]
+    assert " ".join(line.strip() for line in below) == "a name longer than the column"
+    assert {len(line) - len(line.lstrip()) for line in below} == starts

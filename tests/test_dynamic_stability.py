@@ -20,6 +20,7 @@ from skinny_mj.plant.model import (
     xml_path,
 )
 from skinny_mj.recording import recording_entities
+from skinny_mj.trajectories import get
 
 TORQUE_ROLES = ("commanded", "applied", "gravity", "limit_upper", "limit_lower")
 
@@ -71,15 +72,15 @@ def test_saturated_torques_diverged_without_the_armature_and_stay_clean_with_it(
 
 def test_each_plant_has_its_own_read_only_full_scale():
     speed = np.array([3.0, 4.0, 5.0, 6.0])
-    a = BatchPlant(4, "joint", n_runs=1, max_speed_rad_s=speed)
-    b = BatchPlant(4, "joint", n_runs=2, max_speed_rad_s=speed)
+    a = BatchPlant(4, "joint", get("ymca", 4), n_runs=1, max_speed_rad_s=speed)
+    b = BatchPlant(4, "joint", get("ymca", 4), n_runs=2, max_speed_rad_s=speed)
     assert not np.shares_memory(a.max_speed_rad_s, b.max_speed_rad_s)
     assert not np.shares_memory(a.max_speed_rad_s, speed)
     with pytest.raises(ValueError, match="read-only"):
         a.max_speed_rad_s[0] = 1.0
     speed[0] = 1.0  # the caller's array is the caller's
     assert a.max_speed_rad_s[0] == 3.0 and b.max_speed_rad_s[0] == 3.0
-    default = BatchPlant(4, "joint", n_runs=1)  # the movement's own full scale
+    default = BatchPlant(4, "joint", get("ymca", 4), n_runs=1)  # the movement's own full scale
     assert not default.max_speed_rad_s.flags.writeable
 
 

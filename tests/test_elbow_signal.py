@@ -7,7 +7,7 @@ import pytest
 from skinny_mj.plant import body
 from skinny_mj.plant.adapters import BatchPlant
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.trajectories import load_movement
+from skinny_mj.trajectories import get, load_movement
 
 
 @pytest.mark.parametrize("dof", [4, 8])
@@ -72,7 +72,7 @@ def test_a_new_signal_set_is_one_entry_of_the_table(monkeypatch):
                                                                lambda d: np.arange(d)))
     names = body.signal_names(dof, name)
     assert names == body.signal_names(dof, "cartesian") + body.dof_names(dof)
-    plant = BatchPlant(dof, name, n_runs=2, sensor_noise=0.0)
+    plant = BatchPlant(dof, name, get("ymca", dof), n_runs=2, sensor_noise=0.0)
     plant.reset()
     sensed = plant.step(np.full((2, dof), 0.4))
     q = plant.joint_angles()

@@ -51,7 +51,7 @@ def test_output_under_a_file_fails_before_training(tmp_path, monkeypatch, capsys
     (tmp_path / "plain").write_text("x")
     monkeypatch.setattr("skinny_mj.training.loop.train", _never)
     code = main(["train", "--epochs", "1", "--out", str(tmp_path / "plain" / "run")])
-    _one_line_error(capsys, code, 1, "Not a directory")
+    _one_line_error(capsys, code, 2, "Not a directory")  # the path given: input
 
 
 @pytest.mark.parametrize("error", [errno.EACCES, errno.EROFS, errno.ENOSPC])
@@ -193,10 +193,11 @@ def test_singular_readout_solves_give_finite_or_nan_never_raise():
 def test_an_unstable_torque_plant_counts_warnings_and_does_not_crash(monkeypatch):
     import skinny_mj.plant.model as model
     from skinny_mj.plant.adapters import BatchPlant
+    from skinny_mj.trajectories import get
 
     monkeypatch.setattr(model, "TORQUE_GEAR_NM",
                         {k: v * 1e12 for k, v in model.TORQUE_GEAR_NM.items()})
-    plant = BatchPlant(4, "joint", n_runs=2, seeds=[1, 2], actuation="torque")
+    plant = BatchPlant(4, "joint", get("ymca", 4), n_runs=2, seeds=[1, 2], actuation="torque")
     plant.reset()
     for _ in range(20):
         sensed = plant.step(np.ones((2, 4)))

@@ -38,3 +38,21 @@ def test_the_packages_fits_build_what_training_used_before(registry):
     assert fits.make_rule(TrainConfig(), None, 10) is None  # the loop's per-cycle default
     assert registry["ridge-select"].bodies == ("velocity",)
     assert registry["forgetting"].bodies == registry["rls"].bodies == ("torque",)
+
+
+
+def build_named(cfg, esn, steps):
+    """A builder a fit names as text (``"tests.test_fits:build_named"``)."""
+    return ("named", steps)
+
+
+def test_a_fit_may_name_its_builder_which_is_imported_when_the_rule_is_made(registry,
+                                                                            monkeypatch):
+    fits.register_fit("named", f"{__name__}:build_named")
+    cfg = TrainConfig().override({"rule.fit": "named"})
+    assert fits.make_rule(cfg, None, 7) == ("named", 7)
+    from skinny_mj.training import torque  # the remembering fits' builder, named in FITS
+
+    monkeypatch.setattr(torque, "readout_fitter", lambda cfg, esn, steps: ("torque", steps))
+    rls = TrainConfig().override({"actuation": "torque", "rule.fit": "rls"})
+    assert fits.make_rule(rls, None, 40) == ("torque", 40)

@@ -20,7 +20,6 @@ from skinny_mj.errors import SkinnyInputError  # noqa: E402
 from skinny_mj.gym import IDS  # noqa: E402
 from skinny_mj.gym.env import SkinnyEnv  # noqa: E402
 from skinny_mj.gym.vector import SkinnyVectorEnv  # noqa: E402
-from skinny_mj.plant.task import load  # noqa: E402
 from skinny_mj.trajectories import get  # noqa: E402
 
 VELOCITY_IDS = [i for i, kw in IDS.items() if kw["actuation"] == "velocity"]
@@ -113,7 +112,7 @@ def test_reset_seed_is_reproducible_and_means_the_task_seed(env_id):
         assert np.abs(x[:n] - z[:n]).max() > 0  # other seed, other sensor noise
         np.testing.assert_array_equal(x[n:3 * n], z[n:3 * n])  # same movement
     # reset(seed=s) is skinny_mj.load(..., seed=s); reset() continues the stream
-    dm = load(dof, actuation=IDS[env_id]["actuation"], seed=7)
+    dm = skinny_mj.load(dof, actuation=IDS[env_id]["actuation"], seed=7)
     for episode in range(2):
         obs, _ = env.reset(seed=7 if episode == 0 else None)
         ts = dm.reset()

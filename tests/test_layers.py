@@ -2,10 +2,11 @@
 
 controllers/ (the learning) never imports the plant, the package ``skinny_mj`` never
 imports ``experiments`` (it finds them through the ``skinny_mj.experiments`` entry
-points), the parts of ``skinny_mj`` import each other one way only (:data:`RULES`, read
-from every import statement, those inside functions included), no two modules import
-each other, no module reads another module's private attributes, and the wheel carries
-every package folder, the MJCF and the CMU sample clips.
+points), the parts import only their own modules and the parts of lower :data:`LEVELS`
+(read from every import statement, those inside functions and under ``if TYPE_CHECKING:``
+included), no modules import each other in a circle of any length, no module reads
+another module's private attributes, and the wheel carries every package folder, the
+MJCF and the CMU sample clips.
 """
 
 from __future__ import annotations
@@ -34,45 +35,65 @@ MAPPED = {folder: name for name, folder in tomllib.loads((ROOT / "pyproject.toml
     "tool"]["setuptools"]["package-dir"].items()}
 CONTROLLERS = ("skinny_mj.controllers",)
 EXPERIMENTS = ("skinny_mj.experiments",)
-# The body and its MuJoCo model, the dm_control task, the plant adapters and the Gymnasium
-# envs over them, the analytic ideal controller, changes of the body, pictures.
-PLANT = ("skinny_mj.plant", "skinny_mj.gym")
+# The body as data (its joints, ranges, signals; no MuJoCo): what a movement is made for.
+BODY = ("skinny_mj.plant.body",)
+# Its MuJoCo model, the dm_control task, the plant adapters, the analytic ideal
+# controller, changes of the body, pictures.
+PLANT = ("skinny_mj.plant",)
+# The Gymnasium envs over the plant (a movement by name: YMCA by default).
+GYM = ("skinny_mj.gym",)
 # What Skinny imitates (pure NumPy/SciPy: no mujoco, no dm_control).
 MOVEMENTS = ("skinny_mj.trajectories",)
 # One run: its configuration (dotted overrides, earlier versions' flat configs, presets),
 # its parts, the training path, the torque additions, the learning rules' registry, the
-# toolbox's protocol options, the imitation metrics.
+# toolbox's protocol options, the imitation metrics, DTW, its memory estimates.
 TRAINING = ("skinny_mj.training",)
-# Many runs: the experiment engine, its sweep helpers, the registry of studies.
+# Many runs: the experiment engine, its sweep helpers, the registry of studies, a sweep's
+# memory estimate.
 ENGINE = ("skinny_mj.engine",)
 # The `skinny` command: parser, handlers, flags (the configuration's flags; a run repeated
-# from its files with --config), help texts, bench, viewer.
+# from its files with --config), help texts, bench, viewer, the commands' memory checks.
 COMMAND_LINE = ("skinny_mj.cli",)
 # Shared by every part: errors, other packages' entry points (plugins), io, threads,
-# progress, preflight, memory (its generic check; its run and sweep estimates import training
-# and the engine inside functions), dtw, plots, recording, recording_layout.
+# progress, preflight (its memory check too), plots, the MJCF.
 SHARED = ("skinny_mj.errors", "skinny_mj.plugins", "skinny_mj.io", "skinny_mj.threads",
-          "skinny_mj.progress", "skinny_mj.preflight", "skinny_mj.memory", "skinny_mj.training.dtw",
-          "skinny_mj.plots", "skinny_mj.recording", "skinny_mj.recording_layout",
-          "skinny_mj.models")
-PARTS = {"controllers": CONTROLLERS, "experiments": EXPERIMENTS, "plant": PLANT,
-         "movements": MOVEMENTS, "training": TRAINING, "engine": ENGINE,
-         "command line": COMMAND_LINE, "shared": SHARED}
-PACKAGE_PARTS = ("plant", "movements", "training", "engine", "command line", "shared")
+          "skinny_mj.progress", "skinny_mj.preflight", "skinny_mj.plots", "skinny_mj.models")
+# rerun recordings of the body and their blueprint.
+RECORDING = ("skinny_mj.recording", "skinny_mj.recording_layout")
+# The package itself (this module only, not its sub-modules): skinny_mj.load, with the
+# synthesized YMCA as its default movement.
+FACADE = "skinny_mj"
+PARTS = {"controllers": CONTROLLERS, "experiments": EXPERIMENTS, "body": BODY, "plant": PLANT,
+         "gym": GYM, "movements": MOVEMENTS, "training": TRAINING, "engine": ENGINE,
+         "command line": COMMAND_LINE, "shared": SHARED, "recording": RECORDING}
+PACKAGE_PARTS = ("body", "plant", "gym", "movements", "training", "engine", "command line",
+                 "shared", "recording", "facade")
+#: The layers, bottom first: a module imports its own part and the parts of lower levels,
+#: never a part of its own level or a higher one.
+LEVELS = (
+    ("controllers",),
+    ("shared",),
+    ("body",),
+    ("movements", "plant", "recording"),
+    ("gym",),
+    ("training",),
+    ("engine",),
+    ("command line",),
+    ("experiments", "facade"),
+)
+LEVEL = {part: i for i, parts in enumerate(LEVELS) for part in parts}
 HEAVY = ("mujoco", "dm_control", "rerun")
 BARE = ("controllers", "experiments")  # the folders' names, never import names
-# (parts, what they must not import, why): a part may always import itself.
+# (parts, what they must not import, why), beside the levels: a part may always import
+# itself.
 RULES = (
     (("controllers",), ("skinny_mj", *BARE, *HEAVY),
      "the learning is pure NumPy/SciPy, testable without the plant"),
     (PACKAGE_PARTS, (*EXPERIMENTS, *BARE), "studies are found by the registry, and the "
      "learning is imported as skinny_mj.controllers"),
     (("experiments",), BARE, "the learning is imported as skinny_mj.controllers"),
-    (("movements",), (*CONTROLLERS, *HEAVY, *TRAINING, *ENGINE, *COMMAND_LINE),
+    (("movements", "body"), (*CONTROLLERS, *HEAVY),
      "a movement is data, usable without a controller or a simulator"),
-    (("plant",), (*TRAINING, *ENGINE, *COMMAND_LINE), "the plant knows nothing of training"),
-    (("training",), (*ENGINE, *COMMAND_LINE), "one run knows nothing of sweeps or the CLI"),
-    (("engine",), COMMAND_LINE, "the engine runs without the command line"),
 )
 
 
@@ -82,6 +103,8 @@ def _under(name: str, prefixes) -> bool:
 
 def part_of(module: str) -> str | None:
     """The part a module belongs to: its longest prefix among :data:`PARTS`."""
+    if module == FACADE:
+        return "facade"
     best = max(((len(p), part) for part, prefixes in PARTS.items() for p in prefixes
                 if _under(module, (p,))), default=None)
     return best[1] if best else None
@@ -139,19 +162,16 @@ def _module_name(path: Path, root: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def _statements(nodes, runtime: bool):
-    """Every import statement in ``nodes`` and under them (inside functions too); with
-    ``runtime``, not those under ``if TYPE_CHECKING:`` (they never run)."""
+def _statements(nodes):
+    """Every import statement in ``nodes`` and under them: inside functions and under
+    ``if TYPE_CHECKING:`` too (a circle of types is still one a reader untangles)."""
     for node in nodes:
-        if runtime and isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            yield from _statements(node.orelse, runtime)
-            continue
         if isinstance(node, ast.Import | ast.ImportFrom):
             yield node
-        yield from _statements(ast.iter_child_nodes(node), runtime)
+        yield from _statements(ast.iter_child_nodes(node))
 
 
-def imports(path: Path, root: Path = ROOT, runtime: bool = False) -> list[tuple[str, list[str]]]:
+def imports(path: Path, root: Path = ROOT) -> list[tuple[str, list[str]]]:
     """``(module, names)`` of every import in ``path``, module level and inside functions:
     ``import a.b`` gives ``("a.b", [])``, ``from a import b, c`` gives ``("a", ["b", "c"])``;
     relative imports are resolved against the file's package."""
@@ -159,7 +179,7 @@ def imports(path: Path, root: Path = ROOT, runtime: bool = False) -> list[tuple[
     name = _module_name(path, root)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found = []
-    for node in _statements([tree], runtime):
+    for node in _statements([tree]):
         if isinstance(node, ast.Import):
             found += [(alias.name, []) for alias in node.names]
         else:
@@ -192,22 +212,63 @@ def layer_violations(root: Path = ROOT) -> set[str]:
     return found
 
 
-def import_circles(layer: str, root: Path = ROOT) -> list[tuple[str, str]]:
-    """Pairs of modules of ``layer`` that import each other at run time (any level, inside
-    functions too; not under ``if TYPE_CHECKING:``). ``from a import b`` imports the module
-    ``a.b`` when it is one, else ``a``; a module importing its own package is no circle
-    (the package comes first)."""
-    paths = sorted((root / layer).rglob("*.py"))
-    modules = {_module_name(p, root): p for p in paths}
-    edges: dict[str, set[str]] = {}
-    for module, path in modules.items():
-        names = set()
-        for base, aliases in imports(path, root, runtime=True):
-            subs = {f"{base}.{a}" for a in aliases} & set(modules)
-            names |= subs | ({base} if len(subs) < len(aliases) or not aliases else set())
-        edges[module] = {n for n in names & set(modules)
-                         if n != module and not module.startswith(n + ".")}
-    return sorted((a, b) for a in edges for b in edges[a] if a < b and a in edges.get(b, ()))
+def import_graph(root: Path = ROOT) -> dict[str, set[str]]:
+    """Module -> the modules of the three folders it imports (:func:`imports`: any level,
+    inside functions and under ``if TYPE_CHECKING:`` too). ``from a import b`` imports the
+    module ``a.b`` when it is one, else ``a``; a module importing its own package is no
+    edge (the package comes first)."""
+    modules = {_module_name(p, root) for layer in LAYERS for p in (root / layer).rglob("*.py")}
+    graph: dict[str, set[str]] = {}
+    for layer in LAYERS:
+        for path in sorted((root / layer).rglob("*.py")):
+            module, names = _module_name(path, root), set()
+            for base, aliases in imports(path, root):
+                subs = {f"{base}.{a}" for a in aliases} & modules
+                names |= subs | ({base} if len(subs) < len(aliases) or not aliases else set())
+            graph[module] = {n for n in names & modules
+                             if n != module and not module.startswith(n + ".")}
+    return graph
+
+
+def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The import circles of ``graph``, of any length: its strongly connected components
+    of two modules or more (Tarjan's algorithm), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = stack[stack.index(v):]
+            del stack[stack.index(v):]
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return sorted(found)
+
+
+def layer_climbs(graph: dict[str, set[str]]) -> set[str]:
+    """``a imports b (part -> part)`` for every import of a part on the importer's own level
+    of :data:`LEVELS` or a higher one."""
+    found: set[str] = set()
+    for a, targets in graph.items():
+        for b in targets:
+            pa, pb = part_of(a), part_of(b)
+            if pa is not None and pb is not None and pa != pb and LEVEL[pb] >= LEVEL[pa]:
+                found.add(f"{a} imports {b} ({pa} -> {pb})")
+    return found
 
 
 def _plant(root: Path, module: str, code: str) -> str:
@@ -231,29 +292,40 @@ def test_the_import_scan_reads_every_import_and_finds_a_planted_violation(tmp_pa
     a = _plant(tmp_path, movement, f"import numpy as np\nfrom . import b\n"
                f"def f():\n    from {up} import train\n    import skinny_mj.controllers.metrics\n")
     _plant(tmp_path, sibling, f"def g():\n    from {MOVEMENTS[0]} import a\n")
-    p = _plant(tmp_path, perturb,
-               f"class P:\n    def m(self):\n        from {package} import {leaf}\n")
+    _plant(tmp_path, perturb,
+           f"class P:\n    def m(self):\n        from {package} import {leaf}\n")
     c = _plant(tmp_path, "skinny_mj.controllers.esn", "def f():\n    import mujoco\n")
+    _plant(tmp_path, parts, "def train():\n    pass\n")
+    _plant(tmp_path, torque, "")
     assert imported_names(tmp_path / a, tmp_path) == {
         "numpy", MOVEMENTS[0], sibling, parts, f"{parts}.train", "skinny_mj.controllers.metrics"}
     assert {v.split(" (")[0] for v in layer_violations(tmp_path)} == {
-        f"{a} imports {parts}", f"{a} imports {parts}.train",
-        f"{a} imports skinny_mj.controllers.metrics",
-        f"{p} imports {package}", f"{p} imports {torque}", f"{c} imports mujoco"}
-    assert import_circles("skinny_mj", tmp_path) == [(movement, sibling)]
+        f"{a} imports skinny_mj.controllers.metrics", f"{c} imports mujoco"}
+    graph = import_graph(tmp_path)
+    assert {v.split(" (")[0] for v in layer_climbs(graph)} == {
+        f"{movement} imports {parts}", f"{perturb} imports {torque}"}
+    assert import_cycles(graph) == [[movement, sibling]]
 
 
-def test_a_type_only_import_is_no_circle_but_a_function_level_one_is(tmp_path):
+def test_a_circle_of_any_length_is_found_through_types_and_functions(tmp_path):
     _plant(tmp_path, "skinny_mj.x", "import skinny_mj.y\n")
     _plant(tmp_path, "skinny_mj.y", "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
-           "    from skinny_mj.x import X\nelse:\n    import skinny_mj.z\n")
-    _plant(tmp_path, "skinny_mj.z", "def f():\n    from skinny_mj import y\n")
-    assert import_circles("skinny_mj", tmp_path) == [("skinny_mj.y", "skinny_mj.z")]
-    assert "skinny_mj.x.X" in imported_names(tmp_path / "skinny_mj" / "y.py", tmp_path)
+           "    from skinny_mj.z import Z\n")
+    _plant(tmp_path, "skinny_mj.z", "def f():\n    from skinny_mj import x\n")
+    _plant(tmp_path, "skinny_mj.w", "import skinny_mj.x\n")  # on the way in, not in the circle
+    graph = import_graph(tmp_path)
+    assert import_cycles(graph) == [["skinny_mj.x", "skinny_mj.y", "skinny_mj.z"]]
+    graph["skinny_mj.y"].clear()
+    assert import_cycles(graph) == []
 
 
 def test_every_import_keeps_the_layering_rules():
     assert layer_violations() == set()
+
+
+def test_no_import_climbs_a_layer():
+    """Every import is of the importer's own part or of a part on a lower level."""
+    assert layer_climbs(import_graph()) == set()
 
 
 def test_every_module_is_placed_in_a_part_or_is_shared():
@@ -263,16 +335,17 @@ def test_every_module_is_placed_in_a_part_or_is_shared():
                if p.name != "__main__.py"}  # a package's program, placed with its package
     packages = {m for m in modules if any(n.startswith(m + ".") for n in modules)}
     assert {m for m in modules - packages if part_of(m) is None} == set()
+    assert set(PARTS) | {"facade"} == {part for level in LEVELS for part in level}
 
 
-@pytest.mark.parametrize("layer", ["skinny_mj", "controllers"])
-def test_no_two_modules_import_each_other(layer):
-    assert import_circles(layer) == []
-
-
-def test_no_two_experiment_modules_import_each_other():
-    """A study names its report as text; the report imports the study, never both ways."""
-    assert import_circles("experiments") == []
+def test_no_import_circles():
+    """No modules of the package, the learning or the studies import each other in a
+    circle: a study names its report as text, the report imports the study."""
+    graph = import_graph()
+    circles = import_cycles(graph)
+    assert not circles, "import circles:\n" + "\n".join(
+        f"{len(c)} modules:\n" + "\n".join(f"  {m} -> {sorted(graph[m] & set(c))}" for m in c)
+        for c in circles)
 
 
 def _private(name: str) -> bool:

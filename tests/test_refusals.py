@@ -14,12 +14,14 @@ pytest.importorskip("hypothesis")
 from hypothesis import given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from skinny_mj import memory  # noqa: E402
+from skinny_mj import preflight  # noqa: E402
 from skinny_mj.cli.flags import RULES, check_args, check_value  # noqa: E402
 from skinny_mj.cli.parser import build_parser, main  # noqa: E402
+from skinny_mj.engine.memory import row_estimate  # noqa: E402
 from skinny_mj.errors import SkinnyInputError  # noqa: E402
 from skinny_mj.preflight import cleaned_on_failure  # noqa: E402
 from skinny_mj.training.config import TrainConfig  # noqa: E402
+from skinny_mj.training.memory import generation_estimate, train_estimate  # noqa: E402
 from skinny_mj.trajectories import Trajectory, ymca  # noqa: E402
 
 FLAGS = settings(max_examples=200, deadline=None, database=None)
@@ -122,7 +124,7 @@ def test_cli_refuses_every_negative_seed_before_any_work(command, seed, tmp_path
 
 # -- memory ---------------------------------------------------------------------------------
 def test_available_memory_is_read():
-    free = memory.available_bytes()
+    free = preflight.available_bytes()
     assert free is None or free > 0
 
 
@@ -136,7 +138,7 @@ def test_available_memory_is_read():
 ])
 def test_too_big_for_memory_is_refused_before_any_work(argv, names, capsys, tmp_path,
                                                        monkeypatch):
-    if memory.available_bytes() is None:
+    if preflight.available_bytes() is None:
         pytest.skip("this system does not say how much memory is free")
     monkeypatch.chdir(tmp_path)
     err = _one_line_exit_2([*argv[:1], *argv[1:], *(["--out", "o"] if "--out" not in argv
@@ -147,28 +149,28 @@ def test_too_big_for_memory_is_refused_before_any_work(argv, names, capsys, tmp_
 
 def test_the_estimate_grows_with_steps_runs_and_reservoir():
     cfg = TrainConfig()
-    base = memory.train_estimate(cfg, 313, 313)
-    longer = memory.train_estimate(cfg, 3130, 313)
+    base = train_estimate(cfg, 313, 313)
+    longer = train_estimate(cfg, 3130, 313)
     for part in ("per-step buffers", "readout fit"):  # in proportion to the steps
         assert longer.parts[part] == 10 * base.parts[part]
     assert longer.parts["reservoir weights"] == base.parts["reservoir weights"]
-    lockstep = memory.train_estimate(cfg, 313, 313, runs=10)
+    lockstep = train_estimate(cfg, 313, 313, runs=10)
     assert lockstep.parts["per-step buffers"] > 9 * base.parts["per-step buffers"]
-    big = memory.train_estimate(TrainConfig().override(esn__n_reservoir=2000), 313, 313)
+    big = train_estimate(TrainConfig().override(esn__n_reservoir=2000), 313, 313)
     # the reservoir weights: at least the N x N float64 matrix itself
     assert big.parts["reservoir weights"] >= 2000**2 * 8
     assert big.parts["reservoir weights"] > 50 * base.parts["reservoir weights"]
 
 
 def test_check_names_the_cause_and_what_is_available():
-    est = memory.Estimate({"a": 10, "b": 1000}, {"a": "x", "b": "--reps 7"})
-    memory.check(est, "the run", available=2000)
+    est = preflight.Estimate({"a": 10, "b": 1000}, {"a": "x", "b": "--reps 7"})
+    preflight.check(est, "the run", available=2000)
     with pytest.raises(SkinnyInputError, match=r"the run needs about 1010 B .*--reps 7.*1000 B"):
-        memory.check(est, "the run", available=1000)
+        preflight.check(est, "the run", available=1000)
 
 
 def test_a_sweeps_largest_row_is_refused(capsys, tmp_path):
-    if memory.available_bytes() is None:
+    if preflight.available_bytes() is None:
         pytest.skip("this system does not say how much memory is free")
     err = _one_line_exit_2(["experiment", "paper-e", "--movement", "ymca@0.002",
                             "--workers", "1", "--out", str(tmp_path / "sw")], capsys)
@@ -196,7 +198,7 @@ def test_every_study_estimates_every_row_quick_and_full(monkeypatch):
         module = registry.get(name)
         for quick in (True, False):
             exp = module.build(quick=quick, movement=None, asf=None, dof=None, signals=None)
-            ests = {r.row_id: memory.row_estimate(module, exp, r, exp.runs, cache)
+            ests = {r.row_id: row_estimate(module, exp, r, exp.runs, cache)
                     for r in exp.rows}
             missing = [rid for rid, est in ests.items() if est is None]
             assert not missing, f"{name} says nothing of these rows' memory: {missing}"
@@ -208,7 +210,7 @@ def test_every_study_estimates_every_row_quick_and_full(monkeypatch):
                                   "three-d", "rl-vs-fel"])
 def test_a_study_too_big_for_the_memory_left_is_refused(name, monkeypatch, capsys, tmp_path):
     _every_study(monkeypatch)
-    monkeypatch.setattr(memory, "available_bytes", lambda: 1024**2)
+    monkeypatch.setattr(preflight, "available_bytes", lambda: 1024**2)
     err = _one_line_exit_2(["experiment", name, "--quick", "--workers", "1", "--out",
                             str(tmp_path / "sw")], capsys)
     assert "largest row" in err and "more than the 1.0 MiB available" in err
@@ -216,22 +218,22 @@ def test_a_study_too_big_for_the_memory_left_is_refused(name, monkeypatch, capsy
 
 
 def test_the_generation_estimate_grows_with_steps_runs_and_rls():
-    base = memory.generation_estimate(200, 1, 2, 1200, 2000)
+    base = generation_estimate(200, 1, 2, 1200, 2000)
     assert base.parts["reservoir weights"] >= 200**2 * 8
-    longer = memory.generation_estimate(200, 1, 2, 12000, 2000)
+    longer = generation_estimate(200, 1, 2, 12000, 2000)
     assert longer.parts["readout fit"] == 10 * base.parts["readout fit"]
-    lockstep = memory.generation_estimate(200, 1, 2, 1200, 2000, runs=20)
+    lockstep = generation_estimate(200, 1, 2, 1200, 2000, runs=20)
     assert lockstep.parts["per-step buffers"] == 20 * base.parts["per-step buffers"]
     assert lockstep.parts["reservoir weights"] >= 20 * 200**2 * 8
-    force = memory.generation_estimate(200, 1, 2, 1200, 2000, rls=True)
+    force = generation_estimate(200, 1, 2, 1200, 2000, rls=True)
     assert force.parts["rls"] >= 3 * 204**2 * 8 and force.parts["readout fit"] == 0
 
 
 # -- outputs ----------------------------------------------------------------------------------
-def test_bench_out_unwritable_is_refused_before_the_bench(capsys, tmp_path):
+def test_bench_out_under_a_file_is_refused_before_the_bench(capsys, tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("x")
-    assert main(["bench", "--quick", "--out", str(blocker / "b.json")]) == 1
+    assert main(["bench", "--quick", "--out", str(blocker / "b.json")]) == 2  # input
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and str(blocker) in err and ".skinny-write-probe" not in err
 
@@ -307,7 +309,7 @@ def test_vector_env_refuses_non_finite_actions():
 
 
 def test_a_movement_too_long_for_the_memory_is_refused_before_it_is_made():
-    if memory.available_bytes() is None:
+    if preflight.available_bytes() is None:
         pytest.skip("this system does not say how much memory is free")
     traj = Trajectory(ymca(4).angles, name="ymca")
     with pytest.raises(SkinnyInputError, match=r"speed 1e-09: 313000000000 steps of ymca"):
@@ -531,7 +533,7 @@ def test_a_csv_saved_with_a_byte_order_mark_reads(bad):
     (lambda bad: Trajectory.load(bad / "folder.npz"), "a folder, not a trajectory file"),
 ])
 def test_the_python_api_refuses_the_same_inputs_with_a_skinny_input_error(call, culprit, bad):
-    if culprit == "more than the" and memory.available_bytes() is None:
+    if culprit == "more than the" and preflight.available_bytes() is None:
         pytest.skip("this system does not say how much memory is free")
     with pytest.raises(SkinnyInputError) as caught:
         call(bad)
@@ -553,6 +555,6 @@ def test_render_refuses_a_frame_without_a_movement(capsys, tmp_path, monkeypatch
 
 
 def test_a_memory_refusal_says_a_huge_need_in_a_readable_number():
-    assert memory.fmt_bytes(1.5 * 1024**3) == "1.5 GiB"
-    assert memory.fmt_bytes(222 * 1024**5) == "222.0 PiB"
-    assert memory.fmt_bytes(1e300) == "8.88e+284 PiB"  # not 285 digits
+    assert preflight.fmt_bytes(1.5 * 1024**3) == "1.5 GiB"
+    assert preflight.fmt_bytes(222 * 1024**5) == "222.0 PiB"
+    assert preflight.fmt_bytes(1e300) == "8.88e+284 PiB"  # not 285 digits

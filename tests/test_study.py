@@ -112,14 +112,15 @@ def test_a_report_gets_typed_results_and_the_plan(tmp_path):
 
 
 def test_quick_params_columns_and_the_studys_cost_memory_and_unavailable_hooks(tmp_path):
-    from skinny_mj import memory
+    from skinny_mj import preflight
+    from skinny_mj.engine.memory import row_estimate
 
     study = toy(quick=Quick({"rule.epochs": 2}, runs=2, rows=("g", "c"), params={"tol": 0.5},
                             columns=("k",)),
                 columns=("reservoir", "k"),
                 cost=lambda config, row: float(config.esn.n_reservoir + row.params["k"]),
                 memory=lambda config, row, runs: None if row.id == "a" else
-                memory.Estimate({"x": runs * config.esn.n_reservoir}, {"x": "toy"}),
+                preflight.Estimate({"x": runs * config.esn.n_reservoir}, {"x": "toy"}),
                 unavailable=lambda: {"c": "needs a package", "q": "is not in this sweep"})
     full, quick = study.build(), study.build(quick=True)
     assert full.config.params == {"k": 0, "tol": 0.1} and full.table_columns == ("reservoir", "k")
@@ -129,9 +130,9 @@ def test_quick_params_columns_and_the_studys_cost_memory_and_unavailable_hooks(t
     assert [full.cost(r) for r in full.rows] == [31.0, 42.0, 204.0]
     assert full.unavailable == {"c": "needs a package"}  # of the rows this sweep has
     rows = {r.row_id: r for r in full.rows}
-    assert memory.row_estimate(study, full, rows["b"], 3).parts == {"x": 120}
+    assert row_estimate(study, full, rows["b"], 3).parts == {"x": 120}
     # no estimate of its own: the row's training configuration's
-    assert memory.row_estimate(study, full, rows["a"], 3).total > 0
+    assert row_estimate(study, full, rows["a"], 3).total > 0
     with pytest.raises(SkinnyInputError, match="row 'c' needs a package"):
         run_sweep(full, tmp_path, rows=["c"], workers=1, progress=False)
 

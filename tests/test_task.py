@@ -9,11 +9,13 @@ import pytest
 from absl.testing import absltest
 from dm_env import test_utils
 
+import skinny_mj
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.plant.adapters import BatchPlant
 from skinny_mj.plant.ideal import MIN_MAX_SPEED_RAD_S, IdealController, max_speeds, true_commands
 from skinny_mj.plant.task import load
+from skinny_mj.trajectories import load_movement
 
 
 @dataclass(frozen=True)
@@ -174,10 +176,12 @@ def test_random_commands_never_pass_the_range(dof):
     assert all(w.number == 0 for w in plant.data.warning)
 
 
-def test_default_trajectory_is_ymca():
+def test_the_default_trajectory_is_ymca_and_the_packages_not_the_plants():
     trajectories = pytest.importorskip("skinny_mj.trajectories")
-    env = load(4)
+    env = skinny_mj.load(4)
     np.testing.assert_array_equal(env.task.setup.angles, trajectories.get("ymca", 4).angles)
+    with pytest.raises(SkinnyInputError, match="needs a trajectory"):
+        load(4)
 
 
 @pytest.mark.parametrize(
@@ -193,11 +197,7 @@ def test_default_trajectory_is_ymca():
         ({"trajectory": StandIn(np.full((10, 4), np.nan), 4)}, "NaN"),
         ({"trajectory": StandIn(np.zeros((1, 4)), 4)}, "T >= 2"),
         ({"trajectory": StandIn(np.zeros((10, 4)), 4, dt=0.01)}, "dt"),
-        ({"trajectory": "nope"}, "unknown movement 'nope'"),
-        ({"trajectory": "ymca@"}, "no speed after '@'"),
-        ({"trajectory": ""}, "empty movement name"),
-        ({"trajectory": 3}, "trajectory must be a movement name or file"),
-        ({"trajectory": np.zeros((10, 3))}, "3 columns"),
+        ({"trajectory": "ym"}, "the plant takes a Trajectory"),  # names: skinny_mj.load
         ({"seed": -1}, "seed must be a whole number >= 0"),
         ({"seed": 1.5}, "seed must be a whole number >= 0"),
         ({"sensor_noise": "x"}, "sensor_noise must be a number"),
@@ -225,8 +225,16 @@ def test_a_non_finite_action_is_refused_before_mujoco(actuation, bad):
 
 @pytest.mark.parametrize("name", ["ym", "ymca@0.5", "babble:seed=3,duration=4",
                                   "set:ym+babble:duration=2", "md_03.amc@start=1,duration=1"])
-def test_load_takes_every_name_the_command_line_takes(name):
-    from skinny_mj.trajectories import load_movement
-
-    env = load(4, trajectory=name)
+def test_skinny_mj_load_takes_every_name_the_command_line_takes(name):
+    env = skinny_mj.load(4, trajectory=name)
     np.testing.assert_array_equal(env.task.setup.angles, load_movement(name, 4)[0].angles)
+
+
+@pytest.mark.parametrize("trajectory,match", [
+    ("nope", "unknown movement 'nope'"), ("ymca@", "no speed after '@'"),
+    ("", "empty movement name"), (3, "trajectory must be a movement name or file"),
+    (np.zeros((10, 3)), "3 columns"),
+])
+def test_skinny_mj_load_refuses_a_bad_movement_in_one_error(trajectory, match):
+    with pytest.raises(SkinnyInputError, match=match):
+        skinny_mj.load(4, trajectory=trajectory)

@@ -140,3 +140,90 @@ def test_the_tracker_check_finds_a_number():
 @pytest.mark.parametrize("path", SOURCES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_docstrings_cite_no_tracker_numbers(path):
     assert tracker_numbers(path.read_text()) == []
+
+
+# -- the README: lines that fit, commands that paste, an exit-code table that holds --------
+README = ROOT / "README.md"
+#: Longest prose line of the README (tables and code blocks aside), and of a table row.
+PROSE_CHARS, TABLE_CHARS = 100, 200
+
+
+def long_lines(text: str) -> list[str]:
+    """Lines of ``text`` longer than :data:`PROSE_CHARS` outside fenced code and tables, or
+    longer than :data:`TABLE_CHARS` in a table."""
+    out, fenced = [], False
+    for i, line in enumerate(text.splitlines(), 1):
+        if line.lstrip().startswith(("```", "~~~")):
+            fenced = not fenced
+            continue
+        limit = None if fenced else TABLE_CHARS if line.startswith("|") else PROSE_CHARS
+        if limit is not None and len(line) > limit:
+            out.append(f"{i}: {len(line)} characters: {line[:60]}")
+    return out
+
+
+def piped_commands(text: str) -> list[str]:
+    """Shell code (lines of fenced bash/sh blocks, inline code spans) holding a ``|``:
+    pasted, ``a | b`` alternatives run a pipeline (``skinny experiment paper-a | paper-b``
+    starts paper A)."""
+    shell, prose, fence = [], [], None
+    for line in text.splitlines():
+        if line.lstrip().startswith("```"):
+            fence = line.strip()[3:] if fence is None else None
+        elif fence is None:
+            prose.append(line)
+        elif fence in ("", "bash", "sh", "console"):
+            shell.append(line)
+    spans = re.findall(r"`([^`]+)`", "\n".join(prose))
+    return [code.strip() for code in [*shell, *spans] if "|" in code]
+
+
+def test_the_readme_checks_find_what_they_should():
+    text = ("short\n" + "x" * 101 + "\n| " + "t" * 150 + " |\n```bash\n" + "c" * 120
+            + "\nskinny experiment paper-a | paper-b\n```\nSee `--dof 4|8` and `skinny demo`.\n")
+    assert [line.split(":")[0] for line in long_lines(text)] == ["2"]
+    assert piped_commands(text) == ["skinny experiment paper-a | paper-b", "--dof 4|8"]
+
+
+def test_readme_lines_fit():
+    assert long_lines(README.read_text()) == []
+
+
+def test_readme_commands_paste_without_a_pipe():
+    assert piped_commands(README.read_text()) == []
+
+
+def _readme_exit_codes() -> dict[int, str]:
+    text = README.read_text()
+    table = text[text.index("| code | meaning |"):].split("\n\n")[0]
+    return {int(m[1]): m[2] for m in re.finditer(r"(?m)^\| (\d+) \| (.+) \|$", table)}
+
+
+def _codes_main_returns() -> set[int]:
+    """The exit codes ``skinny_mj.cli.parser.main`` returns as constants, and argparse's 2."""
+    import ast
+    import inspect
+
+    from skinny_mj.cli import parser
+
+    tree = ast.parse(inspect.getsource(parser.main))
+    return {node.value.value for node in ast.walk(tree) if isinstance(node, ast.Return)
+            and isinstance(node.value, ast.Constant)} | {2}
+
+
+def test_readme_exit_code_table_is_the_clis(monkeypatch, capsys):
+    from skinny_mj.cli import commands, parser
+    from skinny_mj.errors import SkinnyEnvironmentError
+
+    documented = _readme_exit_codes()
+    assert set(documented) == _codes_main_returns() == {0, 1, 2, 130, 143}
+    assert parser.main(["trajectory", "list"]) == 0
+    assert parser.main(["trajectory", "show", "no-such-movement"]) == 2
+    assert "bad input" in documented[2] and "interrupted" in documented[130]
+    for raised, code in ((SkinnyEnvironmentError("the disk is full"), 1),
+                         (KeyboardInterrupt(), 130), (parser.Terminated(), 143)):
+        def fail(args, raised=raised):
+            raise raised
+        monkeypatch.setattr(commands, "cmd_trajectory", fail)
+        assert parser.main(["trajectory", "list"]) == code, raised
+    capsys.readouterr()

@@ -18,7 +18,9 @@ from pathlib import Path
 import numpy as np
 from skinny_mj.experiments.bimanual_delay.study import ARCHITECTURES, row_id
 
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.plant.body import CONTROL_DT_S
+from skinny_mj.plots import pyplot, save_figure
 
 #: metric, panel label
 PANELS = (("position_nrmse_x1", "lagging-arm position NRMSE (1x)"),
@@ -32,8 +34,6 @@ SUMMARY = (("position_nrmse_x1", "pos. NRMSE 1x", 4), ("relative_error_x1", "rel
 
 
 def _records(out_dir: Path) -> list[dict]:
-    from skinny_mj.engine.stats import load_runs
-
     return sorted(load_runs(out_dir), key=lambda r: (r["row"], r["run_index"]))
 
 
@@ -55,8 +55,6 @@ def _ok_values(recs: list[dict], metric: str) -> list[float]:
 
 
 def _sweep_png(path: Path, patterns: list[str], delays: list[int], by: dict) -> None:
-    from skinny_mj.plots import pyplot, save_figure
-
     plt = pyplot()
     fig, axes = plt.subplots(len(patterns), len(PANELS), squeeze=False,
                              figsize=(4.2 * len(PANELS), 3.2 * len(patterns)))
@@ -80,8 +78,6 @@ def _sweep_png(path: Path, patterns: list[str], delays: list[int], by: dict) -> 
 
 def _traces_png(path: Path, patterns: list[str], delay: int, by: dict,
                 tags: tuple[str, ...] = ("x1", "x1.5")) -> None:
-    from skinny_mj.plots import pyplot, save_figure
-
     plt = pyplot()
     cols = [(p, tag) for p in patterns for tag in tags]
     fig, axes = plt.subplots(len(ARCHITECTURES), len(cols), squeeze=False, sharex="col",

@@ -22,8 +22,11 @@ import functools
 import statistics
 import time
 
+from skinny_mj.experiments.claims import values
+
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.trajectories import load_movement
 
 #: Fastest speed (a factor of the clip's own, on a 0.01 grid from 0.6 down) at and below
 #: which no step of the clip's inverse dynamics exceeds a torque limit, per body (dof).
@@ -46,8 +49,6 @@ def speed_of(column: str, dof: int) -> float:
 @functools.lru_cache(maxsize=32)
 def load_test(column: str, dof: int):
     """Test column ``column``'s movement for body ``dof`` (cached)."""
-    from skinny_mj.trajectories import load_movement
-
     return load_movement(TESTS[column][0], dof, speed=speed_of(column, dof))[0]
 
 
@@ -98,8 +99,6 @@ def report_lines(out_dir, rows: tuple[str, ...], bodies: dict[str, int]) -> list
     """A markdown table of the general rows swept (position NRMSE per test column, mean ±
     sd over the ok runs), each body's computed-torque floor first, then the goal per
     preset row."""
-    from skinny_mj.experiments.claims import values
-
     lines = []
     for bd, dof in bodies.items():
         mine = [r for r in rows if r.startswith(f"{bd}-general")]

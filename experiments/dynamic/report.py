@@ -19,7 +19,9 @@ from skinny_mj.experiments.dynamic.study import (
     YMCA,
 )
 
+from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.imitation import movement_stats
 from skinny_mj.training.parts import load_trajectory
 from skinny_mj.training.torque import feasibility
 
@@ -34,8 +36,6 @@ def feasibility_table(movements: tuple[str, ...], bodies: tuple[str, ...]) -> li
     """Markdown rows: what each movement asks of each body's motors (inverse dynamics of
     the desired motion, :meth:`skinny_mj.plant.dynamics.Dynamics.feasibility`), the DOF
     with the largest peak named."""
-    from skinny_mj.plant import body
-
     lines = ["| movement | body | peak \\|τ\\|/limit (DOF) | p99 | steps over a limit | "
              "mean \\|τ\\| (N m) | peak speed (rad/s) | peak accel (rad/s²) | motor work (J) "
              "| feasible |", "|---|---|---|---|---|---|---|---|---|---|"]
@@ -55,8 +55,6 @@ def feasibility_table(movements: tuple[str, ...], bodies: tuple[str, ...]) -> li
 
 def floor(dof: int, name: str) -> float:
     """The position NRMSE of the best reachable pose of a movement (no controller beats it)."""
-    from skinny_mj.training.imitation import movement_stats
-
     return movement_stats(torque_movement(dof, name))["reachable_floor_position_nrmse"]
 
 

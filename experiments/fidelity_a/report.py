@@ -7,9 +7,11 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments.fidelity_a.study import THESIS
 
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.io import atomic_write_text
+from skinny_mj.plots import pyplot, save_figure
 
 ARCHS = ("inverse", "parallel", "serial", "hybrid")
 WHERE = {"train": "last training epoch (K = 0.65)", "test": "K = 0 test"}
@@ -122,8 +124,6 @@ def prediction_table(runs: Runs) -> str:
 
 def thesis_table(runs: Runs) -> str:
     """The thesis's stated numbers (paper A §4, text) beside ours."""
-    from skinny_mj.experiments.fidelity_a.study import THESIS
-
     lines = ["| quantity | thesis (paper A text) | ours |", "|---|---|---|"]
     lo, hi = THESIS["inverse_error_by_delay_4"]
     for d in (4, 10):
@@ -238,8 +238,6 @@ def _matrix(runs: Runs, arch: str, delays: list[int], metric: str, scale: float)
 
 def fig5(runs: Runs, path: Path, epochs: int = 10) -> None:
     """Thesis Fig. 5 redrawn: inverse only vs serial, mean and min–max band over seeds."""
-    from skinny_mj.plots import pyplot, save_figure
-
     plt = pyplot()
     epochs = min([epochs] + [_pe(runs, r) for r in runs.rows])
     delays = sorted({p["delay"] for r, p in runs.rows.items()
@@ -290,8 +288,6 @@ def fig5(runs: Runs, path: Path, epochs: int = 10) -> None:
 def fig_epochs(runs: Runs, path: Path) -> bool:
     """Error against epochs for the rows run longer than 10 epochs: the training curve
     (every epoch) and the K = 0 test at the checkpoints, mean and min–max over seeds."""
-    from skinny_mj.plots import pyplot, save_figure
-
     long = [r for r in _row_order(runs) if int(runs.rows[r]["epochs"]) > 10]
     if not long:
         return False
@@ -319,8 +315,6 @@ def fig_epochs(runs: Runs, path: Path) -> bool:
 
 def fig6(runs: Runs, path: Path) -> bool:
     """Thesis Fig. 6 redrawn: prediction error per training mode, mean ± sd, by delay."""
-    from skinny_mj.plots import pyplot, save_figure
-
     groups = [(fi, d) for fi in ("sensed", "chained")
               for d in sorted({p["delay"] for p in runs.rows.values()})
               if all(runs.find(a, fi, d) for a in ("serial", "parallel", "hybrid"))]

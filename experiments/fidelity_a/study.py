@@ -33,6 +33,9 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from skinny_mj.controllers.fel import run_mean
+from skinny_mj.controllers.forward_model import rollout_prediction_error
+from skinny_mj.controllers.rollout import Rollout
 from skinny_mj.experiments import paper_a
 
 from skinny_mj.engine.study import Quick, Row, Study
@@ -86,16 +89,12 @@ def checkpoints_of(checkpoints: tuple[int, ...], epochs: int) -> tuple[int, ...]
 
 def _mad(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Mean |a - b| / 2 per run, (R,), for (R, T, n) and (R or T, ..., n)."""
-    from skinny_mj.controllers.fel import run_mean
-
     return run_mean(np.abs(a - b)) / 2.0
 
 
 def _cycle_metrics(ro, desired: np.ndarray, prefix: str) -> dict[str, np.ndarray]:
     """Per-run metrics (R,) of one closed-loop cycle ``ro`` (the feedback share and
     correction ratio only with the feedback on: in training)."""
-    from skinny_mj.controllers.forward_model import rollout_prediction_error
-
     out = {f"{prefix}_mad": _mad(ro.true_signals, desired)}
     if prefix == "train":
         out.update({"train_share": paper_a.feedback_share(ro),
@@ -123,8 +122,6 @@ def _test_metrics(run) -> dict[str, np.ndarray]:
 
 def _stack_rollouts(ros: list):
     """One R-run Rollout from R one-run selections (the test's per-run views)."""
-    from skinny_mj.controllers.rollout import Rollout
-
     return Rollout(**{f.name: None if getattr(ros[0], f.name) is None else
                       np.concatenate([getattr(r, f.name) for r in ros])
                       for f in dataclasses.fields(Rollout)})

@@ -5,8 +5,20 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments.claims import values
+from skinny_mj.experiments.fidelity_d.study import (
+    STAGE_2_CELLS,
+    THESIS_TRAIN_RANGE,
+    cell_id,
+    cells,
+    grid_of,
+    in_thesis_range,
+)
+from skinny_mj.experiments.paper_d import PAPER_TABLE_1
 
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.io import atomic_write_text
+from skinny_mj.plots import pyplot
 
 #: Paper D Table 1, TT position test means: the ordering the thesis reports.
 ORDER = ("1", "2", "3a", "3b", "4")
@@ -44,7 +56,6 @@ def ordering(results: dict, cell: str, runs: list[dict] | None = None) -> dict:
     p: dict[str, float] = {}
     if runs is not None and ok:
         from scipy.stats import mannwhitneyu
-        from skinny_mj.experiments.claims import values
 
         v = {e: values(Path(), f"{cell}-e{e}", "tt_position_test", runs) for e in ORDER}
         worst = max(("3a", "3b", "4"), key=lambda e: med[e])
@@ -55,8 +66,6 @@ def ordering(results: dict, cell: str, runs: list[dict] | None = None) -> dict:
 
 
 def stage_1_table(results: dict, cfg) -> str:
-    from skinny_mj.experiments.fidelity_d.study import THESIS_TRAIN_RANGE, cell_id, in_thesis_range
-
     lines = ["| movement | N | input noise | exp 1 pos train | exp 2 pos train | in range | "
              "exp 1 pos test | exp 2 pos test | exp 1 motor test | exp 2 motor test | "
              "failed / n (1; 2) |", "|" + "---|" * 11]
@@ -84,8 +93,6 @@ def stage_1_table(results: dict, cfg) -> str:
 
 
 def stage_2_table(results: dict, cells: list[str], runs: list[dict] | None = None) -> str:
-    from skinny_mj.experiments.paper_d import PAPER_TABLE_1
-
     thesis = {e: PAPER_TABLE_1[e] for e in ORDER}
     head = ["cell"] + [f"exp {e}" for e in ORDER] + ["1 > 2", "2 > 3a,3b,4", "3a≈3b≈4"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head),
@@ -111,8 +118,6 @@ def stage_2_table(results: dict, cells: list[str], runs: list[dict] | None = Non
 
 def write_report(results: dict, out_dir: Path, cfg) -> str:
     """Write stages.md and the two figures of the grid ``cfg`` (a fidelity_d.Grid)."""
-    from skinny_mj.experiments.fidelity_d.study import STAGE_2_CELLS, cells, in_thesis_range
-
     out_dir = Path(out_dir)
     picked = [c for c in cells(cfg) if in_thesis_range(results, c)]
     text = ["## Stage 1 (exps 1, 2)", "", stage_1_table(results, cfg), "",
@@ -124,8 +129,6 @@ def write_report(results: dict, out_dir: Path, cfg) -> str:
            if all(_row(results, f"{c}-e{e}") and _row(results, f"{c}-e{e}")["n"]
                   for e in ORDER)]
     if ran:
-        from skinny_mj.engine.stats import load_runs
-
         text += ["", "## Stage 2 (all TT exps)", "",
                  stage_2_table(results, ran, load_runs(out_dir))]
     body = "\n".join(text) + "\n"
@@ -137,11 +140,6 @@ def write_report(results: dict, out_dir: Path, cfg) -> str:
 
 
 def _figure(results: dict, cfg, metric: str, path: Path) -> None:
-    from skinny_mj.experiments.fidelity_d.study import THESIS_TRAIN_RANGE, cell_id
-    from skinny_mj.experiments.paper_d import PAPER_TABLE_1
-
-    from skinny_mj.plots import pyplot
-
     plt = pyplot()
     train = metric.endswith("train")
     fig, axes = plt.subplots(len(cfg.movements), len(cfg.reservoirs), squeeze=False,
@@ -191,6 +189,4 @@ def _figure(results: dict, cfg, metric: str, path: Path) -> None:
 
 def report(results: dict, plan, out_dir: Path) -> str:
     """stage1.md / stage2.md tables and fig_train_error.png / fig_test_error.png."""
-    from skinny_mj.experiments.fidelity_d.study import grid_of
-
     return write_report(results, Path(out_dir), grid_of(plan))

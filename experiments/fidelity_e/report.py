@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments.fidelity_e.study import THESIS_RATIO
 
 from skinny_mj.io import atomic_write_text
 
@@ -46,8 +47,6 @@ def ratios(results: dict, plan) -> list[dict]:
 
 
 def write_report(results: dict, out_dir: Path, plan) -> str:
-    from skinny_mj.experiments.fidelity_e.study import THESIS_RATIO
-
     rows = ratios(results, plan)
     lines = ["| movement | u_error gain | test noise | metric | exp 1 | exp 2 | exp 5 | "
              "exp 2 / exp 5 | thesis |", "|---|---|---|---|---|---|---|---|---|"]

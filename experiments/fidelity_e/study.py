@@ -21,6 +21,7 @@ from skinny_mj.experiments.paper_e import study as paper_e
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.trajectories.samples import sample_clip
 
 NAME = "fidelity-e"
 MD02 = "md_02.amc@start=3,duration=6.26"  # paper E's md_02 excerpt (docs/RESULTS.md)
@@ -33,8 +34,6 @@ THESIS_RATIO = {"position_nrmse": 0.1088 / 0.0245, "motor_nrmse": 0.2435 / 0.071
 
 
 def _trajectory(key: str) -> tuple[str, str]:
-    from skinny_mj.trajectories.samples import sample_clip
-
     name, retarget = MOVEMENTS[key]
     if name == MD02:
         name = f"{sample_clip('md_02')}@start=3,duration=6.26"

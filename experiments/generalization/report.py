@@ -22,6 +22,10 @@ from skinny_mj.experiments.generalization.study import (
 )
 from skinny_mj.experiments.generalization.study import TRAIN_SETS as _MAIN_SETS
 
+from skinny_mj.engine.stats import load_runs
+from skinny_mj.io import atomic_write_text
+from skinny_mj.plots import pyplot, save_figure
+
 # the report shows the extra and general rows too ("general" marked as no movement row)
 TRAIN_SETS = {**_MAIN_SETS, **TRAIN_SETS_EXTRA, **TRAIN_SETS_GENERAL,
               "general": ("the preset's", {"preset": "general"})}
@@ -35,8 +39,6 @@ REAL = ("md_02", "md_03", "md_02-tail", "md_03-tail")
 
 
 def _runs(out_dir: Path) -> list[dict]:
-    from skinny_mj.engine.stats import load_runs
-
     return [r for r in load_runs(out_dir) if r.get("status") == "ok"]
 
 
@@ -70,8 +72,6 @@ def matrix(runs: list[dict], rep: str, metric: str):
 def heatmap(path: Path, m: np.ndarray, train: list[str], tests: list[str], title: str,
             fmt: str = "{:.3f}") -> Path:
     """A heat map; cells whose test movement the row trained on are marked '*'."""
-    from skinny_mj.plots import pyplot, save_figure
-
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(1.2 + 0.8 * len(tests), 1.0 + 0.45 * len(train)))
     image = ax.imshow(m, cmap="viridis_r", aspect="auto")
@@ -179,7 +179,6 @@ def _ms(v: np.ndarray) -> str:
 def report(results: dict, plan, out_dir: Path) -> str:
     """Matrices, figures and findings."""
     out_dir = Path(out_dir)
-    from skinny_mj.io import atomic_write_text
 
     runs = _runs(out_dir)
     if not runs:
@@ -266,8 +265,6 @@ def general_figure(path: Path, bars: list,
                    title: str = "Imitating unseen CMU dance: before -> the general presets"
                    ) -> Path:
     """Grouped bars: per row (label, [(mean, sd) per clip]) the clips' mean ± sd."""
-    from skinny_mj.plots import pyplot, save_figure
-
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(1.5 + 0.7 * len(bars), 4.2))
     x = np.arange(len(bars))

@@ -49,6 +49,7 @@ import functools
 import time
 
 import numpy as np
+from skinny_mj.controllers.metrics import position_nrmse
 
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
@@ -56,6 +57,7 @@ from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import imitation_metrics, saturation  # noqa: F401 (API)
 from skinny_mj.training.presets import preset_fields
+from skinny_mj.trajectories import load_movement
 
 NAME = "generalization"
 #: Representation id -> (dof, signals); the matrix runs the first three.
@@ -151,8 +153,6 @@ QUICK_TESTS = ("ymca", "md_02", "md_02-tail")
 @functools.lru_cache(maxsize=64)
 def load_test(movement: str, dof: int):
     """A test movement for ``dof`` (cached: every row of a worker reuses it)."""
-    from skinny_mj.trajectories import load_movement
-
     return load_movement(movement, dof)[0]
 
 
@@ -161,8 +161,6 @@ def clipped_ideal_nrmse(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarr
     """Position NRMSE of the exact inverse model whose commands are clipped to [-1, 1]
     (kinematic: q(t+1) = q(t) + clip(c) v_max dt, no sensor noise): what the command
     scale alone costs on ``angles`` (T, n_dof) rad, a lower bound for any network."""
-    from skinny_mj.controllers.metrics import position_nrmse
-
     step = np.asarray(max_speed_rad_s) * dt
     q = np.empty_like(angles)
     q[0] = angles[0]

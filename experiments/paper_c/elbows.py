@@ -19,8 +19,10 @@ import json
 
 import numpy as np
 from skinny_mj.experiments.paper_c import study as paper_c
+from skinny_mj.experiments.paper_c.report import lag_steps
 
 from skinny_mj.plant import body
+from skinny_mj.training.loop import build_run, evaluate, train_run
 
 
 def jacobian(esn, r: int, states: np.ndarray, y_esn: np.ndarray, n_in: int) -> np.ndarray:
@@ -48,8 +50,6 @@ def dead_beat_gain(run, joint: int, dof: int, dt: float) -> float:
 def analyse(run, dof: int = 4) -> list[dict]:
     """Per run: YM elbow range ratio and correlation, the elbows' Jacobian rows, and the
     produced elbow ranges (deg) with YM's elbow targets held (both, left only)."""
-    from skinny_mj.training.loop import evaluate
-
     names, elbows = body.dof_names(dof), paper_c.elbow_dofs(dof)
     ym, pure = paper_c.load("ym", dof), paper_c.load("y-pure", dof)
     held, left_held = ym.angles.copy(), ym.angles.copy()
@@ -57,7 +57,6 @@ def analyse(run, dof: int = 4) -> list[dict]:
     left_held[:, elbows[1]] = pure.angles[0, elbows[1]]
     counter = {name: evaluate(run, dataclasses.replace(ym, angles=a, name=name))
                for name, a in (("elbow targets held", held), ("left target held", left_held))}
-    from skinny_mj.experiments.paper_c.report import lag_steps
 
     ymca = paper_c.load("ymca", dof)
     ymca_lags = [lag_steps(t.rollout.angles[0], ymca.angles) for t in evaluate(run, ymca)]
@@ -84,8 +83,6 @@ def analyse(run, dof: int = 4) -> list[dict]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    from skinny_mj.training.loop import build_run, train_run
-
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
     p.add_argument("--epochs", type=int, default=150)

@@ -21,15 +21,17 @@ from skinny_mj.experiments.paper_c.study import (
     load,
 )
 
+from skinny_mj.engine.stats import load_runs
+from skinny_mj.io import atomic_write_text
 from skinny_mj.plant import body
+from skinny_mj.plots import heatmap_png, learning_curve_png, pyplot, save_figure
+from skinny_mj.trajectories import get
 
 if TYPE_CHECKING:
     from skinny_mj.engine.plan import Plan, Results
 
 
 def _runs(out_dir: Path) -> list[dict]:
-    from skinny_mj.engine.stats import load_runs
-
     return [r for r in load_runs(out_dir) if r.get("status") == "ok"]
 
 
@@ -64,8 +66,6 @@ def arm_figure_png(path: Path, cases: list[tuple[str, np.ndarray, np.ndarray | N
 
     cases : (title, desired (T, n_dof) rad, produced (T, n_dof) rad or None).
     """
-    from skinny_mj.plots import pyplot, save_figure
-
     plt = pyplot()
     names = body.dof_names(dof)
     fig, axes = plt.subplots(len(cases), 2, figsize=(7.5, 3.0 * len(cases)), squeeze=False)
@@ -220,10 +220,6 @@ def timing_lags(runs: list[dict], dof: int) -> dict[str, float]:
 def report(results: Results, plan: Plan, out_dir: Path) -> str:
     """The train x test heat maps, shoulder-vs-elbow figures, learning curves, claims of
     the sweep in ``out_dir`` (``plan``: what it ran; its body's DOFs)."""
-    from skinny_mj.io import atomic_write_text
-    from skinny_mj.plots import heatmap_png, learning_curve_png
-    from skinny_mj.trajectories import get
-
     out_dir = Path(out_dir)
     runs = _runs(out_dir)
     dof = plan.base.plant.dof

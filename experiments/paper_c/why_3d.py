@@ -44,6 +44,7 @@ from skinny_mj.experiments.paper_c.elbows import jacobian
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
+from skinny_mj.training.loop import build_run, evaluate, train_run
 from skinny_mj.training.overrides import parse_value
 
 #: Epoch windows of the cycle-to-cycle generalization error.
@@ -88,8 +89,6 @@ def analyse(row: str, overrides: dict, seeds: list[int], epochs: int | None = No
             study=paper_c_3d.STUDY) -> dict:
     """Train ``row`` of ``study`` (paper-c-3d, or paper-c for the 2D contrast) with
     ``overrides`` on ``seeds`` and measure it."""
-    from skinny_mj.training.loop import build_run, evaluate, train_run
-
     cfg = study.config(row).override(overrides)
     if epochs is not None:
         cfg = cfg.override({"rule.epochs": epochs})
@@ -139,8 +138,6 @@ def analyse(row: str, overrides: dict, seeds: list[int], epochs: int | None = No
 def plant_response(row: str, every: int = 10) -> dict:
     """The 3D plant at ``row``'s poses: per joint the min and max one-step response to a
     0.05 command / the ideal, and the largest drift (deg) under a zero command."""
-    from skinny_mj.training.loop import build_run
-
     run = build_run(paper_c_3d.STUDY.config(row).override({"plant.sensor_noise": 0.0,
                                                            "esn.n_reservoir": 1}), [0])
     plant, dof, step = run.plant, run.cfg.plant.dof, 0.05

@@ -22,7 +22,11 @@ from skinny_mj.experiments.paper_e.study import (
 from skinny_mj.engine.plan import Plan
 from skinny_mj.engine.stats import load_runs, markdown_table
 from skinny_mj.io import atomic_write_text
+from skinny_mj.plots import boxplot_png, line_sweep_png, pyplot, save_figure
+from skinny_mj.recording import record_test
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.loop import train
+from skinny_mj.trajectories import load_movement
 
 
 def group_of(row_id: str) -> str:
@@ -55,8 +59,6 @@ def _padded(columns: Sequence[list[float]]) -> np.ndarray:
 
 def movement_line(cfg: TrainConfig) -> str:
     """Which movement the rows trained and tested on, and how much was clipped."""
-    from skinny_mj.trajectories import load_movement
-
     traj, rep = load_movement(cfg.movement.trajectory, cfg.plant.dof, asf=cfg.movement.asf)
     return (f"Movement: `{cfg.movement.trajectory}` ({traj.name}, {len(traj)} steps = "
             f"{traj.duration_s:.2f} s, {cfg.plant.dof} DOF, {cfg.plant.signals}); clipped into "
@@ -76,8 +78,6 @@ def write_table(results: dict, out_dir: Path, plan: Plan) -> Path:
 def fig3(out_dir: Path) -> Path | None:
     """Fig. 3: NRMSE(y_used, y_true) per cycle, mean ± sd over runs, per β (log y);
     dashed lines: the cycles the paper used (Table 1 x 10 epochs)."""
-    from skinny_mj.plots import pyplot, save_figure
-
     runs = _ok_runs(out_dir, "fig3")
     if not runs:
         return None
@@ -163,8 +163,6 @@ def fig3_proportion(runs: Sequence[dict]) -> str:
 
 def fig4(out_dir: Path, plan: Plan) -> Path | None:
     """Fig. 4: mean test position NRMSE vs reservoir size (original method, 5 reps)."""
-    from skinny_mj.plots import line_sweep_png
-
     runs = _ok_runs(out_dir, "fig4")
     sizes = sorted({int(r["params"]["esn.n_reservoir"]) for r in runs})
     cfg = _group_config(plan, "fig4")
@@ -182,8 +180,6 @@ def fig4(out_dir: Path, plan: Plan) -> Path | None:
 
 def fig5(out_dir: Path, plan: Plan) -> Path | None:
     """Fig. 5: mean test position NRMSE vs reservoir noise, (a) original (b) new β."""
-    from skinny_mj.plots import line_sweep_png
-
     a, b = _group_config(plan, "fig5a"), _group_config(plan, "fig5b")
     if a is None or b is None:
         return None
@@ -207,8 +203,6 @@ def fig5(out_dir: Path, plan: Plan) -> Path | None:
 
 def fig6(out_dir: Path) -> list[Path]:
     """Fig. 6: box plots of the Table rows beside the paper's means."""
-    from skinny_mj.plots import boxplot_png
-
     written = []
     for metric in ("position_nrmse", "motor_nrmse"):
         groups = {f"exp {r}": values(out_dir, r, metric) for r in TABLE_1}
@@ -334,9 +328,6 @@ def median_recordings(out_dir: Path, plan: Plan, table_rows: Sequence[str]) -> l
 
 def _record_run(path: Path, cfg: TrainConfig, row_id: str, seed: int, metrics: dict) -> bool:
     """Re-train one run, write its test as an .rrd; True when it reproduces ``metrics``."""
-    from skinny_mj.recording import record_test
-    from skinny_mj.training.loop import train
-
     outcome = train(cfg, seed)
     record_test(path, outcome, f"paper E exp {row_id}, median run (seed {seed})",
                 {"row": row_id, "config": cfg.to_dict()})

@@ -27,6 +27,7 @@ The paper's numbers are shown beside ours, labelled; never in place of ours.
 from __future__ import annotations
 
 import numpy as np
+from skinny_mj.controllers.true_target import convergence_curve
 
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
@@ -68,8 +69,6 @@ def run_convergence(config: TrainConfig, row: Row, seeds: list[int]) -> list[dic
     """Fig. 3: NRMSE(y_used^i, y_true) over ``cycles`` cycles with perfect targets
     and teacher forcing (true commands at full scale 2 x the fastest speed), for
     several seeds in lockstep."""
-    from skinny_mj.controllers.true_target import convergence_curve
-
     from skinny_mj.training.loop import build_run
 
     run = build_run(config, seeds)

@@ -14,6 +14,8 @@ from skinny_mj.experiments.paper_e_explain.study import EXPS
 
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.io import atomic_write_text
+from skinny_mj.plots import pyplot, save_figure
+from skinny_mj.training.parts import full_scale_speeds, load_trajectory, true_commands_of
 
 TABLE_EPOCHS = (1, 2, 5, 10)
 #: table rows: (run-file key, label)
@@ -209,8 +211,6 @@ def _epochs(plan) -> int:
 
 
 def _true_commands(plan, exp: str) -> np.ndarray:
-    from skinny_mj.training.parts import full_scale_speeds, load_trajectory, true_commands_of
-
     tc = plan.config(exp)
     traj, _ = load_trajectory(tc)
     return true_commands_of(tc, traj, full_scale_speeds(tc, traj))
@@ -221,8 +221,6 @@ def _true_rough(runs: list[dict]) -> float | None:
 
 
 def _figure(n_top: int):
-    from skinny_mj.plots import pyplot
-
     plt = pyplot()
     fig = plt.figure(figsize=(3.2 * max(n_top, 2), 6.4))
     grid = fig.add_gridspec(2, 2 * n_top)
@@ -235,8 +233,6 @@ def _figure(n_top: int):
 def fig7(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
     """Fig. 7: why exp 1 fails (true target, initial output, y_est and the output after
     training in epoch 1), and per epoch roughness / NRMSE of y_est and the ESN output."""
-    from skinny_mj.plots import save_figure
-
     runs = by_row["1"]
     ex = _example(runs)
     if ex is None:
@@ -262,8 +258,6 @@ def fig7(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
 
 def fig8(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
     """Fig. 8: the ESN output after training, exp 1 vs exp 2 (repetitions)."""
-    from skinny_mj.plots import save_figure
-
     if not by_row["1"] or not by_row["2"]:
         return None
     fig, top, (rough, err) = _figure(2)
@@ -285,8 +279,6 @@ def fig8(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
 def fig9(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
     """Fig. 9: exp 5 in epoch 5: y_est, y_used, the ESN output after the fit; per epoch
     roughness / NRMSE of the three (and exp 1's y_est for reference)."""
-    from skinny_mj.plots import save_figure
-
     runs = by_row["5"]
     ex = _example(runs)
     if ex is None:
@@ -312,9 +304,6 @@ def fig9(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
 def fig10(out_dir: Path, plan, by_row: dict[str, list[dict]]) -> Path | None:
     """Fig. 10: teacher forcing in epoch 5: the plant's positions (one repetition)
     beside the desired ones, and the position NRMSE of the learning cycles per epoch."""
-    from skinny_mj.plots import save_figure
-    from skinny_mj.training.parts import load_trajectory
-
     if not any(by_row.values()):
         return None
     e5 = min(5, _epochs(plan))

@@ -18,6 +18,7 @@ import numpy as np
 
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.io import atomic_write_text
+from skinny_mj.plots import pyplot, save_figure
 
 COLOURS = {"fel": "tab:blue", "ppo": "tab:orange", "sac": "tab:green"}
 LABELS = {"fel": "ESN + FEL", "ppo": "PPO", "sac": "SAC"}
@@ -41,8 +42,6 @@ def _xy(curve: list[dict], x: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def curves_png(path: Path, thresholds, rows, curves: dict, x: str) -> Path:
-    from skinny_mj.plots import pyplot, save_figure
-
     plt = pyplot()
     bodies = sorted({r.params["actuation"] for r in rows}, reverse=True)
     moves = list(dict.fromkeys(r.params["movement"] for r in rows))

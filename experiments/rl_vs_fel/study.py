@@ -42,6 +42,8 @@ from skinny_mj.experiments.rl_vs_fel import runs as runs_mod
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
+from skinny_mj.preflight import Estimate
 from skinny_mj.training.config import TrainConfig
 
 NAME = "rl-vs-fel"
@@ -113,9 +115,6 @@ def estimate_bytes(config: TrainConfig, row: Row, runs: int):
     before), float64 observations, actions and five scalars per step; the networks'
     float32 weights, gradients and Adam's two moments (a target copy: weights only).
     ESN + FEL rows: None (their training configuration says)."""
-    from skinny_mj.memory import Estimate
-    from skinny_mj.plant import body
-
     p, dof = row.params, config.plant.dof
     learner = p["learner"]
     if learner == "fel":

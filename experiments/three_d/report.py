@@ -16,12 +16,18 @@ import shutil
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.controllers.metrics import nrmse
 from skinny_mj.experiments import paper_a, paper_b
+from skinny_mj.experiments.paper_c import report as paper_c_report
+from skinny_mj.experiments.paper_c.study import MOVEMENTS
 from skinny_mj.experiments.three_d.study import DIMS, PAPERS, paper_experiment, row_id, subset
 
 from skinny_mj.engine.folder import recorded_config
 from skinny_mj.engine.stats import aggregate, load_runs, to_jsonable
 from skinny_mj.io import atomic_write_json, atomic_write_text
+from skinny_mj.plant import body
+from skinny_mj.plots import pyplot, save_figure
+from skinny_mj.trajectories import load_movement
 
 #: The table's lines: paper -> (paper row or None for every row of the subset, metric,
 #: label). Paper C's metrics are ``<test movement>__<metric>``.
@@ -55,10 +61,6 @@ _LINE = re.compile(r"^- \[([^\]]+)\] (.*)$")
 def angle_nrmse(produced: np.ndarray, desired: np.ndarray, dof: int) -> float | None:
     """NRMSE of normalized joint angles (produced, desired: (T, dof) rad), None if the
     lengths differ: the same measure on both bodies, whatever the signals."""
-    from skinny_mj.controllers.metrics import nrmse
-
-    from skinny_mj.plant import body
-
     if produced.shape != desired.shape:
         return None
     return float(nrmse(body.normalize_angles(produced, dof),
@@ -68,10 +70,6 @@ def angle_nrmse(produced: np.ndarray, desired: np.ndarray, dof: int) -> float | 
 def _with_angle_errors(rec: dict, dof: int) -> dict:
     """Paper C's run metrics (on the body with ``dof`` DOFs) plus ``<col>__angle_nrmse``
     for the kept joint angles."""
-    from skinny_mj.experiments.paper_c.study import MOVEMENTS
-
-    from skinny_mj.trajectories import load_movement
-
     metrics = dict(rec["metrics"])
     for key, value in rec["metrics"].items():
         if key.startswith("angles__") and value is not None:
@@ -114,7 +112,6 @@ def paper_claims(p: str, view: Path, dof: int) -> list[str]:
         return paper_a.claims(view)
     if p == "b":
         return paper_b.claims(view)
-    from skinny_mj.experiments.paper_c import report as paper_c_report
 
     ok = [r for r in load_runs(view) if r["status"] == "ok"]
     return paper_c_report.claims(ok, dof) if ok else ["- [n/a] no finished runs"]
@@ -212,8 +209,6 @@ def table_markdown(lines: list[dict]) -> str:
 def figure_png(path: Path, lines: list[dict], bodies: dict[str, str]) -> Path | None:
     """Per paper, each line's 2D and 3D mean ± sd (markers on one row per line, log x)."""
     from matplotlib.ticker import NullFormatter
-
-    from skinny_mj.plots import pyplot, save_figure
 
     by_paper = {p: [ln for ln in lines if ln["paper"] == p and ln["2d"] and ln["3d"]]
                 for p in PAPERS}

@@ -48,6 +48,7 @@ import functools
 from skinny_mj.engine import registry
 from skinny_mj.engine.experiment import Experiment
 from skinny_mj.engine.experiment import Row as EngineRow
+from skinny_mj.engine.memory import row_configs
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
 
@@ -99,8 +100,6 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
 
 def trainings(config: TrainConfig, row: Row) -> dict[str, TrainConfig]:
     """The TrainConfigs the paper's own row trains, for the sweep's memory estimate."""
-    from skinny_mj.memory import row_configs
-
     exp, paper_row = paper_of(config, row)
     found = row_configs(registry.get(PAPERS[row.params["paper"]]), exp, paper_row)
     return {str(i): c for i, c in enumerate(found)}

@@ -22,14 +22,13 @@ from skinny_mj.controllers.metrics import nrmse
 from skinny_mj.experiments.paper_c import study as paper_c
 
 from skinny_mj.plant import body
+from skinny_mj.training.loop import build_run
 
 BODIES = ((4, "joint"), (4, "cartesian"), (8, "joint"), (8, "cartesian"))
 
 
 def target_noise(dof: int, signals: str, sensor_noise: float, seed: int = 0) -> dict:
     """One feedback-only cycle of YMCA: y_est's error per DOF against the true commands."""
-    from skinny_mj.training.loop import build_run
-
     tc = paper_c.STUDY.config("ymca", dof=dof, signals=signals).override({
         "esn.n_reservoir": 50, "rule": "original", "plant.sensor_noise": sensor_noise})
     run = build_run(tc, [seed])

@@ -15,7 +15,8 @@ average at the start and end is recorded with the figures. Goals:
 | ``mackey_glass`` N = 1000, log10 NRMSE_84 | <= -4.5 |
 
 The speed figures are here; the accuracy one (Mackey-Glass) is in
-:mod:`skinny_mj.cli.bench_mackey_glass`.
+:mod:`skinny_mj.cli.bench_mackey_glass`, the goals and the printed table in
+:mod:`skinny_mj.cli.bench_summary`.
 """
 
 from __future__ import annotations
@@ -31,26 +32,24 @@ from typing import Any
 
 import numpy as np
 
-from skinny_mj.cli.bench_floor import esn_state_floor, floor_lines, separate_robots
+from skinny_mj.cli.bench_floor import esn_state_floor, separate_robots
 from skinny_mj.cli.bench_mackey_glass import mackey_glass
+from skinny_mj.cli.bench_summary import BENCH_EXTRA, GOALS, summary, table
 from skinny_mj.cli.bench_timing import interleaved
+from skinny_mj.controllers import fel
+from skinny_mj.controllers.esn import ESN, ESNConfig
+from skinny_mj.engine import registry
+from skinny_mj.engine.experiment import default_workers, run_sweep
+from skinny_mj.plant.ideal import max_speeds
+from skinny_mj.trajectories import excerpt, get
 
-GOALS = {
-    "esn_run_vs_reservoirpy_N200": (">=", 2.0),
-    "esn_run_vs_reservoirpy_N1000": (">=", 3.0),
-    "control_step_over_physics": ("<=", 3.0),
-    "lockstep_speedup": (">=", 3.0),
-    "fast_vs_naive": (">=", 6.0),
-    "paper_e_full_s": ("<=", 20.0),
-    "torque_over_kinematic": ("<=", 2.0),
-    "mackey_glass_log10_nrmse84": ("<=", -4.5),
-}
+__all__ = ["GOALS", "RUN_STEPS", "control_step_over_physics", "esn_run_vs_reservoirpy",
+           "fast_vs_naive", "lockstep_speedup", "paper_e_full_s", "run", "run_with_bar",
+           "summary", "table", "torque_over_kinematic"]
 N_RUNS = 20  # R of the lockstep figures
 
 
 def _movement(n_steps: int):
-    from skinny_mj.trajectories import excerpt, get
-
     traj = get("ymca", 4)
     return excerpt(traj, 0.0, n_steps * traj.dt) if n_steps < len(traj) - 1 else traj
 
@@ -62,13 +61,11 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
     Also our R = 20 lockstep throughput (run-steps/s), the rate a sweep sees, and
     reservoirpy's time over the floor (:mod:`skinny_mj.cli.bench_floor`): the most any loop
     on SciPy's sparse product can gain over reservoirpy."""
-    from skinny_mj.controllers.esn import ESN, ESNConfig
-
     try:
         import reservoirpy
         from reservoirpy.nodes import Reservoir
     except ImportError:
-        return {"skipped": "reservoirpy not installed: pip install 'skinny-mj[bench]'"}
+        return {"skipped": f"needs reservoirpy, the bench extra: {BENCH_EXTRA}"}
     n_in = 16
     esn = ESN(ESNConfig(n_inputs=n_in, n_outputs=4, n_reservoir=n_reservoir), seed=0)
     # reservoirpy takes W as CSR, the format ours multiplies by
@@ -107,9 +104,7 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
 
 
 def _lockstep_parts(n_runs: int, n_steps: int, seed: int = 0):
-    from skinny_mj.controllers.esn import ESN
     from skinny_mj.plant.adapters import BatchPlant
-    from skinny_mj.plant.ideal import max_speeds
     from skinny_mj.training.loop import TrainConfig
 
     traj = _movement(n_steps)
@@ -136,7 +131,6 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
     import mujoco
     from mujoco import rollout as mj_rollout
 
-    from skinny_mj.controllers import fel
     _, _, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
     plant.reset()
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -186,8 +180,6 @@ def lockstep_speedup(epochs: int, repeats: int) -> dict:
 def fast_vs_naive(n_steps: int, repeats: int) -> dict:
     """Per run-step cost: the naive path (dm_control ``env.step`` through ``EnvPlant``
     and a one-run Python ESN, ``fel.rollout``) vs the fast path (R = 20 lockstep)."""
-    from skinny_mj.controllers import fel
-    from skinny_mj.controllers.esn import ESN
     from skinny_mj.plant.adapters import EnvPlant
     from skinny_mj.plant.task import load
 
@@ -212,7 +204,6 @@ def torque_over_kinematic(n_runs: int, repeats: int, epochs: int | None = None) 
     cycles) over ``2d-ymca-kinematic`` (the velocity servo, paper E's 10 epochs of 5
     cycles), ``n_runs`` seeds in lockstep each, timed interleaved (best of ``repeats``);
     ``epochs`` shortens both to that many (a smoke test of this figure)."""
-    from skinny_mj.engine import registry
     from skinny_mj.training.loop import train_batch
 
     study = registry.get("dynamic")
@@ -235,9 +226,6 @@ def paper_e_full_s(workers: int | None = None, quick: bool = False,
     cores) through the engine's fast path, with the peak resident memory of this
     process and of the largest worker. ``quick`` runs ``build(quick=True)`` instead (a
     smoke test of this figure, not the figure)."""
-    from skinny_mj.engine import registry
-    from skinny_mj.engine.experiment import default_workers, run_sweep
-
     module = registry.get("paper-e")
     if only is None:
         only = tuple(getattr(module, "TABLE_1", {"1": 0, "2": 0, "3": 0, "4": 0, "5": 0,
@@ -302,7 +290,7 @@ def run(quick: bool = False, workers: int | None = None,
     tick = progress or (lambda name: None)
     reps = 2 if quick else 5
     steps = 100 if quick else 312
-    figures: dict[str, Any] = {"load_avg_start": os.getloadavg()}
+    figures: dict[str, Any] = {"quick": quick, "load_avg_start": os.getloadavg()}
     tick(RUN_STEPS[0])
     figures["esn_run_vs_reservoirpy"] = [
         esn_run_vs_reservoirpy(n, 300 if quick else 1000, reps) for n in (200, 1000)]
@@ -315,7 +303,7 @@ def run(quick: bool = False, workers: int | None = None,
     tick(RUN_STEPS[4])
     figures["mackey_glass"] = mackey_glass(1000, 2 if quick else 10)
     tick(RUN_STEPS[5])
-    figures["paper_e_full_s"] = ({"skipped": "--quick"} if quick
+    figures["paper_e_full_s"] = ({"skipped": "not run with --quick"} if quick
                                  else paper_e_full_s(workers))
     tick(RUN_STEPS[6])
     figures["torque_over_kinematic"] = (torque_over_kinematic(2, 1, epochs=1) if quick
@@ -339,54 +327,3 @@ def run_with_bar(quick: bool = False, workers: int | None = None, show: bool = T
             bar.update(RUN_STEPS.index(name) - bar.n)
 
         return run(quick=quick, workers=workers, progress=tick)
-
-
-def summary(figures: dict) -> dict[str, dict]:
-    """Each goal's measured value and whether it is met (None: skipped)."""
-    def get(path: list) -> float | None:
-        node: Any = figures
-        for key in path:
-            if isinstance(node, dict) and key in node:
-                node = node[key]
-            elif isinstance(node, list) and isinstance(key, int) and key < len(node):
-                node = node[key]
-            else:
-                return None
-        return float(node) if isinstance(node, int | float) else None
-
-    values = {
-        "esn_run_vs_reservoirpy_N200": get(["esn_run_vs_reservoirpy", 0, "ratio"]),
-        "esn_run_vs_reservoirpy_N1000": get(["esn_run_vs_reservoirpy", 1, "ratio"]),
-        "control_step_over_physics": get(["control_step_over_physics", "ratio"]),
-        "lockstep_speedup": get(["lockstep_speedup", "ratio"]),
-        "fast_vs_naive": get(["fast_vs_naive", "ratio"]),
-        "paper_e_full_s": get(["paper_e_full_s", "wall_s"]),
-        "torque_over_kinematic": get(["torque_over_kinematic", "ratio"]),
-        "mackey_glass_log10_nrmse84": get(["mackey_glass", "ours_log10_nrmse84"]),
-    }
-    out = {}
-    for key, value in values.items():
-        op, goal = GOALS[key]
-        met = None if value is None else (value >= goal if op == ">=" else value <= goal)
-        out[key] = {"value": value, "goal": f"{op} {goal:g}", "met": met}
-    return out
-
-
-def table(figures: dict) -> str:
-    """The summary as a plain-text table, with the machine load."""
-    lines = [f"{'figure':<30} {'measured':>10} {'goal':>8}  met",
-             "-" * 56]
-    for key, row in figures["summary"].items():
-        value = "skipped" if row["value"] is None else f"{row['value']:.3g}"
-        met = {True: "yes", False: "NO", None: "-"}[row["met"]]
-        lines.append(f"{key:<30} {value:>10} {row['goal']:>8}  {met}")
-    strict = figures.get("control_step_over_physics", {}).get("ratio_vs_batch_physics")
-    if strict is not None:
-        lines.append(f"{'  same, over batch-model physics':<30} {strict:>10.3g} {'-':>8}  "
-                     "(the R-robot model the fast path steps: a stricter floor)")
-    lines += floor_lines(figures.get("esn_run_vs_reservoirpy", []))
-    start, end = figures["load_avg_start"], figures["load_avg_end"]
-    lines.append(f"load average (1 min) {start[0]:.2f} -> {end[0]:.2f} on "
-                 f"{figures['cpu_count']} CPUs: ratios are timed interleaved, "
-                 "absolute times shift with load")
-    return "\n".join(lines)

@@ -11,14 +11,15 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj.cli.bench_summary import BENCH_EXTRA
+from skinny_mj.controllers.esn import ESN, ESNConfig, run_generators
+from skinny_mj.controllers.mackey_glass import mackey_glass as series
+
 MG_HORIZON = 84
 
 
 def mackey_glass_series(trials: int, length: int, seed: int = 0) -> np.ndarray:
     """(trials, length) squashed Mackey-Glass series, one attractor trajectory each."""
-    from skinny_mj.controllers.esn import run_generators
-    from skinny_mj.controllers.mackey_glass import mackey_glass as series
-
     return np.stack([series(length, g) for g in run_generators(seed, trials)])
 
 
@@ -32,8 +33,6 @@ def _nrmse84(free: np.ndarray, series: np.ndarray, washout: int, n_fit: int) -> 
 def esn_config(n_reservoir: int):
     """Jaeger & Haas's Mackey-Glass ESN (output feedback, leak 0.6, spectral radius
     0.95, bias 0.2, feedback scaling 0.56, state noise 1e-8, pinv, identity readout)."""
-    from skinny_mj.controllers.esn import ESNConfig
-
     return ESNConfig(n_inputs=1, n_outputs=1, n_reservoir=n_reservoir, spectral_radius=0.95,
                      bias=0.2, leak_rate=0.6, noise_level=1e-8, output_feedback=True,
                      feedback_scaling=0.56, readout_activation="identity")
@@ -45,8 +44,6 @@ def mackey_glass_ours(series: np.ndarray, n_reservoir: int, washout: int = 1000,
     0.95, bias 0.2, feedback scaling 0.56, state noise 1e-8, pinv readout), all trials
     in lockstep; teacher-forced through the series minus the horizon, then 84 free
     steps. Returns the free run (trials, 84)."""
-    from skinny_mj.controllers.esn import ESN, run_generators
-
     trials, n_fit = series.shape[0], series.shape[1] - MG_HORIZON
     esn = ESN(esn_config(n_reservoir), n_runs=trials, rngs=run_generators(seed + 1, trials))
     teacher = series[:, :n_fit, None]
@@ -95,7 +92,7 @@ def mackey_glass(n_reservoir: int, trials: int, washout: int = 1000, train: int 
     try:
         import reservoirpy
     except ImportError:
-        out["reservoirpy"] = "skipped: reservoirpy not installed"
+        out["reservoirpy"] = f"skipped: needs reservoirpy, the bench extra: {BENCH_EXTRA}"
         return out
     start = time.perf_counter()
     with warnings.catch_warnings():  # its ridge solve warns on ill-conditioned Gram matrices

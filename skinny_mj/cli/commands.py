@@ -1,7 +1,8 @@
 """The handlers behind ``skinny``'s sub-commands (the parser lives in :mod:`skinny_mj.cli.parser`).
 
 Every command computes first and writes last, each file atomically, so a command that
-fails on bad input leaves nothing half-written in ``--out``.
+fails on bad input leaves nothing half-written in ``--out``; and none writes over earlier
+results unless told to (``--overwrite``; :mod:`skinny_mj.preflight`).
 """
 
 from __future__ import annotations
@@ -14,36 +15,64 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj import preflight
+from skinny_mj.cli import config_files as cf
+from skinny_mj.cli import memory
+from skinny_mj.cli.config_files import file_config, train_config
+from skinny_mj.cli.config_flags import TEST_FLAGS, TRACK_FLAGS, changes, flag_names, given
+from skinny_mj.cli.memory import check_bench, check_export, check_sweep, check_train
 from skinny_mj.cli.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
+from skinny_mj.controllers.metrics import position_nrmse
+from skinny_mj.engine import folder, protocols, registry
+from skinny_mj.engine.experiment import default_out_dir, run_sweep
+from skinny_mj.engine.grid import grid_study
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.io import atomic_write_json
-from skinny_mj.memory import check_export, check_train
-from skinny_mj.preflight import check_writable, check_writable_file, cleaned_on_failure
+from skinny_mj.io import atomic_write_json, atomic_write_text
+from skinny_mj.plant import body
+from skinny_mj.plant.ideal import IdealController
+from skinny_mj.plant.render import render_png
+from skinny_mj.plots import learning_curve_png
+from skinny_mj.preflight import (
+    check_new_file,
+    check_run_folder,
+    check_writable,
+    run_folder,
+)
 from skinny_mj.progress import Progress as _Progress
 from skinny_mj.progress import progress_on as _progress_on
-from skinny_mj.training.config import Movement
+from skinny_mj.recording import record_test, write_recording
+from skinny_mj.training.config import Movement, TrainConfig
+from skinny_mj.training.imitation import imitation_metrics, movement_stats, saturation
+from skinny_mj.training.memory import steps_cause
+from skinny_mj.training.model_file import check_model, read_model
+from skinny_mj.trajectories import load_movement
+from skinny_mj.trajectories.library import SET_PREFIX, check_asf, set_pieces
 
 DEFAULT_RESULTS = Path("results")
 
 
-def _timestamped(kind: str) -> Path:
-    from datetime import datetime
-
-    return DEFAULT_RESULTS / kind / datetime.now().strftime("%Y%m%d-%H%M%S")
-
-
 def _out_dir(args: argparse.Namespace, kind: str) -> Path:
-    """``--out`` (default ``results/<kind>/<time>``), checked writable before the work
-    (a read-only, full or file-blocked folder is an environment error, exit 1)."""
-    return check_writable(Path(args.out) if args.out is not None else _timestamped(kind))
+    """``--out``, refused before the work if it holds results and no ``--overwrite``
+    (exit 2), and checked writable (a read-only or full disk: exit 1); by default
+    ``results/<kind>/<time the command started>``, made (unique) when the run is
+    written (:func:`_writing`)."""
+    if args.out is None:
+        return check_writable(DEFAULT_RESULTS / kind / preflight.timestamp())
+    return check_writable(check_run_folder(args.out, args.overwrite))
+
+
+def _writing(args: argparse.Namespace, out: Path):
+    """The folder to write the computed run into: ``out`` from :func:`_out_dir`, or for
+    the default a new folder of that name, ``-2`` if another run took it since
+    (:func:`skinny_mj.preflight.run_folder`)."""
+    if args.out is None:
+        return run_folder(None, out.parent, stamp=out.name)
+    return run_folder(out, out.parent, overwrite=args.overwrite)
 
 
 def _flag_config(args: argparse.Namespace, groups, base=None):
     """``base`` (default ``TrainConfig()``) with the config flags of ``groups`` given in
     ``args`` (:mod:`skinny_mj.cli.config_flags`)."""
-    from skinny_mj.cli.config_flags import changes, flag_names, given
-    from skinny_mj.training.config import TrainConfig
-
     base = TrainConfig() if base is None else base
     return base.override(changes(base, given(args, groups), flag_names(groups)))
 
@@ -52,10 +81,6 @@ def _load_movement(mv, dof: int, check=None):
     """The movement ``mv`` (a :class:`skinny_mj.training.config.Movement`); ``check(steps, cause)``
     first sees its length x reps (one repetition loaded), so a run too big for the
     memory is refused before it is."""
-    from skinny_mj.memory import steps_cause
-    from skinny_mj.trajectories import load_movement
-    from skinny_mj.trajectories.library import check_asf
-
     check_asf(mv.trajectory, mv.asf, mv.retarget)  # not silently unused
     kw = {"asf": mv.asf, "speed": mv.speed, "retarget": mv.retarget}
     if check is not None:
@@ -70,9 +95,6 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
                desired_signals, actual_signals, sensed_signals=None, title: str = "",
                metadata: dict | None = None, curves: dict | None = None,
                torques: dict | None = None) -> Path:
-    from skinny_mj.plant import body
-    from skinny_mj.recording import write_recording
-
     return write_recording(
         path, dt=body.CONTROL_DT_S, dof=dof, dof_names=list(body.dof_names(dof)),
         signal_names=list(body.signal_names(dof, signals)), desired_angles=desired_angles,
@@ -84,11 +106,6 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
 
 # -- track ------------------------------------------------------------------------------
 def cmd_track(args: argparse.Namespace) -> int:
-    from skinny_mj import memory
-    from skinny_mj.cli.config_flags import TRACK_FLAGS
-    from skinny_mj.controllers.metrics import position_nrmse
-    from skinny_mj.plant import body
-    from skinny_mj.plant.ideal import IdealController
     from skinny_mj.plant.task import load
 
     cfg = _flag_config(args, TRACK_FLAGS)
@@ -118,7 +135,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         "max_speed_rad_s": [float(v) for v in env.task.max_speed_rad_s],
         "clipped_samples": int(report.clipped_samples), "retarget": report.to_dict(),
     }
-    with cleaned_on_failure(out):
+    with _writing(args, out) as out:
         _recording(out / "run.rrd", dof=dof, signals=signals,
                    desired_angles=traj.angles, actual_angles=np.array(angles),
                    commands=np.array(commands), desired_signals=desired,
@@ -135,9 +152,6 @@ def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> Non
     """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png; for a
     failed (diverged) run only metrics.json, which says why. The model's metadata says
     what it was trained on (``training``: movement, its pieces, steps, seconds, preset)."""
-    from skinny_mj.plots import learning_curve_png
-    from skinny_mj.recording import record_test
-
     if outcome.failed:
         atomic_write_json(out / "metrics.json", outcome.metrics)
         return
@@ -162,8 +176,6 @@ def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> Non
 def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
     """What a model was trained on: the movement, its pieces (a ``set:``),
     steps and seconds per cycle, repetitions, the seed and the preset."""
-    from skinny_mj.trajectories.library import SET_PREFIX, set_pieces
-
     mv, steps = outcome.config.movement, int(outcome.metrics["steps_per_cycle"])
     name = str(mv.trajectory)
     pieces = set_pieces(name) if name.lower().startswith(SET_PREFIX) else [name]
@@ -173,18 +185,19 @@ def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
             "seed": int(outcome.seed), "preset": preset}
 
 
-def _train_and_write(cfg, seed: int, out: Path, title: str, quiet: bool = False,
+def _train_and_write(cfg, seed: int, args: argparse.Namespace, out: Path, title: str,
                      preset: str | None = None):
+    """Train, then write the run (:func:`_write_run`); the outcome and the folder."""
     from skinny_mj.training.loop import train
 
-    bar = _Progress(title, quiet)
+    bar = _Progress(title, args.quiet)
     try:
         outcome = train(cfg, seed, progress=bar)
     finally:
         bar.close()
-    with cleaned_on_failure(out):
+    with _writing(args, out) as out:
         _write_run(out, outcome, title, preset)
-    return outcome
+    return outcome, out
 
 
 def _fmt(v: float | None) -> str:
@@ -192,13 +205,12 @@ def _fmt(v: float | None) -> str:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from skinny_mj.cli.config_files import train_config
-
     cfg, seed = train_config(args)
     out = _out_dir(args, "train")
     check_train(cfg)
-    outcome = _train_and_write(cfg, seed, out, f"{cfg.method} on {cfg.movement.trajectory}",
-                               quiet=args.quiet, preset=getattr(args, "preset", None))
+    outcome, out = _train_and_write(cfg, seed, args, out,
+                                    f"{cfg.method} on {cfg.movement.trajectory}",
+                                    preset=getattr(args, "preset", None))
     m = outcome.metrics
     if outcome.failed:
         print(f"skinny train: run failed: {m.get('fail_reason')} (details in {out}/metrics.json)",
@@ -210,7 +222,6 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from skinny_mj.engine import registry
     from skinny_mj.training.loop import TrainConfig
 
     cfg = TrainConfig()  # paper E, experiment 5
@@ -220,7 +231,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print("paper E experiment 5 - new method, beta = 0.1, 3 learning cycles x 10 epochs, "
           "feedback gain K 1 -> 0, then a test with the feedback controller off.")
     start = time.perf_counter()
-    outcome = _train_and_write(cfg, args.seed, out, "demo: paper E exp. 5", quiet=args.quiet)
+    outcome, out = _train_and_write(cfg, args.seed, args, out, "demo: paper E exp. 5")
     wall = time.perf_counter() - start
     m = outcome.metrics
     paper = registry.get("paper-e").row("5").paper
@@ -235,7 +246,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(f"|{'-' * 24}|{'-' * 16}|{'-' * 20}|")
     for name, ours, theirs in rows:
         print(f"| {name:22} | {ours:>14} | {theirs:>18} |")
-    print(f"\nRecording: {out / 'run.rrd'}  (open it with: rerun {out / 'run.rrd'})")
+    print(f"\nRecording: {out / 'run.rrd'}  (open it with: skinny view {out})")
     print(f"Also: {out / 'metrics.json'}, {out / 'learning_curve.png'}, {out / 'model.npz'}")
     if outcome.failed:
         print(f"the run failed: {m.get('fail_reason')}", file=sys.stderr)
@@ -244,17 +255,16 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_test(args: argparse.Namespace) -> int:
-    from skinny_mj.cli.config_flags import TEST_FLAGS
     from skinny_mj.training.loop import TrainConfig, evaluate, run_of, run_streams
-    from skinny_mj.training.model_file import check_model, read_model
 
     path, esn, meta = read_model(args.model)  # a shipped model's name, or a file
     dof, signals = meta["dof"], meta["signals"]
-    from skinny_mj import memory
-    from skinny_mj.plant import body
 
     asked = _flag_config(args, TEST_FLAGS)  # the test's movement and sensor noise
     out = _out_dir(args, "test")
+    if args.overwrite and args.out is not None and path.resolve().parent == out.resolve():
+        raise SkinnyInputError("--overwrite would delete the --model itself (it is in --out); "
+                               "choose another --out", path=path)
     traj, report = _load_movement(asked.movement, dof,
                                   memory.check_test(esn.cfg, dof, body.n_signals(dof, signals)))
     saved = meta.get("config") if isinstance(meta.get("config"), dict) else {}
@@ -278,13 +288,12 @@ def cmd_test(args: argparse.Namespace) -> int:
     if test.torque is not None:  # torque body: limits, |torque|, work, MuJoCo warnings
         metrics["test"]["torque"] = test.torque["metrics"]
     if not test.failed and cfg.torque is None:  # DTW, within 5°, lag
-        from skinny_mj.training.imitation import imitation_metrics, saturation
 
         # beside "test" (which stays the train command's own test dict, key for key)
         metrics["imitation"] = {**imitation_metrics(test, dof),
                                 "saturated": saturation(traj.angles, traj.dt, run.max_speed_rad_s)}
     ro = test.rollout
-    with cleaned_on_failure(out):
+    with _writing(args, out) as out:
         _recording(out / "run.rrd", dof=dof, signals=signals, desired_angles=traj.angles,
                    actual_angles=ro.angles[0], commands=ro.commands[0],
                    desired_signals=test.desired, actual_signals=ro.true_signals[0],
@@ -308,17 +317,12 @@ def cmd_test(args: argparse.Namespace) -> int:
 
 # -- trajectory / render ----------------------------------------------------------------
 def cmd_trajectory(args: argparse.Namespace) -> int:
-    from skinny_mj.trajectories import get, names
-
     if args.action == "list":
-        for name in names():
-            traj = get(name, 4)
-            print(f"{name:14} {len(traj):5d} steps  {traj.duration_s:6.2f} s")
-        print("speed variants: NAME@0.5, NAME@1.5 (or --speed); repetitions: --reps N")
+        from skinny_mj.cli.movement_list import list_text
+
+        print(list_text())
         return 0
     if args.action == "show":
-        from skinny_mj.training.imitation import movement_stats
-
         traj, _ = _load_movement(Movement(args.name, asf=args.asf, retarget=args.retarget),
                                  args.dof)
         print(f"{traj.name} (dof {args.dof}, explicit desired signals: "
@@ -332,11 +336,11 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
             for line in torque_training.feasibility_report(args.dof, traj):
                 print(line)
         return 0
+    out = check_new_file(args.out, args.overwrite)
     traj, _ = _load_movement(Movement(args.name, asf=args.asf, speed=args.speed,
                                       reps=args.reps), args.dof,
                              check_export(args.dof, args.out))
-    out = Path(args.out)
-    traj.save(out)
+    traj.save(check_new_file(out, args.overwrite))  # again: another command may have written it
     print(f"wrote {traj.name}: {len(traj)} steps, {args.dof} DOF -> {out}")
     return 0
 
@@ -344,15 +348,14 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
 def cmd_render(args: argparse.Namespace) -> int:
     if args.trajectory is None and args.frame != 0:  # not silently the rest pose
         raise SkinnyInputError(f"--frame {args.frame} needs --trajectory (a movement's frame)")
-    from skinny_mj.plant.render import render_png
-
-    check_writable_file(args.out)
+    check_new_file(args.out, args.overwrite)
     angles = None
     if args.trajectory is not None:
         traj, _ = _load_movement(Movement(args.trajectory), args.dof)
         if not 0 <= args.frame < len(traj):
             raise SkinnyInputError(f"--frame must be in [0, {len(traj) - 1}], got {args.frame}")
         angles = traj.angles[args.frame]
+    check_new_file(args.out, args.overwrite)  # again: another command may have written it
     path = render_png(args.dof, args.out, width=args.width, height=args.height, angles=angles)
     print(f"wrote {path}")
     return 0
@@ -362,22 +365,16 @@ def cmd_render(args: argparse.Namespace) -> int:
 def cmd_experiment(args: argparse.Namespace) -> int:
     """Build the experiment with the CLI's options (each None = the paper's default), run
     the selected rows, write table/claims/report; exit 1 if any run errored (a bug)."""
-    from skinny_mj.engine import registry
-
     module = registry.get(args.name)  # `experiment list` is answered by the parser's main
     rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
     options = {"quick": bool(args.quick), "movement": args.movement,
                "asf": None if args.asf is None else str(args.asf), "dof": args.dof,
                "signals": args.signals, "protocol": args.protocol}
-    from skinny_mj.cli import config_files as cf  # --config: the file's options, rows, runs
 
     options, rows, runs, invocation = cf.apply_sweep_config(args, options, rows)
     if options["asf"] is not None:  # a skeleton for --movement CLIP.amc only
-        from skinny_mj.trajectories.library import check_asf
-
         check_asf(options["movement"], options["asf"])
     if options["protocol"] is not None:  # readings of unstated settings, on the study's base
-        from skinny_mj.engine import protocols
 
         module = protocols.apply(options["protocol"], module, args.name)
     exp = module.build(**{k: v for k, v in options.items() if k != "protocol"})
@@ -388,10 +385,6 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``skinny sweep KEY=V1,V2 ...``: a grid over config keys (:mod:`skinny_mj.engine.grid`)
     on the experiment engine, from TrainConfig's defaults, a config file or a study's row."""
-    from skinny_mj.cli.config_files import file_config
-    from skinny_mj.engine import registry
-    from skinny_mj.engine.grid import grid_study
-
     study = None
     if args.study is not None:
         study = registry.get(args.study)
@@ -407,20 +400,19 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any, runs: Any,
                       options: dict[str, Any], invocation: Any) -> int:
     """Run ``exp`` into ``--out`` (checked first), then its report; exit 1 on errored runs."""
-    from skinny_mj.cli import config_files as cf
-    from skinny_mj.engine import folder
-    from skinny_mj.engine.experiment import default_out_dir, run_sweep
-    from skinny_mj.io import atomic_write_text
-    from skinny_mj.memory import check_sweep
-
     overwrite = bool(getattr(args, "overwrite", False))
-    out = folder.choose_out_dir(args.out, default_out_dir(exp.name), resume=args.resume,
+    out = folder.choose_out_dir(args.out, None, resume=args.resume,
                                 overwrite=overwrite)  # nothing lost in silence
-    check_writable(out)  # before the sweep, not after its first run
-    folder.check_unlocked(out)
+    check_writable(DEFAULT_RESULTS / exp.name if out is None else out)  # before the sweep
+    if out is not None:
+        folder.check_unlocked(out)
     check_sweep(module, exp, rows, runs, args.workers, args.scheduler)
+    if out is None:  # made now: two sweeps started in the same second get two folders
+        out = default_out_dir(exp.name, DEFAULT_RESULTS)
     start = time.perf_counter()
     with folder.sweep_lock(out):  # held until the report is written
+        folder.choose_out_dir(out, None, resume=args.resume,  # again: another sweep may
+                              overwrite=overwrite)  # have written there and ended since
         if overwrite:
             folder.clear_sweep(out)
         results = run_sweep(exp, out, rows=rows, runs=runs, workers=args.workers,
@@ -444,17 +436,16 @@ def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any
 
 # -- bench ------------------------------------------------------------------------------
 def cmd_bench(args: argparse.Namespace) -> int:
-    from skinny_mj.cli import bench
+    from skinny_mj.cli import bench  # here: the bench's imports cost every command ~0.09 s
 
     if args.out is not None:  # before the bench, not after it
-        check_writable_file(args.out)
-    from skinny_mj.memory import check_bench
+        check_new_file(args.out, args.overwrite)
 
     check_bench(args.workers, args.quick)
     figures = bench.run_with_bar(quick=args.quick, workers=args.workers,
                                  show=_progress_on(args.quiet))
     print(bench.table(figures))
     if args.out is not None:
-        atomic_write_json(Path(args.out), figures)
+        atomic_write_json(check_new_file(args.out, args.overwrite), figures)
         print(f"wrote {args.out}")
     return 0

@@ -16,14 +16,26 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
+import logging
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from skinny_mj.cli.config_flags import (
+    TRAIN_FLAGS,
+    changes,
+    check_no_conflict,
+    flag_names,
+    given,
+    pairs,
+)
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import DERIVED, TrainConfig
 from skinny_mj.training.legacy import is_legacy
+from skinny_mj.training.presets import preset_fields
+from skinny_mj.trajectories.library import check_asf
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["read_json", "read_train_file", "file_config", "train_config", "SweepInvocation",
            "sweep_invocation", "apply_sweep_config", "check_experiment",
@@ -91,15 +103,6 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     """The run ``skinny train`` was asked for, and its seed: ``TrainConfig()``, then
     ``--preset``'s keys, then ``--config FILE``'s (and its seed), then the flags and
     ``KEY=VALUE`` overrides given (:mod:`skinny_mj.cli.config_flags`)."""
-    from skinny_mj.cli.config_flags import (
-        TRAIN_FLAGS,
-        changes,
-        check_no_conflict,
-        flag_names,
-        given,
-        pairs,
-    )
-
     flags, keyed = given(args, TRAIN_FLAGS), pairs(getattr(args, "overrides", None) or [])
     check_no_conflict(flags, keyed, flag_names(TRAIN_FLAGS))
     texts = {**flags, **keyed}
@@ -107,8 +110,6 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     cfg, seed = TrainConfig(), None
     preset = getattr(args, "preset", None)
     if preset is not None:
-        from skinny_mj.training.presets import preset_fields
-
         fields = preset_fields(preset, str(texts.get("actuation", "velocity")),
                                dof=texts.get("plant.dof"), signals=texts.get("plant.signals"))
         cfg = cfg.override(fields)
@@ -123,9 +124,7 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
         cfg = _make(fields, path, cfg)
     cfg = cfg.override(changes(cfg, texts, names))
     if {"movement.asf", "movement.retarget"} & texts.keys():  # not for a movement without
-        from skinny_mj.trajectories.library import check_asf  # motion capture
-
-        check_asf(cfg.movement.trajectory, cfg.movement.asf, cfg.movement.retarget)
+        check_asf(cfg.movement.trajectory, cfg.movement.asf, cfg.movement.retarget)  # mocap
     if getattr(args, "seed", None) is not None:
         seed = int(args.seed)
     return cfg, 0 if seed is None else seed
@@ -200,13 +199,12 @@ def check_experiment(inv: SweepInvocation | None, experiment: Any) -> None:
 
 
 def warn_if_rebuilt_differs(inv: SweepInvocation | None, out_dir: str | Path) -> None:
-    """One line on stderr when the sweep just run (its ``out_dir/config.json``) is not
+    """A warning (logging) when the sweep just run (its ``out_dir/config.json``) is not
     the one the file recorded: flags changed it, or the code did since."""
     if inv is None:
         return
     now = read_json(Path(out_dir) / "config.json")
     changed = [k for k in ("config", "rows", "base_seed") if inv.recorded.get(k) != now.get(k)]
     if changed:
-        print(f"skinny experiment: warning: {', '.join(changed)} differ from the config "
-              "file's (flags given, or the code changed): this is not an exact repeat",
-              file=sys.stderr)
+        _log.warning("%s differ from the config file's (flags given, or the code changed): "
+                     "this is not an exact repeat", ", ".join(changed))

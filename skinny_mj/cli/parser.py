@@ -1,7 +1,9 @@
 """The ``skinny`` command line.
 
 Every sub-command imports what it needs when it runs, so ``skinny --help`` is quick.
-User errors (bad files, names, parameters) end with one line on stderr and exit code 2.
+User errors (bad files, names, parameters, an ``--out`` that holds results or cannot be a
+folder) end with one line on stderr and exit code 2; the machine's (a read-only or full
+disk, no rendering backend) with one line and exit code 1.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from skinny_mj.cli.logs import LEVELS, to_stderr
 from skinny_mj.errors import SkinnyInputError
 
 
@@ -79,6 +82,25 @@ class _ExperimentHelp(argparse.Action):
 
 
 
+class _Version(argparse.Action):
+    """``skinny --version``: ``skinny <version>`` of the installed distribution, read
+    when asked (importlib.metadata), so that building the parser reads no metadata."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs):  # noqa: ANN001
+        super().__init__(option_strings, dest=dest, default=argparse.SUPPRESS, nargs=0,
+                         **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):  # noqa: ANN001
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            number = version("skinny-mj")
+        except PackageNotFoundError:  # run from a source tree that pip never installed
+            number = "unknown (not installed)"
+        print(f"skinny {number}")
+        parser.exit()
+
+
 def _dof(text: str) -> int:
     """argparse type of ``--dof``: a body's dof (4, 8 or one another package registered),
     else a one-line usage error naming the known ones."""
@@ -107,7 +129,7 @@ def _rows(text: str) -> str:
 
 def _scheduler(text: str) -> str:
     """argparse type of ``--scheduler``: ``local`` or a Dask address."""
-    from skinny_mj.engine.sweep import check_scheduler
+    from skinny_mj.engine.sweep import check_scheduler  # only when given: --help stays light
 
     try:
         return check_scheduler(text)
@@ -137,6 +159,10 @@ def build_parser() -> argparse.ArgumentParser:
         prog="skinny",
         description="Skinny-MJ: echo state networks learn to make a MuJoCo torso imitate YMCA.",
     )
+    parser.add_argument("--version", action=_Version, help="print skinny's version and exit")
+    parser.add_argument("--log-level", choices=LEVELS,
+                        default="warning", help="the diagnostics shown on stderr (warnings, "
+                        "notes; info: progress too); results go to stdout whatever the level")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("demo", help="train with the defaults (paper E, exp. 5) and show the result")
@@ -169,9 +195,10 @@ def build_parser() -> argparse.ArgumentParser:
                    "and rests, full scale 4x its fastest speed (3D Cartesian: 240 s of "
                    "babbling then YMCA, 2x), paper E exp. 5 schedule; the configuration "
                    "with the lowest error on real dance it never saw in `skinny experiment "
-                   "generalization --rows general`. Trained ones ship: skinny test --model "
-                   "general-2d-joint|general-3d-joint|general-2d-cartesian|"
-                   "general-3d-cartesian --trajectory CLIP.amc --asf SKELETON.asf. "
+                   "generalization --rows general`. Trained ones ship (general-2d-joint, "
+                   "general-3d-joint, general-2d-cartesian, general-3d-cartesian): skinny "
+                   "test --model general-2d-joint --trajectory md_02.amc (a shipped clip; "
+                   "another CMU clip: --trajectory CLIP.amc --asf SUBJECT.asf). "
                    "With --actuation torque: the torque twin's general, one per --dof (joint "
                    "angles): 240 s of babbling at 0.5-4 rad/s (within the torque limits) then "
                    "YMCA, the inertia-scaled PD teacher (3D: poles at 20 rad/s, forgetting "
@@ -187,7 +214,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("trajectory", help="list or export movements")
     tsub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    tsub.add_parser("list", help="list the built-in movements")
+    tsub.add_parser("list", help="every movement source: the named movements, the shipped "
+                    "clips, the file kinds, babble: and set:")
     w = tsub.add_parser("show", help="a movement's statistics (still steps, peak speeds, "
                         "unreachable targets, tremor band)")
     w.add_argument("name")
@@ -203,6 +231,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--speed", type=float, default=1.0)
     e.add_argument("--reps", type=_positive_int, default=1)
     e.add_argument("--out", type=Path, required=True, help="FILE.npz or FILE.csv")
+    e.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
 
     p = sub.add_parser("experiment", help="reproduce a paper's table and figures (a sweep)",
                        add_help=False)
@@ -273,7 +302,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, required=True)
 
     p = sub.add_parser("view", help="open a recording (or a results folder's) in the rerun "
-                       "viewer; headless, print the command")
+                       "viewer; headless, print the command (or save a --screenshot)")
     p.add_argument("path", type=Path, help="a .rrd file or a folder holding some")
     p.add_argument("--web", action="store_true",
                    help="serve the web viewer (on --bind: 127.0.0.1, this machine only)")
@@ -284,11 +313,23 @@ def build_parser() -> argparse.ArgumentParser:
                    help="address the viewer listens on (default 127.0.0.1: this machine only; "
                    "0.0.0.0: every interface)")
     p.add_argument("--dry-run", action="store_true", help="print the viewer command only")
+    p.add_argument("--screenshot", type=Path, metavar="OUT.png",
+                   help="save the viewer's picture of the recording to OUT.png instead (no "
+                   "display needed: a headless viewer, drawing with Vulkan)")
+    p.add_argument("--at", type=float, default=0.0, metavar="SECONDS",
+                   help="with --screenshot: the time cursor's place, s (default 0)")
 
     for name in ("demo", "train", "experiment", "sweep", "bench"):  # the long commands
         sub.choices[name].add_argument(
             "--quiet", "-q", action="store_true",
             help="no progress bar (also off when stderr is not a terminal)")
+    for name in ("demo", "track", "train", "test"):  # a run's folder
+        sub.choices[name].add_argument(
+            "--overwrite", action="store_true", help="replace the run already in --out "
+            "(without it, an --out holding files is refused; a folder of other files always is)")
+    for name in ("bench", "render"):
+        sub.choices[name].add_argument("--overwrite", action="store_true",
+                                       help="replace --out if it exists")
     parser.subcommands = sub.choices  # name -> sub-command parser (for given_options)
     return parser
 
@@ -329,6 +370,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
     os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
     previous = _on_sigterm(_terminate)
+    restore_logs = to_stderr(args.log_level)  # diagnostics: plain lines on stderr
     try:
         if args.command == "experiment" and args.name == "list":  # reads the studies' source
             from skinny_mj.cli.study_help import list_text  # only: no NumPy, no study
@@ -366,6 +408,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     finally:
         _on_sigterm(previous)
+        restore_logs()
 
 
 if __name__ == "__main__":

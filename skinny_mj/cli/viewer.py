@@ -8,14 +8,16 @@ The native viewer's gRPC server, and the web viewer with its gRPC data server, a
 to 127.0.0.1 (rerun's own default is 0.0.0.0, every interface): only this machine can
 connect unless the user tunnels a port or asks for another address (``--bind``).
 
-:func:`screenshot` drives a native viewer through rerun's viewer-control API: it waits
-until the recording has loaded, pauses the time cursor at a given time and saves the
+:func:`screenshot` (``skinny view --screenshot``) drives a headless viewer (rerun's own
+offscreen mode: no window, no display, no pointer) through rerun's viewer-control API: it
+waits until the recording has loaded, pauses the time cursor at a given time and saves the
 first frame that no longer changes.
 """
 
 from __future__ import annotations
 
 import ipaddress
+import math
 import os
 import shlex
 import shutil
@@ -31,7 +33,7 @@ from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.io import atomic_write_bytes
 
 __all__ = ["find_recordings", "has_display", "viewer_command", "view", "cmd_view",
-           "screenshot"]
+           "screenshot", "vulkan_drivers"]
 
 #: Address the viewers and their gRPC servers listen on unless ``bind`` says otherwise.
 BIND_ADDRESS = "127.0.0.1"
@@ -166,32 +168,67 @@ def _until(deadline: float, what: str, proc: subprocess.Popen, probe):
     raise SkinnyEnvironmentError(f"timed out {what}" + (f" ({last})" if last else ""))
 
 
+#: Why a screenshot cannot be taken here, and what to install (Debian/Ubuntu package names).
+NO_VULKAN = ("no Vulkan driver found, which the headless rerun viewer draws with: install "
+             "your GPU's Vulkan driver, or Mesa's software one (Debian/Ubuntu package "
+             "mesa-vulkan-drivers)")
+
+
+def vulkan_drivers(environ: Mapping[str, str] | None = None) -> list[Path]:
+    """The Vulkan driver manifests (ICD ``*.json``) the Vulkan loader finds on Linux:
+    those ``VK_DRIVER_FILES`` / ``VK_ICD_FILENAMES`` name, else the ``vulkan/icd.d``
+    folders of ``XDG_CONFIG_DIRS``, ``/etc``, ``XDG_DATA_DIRS``, ``/usr/local/share`` and
+    ``/usr/share``. Elsewhere (macOS, Windows: drivers come with the system) ``[]``."""
+    env = os.environ if environ is None else environ
+    if not sys.platform.startswith("linux"):
+        return []
+    named = env.get("VK_DRIVER_FILES") or env.get("VK_ICD_FILENAMES")
+    if named:
+        return [Path(p) for p in named.split(os.pathsep) if Path(p).exists()]
+    roots = [*env.get("XDG_CONFIG_DIRS", "/etc/xdg").split(os.pathsep), "/etc",
+             *env.get("XDG_DATA_DIRS", "/usr/local/share:/usr/share").split(os.pathsep),
+             "/usr/local/share", "/usr/share"]
+    return sorted({p for root in roots if root
+                   for p in Path(root, "vulkan", "icd.d").glob("*.json")})
+
+
 def screenshot(recording: str | Path, png: str | Path, *, at_s: float,
                views: Sequence[str] = (), window: str = "1600x1000",
                timeout_s: float = 300.0) -> dict[str, Path]:
-    """Save a screenshot of the native viewer showing ``recording`` at ``at_s`` seconds
-    (and one of each view named in ``views``).
+    """Save a screenshot of the viewer showing ``recording`` at ``at_s`` seconds (and one
+    of each view named in ``views``), as the native viewer draws it in a ``window``
+    (width x height) window.
 
     ``rerun --screenshot-to`` takes its picture ten frames after start, whatever has
     loaded by then, with the time cursor wherever playback (or following the data still
-    arriving) has put it. Here a fresh viewer (on a free port of 127.0.0.1; under
-    ``xvfb-run`` when there is no display) is driven through rerun's viewer-control API:
-    open the file, wait until nothing is loading and the ``time`` timeline is known,
-    pause the cursor at ``at_s``, then take screenshots until two in a row are identical
-    (every chunk the views need has arrived and been drawn).
+    arriving) has put it. Here a fresh headless viewer (``rerun --headless`` on a free
+    port of 127.0.0.1: no window, so no pointer hovering over a plot and no window
+    manager) is driven through rerun's viewer-control API: open the file, wait until
+    nothing is loading and the ``time`` timeline is known, pause the cursor at ``at_s``,
+    then take screenshots until two in a row are identical (every chunk the views need
+    has arrived and been drawn). The viewer logs errors only (``RUST_LOG=error``), so its
+    warnings (software rasterizer, Docker) raise no notification over the views; the one
+    it always shows, its gRPC address, is gone from the headless viewer within 2 s.
 
     Returns ``{"window": png, view name: png's name + "-<i>" for the i-th of views}``.
+
+    Raises
+    ------
+    SkinnyEnvironmentError
+        No Vulkan driver (Linux), or the viewer failed or timed out.
+    SkinnyInputError
+        A name in ``views`` is no view of the recording.
     """
     recording, png = Path(recording).resolve(), Path(png)
+    if sys.platform.startswith("linux") and not vulkan_drivers():
+        raise SkinnyEnvironmentError(NO_VULKAN)
     port = _free_port()
     cmd = _rerun_executable() + ["--bind", BIND_ADDRESS, "--port", str(port),
-                                 "--window-size", window, "--hide-welcome-screen"]
-    if not has_display():
-        if shutil.which("xvfb-run") is None:
-            raise SkinnyEnvironmentError("no display and no xvfb-run (Debian package xvfb)")
-        cmd = ["xvfb-run", "-a"] + cmd
+                                 "--window-size", window, "--hide-welcome-screen",
+                                 "--headless"]
     proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True)
+                            stderr=subprocess.DEVNULL, start_new_session=True,
+                            env={**os.environ, "RUST_LOG": "error"})
     deadline = time.monotonic() + timeout_s
     try:
         client = _until(deadline, "starting the viewer", proc, lambda: _connected(port))
@@ -201,11 +238,14 @@ def screenshot(recording: str | Path, png: str | Path, *, at_s: float,
             state = client.get_state()
             recs = [r for r in state.recordings if r.store_id == state.active_recording]
             ends = [t.end for r in recs for t in r.timelines if t.name == "time"]
-            return True if not state.loading and ends and ends[0] is not None else None
+            return ends[0] if not state.loading and ends and ends[0] is not None else None
 
-        _until(deadline, f"loading {recording}", proc, loaded)
-        client.set_time("time", duration=at_s, play_state="paused")
+        end_ns = _until(deadline, f"loading {recording}", proc, loaded)
         at_ns, shots = round(at_s * 1e9), []
+        if not 0 <= at_ns <= end_ns:
+            raise SkinnyInputError(f"the time {at_s:g} s is outside the recording "
+                                   f"(0 .. {end_ns / 1e9:g} s)", path=recording)
+        client.set_time("time", duration=at_s, play_state="paused")
 
         def stable():
             state = client.get_state()
@@ -225,8 +265,15 @@ def screenshot(recording: str | Path, png: str | Path, *, at_s: float,
                 raise SkinnyInputError(f"no view {name!r} (views: {sorted(ids)})")
             images[name] = _saved_screenshot(client, png.with_name(f".{png.stem}.v.png"),
                                              deadline, proc, ids[name])
+    except SkinnyEnvironmentError as err:
+        if proc.poll() is not None:  # crashed: most often no working graphics adapter
+            raise SkinnyEnvironmentError(f"{err}; it needs a working Vulkan driver, such as "
+                                         "Mesa's (Debian/Ubuntu package mesa-vulkan-drivers)"
+                                         ) from None
+        raise
     finally:
-        os.killpg(proc.pid, signal.SIGTERM)
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGTERM)
         proc.wait(timeout=30)
     png.parent.mkdir(parents=True, exist_ok=True)
     names = {"window": png} | {v: png.with_name(f"{png.stem}-{i}{png.suffix}")
@@ -268,5 +315,29 @@ def _connected(port: int):
 
 def cmd_view(args) -> int:
     """The ``skinny view`` handler (:mod:`skinny_mj.cli.parser` parses its arguments)."""
+    if getattr(args, "screenshot", None) is not None:
+        return _cmd_screenshot(args)
     return view(args.path, web=args.web, web_port=args.web_port, grpc_port=args.grpc_port,
                 bind=getattr(args, "bind", BIND_ADDRESS), dry_run=args.dry_run)
+
+
+def _cmd_screenshot(args) -> int:
+    """``skinny view --screenshot OUT.png RUN``: the viewer's picture of one recording."""
+    from skinny_mj.preflight import check_writable_file
+
+    out = Path(args.screenshot)
+    if not math.isfinite(args.at) or args.at < 0:
+        raise SkinnyInputError(f"--at must be a time >= 0 s, got {args.at:g}")
+    if args.web or args.dry_run:
+        raise SkinnyInputError("--screenshot takes neither --web nor --dry-run")
+    if out.suffix.lower() != ".png":
+        raise SkinnyInputError(f"--screenshot writes a PNG: give a name ending in .png, "
+                               f"got {out}")
+    recordings = find_recordings(args.path)
+    if len(recordings) > 1:
+        raise SkinnyInputError(f"holds {len(recordings)} recordings; --screenshot takes "
+                               f"one: name its .rrd", path=args.path)
+    check_writable_file(out, "--screenshot")
+    path = screenshot(recordings[0], out, at_s=args.at)["window"]
+    print(f"wrote {path}")
+    return 0

@@ -76,7 +76,7 @@ under the table that the means exclude failed runs.
 
 While a sweep runs, ``out/sweep.lock`` (its pid, host and start time) keeps a second
 sweep out of the folder (:mod:`skinny_mj.engine.folder`; a lock whose process died on
-this host is taken over, with a line on stderr).
+this host is taken over, with a warning of the ``skinny_mj`` logger).
 
 Output layout::
 
@@ -85,10 +85,9 @@ Output layout::
 
 from __future__ import annotations
 
-import datetime as _dt
 import functools
+import logging
 import os
-import re
 import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -99,37 +98,25 @@ import numpy as np
 
 from skinny_mj.engine.folder import prepare_out_dir, sweep_lock
 from skinny_mj.engine.stats import aggregate, load_run, markdown_table
-from skinny_mj.engine.sweep import RunFailed, execute_batch, execute_run, iter_dask, iter_joblib
+from skinny_mj.engine.sweep import (
+    SAFE_NAME,
+    Row,
+    RunFailed,
+    RunSpec,
+    execute_batch,
+    execute_run,
+    iter_dask,
+    iter_joblib,
+)
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
+from skinny_mj.preflight import new_folder
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "select_rows",
            "run_sweep", "aggregate", "markdown_table", "execute_run", "execute_batch",
            "default_out_dir", "default_workers", "default_batch_size"]
-
-_SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+=-]*$")  # no "..", no hidden file
-
-
-@dataclass(frozen=True)
-class Row:
-    """One row of a paper's table: its id, the parameters that differ, the paper's values.
-
-    ``runs``: this row's run count if not the experiment's (``--runs N`` caps it at N);
-    ``seeds_of``: a row whose seeds this row takes (a paired comparison), None its own.
-    """
-
-    row_id: str
-    params: Mapping[str, Any] = field(default_factory=dict)
-    paper: Mapping[str, float] = field(default_factory=dict)
-    runs: int | None = None
-    seeds_of: str | None = None
-
-    def __post_init__(self) -> None:
-        if not _SAFE_NAME.match(self.row_id):
-            raise SkinnyInputError(f"row id {self.row_id!r} must be a plain file-name word")
-        if self.runs is not None and self.runs < 1:
-            raise SkinnyInputError(f"row {self.row_id!r}: runs must be >= 1, got {self.runs}")
-
 
 @dataclass(frozen=True)
 class Experiment:
@@ -164,7 +151,7 @@ class Experiment:
     report: Callable[[Mapping[str, Any], Path], str] | None = None
 
     def __post_init__(self) -> None:
-        if not _SAFE_NAME.match(self.name):
+        if not SAFE_NAME.match(self.name):
             raise SkinnyInputError(f"experiment name {self.name!r} must be a plain word")
         ids = [r.row_id for r in self.rows]
         if not ids or len(set(ids)) != len(ids):
@@ -181,21 +168,6 @@ class Experiment:
                     f"and not be a row id itself (members {list(members)}, rows {ids})")
         object.__setattr__(self, "rows", tuple(self.rows))
         object.__setattr__(self, "groups", groups)
-
-
-@dataclass(frozen=True)
-class RunSpec:
-    """One (row, run) pair with its derived seed; ``row_index`` is the row's place in
-    the experiment's full ``rows``."""
-
-    row: Row
-    row_index: int
-    run_index: int
-    seed: int
-
-    @property
-    def filename(self) -> str:
-        return f"{self.row.row_id}-{self.seed}.json"
 
 
 def run_seed(base_seed: int, row_index: int, run_index: int) -> int:
@@ -259,8 +231,9 @@ def _batches(specs: list[RunSpec], size: int) -> list[list[RunSpec]]:
 
 
 def default_out_dir(experiment_name: str, root: str | Path = "results") -> Path:
-    """``results/<experiment>/<UTC timestamp>``."""
-    return Path(root) / experiment_name / _dt.datetime.now(_dt.UTC).strftime("%Y%m%d-%H%M%S")
+    """A new folder ``results/<experiment>/<UTC timestamp>``, made now: a sweep started
+    in the same second gets ``<timestamp>-2`` (:func:`skinny_mj.preflight.new_folder`)."""
+    return new_folder(Path(root) / experiment_name)
 
 
 def _key(job: RunSpec | list[RunSpec]) -> str:
@@ -274,17 +247,17 @@ def _run_specs(experiment: Experiment, runs: int, selected: Sequence[Row]) -> li
             if row.row_id in chosen and (row.runs is None or k < row.runs)]
 
 
-def _report(bar: Any, records: list[dict[str, Any]]) -> None:
-    """One line per batch that fell back, per errored run and per failed run."""
+def _report(records: list[dict[str, Any]]) -> None:
+    """A warning per batch that fell back, per errored run and per failed run."""
     if records and records[0].get("fallback"):
-        bar.write(f"row {records[0]['row']}: run_batch raised {records[0]['fallback']}; "
-                  "ran its seeds one by one", file=sys.stderr)
+        _log.warning("row %s: run_batch raised %s; ran its seeds one by one",
+                     records[0]["row"], records[0]["fallback"])
     for rec in records:
         name = f"{rec['row']}-{rec['seed']}.json"
         if rec["status"] == "error":
-            bar.write(f"run {name} errored (a bug, not data): {rec['error']}", file=sys.stderr)
+            _log.warning("run %s errored (a bug, not data): %s", name, rec["error"])
         elif rec["status"] == "failed":
-            bar.write(f"run {name} failed (diverged): {rec['fail_reason']}", file=sys.stderr)
+            _log.warning("run %s failed (diverged): %s", name, rec["fail_reason"])
 
 
 def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
@@ -297,7 +270,8 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     Parameters
     ----------
     experiment : the sweep (all its rows).
-    out_dir : output folder; default ``results/<name>/<timestamp>``.
+    out_dir : output folder; default a new ``results/<name>/<timestamp>`` (made now,
+        never another sweep's).
     rows : row ids and group names to run (default: all); seeds do not depend on it.
     runs : runs per row (default ``experiment.runs``).
     workers : parallel processes (default: all cores); 1 runs in this process.
@@ -320,7 +294,7 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     selected = select_rows(experiment, rows)
     if rows is None and experiment.unavailable:
         for row_id, why in experiment.unavailable.items():
-            print(f"{experiment.name}: row {row_id} left out: it {why}", file=sys.stderr)
+            _log.warning("%s: row %s left out: it %s", experiment.name, row_id, why)
     runs = experiment.runs if runs is None else int(runs)
     if runs < 1:
         raise SkinnyInputError(f"runs must be >= 1, got {runs}")
@@ -351,8 +325,13 @@ def _sweep(experiment: Experiment, out_dir: Path, selected: Sequence[Row], runs:
 
     specs = _run_specs(experiment, runs, selected)
     if resume:  # an errored run (a bug) runs again; ok and failed runs are data
+        n_all = len(specs)
         specs = [s for s in specs if not (runs_dir / s.filename).is_file()
                  or load_run(runs_dir / s.filename)["status"] == "error"]
+        _log.info("%s: %d of %d run(s) already in %s are kept", experiment.name,
+                  n_all - len(specs), n_all, runs_dir)
+    _log.info("%s: %d run(s) of %d row(s) on %s -> %s", experiment.name, len(specs),
+              len(selected), scheduler or f"{workers} worker(s)", out_dir)
     jobs: list = specs
     fn: Callable[[Any], Any] = functools.partial(
         execute_run, experiment.run_one, experiment_name=experiment.name)
@@ -382,7 +361,7 @@ def _sweep(experiment: Experiment, out_dir: Path, selected: Sequence[Row], runs:
                 # The parent writes every file, so remote Dask workers need no shared disk.
                 atomic_write_json(runs_dir / f"{record['row']}-{record['seed']}.json", record)
                 bar.update(1)
-            _report(bar, records)
+            _report(records)
 
     results = aggregate(out_dir)
     atomic_write_text(out_dir / "table.md",

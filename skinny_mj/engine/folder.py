@@ -6,7 +6,7 @@
 - :func:`sweep_lock`: the file ``sweep.lock`` (JSON: pid, host, start time) held while a
   sweep runs; a second sweep into the same folder is refused naming the holder. A lock
   whose process is gone (same host, pid not running, or running since another time: the
-  pid was reused) is stale: it is taken over with a line saying so.
+  pid was reused) is stale: it is taken over with a warning saying so.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import contextlib
 import dataclasses
 import datetime as _dt
 import json
+import logging
 import os
 import shutil
 import socket
@@ -33,6 +34,7 @@ __all__ = ["LOCK_NAME", "config_dict", "recorded_config", "prepare_out_dir", "ch
            "clear_sweep", "check_unlocked", "sweep_lock", "read_lock"]
 
 LOCK_NAME = "sweep.lock"
+_log = logging.getLogger(__name__)
 
 
 def recorded_config(cfg: Any) -> Any:
@@ -88,10 +90,12 @@ def _entries(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir() if p.name != LOCK_NAME)
 
 
-def choose_out_dir(out: str | Path | None, default: Path, *, resume: bool,
-                   overwrite: bool) -> Path:
+def choose_out_dir(out: str | Path | None, default: Path | None, *, resume: bool,
+                   overwrite: bool) -> Path | None:
     """The folder a ``skinny experiment`` writes, refused (:class:`SkinnyInputError`)
-    before any run when it would lose results in silence; see the module docstring."""
+    before any run when it would lose results in silence; see the module docstring.
+    Without ``out``: ``default`` (None: the caller makes a new folder when the sweep
+    starts, :func:`skinny_mj.engine.experiment.default_out_dir`)."""
     if resume and overwrite:
         raise SkinnyInputError("give --resume (continue the sweep in --out) or --overwrite "
                                "(replace it), not both")
@@ -205,7 +209,7 @@ def _held(path: Path, holder: dict[str, Any] | None) -> SkinnyInputError:
 
 def _acquire(path: Path) -> bool:
     """Create the lock ``path`` (True), or find it this process's own (False); a stale
-    lock is replaced with a line on stderr, a live one refused."""
+    lock is replaced with a warning (logging), a live one refused."""
     me = {"pid": os.getpid(), "host": socket.gethostname(),
           "started_at": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
           "start_ticks": _start_ticks(os.getpid())}
@@ -218,8 +222,8 @@ def _acquire(path: Path) -> bool:
                 return False
             if not _stale(holder):
                 raise _held(path, holder) from None
-            print(f"skinny experiment: removed a stale lock ({_holder_line(holder)}; "
-                  "that process is no longer running)", file=sys.stderr)
+            _log.warning("removed a stale lock (%s; that process is no longer running): %s",
+                         _holder_line(holder), path)
             path.unlink(missing_ok=True)
             continue
         with os.fdopen(fd, "w") as f:
@@ -231,8 +235,8 @@ def _acquire(path: Path) -> bool:
 @contextlib.contextmanager
 def sweep_lock(out: str | Path) -> Iterator[Path]:
     """Hold ``out/sweep.lock`` while the block runs (creating ``out``); a lock this
-    process already holds is kept (nested use); a stale one is replaced, with a line
-    on stderr."""
+    process already holds is kept (nested use); a stale one is replaced, with a
+    warning (logging)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / LOCK_NAME

@@ -26,6 +26,7 @@ import re
 from collections.abc import Sequence
 from typing import Any
 
+from skinny_mj.engine.plan import plan
 from skinny_mj.engine.study import Row, Study
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
@@ -65,8 +66,6 @@ def _study_row(study: Study, row: str, quick: bool) -> tuple[TrainConfig, Row, d
     """A study's row as the base: its config, its row as its run gets it, the study's
     params (``quick``: as the study's ``--quick`` has them) and the runs per row (10, or
     the study's ``--quick`` runs)."""
-    from skinny_mj.engine.plan import plan
-
     study.row(row)  # an unknown row: one line naming the study's rows
     if quick:  # every row, not only those --quick keeps
         study = dataclasses.replace(study, quick=dataclasses.replace(study.quick, rows=None))

@@ -22,18 +22,20 @@ import importlib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from skinny_mj.engine.experiment import Experiment, RunFailed
 from skinny_mj.engine.experiment import Row as EngineRow
 from skinny_mj.engine.options import movement_changes
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.engine.sweep import one_of_batch
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training import overrides
 from skinny_mj.training.config import TrainConfig, relative_cost
 
-if TYPE_CHECKING:  # (the study module imports this one when a study is built)
-    from skinny_mj.engine.study import Metric, Row, RunBatch, Study
+# The study's types (skinny_mj.engine.study's Study, Row, Metric, RunBatch), named for the
+# reader only: the study module imports this one to build its sweep, not the other way round.
+Study = Row = Metric = RunBatch = Any
 
 __all__ = ["Plan", "Results", "plan", "train_metrics", "read_metric"]
 
@@ -95,8 +97,6 @@ class Results(dict):
 
     def runs(self, row_id: str | None = None, status: str | None = "ok") -> list[dict]:
         """The run records of ``row_id`` (None: every row) with ``status`` (None: any)."""
-        from skinny_mj.engine.stats import load_runs
-
         return [r for r in load_runs(self.out_dir) if row_id in (None, r["row"])
                 and status in (None, r["status"])]
 

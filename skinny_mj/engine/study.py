@@ -44,13 +44,12 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from skinny_mj.engine.options import OPTION_KEYS
+from skinny_mj.engine.plan import Plan, Results, plan
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
 
 if TYPE_CHECKING:
     from pathlib import Path
-
-    from skinny_mj.engine.plan import Plan, Results
 
 __all__ = ["Study", "Row", "Quick", "OPTIONS", "TINY"]
 
@@ -138,7 +137,7 @@ class Study:
     ``tiny``: the contract test's shrink (default :data:`TINY`); ``cost(config, row) ->
     float``: one run's relative cost, for the schedule (default: the training's
     :func:`~skinny_mj.training.config.relative_cost`); ``memory(config, row, runs)``: the
-    bytes a lockstep batch of a custom run needs (a :class:`skinny_mj.memory.Estimate`;
+    bytes a lockstep batch of a custom run needs (a :class:`skinny_mj.preflight.Estimate`;
     None: its ``trainings``' estimate); ``unavailable() -> {row id: why}``: rows this
     machine cannot run (an optional package missing).
     """
@@ -192,16 +191,12 @@ class Study:
     def config(self, row_id: str, **options: Any) -> TrainConfig:
         """The training configuration of row ``row_id`` (full, not quick), with the
         options of ``skinny experiment`` (``movement``, ``asf``, ``dof``, ``signals``)."""
-        from skinny_mj.engine.plan import plan
-
         return plan(self, **options).config(row_id)
 
     # -- what `skinny experiment`, the memory check and the study help call --
     def build(self, quick: bool = False, movement: str | None = None, asf: Any = None,
               dof: int | None = None, signals: str | None = None) -> Any:
         """The :class:`~skinny_mj.engine.experiment.Experiment` of ``skinny experiment NAME``."""
-        from skinny_mj.engine.plan import plan
-
         return plan(self, quick=quick, movement=movement, asf=asf, dof=dof,
                     signals=signals).experiment()
 

@@ -1,8 +1,9 @@
 """Helpers of the experiment engine (:mod:`skinny_mj.engine.experiment`, which re-exports the
 public names and documents the contract).
 
-Here: one job's run records (:func:`execute_run`, :func:`execute_batch`: a run's outcome
--> ``"ok"``, ``"failed"`` or ``"error"``), and where the jobs run, joblib/loky on this
+Here: a table's :class:`Row` and one (row, run) pair's :class:`RunSpec`, one job's run
+records (:func:`execute_run`, :func:`execute_batch`: a run's outcome -> ``"ok"``,
+``"failed"`` or ``"error"``), and where the jobs run, joblib/loky on this
 machine (:func:`iter_joblib`) or a Dask cluster (:func:`iter_dask`), both yielding job
 results as they finish, in any order; :mod:`skinny_mj.engine.stats` turns run files into
 results.
@@ -12,10 +13,12 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import re
 import time
 import traceback
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -23,14 +26,51 @@ from skinny_mj.engine.stats import to_jsonable
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.threads import single_threaded
 
-if TYPE_CHECKING:
-    from skinny_mj.engine.experiment import Row, RunSpec
-
-__all__ = ["THREAD_ENV", "RunFailed", "one_of_batch", "execute_run", "execute_batch", "iter_joblib",
-           "iter_dask"]
+__all__ = ["THREAD_ENV", "SAFE_NAME", "Row", "RunSpec", "RunFailed", "one_of_batch",
+           "execute_run", "execute_batch", "iter_joblib", "iter_dask"]
 
 #: The BLAS/OpenMP thread variables pinned to 1 in every worker process.
 THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+#: A row's or an experiment's name: a plain file-name word (no "..", no hidden file).
+SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+=-]*$")
+
+
+@dataclass(frozen=True)
+class Row:
+    """One row of a paper's table: its id, the parameters that differ, the paper's values.
+
+    ``runs``: this row's run count if not the experiment's (``--runs N`` caps it at N);
+    ``seeds_of``: a row whose seeds this row takes (a paired comparison), None its own.
+    """
+
+    row_id: str
+    params: Mapping[str, Any] = field(default_factory=dict)
+    paper: Mapping[str, float] = field(default_factory=dict)
+    runs: int | None = None
+    seeds_of: str | None = None
+
+    def __post_init__(self) -> None:
+        if not SAFE_NAME.match(self.row_id):
+            raise SkinnyInputError(f"row id {self.row_id!r} must be a plain file-name word")
+        if self.runs is not None and self.runs < 1:
+            raise SkinnyInputError(f"row {self.row_id!r}: runs must be >= 1, got {self.runs}")
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One (row, run) pair with its derived seed; ``row_index`` is the row's place in
+    the experiment's full ``rows``."""
+
+    row: Row
+    row_index: int
+    run_index: int
+    seed: int
+
+    @property
+    def filename(self) -> str:
+        return f"{self.row.row_id}-{self.seed}.json"
 
 
 class RunFailed(RuntimeError):

@@ -34,7 +34,10 @@ from gymnasium import spaces
 from gymnasium.utils import seeding
 
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.plant.task import Setup, finite_actions, load, resolve_trajectory
+from skinny_mj.gym import IDS, MAX_EPISODE_STEPS
+from skinny_mj.plant.render import check_rendering
+from skinny_mj.plant.task import Setup, finite_actions, load
+from skinny_mj.trajectories import resolve_trajectory
 
 RENDER_CAMERA = "front"
 
@@ -46,8 +49,6 @@ def check_id(env_id: str | None, dof: int, actuation: str, n_steps: int,
     ``n_steps`` exceed the episode's limit (``max_episode_steps``, default the id's)."""
     if env_id is None:
         return
-    from skinny_mj.gym import IDS, MAX_EPISODE_STEPS
-
     if env_id not in IDS:
         raise SkinnyInputError(f"unknown env_id {env_id!r}; known: {', '.join(IDS)}")
     fixed = IDS[env_id]
@@ -114,8 +115,6 @@ class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         if render_mode is not None:
-            from skinny_mj.plant.render import check_rendering
-
             check_rendering()  # MUJOCO_GL=disabled: one line saying how to turn it on
         self.render_mode = render_mode
         self.width, self.height = int(width), int(height)

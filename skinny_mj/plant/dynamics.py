@@ -18,9 +18,11 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
-from scipy.interpolate import CubicSpline
 
+from skinny_mj.controllers.feedback import jacobian_error
+from skinny_mj.controllers.torque_arm import ArmState
 from skinny_mj.plant import body
+from skinny_mj.plant.model import load_batch_model
 from skinny_mj.plant.physics import Layout
 
 
@@ -123,6 +125,8 @@ class Dynamics:
         (``tests/test_dynamics.py`` states how closely); the true target of a torque
         inverse model.
         """
+        from scipy.interpolate import CubicSpline  # here: scipy.interpolate takes ~0.25 s
+
         angles = np.asarray(angles, float)
         t = dt * np.arange(len(angles))
         spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
@@ -144,6 +148,8 @@ class Dynamics:
         0), J (exact for a torque held over the step). ``feasible`` (a 0-d bool array):
         no step of any DOF over its limit.
         """
+        from scipy.interpolate import CubicSpline  # here: scipy.interpolate takes ~0.25 s
+
         angles = np.asarray(angles, float)
         tau = self.trajectory_torques_nm(angles, dt)
         ratio = np.abs(tau) / self.torque_limits_nm()
@@ -182,8 +188,6 @@ class BatchArmState:
     """
 
     def __init__(self, plant, gravity: bool = False, nominal: bool = False):
-        from skinny_mj.plant.model import load_batch_model
-
         self.plant, self.n_runs = plant, plant.n_runs
         self.model = load_batch_model(plant.n_dof, plant.n_runs, "torque") if nominal \
             else plant.model
@@ -199,8 +203,6 @@ class BatchArmState:
 
     def sensed_angles(self, sensed: np.ndarray) -> np.ndarray:
         """(R, n) joint angles as the position sensors see them, rad."""
-        from skinny_mj.controllers.feedback import jacobian_error
-
         plant = self.plant
         noise = np.asarray(sensed, float) - plant.true_signals()
         if plant.signals == "joint":
@@ -236,8 +238,6 @@ class BatchArmState:
         return sd.qfrc_bias.reshape(self.n_runs, -1)[:, self.adr].copy()
 
     def __call__(self, sensed: np.ndarray):
-        from skinny_mj.controllers.torque_arm import ArmState
-
         plant, d = self.plant, self._data()
         bias = plant.bias_torque_nm() if self._own is None else \
             d.qfrc_bias.reshape(self.n_runs, -1)[:, self.adr].copy()

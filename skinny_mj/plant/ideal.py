@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from skinny_mj.plant import body
+
 # Full scale of a DOF that (almost) does not move in the movement, rad/s: keeps a
 # still joint controllable (0.5 rad/s = 0.01 rad per 20 ms step at command 1).
 MIN_MAX_SPEED_RAD_S = 0.5
@@ -79,8 +81,6 @@ def one_step_positions(trajectory, signals: str, max_speed_rad_s: np.ndarray):
     """The true-target architecture's training position error: each teacher-forced
     command applied for one step from the desired pose q_d(t), through Skinny's
     kinematics (the servo follows a command to < 1 %; joints clip at their ranges)."""
-    from skinny_mj.plant import body
-
     dof, dt = trajectory.dof, trajectory.dt
     lo, hi = body.joint_ranges(dof).T
     q_from = trajectory.angles[:-1]

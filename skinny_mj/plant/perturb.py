@@ -43,6 +43,7 @@ import mujoco
 import numpy as np
 
 from skinny_mj.plant import body
+from skinny_mj.plant.model import load_batch_model
 
 #: the side whose forearm :func:`lengthen_forearm` lengthens by default
 FOREARM_SIDE = "right"
@@ -132,8 +133,6 @@ def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0) -> None:
 def forearm_change(plant: Any, factor: float) -> ModelChange:
     """The :class:`ModelChange` that lengthens ``plant``'s right forearms (every copy of
     a :class:`~skinny_mj.plant.adapters.BatchPlant`) ``factor`` x."""
-    from skinny_mj.plant.model import load_batch_model
-
     args = (plant.n_dof, plant.n_runs, plant.setup.actuation)
     edit = functools.partial(lengthen_forearm, factor=factor)
     return ModelChange(plant.model, load_batch_model(*args), load_batch_model(*args, edit=edit))

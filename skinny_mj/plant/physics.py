@@ -15,6 +15,7 @@ import numpy as np
 from dm_control import mujoco as dm_mujoco
 
 from skinny_mj.plant import body
+from skinny_mj.plant.model import load_model
 
 # A command never targets a joint closer than this to its range limit (rad): MuJoCo's
 # limit constraint stays inactive, so the stiff servo never gets kicked off a limit.
@@ -200,8 +201,6 @@ class SkinnyPhysics(dm_mujoco.Physics):
     def load(cls, dof: int = 4, actuation: str = "velocity") -> SkinnyPhysics:
         """Skinny's scene (see :func:`skinny_mj.plant.model.load_model`) as a Physics."""
         from dm_control.mujoco import wrapper
-
-        from skinny_mj.plant.model import load_model
 
         return cls.from_model(wrapper.MjModel(load_model(dof, actuation)))
 

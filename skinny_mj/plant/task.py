@@ -11,7 +11,6 @@ on reset, so episode k of an environment continues episode k-1's stream.
 from __future__ import annotations
 
 import collections
-import os
 from dataclasses import dataclass
 from typing import Any
 
@@ -98,7 +97,13 @@ def prepare(
     speed_factor = _number("speed_factor", speed_factor)
     if not (np.isfinite(sensor_noise) and sensor_noise >= 0):
         raise SkinnyInputError(f"sensor_noise must be finite and >= 0, got {sensor_noise!r}")
-    trajectory = resolve_trajectory(trajectory, dof)
+    if trajectory is None:  # the plant has no movement of its own (it imports none)
+        raise SkinnyInputError("the plant needs a trajectory; skinny_mj.load's default is "
+                               "the synthesized YMCA, skinny_mj.trajectories.get('ymca', dof)")
+    if not hasattr(trajectory, "angles"):  # names and files: skinny_mj.load, the gym envs
+        raise SkinnyInputError(f"the plant takes a Trajectory (an object with .angles), got "
+                               f"{type(trajectory).__name__}; skinny_mj.load takes movement "
+                               "names and files")
     if getattr(trajectory, "dof", dof) != dof:
         raise SkinnyInputError(f"trajectory has dof={trajectory.dof}, the plant dof={dof}")
     angles = np.asarray(trajectory.angles, dtype=float)
@@ -136,28 +141,6 @@ def prepare(
         max_speed_rad_s=speed,
         dt=dt,
     )
-
-
-def resolve_trajectory(trajectory: Any, dof: int) -> Any:
-    """The movement a ``trajectory`` argument names: None (the synthesized YMCA), any
-    name or file the command line's ``--trajectory`` takes (``"ymca@0.5"``,
-    ``"babble:seed=3"``, ``"set:ymca+md_03.amc"``, ``"clip.csv@start=2"``; see
-    :func:`skinny_mj.trajectories.load_movement`), a (T, dof) array of angles in rad, or
-    an object with ``.angles`` (T, dof) rad, ``.dt`` and ``.dof`` (a
-    :class:`~skinny_mj.trajectories.Trajectory`). Anything else is a
-    :class:`SkinnyInputError`."""
-    from skinny_mj import trajectories
-
-    if trajectory is None:
-        return trajectories.get("ymca", dof)
-    if isinstance(trajectory, str | os.PathLike):
-        return trajectories.load_movement(trajectory, dof)[0]
-    if isinstance(trajectory, np.ndarray):
-        return trajectories.Trajectory(trajectory)
-    if not hasattr(trajectory, "angles"):
-        raise SkinnyInputError(f"trajectory must be a movement name or file, (T, {dof}) "
-                               f"angles or a Trajectory, got {type(trajectory).__name__}")
-    return trajectory
 
 
 def widen_ctrlrange(model, actuator_ids: np.ndarray, setup: Setup) -> None:
@@ -284,10 +267,9 @@ def load(
     ----------
     dof : 4 (2D) or 8 (3D).
     signals : "joint" (normalized angles) or "cartesian" (normalized segment vectors).
-    trajectory : a movement name or file as ``skinny train --trajectory`` takes
-        (``"ym"``, ``"ymca@0.5"``, ``"babble:seed=3"``, ``"set:A+B"``, ``"clip.npz"``), an
-        object with ``.angles`` (T, dof) rad, ``.dt`` (0.02 s) and ``.dof``, or (T, dof)
-        angles; None = the synthesized YMCA (see :func:`resolve_trajectory`).
+    trajectory : object with ``.angles`` (T, dof) rad, ``.dt`` (0.02 s) and ``.dof``
+        (required: :func:`skinny_mj.load` defaults to the synthesized YMCA,
+        ``skinny_mj.trajectories.get("ymca", dof)``, and takes movement names and files).
     actuation : "velocity" (the kinematic servo; action = normalized joint velocity) or
         "torque" (motor twin; action = normalized torque, ctrl x gear N m).
     sensor_noise : std of the Gaussian noise on the sensed signals (normalized units).

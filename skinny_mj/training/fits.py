@@ -4,7 +4,10 @@ its learning rule (:class:`skinny_mj.controllers.learning.LearningRule`).
 The package's own: ``cycle`` (each learning cycle alone, the thesis's pinv or ridge fit),
 ``ridge-select`` (λ chosen per fit on a validation cycle; the velocity body),
 ``forgetting`` and ``rls`` (remembering earlier cycles; the torque body). A new rule is
-one class in controllers plus one :func:`register_fit` line; then
+one class in controllers plus one :func:`register_fit` line (its builder, or the builder's
+name ``"module:function"``, imported when a training makes its rule: the torque fits'
+builder lives in :mod:`skinny_mj.training.torque`, which imports the configuration, which
+imports this registry); then
 ``TrainConfig().override({"rule.fit": NAME})``, ``skinny train rule.fit=NAME`` and
 ``skinny sweep rule.fit=cycle,NAME`` choose it (see the docs page "Adding a learning
 rule"). :func:`register_fit` changes one Python process; for the command line and a
@@ -14,15 +17,14 @@ entry-point group :data:`FIT_GROUP`, read the first time a name is not known.
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from skinny_mj import plugins
+from skinny_mj.controllers.ridge_select import RidgeSelector
 from skinny_mj.errors import SkinnyInputError
-
-if TYPE_CHECKING:
-    from skinny_mj.training.config import TrainConfig
 
 __all__ = ["Fit", "FITS", "FIT_GROUP", "register_fit", "make_rule", "known", "check",
            "refusal"]
@@ -32,46 +34,41 @@ __all__ = ["Fit", "FITS", "FIT_GROUP", "register_fit", "make_rule", "known", "ch
 FIT_GROUP = "skinny_mj.fits"
 
 #: ``make(cfg, esn, steps)`` -> the rule for one training (None: the loop's default,
-#: each cycle alone); ``steps``: the samples of one learning cycle.
-Make = Callable[["TrainConfig", Any, int], Any]
+#: each cycle alone); ``cfg``: its :class:`skinny_mj.training.config.TrainConfig`,
+#: ``steps``: the samples of one learning cycle.
+Make = Callable[[Any, Any, int], Any]
 
 
 @dataclass(frozen=True)
 class Fit:
-    """A readout fit: how to build it, and the bodies (actuation kinds) it runs on."""
+    """A readout fit: how to build it (a :data:`Make`, or its name ``"module:function"``),
+    and the bodies (actuation kinds) it runs on."""
 
-    make: Make
+    make: Make | str
     bodies: tuple[str, ...] = ("velocity", "torque")
 
 
-def _cycle(cfg: TrainConfig, esn: Any, steps: int) -> None:
+def _cycle(cfg: Any, esn: Any, steps: int) -> None:
     return None
 
 
-def _ridge_select(cfg: TrainConfig, esn: Any, steps: int) -> Any:
-    from skinny_mj.controllers.ridge_select import RidgeSelector
-
+def _ridge_select(cfg: Any, esn: Any, steps: int) -> Any:
     return RidgeSelector(esn, cfg.rule.epochs)
-
-
-def _remembering(cfg: TrainConfig, esn: Any, steps: int) -> Any:
-    from skinny_mj.training.torque import readout_fitter
-
-    return readout_fitter(cfg, esn, steps)
 
 
 FITS: dict[str, Fit] = {
     "cycle": Fit(_cycle),
     "ridge-select": Fit(_ridge_select, ("velocity",)),
-    "forgetting": Fit(_remembering, ("torque",)),
-    "rls": Fit(_remembering, ("torque",)),
+    "forgetting": Fit("skinny_mj.training.torque:readout_fitter", ("torque",)),
+    "rls": Fit("skinny_mj.training.torque:readout_fitter", ("torque",)),
 }
 
 
-def register_fit(name: str, make: Make, *, bodies: tuple[str, ...] = ("velocity", "torque"),
+def register_fit(name: str, make: Make | str, *, bodies: tuple[str, ...] = ("velocity", "torque"),
                  replace: bool = False) -> None:
-    """Make ``name`` a value of ``rule.fit``: ``make(cfg, esn, steps)`` builds its rule.
-    A name already taken is refused unless ``replace``."""
+    """Make ``name`` a value of ``rule.fit``: ``make(cfg, esn, steps)`` builds its rule
+    (``make`` may be its name, ``"module:function"``). A name already taken is refused
+    unless ``replace``."""
     if not name or not isinstance(name, str):
         raise SkinnyInputError(f"a fit's name is a non-empty string, got {name!r}")
     if name in FITS and not replace:
@@ -80,9 +77,13 @@ def register_fit(name: str, make: Make, *, bodies: tuple[str, ...] = ("velocity"
     FITS[name] = Fit(make, tuple(bodies))
 
 
-def make_rule(cfg: TrainConfig, esn: Any, steps: int) -> Any:
+def make_rule(cfg: Any, esn: Any, steps: int) -> Any:
     """The learning rule of ``cfg``'s FEL training (None: the default per-cycle fit)."""
-    return FITS[cfg.rule.fit].make(cfg, esn, steps)  # (the module's FITS, as registered)
+    make = FITS[cfg.rule.fit].make  # (the module's FITS, as registered)
+    if isinstance(make, str):
+        module, _, name = make.partition(":")
+        make = getattr(importlib.import_module(module), name)
+    return make(cfg, esn, steps)
 
 
 def refusal(name: str) -> str:

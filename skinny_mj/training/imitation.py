@@ -21,6 +21,7 @@ from skinny_mj.controllers.metrics import (
     timing_lag,
 )
 from skinny_mj.plant import body
+from skinny_mj.training.dtw import available, dtw_nrmse
 from skinny_mj.trajectories import Trajectory, ik
 
 __all__ = ["WITHIN_DEG", "imitation_metrics", "movement_stats", "saturation"]
@@ -43,8 +44,6 @@ def imitation_metrics(outcome, dof: int, *, dtw: bool = True) -> dict[str, Any]:
     ``within5_per_joint``, ``rmse_deg`` and ``rmse_deg_per_joint``, ``lag_s`` (positive
     = the produced movement is late), ``cartesian_position_nrmse`` (the produced joint
     angles scored on Cartesian signals). Step 0 (the shared first pose) is not scored."""
-    from skinny_mj.training.dtw import available, dtw_nrmse
-
     test = outcome.trajectory
     produced, wanted = outcome.rollout.angles[0], test.angles
     within = fraction_within(produced[1:], wanted[1:], np.radians(WITHIN_DEG))

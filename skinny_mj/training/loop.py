@@ -35,6 +35,7 @@ from skinny_mj.controllers.esn import ESN
 from skinny_mj.controllers.forward_model import ForwardModel
 from skinny_mj.controllers.true_target import TrueTargetConfig, train_true_target
 from skinny_mj.plant import ideal
+from skinny_mj.plant.bimanual import arm_signals
 from skinny_mj.threads import single_threaded
 from skinny_mj.training import protocol, torque
 from skinny_mj.training.config import (  # noqa: F401  (re-exported: the training API in one place)
@@ -96,7 +97,6 @@ class Run:
         body = self.cfg.plant
         if body.leading_arm is None:
             return None
-        from skinny_mj.plant.bimanual import arm_signals
 
         return arm_signals(body.dof, body.signals, lagging_arm(self.cfg))
 

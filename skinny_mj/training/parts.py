@@ -10,8 +10,16 @@ from typing import NamedTuple
 
 import numpy as np
 
+from skinny_mj.controllers.arm_forward import ArmForwardModels
+from skinny_mj.controllers.esn import ESN
+from skinny_mj.plant import body
+from skinny_mj.plant.adapters import BatchPlant, EnvPlant
+from skinny_mj.plant.bimanual import BimanualPlant, arm_dofs, arm_signals
+from skinny_mj.plant.ideal import max_speeds, true_commands
+from skinny_mj.plant.task import load
 from skinny_mj.training import torque
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.trajectories import load_movement
 
 
 class RunStreams(NamedTuple):
@@ -33,8 +41,6 @@ def run_streams(seed: int) -> RunStreams:
 
 def load_trajectory(cfg: TrainConfig):
     """The movement of one repetition (at cfg.movement.speed) and its retarget report."""
-    from skinny_mj.trajectories import load_movement
-
     mv = cfg.movement
     kw = {} if mv.retarget == "angles" else {"retarget": mv.retarget}  # today's call
     return load_movement(mv.trajectory, cfg.plant.dof, asf=mv.asf, speed=mv.speed, **kw)
@@ -46,9 +52,6 @@ def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
     ``movement.max_speed_from``,
     so that networks trained on different movements share one command scale (paper C);
     ``movement.full_scale="shared"``: the fastest DOF's for every DOF."""
-    from skinny_mj.plant.ideal import max_speeds
-    from skinny_mj.trajectories import load_movement
-
     mv = cfg.movement
     if mv.max_speed_from is not None:
         trajectory, _ = load_movement(mv.max_speed_from, cfg.plant.dof, asf=mv.asf)
@@ -59,18 +62,12 @@ def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
 def make_plant(cfg: TrainConfig, trajectory, plant_seeds: Sequence[int],
                max_speed_rad_s: np.ndarray):
     """The plant of ``cfg`` imitating ``trajectory``, one run per plant seed."""
-    from skinny_mj.plant.adapters import BatchPlant, EnvPlant
-
     seeds, body = [int(s) for s in plant_seeds], cfg.plant
     common = dict(n_runs=len(seeds), seeds=seeds, sensor_noise=body.sensor_noise,
                   actuation=cfg.actuation.kind, max_speed_rad_s=max_speed_rad_s)
     if body.leading_arm is not None:
-        from skinny_mj.plant.bimanual import BimanualPlant
-
         return BimanualPlant(body.dof, body.signals, trajectory, body.leading_arm, **common)
     if body.backend == "env":
-        from skinny_mj.plant.task import load
-
         if len(seeds) != 1:
             raise ValueError("the dm_control path steps one run per environment")
         env = load(body.dof, body.signals, trajectory, actuation=cfg.actuation.kind,
@@ -84,7 +81,6 @@ def controlled_dofs(cfg: TrainConfig) -> np.ndarray | None:
     """Body DOFs the ESN drives: None for all, paper B's lagging arm's otherwise."""
     if cfg.plant.leading_arm is None:
         return None
-    from skinny_mj.plant.bimanual import arm_dofs
 
     return arm_dofs(cfg.plant.dof, lagging_arm(cfg))
 
@@ -93,8 +89,6 @@ def network_sizes(cfg: TrainConfig) -> tuple[int, int, int]:
     """(n_sig, n_out, n_in): the position signals, the inverse ESN's outputs (the DOFs
     it drives) and its inputs (desired and sensed signals, the forward model's
     prediction, the torque loop's velocity inputs)."""
-    from skinny_mj.plant import body
-
     n_sig = body.n_signals(cfg.plant.dof, cfg.plant.signals)
     dofs = controlled_dofs(cfg)
     n_out = cfg.plant.dof if dofs is None else len(dofs)
@@ -113,7 +107,6 @@ def true_commands_of(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) 
     (torque body: the normalized inverse-dynamics torques)."""
     if cfg.torque is not None:
         return torque.true_torques(cfg.plant.dof, trajectory)
-    from skinny_mj.plant.ideal import true_commands
 
     commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
     dofs = controlled_dofs(cfg)
@@ -125,10 +118,6 @@ def arm_forward_models(cfg: TrainConfig, rngs: Sequence[np.random.Generator]):
     (:class:`skinny_mj.controllers.arm_forward.ArmForwardModels`,
     ``forward.sharing``): the lagging arm's network from each run's forward stream,
     the leading arm's (shared predictions only) from a child of that stream."""
-    from skinny_mj.controllers.arm_forward import ArmForwardModels
-    from skinny_mj.controllers.esn import ESN
-    from skinny_mj.plant.bimanual import arm_signals
-
     body, sharing = cfg.plant, cfg.forward.sharing
     lag_sig, lead_sig = (arm_signals(body.dof, body.signals, s)
                          for s in (lagging_arm(cfg), body.leading_arm))

@@ -35,14 +35,17 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
+from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.controllers.torque_arm import ArmGains, DesiredMotion
 from skinny_mj.controllers.torque_arm_loop import ArmLoop
 from skinny_mj.controllers.torque_feedback import TorqueFeedbackController, TorqueGains
 from skinny_mj.controllers.torque_fel import TorqueLoop
+from skinny_mj.controllers.torque_readout import ForgettingReadout, RLSReadout
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
+from skinny_mj.plant.dynamics import BatchArmState, Dynamics, feasibility_lines
+from skinny_mj.plant.model import load_model
 from skinny_mj.plant.perturb import perturb  # noqa: F401  (re-exported: the robustness test plant)
 from skinny_mj.training.config import ARM_LAWS, Torque, TrainConfig
 
@@ -55,9 +58,6 @@ ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0}
 
 @functools.lru_cache(maxsize=4)
 def _dynamics(dof: int):
-    from skinny_mj.plant.dynamics import Dynamics
-    from skinny_mj.plant.model import load_model
-
     return Dynamics(load_model(dof, "torque"))
 
 
@@ -82,6 +82,8 @@ def torque_limits_nm(dof: int) -> np.ndarray:
 def desired_velocities_rad_s(angles: np.ndarray, dt: float) -> np.ndarray:
     """(T, n_dof) joint velocities, rad/s, of the clamped cubic spline through ``angles``
     (T, n_dof) rad (at rest at both ends, as ``trajectory_torques_nm`` assumes)."""
+    from scipy.interpolate import CubicSpline  # here: scipy.interpolate takes ~0.25 s
+
     angles = np.asarray(angles, float)
     t = dt * np.arange(len(angles))
     return CubicSpline(t, angles, axis=0, bc_type="clamped")(t, 1)
@@ -111,6 +113,8 @@ def n_extra_inputs(cfg: TrainConfig) -> int:
 def desired_motion(dof: int, trajectory, with_id: bool = False) -> DesiredMotion:
     """The :class:`DesiredMotion` of ``trajectory`` for a held-torque loop: the clamped
     cubic spline's states, mid-step samples and (``with_id``) held inverse dynamics."""
+    from scipy.interpolate import CubicSpline  # here: scipy.interpolate takes ~0.25 s
+
     angles, dt = np.asarray(trajectory.angles, float), trajectory.dt
     t = dt * np.arange(len(angles))
     spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
@@ -134,8 +138,6 @@ def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
     if act is None:
         return None
     if act.feedback in ARM_LAWS:
-        from skinny_mj.plant.dynamics import BatchArmState
-
         law = ARM_LAWS[act.feedback]
         if plant is None or not hasattr(plant, "model"):
             raise SkinnyInputError(f"feedback {act.feedback!r} needs the lockstep plant "
@@ -219,8 +221,6 @@ def feasibility(dof: int, trajectory) -> dict[str, np.ndarray]:
 def feasibility_report(dof: int, trajectory) -> list[str]:
     """The feasibility of ``trajectory`` as text lines (``skinny trajectory show
     --actuation torque``)."""
-    from skinny_mj.plant.dynamics import feasibility_lines
-
     return feasibility_lines(feasibility(dof, trajectory), list(body.dof_names(dof)))
 
 
@@ -229,8 +229,6 @@ def readout_fitter(cfg: TrainConfig, esn, steps: int):
     normal equations with forgetting, or RLS, remembering ``rule.forgetting`` of the
     statistics per learning cycle of ``steps`` samples; ridge ``esn.ridge_lambda`` with a
     ridge readout, else :data:`MEMORY_RIDGE`."""
-    from skinny_mj.controllers.torque_readout import ForgettingReadout, RLSReadout
-
     rule = cfg.rule
     ridge = cfg.esn.ridge_lambda if cfg.esn.readout == "ridge" else MEMORY_RIDGE
     if rule.fit == "forgetting":
@@ -267,8 +265,6 @@ class ShareRecorder:
 def joint_nrmse(outcome) -> float:
     """Test joint-angle NRMSE (each angle normalized to [-1, 1] over its range) of a
     :class:`skinny_mj.training.loop.TrainOutcome` against its movement's angles."""
-    from skinny_mj.controllers.metrics import position_nrmse
-
     dof = outcome.config.plant.dof
     angles = outcome.test.rollout.angles[:, :, :dof]
     return float(position_nrmse(body.normalize_angles(angles, dof),

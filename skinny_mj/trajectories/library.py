@@ -22,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import numbers
+import os
 from collections.abc import Callable
 from pathlib import Path
 
@@ -30,8 +31,12 @@ import numpy as np
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.trajectories import patterns
+from skinny_mj.trajectories.asf_amc import load_asf_amc
 from skinny_mj.trajectories.babble import babble, bridge, parse_babble_name
+from skinny_mj.trajectories.bvh import load_bvh
+from skinny_mj.trajectories.human import ymca_recorded
 from skinny_mj.trajectories.retarget import RetargetReport, clip_report, range_excess
+from skinny_mj.trajectories.retarget import retarget as retarget_clip
 from skinny_mj.trajectories.samples import (
     SAMPLE_ASF,
     SAMPLE_CLIPS,
@@ -81,8 +86,6 @@ def _mirror(side: str) -> Callable[[int], Trajectory]:
 def _recorded(unit_2d: bool) -> Callable[[int], Trajectory]:
     def make(dof: int) -> Trajectory:
         """The recorded-like YMCA (``skinny_mj.trajectories.human``), default seed."""
-        from skinny_mj.trajectories.human import ymca_recorded
-
         return ymca_recorded(dof, unit_2d=unit_2d)
 
     return make
@@ -287,16 +290,10 @@ def load_movement(
         report = clip_report(excess, dof, source=str(path), source_fps=1.0 / raw.dt)
         traj = clipped
     else:
-        from skinny_mj.trajectories.retarget import retarget as retarget_clip
-
         if suffix == ".amc":
-            from skinny_mj.trajectories.asf_amc import load_asf_amc
-
             skeleton = Path(asf) if asf is not None else find_asf(path)
             clip = load_asf_amc(skeleton, path, fps=fps)
         else:
-            from skinny_mj.trajectories.bvh import load_bvh
-
             clip = load_bvh(path, fps=fps)
         traj, report = retarget_clip(clip, dof, cutoff_hz=cutoff_hz, window_s=window,
                                      targets=retarget)
@@ -304,6 +301,25 @@ def load_movement(
             _say_skeleton(path, skeleton, asf is not None)
     traj = traj.resample(speed).repeat(reps)
     return traj, report
+
+
+def resolve_trajectory(trajectory: object, dof: int) -> object:
+    """The movement a ``trajectory`` argument (of :func:`skinny_mj.load`, the gym envs)
+    names: None (the synthesized YMCA), any name or file the command line's
+    ``--trajectory`` takes (``"ymca@0.5"``, ``"babble:seed=3"``, ``"set:ymca+md_03.amc"``,
+    ``"clip.csv@start=2"``; :func:`load_movement`), a (T, dof) array of angles in rad, or
+    an object with ``.angles`` (T, dof) rad, ``.dt`` and ``.dof`` (a :class:`Trajectory`),
+    returned as it is. Anything else is a :class:`SkinnyInputError`."""
+    if trajectory is None:
+        return get("ymca", dof)
+    if isinstance(trajectory, str | os.PathLike):
+        return load_movement(trajectory, dof)[0]
+    if isinstance(trajectory, np.ndarray):
+        return Trajectory(trajectory)
+    if not hasattr(trajectory, "angles"):
+        raise SkinnyInputError(f"trajectory must be a movement name or file, (T, {dof}) "
+                               f"angles or a Trajectory, got {type(trajectory).__name__}")
+    return trajectory
 
 
 SET_PREFIX = "set:"

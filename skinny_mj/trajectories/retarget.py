@@ -41,7 +41,7 @@ import numpy as np
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.trajectories import ik
-from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory
+from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory, excerpt
 
 _MIRROR_X = np.array([-1.0, 1.0, 1.0])
 ROTATION_MIN_ELBOW_RAD = np.deg2rad(15.0)  # below this bend the arm rotation is unobservable
@@ -345,8 +345,6 @@ def retarget(
     angles = resample_to(lowpass(angles, clip.fps, cutoff_hz), clip.fps, dt)
     name = Path(clip.source).stem
     if window_s is not None:
-        from skinny_mj.trajectories.trajectory import excerpt
-
         part = excerpt(Trajectory(angles, dt, name), *window_s)
         angles, name = np.array(part.angles), part.name
     angles, excess = clip_continuous(angles, dof)

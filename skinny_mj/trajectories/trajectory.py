@@ -31,6 +31,7 @@ import numpy as np
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path, atomic_write_text
 from skinny_mj.plant import body
+from skinny_mj.preflight import Estimate, check
 
 DEFAULT_DT_S = body.CONTROL_DT_S  # movements are sampled at the control rate
 #: Largest |angle| a movement may hold, rad (joint ranges are within +-pi; a larger
@@ -376,8 +377,6 @@ def excerpt(traj: Trajectory, start_s: float, duration_s: float | None) -> Traje
 def check_size(steps: int, dof: int, cause: str) -> None:
     """Refuse (one line) a movement of ``steps`` steps the memory cannot hold: its angles,
     the interpolation's or tiling's copies, explicit desired signals (about 6 arrays)."""
-    from skinny_mj.memory import Estimate, check
-
     check(Estimate({"movement": steps * (dof + 1) * 8 * 6}, {"movement": cause}),
           "the movement")
 

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant.body import body_of
 from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory
 
 YMCA_STEPS = 313  # 6.26 s at 50 Hz, as the thesis' recording
@@ -74,9 +76,6 @@ def min_jerk(n: int) -> np.ndarray:
 
 def key_poses(dof: int) -> dict[str, np.ndarray]:
     """Key poses {name: (n_dof,) rad} for dof 4 or 8 (Skinny's own bodies)."""
-    from skinny_mj.errors import SkinnyInputError
-    from skinny_mj.plant.body import body_of
-
     table = {4: POSES_2D_DEG, 8: POSES_3D_DEG}.get(body_of(dof).dof)
     if table is None:
         raise SkinnyInputError(f"YMCA's key poses are written for Skinny's 2D and 3D bodies, "
