@@ -20,17 +20,21 @@ _LAZY = {
 
 def load(dof: int = 4, signals: str = "cartesian", trajectory: Any = None, *args: Any,
          **kwargs: Any) -> Any:
-    """Skinny imitating ``trajectory`` (None: the synthesized YMCA), as a dm_control
-    ``control.Environment``: :func:`skinny_mj.plant.task.load`, whose other arguments
-    (``actuation``, ``sensor_noise``, ``seed``, ``max_speed_rad_s``, ``speed_factor``)
-    it passes on. The plant has no movement of its own; this package supplies the default.
+    """Skinny imitating ``trajectory`` as a dm_control ``control.Environment``:
+    :func:`skinny_mj.plant.task.load`, whose other arguments (``actuation``,
+    ``sensor_noise``, ``seed``, ``max_speed_rad_s``, ``speed_factor``) it passes on.
+    ``trajectory``: None (the synthesized YMCA), any movement name or file the command
+    line's ``--trajectory`` takes (``"ym"``, ``"ymca@0.5"``, ``"babble:seed=3"``,
+    ``"set:ymca+md_03.amc"``, ``"clip.csv@start=2"``), (T, dof) angles in rad or a
+    :class:`~skinny_mj.trajectories.Trajectory`
+    (:func:`skinny_mj.trajectories.resolve_trajectory`). The plant has no movement of its
+    own; this package supplies the default and reads the names.
     """
     from skinny_mj import trajectories  # here, not above: importing skinny_mj stays light
     from skinny_mj.plant import task
 
-    if trajectory is None:
-        trajectory = trajectories.get("ymca", dof)
-    return task.load(dof, signals, trajectory, *args, **kwargs)
+    return task.load(dof, signals, trajectories.resolve_trajectory(trajectory, dof), *args,
+                     **kwargs)
 
 
 def __getattr__(name: str) -> Any:

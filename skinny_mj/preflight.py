@@ -243,7 +243,8 @@ def fmt_bytes(n: float) -> str:
     """``n`` bytes in the largest binary unit that keeps it >= 1 (``1.5 GiB``)."""
     for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
         if abs(n) < 1024 or unit == "PiB":
-            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.3g} {unit}" if n >= 1e4 \
+                else f"{n:.1f} {unit}"
         n /= 1024
     raise AssertionError("unreachable")
 

@@ -13,6 +13,7 @@ import pytest
 from skinny_mj.cli.parser import main
 from skinny_mj.engine import registry
 from skinny_mj.engine.experiment import Experiment, Row
+from skinny_mj.errors import SkinnyInputError
 
 TINY = ["--reservoir", "30", "--epochs", "1", "--quiet"]
 
@@ -62,8 +63,8 @@ def test_train_takes_a_bare_config(tmp_path, bare):
     assert m["seed"] == 2
 
 
-def test_train_takes_key_value_overrides_after_the_flags_and_the_file(trained, tmp_path):
-    assert main(["train", "--config", str(trained / "metrics.json"), "--epochs", "3",
+def test_train_takes_key_value_overrides_after_the_file(trained, tmp_path):
+    assert main(["train", "--config", str(trained / "metrics.json"), "--cycles", "2",
                  "rule.epochs=2", "esn.spectral_radius=0.4", "rule=original", "--quiet",
                  "--out", str(tmp_path / "kv")]) == 0
     cfg = _metrics(tmp_path / "kv")["config"]
@@ -78,6 +79,7 @@ def test_train_takes_key_value_overrides_after_the_flags_and_the_file(trained, t
     (["rule.epochs=two"], "rule.epochs must be a whole number"),
     (["spectral_radius"], "KEY=VALUE"),
     (["--epochs", "0"], "epochs must be >= 1"),
+    (["--epochs", "3", "rule.epochs=2"], "--epochs 3 and rule.epochs=2 set the same key"),
 ])
 def test_train_refuses_a_bad_key_or_value_in_one_line(tmp_path, capsys, argv, words):
     assert main(["train", *argv, "--quiet", "--out", str(tmp_path / "no")]) == 2
@@ -98,7 +100,9 @@ def test_key_values_and_flags_apply_together_before_the_config_checks():
     cfg = config("rule=none", "test.gain=1", "--actuation", "torque", "--feedback", "ct")
     assert isinstance(cfg.rule, NoLearning) and cfg.test.gain == 1.0
     assert cfg.torque.feedback == "ct"
-    assert config("--reservoir", "40", "esn.n_reservoir=50").esn.n_reservoir == 50
+    assert config("--reservoir", "50", "esn.n_reservoir=50").esn.n_reservoir == 50  # agree
+    with pytest.raises(SkinnyInputError, match="--reservoir 40 and esn.n_reservoir=50"):
+        config("--reservoir", "40", "esn.n_reservoir=50")  # contradict: refused
     assert config("--method", "original", "--epochs", "4").rule.epochs == 4
 
 

@@ -100,6 +100,7 @@ def test_a_failing_gl_context_is_one_line_exit_1(tmp_path, monkeypatch, capsys):
         raise mujoco.FatalError("an OpenGL platform library has not been loaded")
 
     monkeypatch.setattr(mujoco, "Renderer", no_context)
+    monkeypatch.setenv("MUJOCO_GL", "egl")  # asked for; mujoco's context still fails
     code = main(["render", "--out", str(tmp_path / "x.png")])
     _one_line_error(capsys, code, 1, "no OpenGL rendering backend")
     assert not list(tmp_path.iterdir())

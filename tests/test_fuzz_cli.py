@@ -33,7 +33,9 @@ NUMBERS = ["0", "1", "2", "4", "8", "-1", "-5", "0.5", "1e309", "-1e309", "nan",
            "abc", "", "3.5", "99999999999999999999", "1e-320", "10", "0x10"]
 NAMES = ["ymca", "ymca@0.5", "ymca@abc", "ymca@0", "y-pure", "nope", "../../x", "/abs/x",
          "md_02", "x.amc@start=-1", "file.csv@start=1,duration=0", "", "list", "paper-e",
-         "paper-zz", "1,2", "table", "fig3,nope"]
+         "paper-zz", "1,2", "table", "fig3,nope", "ymca@", " , ", "babble:", "babble:seed=-1",
+         "babble:duration=1e12", "set:", "set:ymca++y", "set:ymca+nope", "md_02.amc@start",
+         "rule.epochs=2", "plant.dof=8", "local", "tcp://", "bogus"]
 
 
 class _Reached(Exception):
@@ -55,23 +57,33 @@ def files(tmp_path_factory) -> dict[str, str]:
     (root / "model.npz").write_bytes(np.zeros(3).tobytes())
     (root / "latin.bvh").write_bytes(b"HIERARCHY\n\xe9\xff\n")
     (root / "plain").write_text("x")
+    (root / "empty.npz").write_bytes(b"")
+    (root / "empty.json").write_text("")
+    (root / "86_02.amc").write_text("1\n")  # a clip with no skeleton of its subject beside
+    lines = (root / "ok.csv").read_text().splitlines()
+    (root / "onerow.csv").write_text("\n".join(lines[:3]) + "\n")
+    (root / "folder.npz").mkdir()
     return {"ok.csv": str(root / "ok.csv"), "ok8.npz": str(root / "ok8.npz"),
             "bad.csv": str(root / "bad.csv"), "bad.npz": str(root / "bad.npz"),
             "model": str(root / "model.npz"), "latin.bvh": str(root / "latin.bvh"),
             "missing": str(root / "missing.npz"), "folder": str(root),
-            "under-a-file": str(root / "plain" / "x.npz")}
+            "under-a-file": str(root / "plain" / "x.npz"), "empty.npz": str(root / "empty.npz"),
+            "empty.json": str(root / "empty.json"), "86_02.amc": str(root / "86_02.amc"),
+            "onerow.csv": str(root / "onerow.csv"), "folder.npz": str(root / "folder.npz")}
 
 
 COMMANDS = {
     "train": ["--dof", "--signals", "--trajectory", "--speed", "--reps", "--method", "--beta",
               "--cycles", "--epochs", "--reservoir", "--spectral-radius", "--noise",
-              "--readout", "--ridge", "--sensor-noise", "--seed", "--asf", "--bogus"],
+              "--readout", "--ridge", "--sensor-noise", "--seed", "--asf", "--bogus",
+              "--config"],
     "track": ["--dof", "--signals", "--trajectory", "--speed", "--reps", "--sensor-noise",
               "--seed", "--asf"],
     "test": ["--model", "--trajectory", "--speed", "--reps", "--sensor-noise", "--seed"],
     "trajectory export": ["--dof", "--speed", "--reps", "--asf"],
     "experiment": ["--runs", "--workers", "--rows", "--movement", "--dof", "--signals",
-                   "--scheduler", "--asf"],
+                   "--scheduler", "--asf", "--config", "--protocol"],
+    "sweep": ["--runs", "--rows", "--study", "--row", "--config", "--scheduler", "--workers"],
     "render": ["--dof", "--trajectory", "--frame", "--width", "--height"],
 }
 
@@ -80,8 +92,11 @@ COMMANDS = {
 def argvs(draw, files: dict[str, str], out: str) -> list[str]:
     command = draw(st.sampled_from(sorted(COMMANDS)))
     argv = command.split()
-    if command in ("trajectory export", "experiment"):
+    if command in ("trajectory export", "experiment", "sweep"):
         argv.append(draw(st.sampled_from(NAMES + list(files.values()))))
+    if command == "train" and draw(st.booleans()):  # KEY=VALUE overrides beside the flags
+        argv.append(draw(st.sampled_from(["rule.epochs=2", "plant.dof=8", "esn=1", "=1",
+                                          "movement.trajectory=", "rule.epochs=x"])))
     values = st.sampled_from(NUMBERS) | st.sampled_from(NAMES) \
         | st.sampled_from(sorted(files.values())) | st.text(max_size=6)
     for flag in draw(st.lists(st.sampled_from(COMMANDS[command]), max_size=4)):

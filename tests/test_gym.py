@@ -16,9 +16,11 @@ gymnasium = pytest.importorskip("gymnasium")
 from gymnasium.utils.env_checker import check_env  # noqa: E402
 
 import skinny_mj.gym  # noqa: E402  (registers the ids)
+from skinny_mj.errors import SkinnyInputError  # noqa: E402
 from skinny_mj.gym import IDS  # noqa: E402
 from skinny_mj.gym.env import SkinnyEnv  # noqa: E402
 from skinny_mj.gym.vector import SkinnyVectorEnv  # noqa: E402
+from skinny_mj.trajectories import get  # noqa: E402
 
 VELOCITY_IDS = [i for i, kw in IDS.items() if kw["actuation"] == "velocity"]
 TORQUE_IDS = [i for i, kw in IDS.items() if kw["actuation"] == "torque"]
@@ -41,7 +43,8 @@ def test_importing_skinny_mj_does_not_import_gymnasium():
 def test_ids_are_registered_with_both_entry_points():
     for env_id, kwargs in IDS.items():
         spec = gymnasium.spec(env_id)
-        assert spec.kwargs == kwargs
+        assert spec.kwargs == {"env_id": env_id, **kwargs}
+        assert spec.max_episode_steps == len(get("ymca", kwargs["dof"])) - 1  # YMCA's
         assert spec.entry_point == "skinny_mj.gym.env:SkinnyEnv"
         assert spec.vector_entry_point == "skinny_mj.gym.vector:SkinnyVectorEnv"
     skinny_mj.gym.register()  # a second registration is a no-op, not a warning
@@ -250,3 +253,31 @@ def test_a_diverging_robot_raises_in_the_vector_env_as_in_a_single_env():
         envs.step(np.zeros((3, 4)))
     envs.reset(seed=0)  # clears MuJoCo's warnings: stepping works again
     assert np.isfinite(envs.step(np.zeros((3, 4)))[0]).all()
+
+
+@pytest.mark.parametrize("env_id,kwargs,says", [
+    ("SkinnyMJ/Skinny2D-v0", {"dof": 8}, "has dof=4, got dof=8: use SkinnyMJ/Skinny3D-v0"),
+    ("SkinnyMJ/Skinny3D-v0", {"dof": 4}, "has dof=8, got dof=4: use SkinnyMJ/Skinny2D-v0"),
+    ("SkinnyMJ/Skinny2D-v0", {"actuation": "torque"}, "use SkinnyMJ/Skinny2D-Torque-v0"),
+    ("SkinnyMJ/Skinny2D-v0", {"trajectory": "nope"}, "unknown movement 'nope'"),
+    ("SkinnyMJ/Skinny2D-v0", {"trajectory": 3}, "trajectory must be a movement name"),
+])
+def test_make_refuses_what_contradicts_the_id_or_names_nothing(env_id, kwargs, says):
+    with pytest.raises(SkinnyInputError, match=says.replace("(", r"\(")):
+        gymnasium.make(env_id, **kwargs)
+    with pytest.raises(SkinnyInputError, match=says.replace("(", r"\(")):
+        gymnasium.make_vec(env_id, num_envs=2, **kwargs)
+
+
+def test_make_takes_every_movement_name_and_limits_episodes_to_the_ids():
+    env = gymnasium.make("SkinnyMJ/Skinny2D-v0", trajectory="ym@1.5")
+    assert env.unwrapped.n_steps < skinny_mj.gym.MAX_EPISODE_STEPS  # plays to its end
+    with pytest.warns(UserWarning, match="max_episode_steps=312 of the movement's 467"):
+        gymnasium.make("SkinnyMJ/Skinny2D-v0", trajectory="md_02.amc")
+    whole = gymnasium.make("SkinnyMJ/Skinny2D-v0", trajectory="md_02.amc",
+                           max_episode_steps=467)
+    assert whole.spec.max_episode_steps == 467
+    vector = gymnasium.make_vec("SkinnyMJ/Skinny2D-v0", num_envs=2, max_episode_steps=10)
+    vector.reset(seed=0)
+    flags = [vector.step(np.zeros((2, 4)))[3] for _ in range(10)]
+    assert not flags[8].any() and flags[9].all()  # truncated at the limit, as TimeLimit

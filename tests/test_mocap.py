@@ -164,16 +164,30 @@ def test_asf_axis_conjugates_the_rotation(tmp_path):
     np.testing.assert_allclose(np.rad2deg(traj.angles[:, 0]), 90.0, atol=1e-6)
 
 
-def test_amc_finds_the_single_asf_beside_it(tmp_path):
-    shutil.copy(DATA / "tiny.amc", tmp_path / "clip.amc")
-    with pytest.raises(SkinnyInputError, match="no .asf"):
-        load_movement(tmp_path / "clip.amc", 4)
-    shutil.copy(DATA / "tiny.asf", tmp_path / "tiny.asf")
-    traj, _ = load_movement(tmp_path / "clip.amc", 4)
+def test_amc_finds_its_subjects_skeleton_beside_it_and_no_other(tmp_path, caplog):
+    shutil.copy(DATA / "tiny.amc", tmp_path / "86_02.amc")
+    with pytest.raises(SkinnyInputError, match="no skeleton 86.asf of its subject:"):
+        load_movement(tmp_path / "86_02.amc", 4)
+    shutil.copy(DATA / "tiny.asf", tmp_path / "12.asf")  # another subject's: never taken
+    with pytest.raises(SkinnyInputError, match="no skeleton 86.asf .*beside it: 12.asf.*--asf"):
+        load_movement(tmp_path / "86_02.amc", 4)
+    shutil.copy(DATA / "tiny.asf", tmp_path / "86.asf")
+    with caplog.at_level("WARNING", logger="skinny_mj"):
+        traj, _ = load_movement(tmp_path / "86_02.amc", 4)
     assert len(traj) == 10
-    shutil.copy(DATA / "tiny.asf", tmp_path / "other.asf")
-    with pytest.raises(SkinnyInputError, match="2 .asf"):
-        load_movement(tmp_path / "clip.amc", 4)
+    assert f"86_02.amc: skeleton {tmp_path / '86.asf'} (beside it" in caplog.text
+    with caplog.at_level("INFO", logger="skinny_mj"):
+        traj, _ = load_movement(tmp_path / "86_02.amc", 4, asf=tmp_path / "12.asf")  # given
+    assert len(traj) == 10
+    assert f"86_02.amc: skeleton {tmp_path / '12.asf'} (given)" in caplog.messages
+    shutil.copy(DATA / "tiny.amc", tmp_path / "md_05.amc")  # the shipped clips' subject
+    shutil.copy(DATA / "tiny.asf", tmp_path / "moderndance.asf")
+    assert len(load_movement(tmp_path / "md_05.amc", 4)[0]) == 10
+    caplog.clear()
+    with caplog.at_level("INFO", logger="skinny_mj"):
+        load_movement("md_03.amc", 4)  # a shipped clip: its own skeleton, said quietly
+    assert [(r.levelname, r.getMessage().endswith("(the shipped clips')"))
+            for r in caplog.records] in ([], [("INFO", True)])  # once per process
 
 
 def test_fps_override_changes_duration():

@@ -28,7 +28,11 @@ FLAGS = settings(max_examples=200, deadline=None, database=None)
 
 
 def _one_line_exit_2(argv, capsys) -> str:
-    assert main(argv) == 2
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's usage error
+        code = exc.code
+    assert code == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "Traceback" not in err, err
     return err
@@ -313,3 +317,244 @@ def test_a_movement_too_long_for_the_memory_is_refused_before_it_is_made():
     with pytest.raises(SkinnyInputError, match=r"10000000000 repetitions of ymca"):
         traj.repeat(10**10)
     assert len(traj.resample(0.5)) == 626 and len(traj.repeat(3)) == 939  # ordinary sizes
+
+
+# -- a body's MJCF ----------------------------------------------------------------------------
+def _edited_models(tmp_path: Path, edit) -> Path:
+    """A copy of the shipped models folder with ``edit(text) -> text`` applied to
+    ``skinny_2d.xml``."""
+    import shutil
+
+    from skinny_mj.plant.model import models_dir
+
+    folder = tmp_path / "models"
+    shutil.copytree(models_dir(), folder)
+    robot = folder / "skinny_2d.xml"
+    robot.write_text(edit(robot.read_text()))
+    return folder
+
+
+def _drop_line(needle: str):
+    return lambda text: "\n".join(ln for ln in text.splitlines() if needle not in ln)
+
+
+@pytest.mark.parametrize("edit,says", [
+    (lambda text: text[:1500], "skinny_2d.xml:26: not well-formed XML"),  # truncated
+    (lambda text: "", "skinny_2d.xml: empty file"),
+    (lambda text: text.replace('<joint name="right_shoulder_abduction"',
+                               '<joint foo="1" name="right_shoulder_abduction"'),
+     "skinny_2d.xml:26: MJCF error: Schema violation: unrecognized attribute: 'foo'"),
+    (lambda text: text.replace('class="shoulder_abduction" axis="0 1 0"',
+                               'class="shoulder_abduction" axis="0 0 0"', 1),
+     "skinny_2d.xml:26: MJCF error: axis too small"),
+    (_drop_line('<velocity name="right_shoulder_abduction"'),
+     "skinny_2d.xml: the MJCF does not match the 2D body's spec (skinny_mj.plant.body): "
+     "no actuator 'right_shoulder_abduction'"),
+    (_drop_line('<site name="left_wrist"'), "no site 'left_wrist'"),
+    (lambda text: text.replace("skinny_defaults.xml", "nope.xml"),
+     "nope.xml: cannot read the file: No such file or directory (included by skinny_2d.xml)"),
+])
+def test_a_broken_mjcf_is_one_line_naming_file_and_line(edit, says, tmp_path, monkeypatch,
+                                                       capsys):
+    from skinny_mj.plant.model import MODELS_ENV_VAR, load_model
+
+    monkeypatch.setenv(MODELS_ENV_VAR, str(_edited_models(tmp_path, edit)))
+    err = _one_line_exit_2(["track", "--out", str(tmp_path / "o")], capsys)
+    assert says in err
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(SkinnyInputError, match="skinny_2d.xml"):
+        load_model(4)
+    with pytest.raises(SkinnyInputError, match="skinny_2d.xml"):
+        load_model(4, "torque")
+
+
+# -- motion capture's skeleton -----------------------------------------------------------------
+def test_an_amc_without_its_subjects_skeleton_is_refused_and_the_one_used_is_said(
+        tmp_path, capsys, caplog):
+    import shutil
+
+    data = Path(__file__).parent / "data"
+    shutil.copy(data / "tiny.amc", tmp_path / "86_02.amc")
+    shutil.copy(data / "tiny.asf", tmp_path / "12.asf")  # another subject's skeleton
+    argv = ["trajectory", "show", str(tmp_path / "86_02.amc")]
+    err = _one_line_exit_2(argv, capsys)
+    assert "86_02.amc: no skeleton 86.asf of its subject; beside it: 12.asf" in err
+    assert "--asf" in err
+    assert main([*argv, "--asf", str(tmp_path / "12.asf")]) == 0  # given: taken as it is
+    capsys.readouterr()
+    shutil.copy(data / "tiny.asf", tmp_path / "86.asf")
+    assert main(argv) == 0  # found beside it: a warning (stderr, or the test's log capture)
+    said = capsys.readouterr().err + "\n".join(caplog.messages)
+    assert f"86_02.amc: skeleton {tmp_path / '86.asf'} (beside it, by the clip's subject)" \
+        in said
+
+
+# -- bad values on the command line: exit 2, one line naming the culprit -----------------------
+@pytest.mark.parametrize("argv,culprit", [
+    (["experiment", "paper-e", "--quick", "--rows", ""], "--rows: '' names no row"),
+    (["experiment", "paper-e", "--quick", "--rows", " , "], "--rows: ' , ' names no row"),
+    (["sweep", "esn.spectral_radius=0.5,0.9", "--rows", ""], "--rows: '' names no row"),
+    (["train", "--epochs", "1", "rule.epochs=2"], "--epochs 1 and rule.epochs=2"),
+    (["train", "--dof", "8", "plant.dof=4"], "--dof 8 and plant.dof=4"),
+    (["train", "rule.epochs=1", "rule.epochs=2"], "rule.epochs=1 and rule.epochs=2"),
+])
+def test_cli_refuses_a_bad_value_in_one_line_naming_it(argv, culprit, capsys, tmp_path,
+                                                       monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    err = _one_line_exit_2([*argv, "--out", str(tmp_path / "o")], capsys)
+    assert culprit in err, err
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize("gl", ["disabled", "off"])
+def test_render_with_rendering_off_says_how_to_turn_it_on(gl, capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("MUJOCO_GL", gl)
+    err = _one_line_exit_2(["render", "--out", str(tmp_path / "x.png")], capsys)
+    assert f"rendering is off (MUJOCO_GL={gl})" in err and "MUJOCO_GL=egl" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+# -- a hidden set of bad inputs: files, names, specs, models -----------------------------------
+@pytest.fixture(scope="module")
+def bad(tmp_path_factory) -> Path:
+    """A folder of damaged inputs (``{bad}`` in the argv below)."""
+    import json
+
+    from skinny_mj.trajectories.samples import SAMPLE_ASF
+
+    root = tmp_path_factory.mktemp("bad")
+    Trajectory(ymca(8).angles[:40], name="t8").save(root / "t8.npz")
+    Trajectory(ymca(4).angles[:40], name="t4").save(root / "t4.csv")
+    lines = (root / "t4.csv").read_text().splitlines()
+    (root / "onerow.csv").write_text("\n".join(lines[:3]) + "\n")
+    (root / "dt01.csv").write_text("\n".join(lines).replace("dt=0.02", "dt=0.01") + "\n")
+    (root / "bom.csv").write_text("\n".join(lines) + "\n", encoding="utf-8-sig")
+    (root / "empty.npz").write_bytes(b"")
+    (root / "empty.asf").write_text("")
+    (root / "folder.npz").mkdir()
+    (root / "folder.json").mkdir()
+    (root / "86_02.amc").write_text((Path(__file__).parent / "data" / "tiny.amc").read_text())
+    (root / "moderndance.asf").write_text(SAMPLE_ASF.read_text())  # subject md's, not 86's
+    with np.load(_shipped("general-2d-joint")) as data:
+        arrays = dict(data)
+    meta = json.loads(str(arrays["metadata"]))
+
+    def model(name: str, **changes) -> None:
+        np.savez(root / name, **{**arrays, "metadata": np.array(json.dumps({**meta, **changes}))})
+
+    model("dof5.npz", dof=5)
+    model("speeds.npz", max_speed_rad_s=[1.0, 2.0])
+    model("dof8.npz", dof=8, max_speed_rad_s=meta["max_speed_rad_s"] * 2)
+    model("forward.npz", config={**meta["config"], "forward": "parallel"})
+    np.savez(root / "cfg.npz", **{**arrays, "config": np.array(json.dumps([1, 2]))})
+    return root
+
+
+def _shipped(name: str) -> Path:
+    from skinny_mj.training.presets import model_path
+
+    return model_path(name)
+
+
+@pytest.mark.parametrize("argv,culprit", [
+    # movement files and names
+    (["track", "--trajectory", "{bad}/t8.npz"], "t8.npz: DOF mismatch: file has 8 DOFs"),
+    (["track", "--trajectory", "{bad}/onerow.csv"], "onerow.csv: 1 step(s)"),
+    (["track", "--trajectory", "{bad}/dt01.csv"], "dt01.csv: 40 step(s) every 0.01 s"),
+    (["track", "--trajectory", "{bad}/empty.npz"], "empty.npz: not a readable trajectory"),
+    (["track", "--trajectory", "{bad}/folder.npz"], "folder.npz: a folder, not a movement"),
+    (["track", "--trajectory", ""], "empty movement name"),
+    (["track", "--trajectory", "ymca@"], "'ymca@' has no speed after '@'"),
+    (["track", "--trajectory", "ymca@0"], "speed must be in (0, 10], got 0"),
+    (["track", "--trajectory", "{bad}/t4.csv@start"], "bad excerpt 'start'"),
+    (["track", "--trajectory", "{bad}/t4.csv@start=-1"], "needs start >= 0"),
+    (["track", "--trajectory", "{bad}/t4.csv@start=0.5,duration=100"], "is outside 't4'"),
+    (["track", "--trajectory", "babble:seed=-1"], "babble seed must be a whole number"),
+    (["track", "--trajectory", "babble:duration=1e12"], "babble duration 1e+12 s"),
+    (["track", "--trajectory", "babble:vmin=5,vmax=1"], "0 < vmin <= vmax"),
+    (["track", "--trajectory", "set:ymca++y"], "bad training set 'set:ymca++y'"),
+    (["track", "--trajectory", "set:ymca+nope"], "unknown movement 'nope'"),
+    (["track", "--trajectory", "{bad}/86_02.amc"], "86_02.amc: no skeleton 86.asf"),
+    (["track", "--trajectory", "md_02.amc", "--asf", "{bad}/empty.asf"], "empty.asf: file is"),
+    (["track", "--trajectory", "md_02.amc", "--asf", "{bad}/folder.npz"], "folder.npz: a fold"),
+    (["track", "--trajectory", "ymca", "--asf", "{bad}/empty.asf"], "and the movement 'ymca' "
+                                                                    "has none: leave --asf out"),
+    (["train", "--asf", "{bad}/empty.asf"], "the movement 'ymca' has none"),
+    (["track", "--trajectory", "set:ymca+y", "--asf", "{bad}/empty.asf"], "has none"),
+    (["experiment", "paper-e", "--quick", "--asf", "{bad}/empty.asf"], "give the clip as the"),
+    (["track", "--trajectory", "ymca", "--retarget", "positions"], "--retarget positions "
+                                                                    "reads motion capture"),
+    (["train", "--retarget", "positions"], "and the movement 'ymca' has none"),
+    # models for `skinny test`
+    (["test", "--model", "{bad}/empty.npz"], "empty.npz: not a model written by `skinny train`"),
+    (["test", "--model", "{bad}/folder.npz"], "folder.npz: a folder, not a model file"),
+    (["test", "--model", "general-9d"], "general-9d: no such model file (shipped models:"),
+    (["test", "--model", "{bad}/dof5.npz"], "dof5.npz: model metadata: dof must be"),
+    (["test", "--model", "{bad}/speeds.npz"], "speeds.npz: model metadata: max_speed_rad_s"),
+    (["test", "--model", "{bad}/dof8.npz"], "dof8.npz: the network has 8 inputs and 4 outputs"),
+    (["test", "--model", "{bad}/forward.npz"], "forward.npz: the model was trained with a "
+                                               "forward model"),
+    (["test", "--model", "{bad}/cfg.npz"], "cfg.npz: not a model written by `skinny train`"),
+    (["test", "--model", "general-2d-joint", "--trajectory", "{bad}/t8.npz"], "DOF mismatch"),
+    # configs, studies, rows, schedulers
+    (["train", "--config", "{bad}/folder.json"], "folder.json: a folder, not a config file"),
+    (["train", "--config", "{bad}/t4.csv"], "t4.csv: not a JSON config file"),
+    (["train", "esn.spectral_radius=nan"], "esn.spectral_radius must be a number"),
+    (["experiment", "paper-zz"], "unknown experiment 'paper-zz'"),
+    (["experiment", "paper-e", "--quick", "--rows", "nope"], "has no row or group 'nope'"),
+    (["experiment", "paper-e", "--quick", "--scheduler", "bogus"], "--scheduler: scheduler mu"),
+    (["experiment", "paper-e", "--quick", "--movement", "{bad}/t8.npz"], "DOF mismatch"),
+    (["sweep", "esn.spectral_radius=0.5", "--study", "paper-e", "--row", "nope"], "no row 'nope'"),
+])
+def test_cli_refuses_a_hidden_set_of_bad_inputs_in_one_line(argv, culprit, bad, capsys,
+                                                            tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    argv = [a.format(bad=bad) for a in argv]
+    err = _one_line_exit_2([*argv, "--out", str(tmp_path / "o")], capsys)
+    assert culprit in err, err
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_a_csv_saved_with_a_byte_order_mark_reads(bad):
+    assert Trajectory.load(bad / "bom.csv").angles.shape == (40, 4)
+
+
+@pytest.mark.parametrize("call,culprit", [
+    (lambda bad: __import__("skinny_mj").load(trajectory="ymca@"), "no speed after '@'"),
+    (lambda bad: __import__("skinny_mj").load(trajectory=bad / "folder.npz"), "a folder"),
+    (lambda bad: __import__("skinny_mj").load(seed=-1), "seed must be a whole number >= 0"),
+    (lambda bad: __import__("skinny_mj").load(sensor_noise=None), "sensor_noise must be a n"),
+    (lambda bad: __import__("skinny_mj").load(max_speed_rad_s="fast"), "max_speed_rad_s must"),
+    (lambda bad: _load_movement("md_02.amc", fps=0), "fps must be a number > 0, got 0"),
+    (lambda bad: _load_movement("md_02.amc", fps=float("nan")), "fps must be a number > 0"),
+    (lambda bad: _load_movement("md_02.amc", cutoff_hz=0), "cutoff_hz must be a number > 0"),
+    (lambda bad: _load_movement(bad / "86_02.amc"), "no skeleton 86.asf"),
+    (lambda bad: _load_movement("babble:duration=1e12"), "more than the"),
+    (lambda bad: Trajectory.load(bad / "folder.npz"), "a folder, not a trajectory file"),
+])
+def test_the_python_api_refuses_the_same_inputs_with_a_skinny_input_error(call, culprit, bad):
+    if culprit == "more than the" and preflight.available_bytes() is None:
+        pytest.skip("this system does not say how much memory is free")
+    with pytest.raises(SkinnyInputError) as caught:
+        call(bad)
+    assert isinstance(caught.value, ValueError) and culprit in str(caught.value)
+
+
+def _load_movement(name, **kwargs):
+    from skinny_mj.trajectories import load_movement
+
+    return load_movement(name, 4, **kwargs)
+
+
+def test_render_refuses_a_frame_without_a_movement(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("MUJOCO_GL", "egl")  # past the rendering check; nothing is drawn
+    err = _one_line_exit_2(["render", "--frame", "5", "--out", str(tmp_path / "x.png")],
+                           capsys)
+    assert "--frame 5 needs --trajectory" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_memory_refusal_says_a_huge_need_in_a_readable_number():
+    assert preflight.fmt_bytes(1.5 * 1024**3) == "1.5 GiB"
+    assert preflight.fmt_bytes(222 * 1024**5) == "222.0 PiB"
+    assert preflight.fmt_bytes(1e300) == "8.88e+284 PiB"  # not 285 digits

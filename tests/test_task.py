@@ -15,6 +15,7 @@ from skinny_mj.plant import body
 from skinny_mj.plant.adapters import BatchPlant
 from skinny_mj.plant.ideal import MIN_MAX_SPEED_RAD_S, IdealController, max_speeds, true_commands
 from skinny_mj.plant.task import load
+from skinny_mj.trajectories import load_movement
 
 
 @dataclass(frozen=True)
@@ -196,6 +197,12 @@ def test_the_default_trajectory_is_ymca_and_the_packages_not_the_plants():
         ({"trajectory": StandIn(np.full((10, 4), np.nan), 4)}, "NaN"),
         ({"trajectory": StandIn(np.zeros((1, 4)), 4)}, "T >= 2"),
         ({"trajectory": StandIn(np.zeros((10, 4)), 4, dt=0.01)}, "dt"),
+        ({"trajectory": "ym"}, "the plant takes a Trajectory"),  # names: skinny_mj.load
+        ({"seed": -1}, "seed must be a whole number >= 0"),
+        ({"seed": 1.5}, "seed must be a whole number >= 0"),
+        ({"sensor_noise": "x"}, "sensor_noise must be a number"),
+        ({"speed_factor": None}, "speed_factor must be a number"),
+        ({"max_speed_rad_s": [1.0, 2.0]}, "max_speed_rad_s must be a number or 4 numbers"),
     ],
 )
 def test_bad_arguments_raise_input_error(kwargs, match):
@@ -214,3 +221,20 @@ def test_a_non_finite_action_is_refused_before_mujoco(actuation, bad):
         env.step([0.1, 0.0, bad, 0.0])
     np.testing.assert_array_equal(env.physics.data.qpos, before)  # nothing stepped
     env.step([2.0, -2.0, 0.0, 0.0])  # a finite value outside [-1, 1] is clipped, no error
+
+
+@pytest.mark.parametrize("name", ["ym", "ymca@0.5", "babble:seed=3,duration=4",
+                                  "set:ym+babble:duration=2", "md_03.amc@start=1,duration=1"])
+def test_skinny_mj_load_takes_every_name_the_command_line_takes(name):
+    env = skinny_mj.load(4, trajectory=name)
+    np.testing.assert_array_equal(env.task.setup.angles, load_movement(name, 4)[0].angles)
+
+
+@pytest.mark.parametrize("trajectory,match", [
+    ("nope", "unknown movement 'nope'"), ("ymca@", "no speed after '@'"),
+    ("", "empty movement name"), (3, "trajectory must be a movement name or file"),
+    (np.zeros((10, 3)), "3 columns"),
+])
+def test_skinny_mj_load_refuses_a_bad_movement_in_one_error(trajectory, match):
+    with pytest.raises(SkinnyInputError, match=match):
+        skinny_mj.load(4, trajectory=trajectory)

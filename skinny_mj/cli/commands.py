@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +22,6 @@ from skinny_mj.cli.config_files import file_config, train_config
 from skinny_mj.cli.config_flags import TEST_FLAGS, TRACK_FLAGS, changes, flag_names, given
 from skinny_mj.cli.memory import check_bench, check_export, check_sweep, check_train
 from skinny_mj.cli.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
-from skinny_mj.controllers.esn import ESN, read_metadata
 from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.engine import folder, protocols, registry
 from skinny_mj.engine.experiment import default_out_dir, run_sweep
@@ -47,9 +45,9 @@ from skinny_mj.recording import record_test, write_recording
 from skinny_mj.training.config import Movement, TrainConfig
 from skinny_mj.training.imitation import imitation_metrics, movement_stats, saturation
 from skinny_mj.training.memory import steps_cause
-from skinny_mj.training.presets import model_path
+from skinny_mj.training.model_file import check_model, read_model
 from skinny_mj.trajectories import load_movement
-from skinny_mj.trajectories.library import SET_PREFIX, set_pieces
+from skinny_mj.trajectories.library import SET_PREFIX, check_asf, set_pieces
 
 DEFAULT_RESULTS = Path("results")
 
@@ -84,6 +82,7 @@ def _load_movement(mv, dof: int, check=None):
     """The movement ``mv`` (a :class:`skinny_mj.training.config.Movement`); ``check(steps, cause)``
     first sees its length x reps (one repetition loaded), so a run too big for the
     memory is refused before it is."""
+    check_asf(mv.trajectory, mv.asf, mv.retarget)  # not silently unused
     kw = {"asf": mv.asf, "speed": mv.speed, "retarget": mv.retarget}
     if check is not None:
         one, report = load_movement(mv.trajectory, dof, reps=1, **kw)
@@ -259,18 +258,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
 def cmd_test(args: argparse.Namespace) -> int:
     from skinny_mj.training.loop import TrainConfig, evaluate, run_of, run_streams
 
-    path = model_path(args.model)  # a shipped model's name, or a file
-    if not path.is_file():
-        raise SkinnyInputError("no such model file", path=path)
-    try:
-        meta = read_metadata(path)
-        esn = ESN.load(path)
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as err:  # BadZipFile: "PK.."
-        raise SkinnyInputError(f"not a model written by `skinny train` ({err})",
-                               path=path) from None
-    if not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
-        raise SkinnyInputError("model has no Skinny metadata (dof, signals, max speed)", path=path)
-    dof, signals = int(meta["dof"]), str(meta["signals"])
+    path, esn, meta = read_model(args.model)  # a shipped model's name, or a file
+    dof, signals = meta["dof"], meta["signals"]
 
     asked = _flag_config(args, TEST_FLAGS)  # the test's movement and sensor noise
     out = _out_dir(args, "test")
@@ -286,8 +275,8 @@ def cmd_test(args: argparse.Namespace) -> int:
             "plant.sensor_noise": asked.plant.sensor_noise})
     except SkinnyInputError as err:
         raise SkinnyInputError(f"model metadata holds a bad config ({err})", path=path) from None
-    run = run_of(cfg, esn, np.asarray(meta["max_speed_rad_s"], dtype=float), traj,
-                 [run_streams(args.seed).plant_seed])
+    check_model(esn, cfg, path)  # a model of another body, an edited file
+    run = run_of(cfg, esn, meta["max_speed_rad_s"], traj, [run_streams(args.seed).plant_seed])
     (test,) = evaluate(run)
     metrics: dict[str, Any] = {
         "model": str(path), "trained_on": meta.get("trained_on"),
@@ -358,6 +347,8 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
+    if args.trajectory is None and args.frame != 0:  # not silently the rest pose
+        raise SkinnyInputError(f"--frame {args.frame} needs --trajectory (a movement's frame)")
     check_new_file(args.out, args.overwrite)
     angles = None
     if args.trajectory is not None:
@@ -382,6 +373,8 @@ def cmd_experiment(args: argparse.Namespace) -> int:
                "signals": args.signals, "protocol": args.protocol}
 
     options, rows, runs, invocation = cf.apply_sweep_config(args, options, rows)
+    if options["asf"] is not None:  # a skeleton for --movement CLIP.amc only
+        check_asf(options["movement"], options["asf"])
     if options["protocol"] is not None:  # readings of unstated settings, on the study's base
 
         module = protocols.apply(options["protocol"], module, args.name)

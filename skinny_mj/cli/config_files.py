@@ -21,11 +21,19 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from skinny_mj.cli.config_flags import TRAIN_FLAGS, changes, flag_names, given, pairs
+from skinny_mj.cli.config_flags import (
+    TRAIN_FLAGS,
+    changes,
+    check_no_conflict,
+    flag_names,
+    given,
+    pairs,
+)
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import DERIVED, TrainConfig
 from skinny_mj.training.legacy import is_legacy
 from skinny_mj.training.presets import preset_fields
+from skinny_mj.trajectories.library import check_asf
 
 _log = logging.getLogger(__name__)
 
@@ -41,6 +49,8 @@ SWEEP_OPTIONS = ("quick", "movement", "asf", "dof", "signals", "protocol")
 def read_json(path: str | Path) -> dict[str, Any]:
     """A JSON object from ``path``; anything else is a :class:`SkinnyInputError`."""
     path = Path(path)
+    if path.is_dir():
+        raise SkinnyInputError("a folder, not a config file", path=path)
     if not path.is_file():
         raise SkinnyInputError("no such config file", path=path)
     try:
@@ -94,6 +104,7 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     ``--preset``'s keys, then ``--config FILE``'s (and its seed), then the flags and
     ``KEY=VALUE`` overrides given (:mod:`skinny_mj.cli.config_flags`)."""
     flags, keyed = given(args, TRAIN_FLAGS), pairs(getattr(args, "overrides", None) or [])
+    check_no_conflict(flags, keyed, flag_names(TRAIN_FLAGS))
     texts = {**flags, **keyed}
     names = {k: f for k, f in flag_names(TRAIN_FLAGS).items() if k in flags and k not in keyed}
     cfg, seed = TrainConfig(), None
@@ -112,6 +123,8 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
         fields, seed = read_train_file(path)
         cfg = _make(fields, path, cfg)
     cfg = cfg.override(changes(cfg, texts, names))
+    if {"movement.asf", "movement.retarget"} & texts.keys():  # not for a movement without
+        check_asf(cfg.movement.trajectory, cfg.movement.asf, cfg.movement.retarget)  # mocap
     if getattr(args, "seed", None) is not None:
         seed = int(args.seed)
     return cfg, 0 if seed is None else seed

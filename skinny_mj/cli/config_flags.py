@@ -32,7 +32,7 @@ from skinny_mj.training.config import (
 from skinny_mj.training.fits import FITS
 
 __all__ = ["Flag", "TRAIN_FLAGS", "TEST_FLAGS", "TRACK_FLAGS", "MOVEMENT_FLAGS", "add_flags",
-           "given", "pairs", "changes", "flag_names", "default_of"]
+           "given", "pairs", "check_no_conflict", "changes", "flag_names", "default_of"]
 
 
 class Flag(NamedTuple):
@@ -189,15 +189,32 @@ def given(args: argparse.Namespace, groups: Mapping[str, list[Flag]]) -> dict[st
 
 
 def pairs(items: Sequence[str]) -> dict[str, str]:
-    """``["esn.spectral_radius=0.9", ...]`` as a dict; a word without ``=`` is refused."""
-    out = {}
+    """``["esn.spectral_radius=0.9", ...]`` as a dict; a word without ``=``, or a key given
+    twice with different values, is refused."""
+    out: dict[str, str] = {}
     for item in items:
         key, sep, value = item.partition("=")
-        if not sep or not key:
+        if not sep or not key.strip():
             raise SkinnyInputError(f"expected KEY=VALUE (e.g. esn.spectral_radius=0.9), "
                                    f"got {item!r}")
-        out[key.strip()] = value
+        key = key.strip()
+        if key in out and out[key] != value:
+            raise SkinnyInputError(f"{key}={out[key]} and {key}={value} contradict each "
+                                   "other: give the key once")
+        out[key] = value
     return out
+
+
+def check_no_conflict(flags: Mapping[str, Any], keyed: Mapping[str, str],
+                      names: Mapping[str, str]) -> None:
+    """Refuse a config key set both by a flag (``flags``: key -> text, ``names``: key ->
+    flag) and by a ``KEY=VALUE`` override (``keyed``) to another value, naming both."""
+    for key in flags.keys() & keyed.keys():
+        flag, value = names.get(key, key), flags[key]
+        if str(value).strip() != str(keyed[key]).strip():
+            shown = flag if value is True else f"{flag} {value}"
+            raise SkinnyInputError(f"{shown} and {key}={keyed[key]} set the same key to "
+                                   "different values: give one")
 
 
 def changes(base: TrainConfig, texts: Mapping[str, Any],

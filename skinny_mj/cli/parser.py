@@ -118,6 +118,25 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _rows(text: str) -> str:
+    """argparse type of ``--rows``: at least one row id or group (an empty value, as from
+    an unset shell variable, would otherwise mean every row)."""
+    if not [r for r in text.split(",") if r.strip()]:
+        raise argparse.ArgumentTypeError(f"{text!r} names no row: give row ids or groups, "
+                                         "or leave --rows out to run every row")
+    return text
+
+
+def _scheduler(text: str) -> str:
+    """argparse type of ``--scheduler``: ``local`` or a Dask address."""
+    from skinny_mj.engine.sweep import check_scheduler  # only when given: --help stays light
+
+    try:
+        return check_scheduler(text)
+    except SkinnyInputError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
 _UNSET = object()
 
 
@@ -228,7 +247,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--overwrite", action="store_true", help="replace the sweep already in "
                    "--out (without it, a non-empty --out is refused)")
     p.add_argument("--quick", action="store_true", help="a smoke test: few runs, few epochs")
-    p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
+    p.add_argument("--scheduler", type=_scheduler,
+                   help="Dask scheduler: `local` or tcp://HOST:PORT")
     p.add_argument("--movement", help="train/test every row on another movement (name or "
                    "file; default: the paper's); recorded in config.json, the name stays")
     p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc --movement")
@@ -236,8 +256,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "(default: the paper's)")
     p.add_argument("--signals", choices=("joint", "cartesian"),
                    help="the networks' position signals (default: the paper's)")
-    p.add_argument("--rows", help="comma-separated row ids and groups to run (default: all); "
-                   "seeds are the full sweep's")
+    p.add_argument("--rows", type=_rows, help="comma-separated row ids and groups to run "
+                   "(default: all); seeds are the full sweep's")
     p.add_argument("--config", type=Path, help="repeat a sweep: its config.json (options, "
                    "rows, runs); flags given as well override them")
     p.add_argument("--protocol", help="run the study under a named set of readings of the "
@@ -258,12 +278,13 @@ def build_parser() -> argparse.ArgumentParser:
                    "metrics.json or a bare config (instead of TrainConfig's defaults)")
     p.add_argument("--quick", action="store_true", help="a smoke test: the --study's own "
                    "--quick for its row, else 2 epochs; 2 runs per row unless --runs")
-    p.add_argument("--rows", help="comma-separated row ids to run (default: all)")
+    p.add_argument("--rows", type=_rows, help="comma-separated row ids to run (default: all)")
     p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
     p.add_argument("--out", type=Path, help="output folder (default: results/sweep/<time>)")
     p.add_argument("--resume", action="store_true", help="continue the sweep in --out")
     p.add_argument("--overwrite", action="store_true", help="replace the sweep in --out")
-    p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
+    p.add_argument("--scheduler", type=_scheduler,
+                   help="Dask scheduler: `local` or tcp://HOST:PORT")
 
     p = sub.add_parser("bench", help="measure the fast path: ratios vs reservoirpy, physics, "
                        "the naive loop (prints a table)")

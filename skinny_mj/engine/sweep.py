@@ -211,6 +211,19 @@ def iter_dask(fn: Callable[[Any], Any], jobs: Sequence[Any], workers: int, sched
     return _dask_results(client, cluster, fn, jobs, keys)
 
 
+#: Address schemes of a remote Dask scheduler (``--scheduler tcp://host:8786``).
+SCHEDULER_SCHEMES = ("tcp://", "tls://", "ws://", "wss://")
+
+
+def check_scheduler(scheduler: str) -> str:
+    """``scheduler`` if it is ``"local"`` or a Dask address, else a
+    :class:`SkinnyInputError` (before the sweep's folder is made)."""
+    if scheduler != "local" and not scheduler.startswith(SCHEDULER_SCHEMES):
+        raise SkinnyInputError(f"scheduler must be 'local' or an address like "
+                               f"tcp://host:8786, got {scheduler!r}")
+    return scheduler
+
+
 def _dask_client(workers: int, scheduler: str) -> tuple[Any, Any]:
     try:
         from dask.distributed import Client, LocalCluster
@@ -223,7 +236,7 @@ def _dask_client(workers: int, scheduler: str) -> tuple[Any, Any]:
                                host="127.0.0.1", dashboard_address=None,
                                env={k: "1" for k in THREAD_ENV})
         client = Client(cluster)
-    elif scheduler.startswith(("tcp://", "tls://", "ws://", "wss://")):
+    elif scheduler.startswith(SCHEDULER_SCHEMES):
         try:
             client = Client(scheduler, timeout=DASK_CONNECT_TIMEOUT_S)
         except OSError as exc:  # refused or timed out (TimeoutError is an OSError)

@@ -15,9 +15,14 @@ id                                    DOF  actuation   action
 
 Every other argument of :func:`skinny_mj.plant.task.load` is a ``make`` keyword
 (``signals``, ``trajectory``, ``sensor_noise``, ``seed``, ``max_speed_rad_s``,
-``speed_factor``). ``make_vec`` builds :class:`SkinnyVectorEnv` (the registered vector
-entry point: N robots in one MuJoCo model); ``make_vec(..., vectorization_mode="sync")``
-gives Gymnasium's ``SyncVectorEnv`` of N :class:`SkinnyEnv` with the same numbers.
+``speed_factor``); a ``dof`` or ``actuation`` that contradicts the id is refused
+(:class:`~skinny_mj.errors.SkinnyInputError`, naming the id that has it). Each id's
+``max_episode_steps`` is YMCA's length, :data:`MAX_EPISODE_STEPS` control steps (the
+default movement's episode); another movement plays to its own end, and one longer than
+that needs ``max_episode_steps=env.n_steps`` (the envs warn).
+``make_vec`` builds :class:`SkinnyVectorEnv` (the registered vector entry point: N robots
+in one MuJoCo model); ``make_vec(..., vectorization_mode="sync")`` gives Gymnasium's
+``SyncVectorEnv`` of N :class:`SkinnyEnv` with the same numbers.
 
 Why a direct ``gymnasium.Env`` and not ``shimmy``'s ``DmControlCompatibilityV0``: shimmy
 reseeds dm_control's legacy ``RandomState`` on ``reset(seed=)``, which our task never
@@ -42,6 +47,9 @@ from typing import Any
 import gymnasium
 
 NAMESPACE = "SkinnyMJ"
+#: Each id's ``max_episode_steps``: the synthesized YMCA's 313 samples at 50 Hz, 312
+#: control steps (the episode of the default movement; a test checks it).
+MAX_EPISODE_STEPS = 312
 IDS = {
     f"{NAMESPACE}/Skinny2D-v0": {"dof": 4, "actuation": "velocity"},
     f"{NAMESPACE}/Skinny3D-v0": {"dof": 8, "actuation": "velocity"},
@@ -59,7 +67,8 @@ def register() -> None:
             id=env_id,
             entry_point="skinny_mj.gym.env:SkinnyEnv",
             vector_entry_point="skinny_mj.gym.vector:SkinnyVectorEnv",
-            kwargs=dict(kwargs),
+            kwargs={"env_id": env_id, **kwargs},  # the env refuses a dof the id contradicts
+            max_episode_steps=MAX_EPISODE_STEPS,
         )
 
 
@@ -74,4 +83,4 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module 'skinny_mj.gym' has no attribute {name!r}")
 
 
-__all__ = ["IDS", "NAMESPACE", "SkinnyEnv", "SkinnyVectorEnv", "register"]
+__all__ = ["IDS", "MAX_EPISODE_STEPS", "NAMESPACE", "SkinnyEnv", "SkinnyVectorEnv", "register"]

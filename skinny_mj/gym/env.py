@@ -23,6 +23,7 @@ starts it as ``numpy.random.default_rng(s)`` (what ``load(..., seed=s)`` does), 
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import dm_env
@@ -32,20 +33,35 @@ from dm_control.rl.control import PhysicsError
 from gymnasium import spaces
 from gymnasium.utils import seeding
 
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.gym import IDS, MAX_EPISODE_STEPS
+from skinny_mj.plant.render import check_rendering
 from skinny_mj.plant.task import Setup, finite_actions, load
-from skinny_mj.trajectories import get, load_movement
+from skinny_mj.trajectories import resolve_trajectory
 
 RENDER_CAMERA = "front"
 
 
-def resolve_trajectory(trajectory: Any, dof: int) -> Any:
-    """A movement name or file (:func:`skinny_mj.trajectories.load_movement`), an object
-    with ``.angles`` (T, dof) rad / ``.dt`` / ``.dof``, or None (the synthesized YMCA)."""
-    if trajectory is None:
-        return get("ymca", dof)
-    if isinstance(trajectory, str):
-        return load_movement(trajectory, dof)[0]
-    return trajectory
+def check_id(env_id: str | None, dof: int, actuation: str, n_steps: int,
+             max_episode_steps: int | None = None) -> None:
+    """Refuse a ``dof`` or ``actuation`` that contradicts the registered ``env_id`` (a
+    :class:`SkinnyInputError` naming the id that has it); warn when the movement's
+    ``n_steps`` exceed the episode's limit (``max_episode_steps``, default the id's)."""
+    if env_id is None:
+        return
+    if env_id not in IDS:
+        raise SkinnyInputError(f"unknown env_id {env_id!r}; known: {', '.join(IDS)}")
+    fixed = IDS[env_id]
+    for key, value in (("dof", dof), ("actuation", actuation)):
+        if value != fixed[key]:
+            other = [i for i, kw in IDS.items() if kw == {**fixed, key: value}]
+            raise SkinnyInputError(f"{env_id} has {key}={fixed[key]!r}, got {key}={value!r}"
+                                   + (f": use {other[0]}" if other else ""))
+    limit = MAX_EPISODE_STEPS if max_episode_steps is None else max_episode_steps
+    if 0 < limit < n_steps:
+        warnings.warn(f"{env_id}: episodes end after max_episode_steps={limit} of the "
+                      f"movement's {n_steps} steps; pass max_episode_steps={n_steps} to "
+                      "play it whole", stacklevel=3)
 
 
 def observation_space(setup: Setup) -> spaces.Box:
@@ -75,6 +91,8 @@ class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
     seed : seed of the noise Generator until ``reset(seed=...)`` replaces it.
     render_mode : None or "rgb_array" (needs an OpenGL backend, e.g. ``MUJOCO_GL=egl``).
     width, height : rendered image size in pixels (at most 640 x 480).
+    env_id : the Gymnasium id this env is made for (``gymnasium.make`` passes it): a
+        ``dof`` or ``actuation`` contradicting it is refused (:func:`check_id`).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
@@ -92,15 +110,19 @@ class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         render_mode: str | None = None,
         width: int = 320,
         height: int = 240,
+        env_id: str | None = None,
     ):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        if render_mode is not None:
+            check_rendering()  # MUJOCO_GL=disabled: one line saying how to turn it on
         self.render_mode = render_mode
         self.width, self.height = int(width), int(height)
         self.dm_control_env = load(dof, signals, resolve_trajectory(trajectory, dof),
                                    actuation, sensor_noise, seed, max_speed_rad_s,
                                    speed_factor)
         self.setup: Setup = self.dm_control_env.task.setup
+        check_id(env_id, dof, actuation, self.n_steps)
         self.observation_space = observation_space(self.setup)
         self.action_space = action_space(dof)
         # default_rng(seed) and Gymnasium's np_random(seed) are the same stream

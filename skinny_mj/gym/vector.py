@@ -44,6 +44,7 @@ from gymnasium.vector.utils import batch_space
 
 from skinny_mj.gym.env import (
     action_space,
+    check_id,
     observation_space,
     resolve_trajectory,
 )
@@ -61,6 +62,11 @@ class SkinnyVectorEnv(VectorEnv):
         as :class:`skinny_mj.gym.env.SkinnyEnv`.
     seed : sub-environment i draws its noise from ``default_rng(seed + i)`` until
         ``reset(seed=...)``.
+    env_id : the Gymnasium id (``make_vec`` passes it): a ``dof`` or ``actuation``
+        contradicting it is refused.
+    max_episode_steps : episodes end (``truncated``) after this many steps, or at the
+        movement's end if sooner (``make_vec`` passes the id's, YMCA's length); None:
+        the movement's end.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
@@ -76,6 +82,8 @@ class SkinnyVectorEnv(VectorEnv):
         seed: int = 0,
         max_speed_rad_s: float | np.ndarray | None = None,
         speed_factor: float = 2.0,
+        env_id: str | None = None,
+        max_episode_steps: int | None = None,
     ):
         if int(num_envs) < 1:
             raise ValueError(f"num_envs must be >= 1, got {num_envs}")
@@ -90,6 +98,13 @@ class SkinnyVectorEnv(VectorEnv):
         self.plant = BatchPlant(n_runs=self.num_envs, seeds=seeds, **self._plant_kwargs)
         self._fresh_seeds: list[int] | None = seeds  # the plant's Generators are unused
         self.setup = self.plant.setup
+        check_id(env_id, dof, actuation, len(self.setup.desired) - 1, max_episode_steps)
+        if max_episode_steps == -1:  # Gymnasium's "no time limit"
+            max_episode_steps = None
+        if max_episode_steps is not None and max_episode_steps < 1:
+            raise ValueError(f"max_episode_steps must be >= 1, got {max_episode_steps}")
+        self._limit = len(self.setup.desired) - 1 if max_episode_steps is None \
+            else min(int(max_episode_steps), len(self.setup.desired) - 1)
         self.single_observation_space = observation_space(self.setup)
         self.single_action_space = action_space(dof)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
@@ -103,8 +118,9 @@ class SkinnyVectorEnv(VectorEnv):
 
     @property
     def n_steps(self) -> int:
-        """Steps per episode: the movement's length T - 1."""
-        return len(self._desired) - 1
+        """Steps per episode: the movement's length T - 1, or ``max_episode_steps`` if
+        fewer."""
+        return self._limit
 
     def reset(
         self,

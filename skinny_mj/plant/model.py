@@ -25,6 +25,7 @@ import numpy as np
 
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.plant import body
+from skinny_mj.plant.mjcf import compile_spec, read_model, read_spec
 
 MODELS_ENV_VAR = "SKINNY_MJ_MODELS"
 ACTUATIONS = ("velocity", "torque")
@@ -147,7 +148,8 @@ def load_spec(dof: int, actuation: str = "velocity", scene: bool = True) -> mujo
     joints keep their limits (soft MuJoCo constraints). The velocity servo is the XML
     as it is."""
     _check(dof, actuation)
-    spec = mujoco.MjSpec.from_file(str(xml_path(dof, scene)))
+    check_on_load(dof)
+    spec = read_spec(xml_path(dof, scene))
     if actuation == "torque":
         _make_physical(spec, dof)
     return spec
@@ -235,8 +237,9 @@ def load_model(dof: int, actuation: str = "velocity") -> mujoco.MjModel:
     """Compile Skinny's scene: ``dof`` 4 (2D) or 8 (3D), velocity servo or torque twin."""
     _check(dof, actuation)
     if actuation == "velocity":
-        return mujoco.MjModel.from_xml_path(str(xml_path(dof)))
-    return load_spec(dof, actuation).compile()
+        check_on_load(dof)
+        return read_model(xml_path(dof))
+    return compile_spec(load_spec(dof, actuation), xml_path(dof))
 
 
 BATCH_PREFIX = "r{}/"  # names of copy r in :func:`load_batch_model`
@@ -274,7 +277,7 @@ def load_batch_model(dof: int, copies: int, actuation: str = "velocity",
         if edit is not None:
             edit(robot)
         parent.attach(robot, prefix=BATCH_PREFIX.format(r), frame=parent.worldbody.add_frame())
-    return parent.compile()
+    return compile_spec(parent, xml_path(dof, scene=False))
 
 
 def check_body(dof: int, poses: int = 20, seed: int = 0) -> list[str]:
@@ -284,15 +287,18 @@ def check_body(dof: int, poses: int = 20, seed: int = 0) -> list[str]:
     axis and limited to its range, the sites ``{side}_{shoulder,elbow,wrist}``, and the
     sites' positions at ``poses`` random poses equal to
     :func:`~skinny_mj.plant.body.arm_points` (1e-9 m)."""
-    model = load_model(dof)
+    _check(dof)
+    model = read_model(xml_path(dof))
     problems = []
     names = list(body.dof_names(dof))
     joints = [model.joint(i).name for i in range(model.njnt)]
     actuators = [model.actuator(i).name for i in range(model.nu)]
-    if joints != names:
-        problems.append(f"joints {joints}, the spec says {names}")
-    if actuators != names:
-        problems.append(f"actuators {actuators}, the spec says {names}")
+    for kind, found in (("joint", joints), ("actuator", actuators)):
+        missing = [n for n in names if n not in found]
+        if missing:
+            problems.append(f"no {kind} {', '.join(map(repr, missing))}")
+        elif found != names:
+            problems.append(f"{kind}s {found}, the spec says {names}")
     sites = [f"{s}_{p}" for s in body.SIDES for p in ("shoulder", "elbow", "wrist")]
     missing = [s for s in sites if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, s) < 0]
     problems += [f"no site {s!r}" for s in missing]
@@ -328,3 +334,22 @@ def check_body(dof: int, poses: int = 20, seed: int = 0) -> list[str]:
                             "the spec's (segment lengths, shoulder positions or axes)")
             break
     return problems
+
+
+_CHECKED: set[tuple] = set()
+
+
+def check_on_load(dof: int) -> None:
+    """:func:`check_body` of the body's MJCF, once per body and file version: an MJCF
+    that disagrees with its spec (an actuator taken out, a hinge renamed) is a
+    :class:`SkinnyInputError` naming the file and what is wrong, not a ``KeyError``
+    from deep inside the plant."""
+    spec, path = body.body_of(dof), xml_path(dof, scene=False)
+    key = (spec, *((str(f), f.stat().st_mtime_ns) for f in (path, xml_path(dof))))
+    if key in _CHECKED:
+        return
+    problems = check_body(dof)
+    if problems:
+        raise SkinnyInputError(f"the MJCF does not match the {spec.label} body's spec "
+                               f"(skinny_mj.plant.body): {'; '.join(problems)}", path=path)
+    _CHECKED.add(key)

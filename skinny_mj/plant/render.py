@@ -25,7 +25,24 @@ _SHOW_POSE = {
 }
 
 
+#: MUJOCO_GL values that turn rendering off (mujoco/rendering/classic/gl_context.py).
+GL_OFF = ("disable", "disabled", "off", "false", "0")
+
+
+def check_rendering() -> None:
+    """Refuse (:class:`SkinnyInputError`, one line) to render with ``MUJOCO_GL`` set to a
+    value that turns rendering off, saying how to turn it on."""
+    value = os.environ.get("MUJOCO_GL")
+    if value is not None and value.strip().lower() in GL_OFF:
+        raise SkinnyInputError(f"rendering is off (MUJOCO_GL={value}): run with "
+                               "MUJOCO_GL=egl (GPU or Mesa EGL) or MUJOCO_GL=osmesa (software)")
+
+
 def _no_backend(exc: Exception) -> SkinnyEnvironmentError:
+    if "GLContext" in str(exc):  # mujoco was imported with rendering off, in this process
+        return SkinnyEnvironmentError(
+            "rendering is off in this process (mujoco was imported with MUJOCO_GL="
+            "disabled): render in a new process with MUJOCO_GL=egl (or osmesa)")
     return SkinnyEnvironmentError(
         f"no OpenGL rendering backend (MUJOCO_GL={os.environ.get('MUJOCO_GL')!r}: "
         f"{type(exc).__name__}: {exc}); install EGL or OSMesa (Debian: libegl1, "
@@ -52,6 +69,7 @@ def render_png(
     -------
     The path written.
     """
+    check_rendering()
     os.environ.setdefault("MUJOCO_GL", "egl")
     import matplotlib.image
 

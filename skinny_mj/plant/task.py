@@ -63,6 +63,23 @@ class Setup:
     dt: float = CONTROL_DT_S
 
 
+def _number(name: str, value: Any) -> float:
+    if isinstance(value, bool):
+        raise SkinnyInputError(f"{name} must be a number, got {value!r}")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise SkinnyInputError(f"{name} must be a number, got {value!r}") from None
+
+
+def check_seed(seed: Any) -> int:
+    """``seed`` as an int if it is a whole number >= 0 (a Generator's seed), else a
+    :class:`SkinnyInputError`."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise SkinnyInputError(f"seed must be a whole number >= 0, got {seed!r}")
+    return int(seed)
+
+
 def prepare(
     dof: int,
     signals: str,
@@ -76,11 +93,17 @@ def prepare(
     body.check_dof(dof)
     body.check_signals(signals)
     body.check_actuation(actuation)
+    sensor_noise = _number("sensor_noise", sensor_noise)
+    speed_factor = _number("speed_factor", speed_factor)
     if not (np.isfinite(sensor_noise) and sensor_noise >= 0):
         raise SkinnyInputError(f"sensor_noise must be finite and >= 0, got {sensor_noise!r}")
     if trajectory is None:  # the plant has no movement of its own (it imports none)
         raise SkinnyInputError("the plant needs a trajectory; skinny_mj.load's default is "
                                "the synthesized YMCA, skinny_mj.trajectories.get('ymca', dof)")
+    if not hasattr(trajectory, "angles"):  # names and files: skinny_mj.load, the gym envs
+        raise SkinnyInputError(f"the plant takes a Trajectory (an object with .angles), got "
+                               f"{type(trajectory).__name__}; skinny_mj.load takes movement "
+                               "names and files")
     if getattr(trajectory, "dof", dof) != dof:
         raise SkinnyInputError(f"trajectory has dof={trajectory.dof}, the plant dof={dof}")
     angles = np.asarray(trajectory.angles, dtype=float)
@@ -96,7 +119,11 @@ def prepare(
             raise SkinnyInputError(f"speed_factor must be > 0, got {speed_factor!r}")
         speed = max_speeds(angles, dt, speed_factor)
     else:
-        speed = np.broadcast_to(np.asarray(max_speed_rad_s, dtype=float), (dof,)).copy()
+        try:
+            speed = np.broadcast_to(np.asarray(max_speed_rad_s, dtype=float), (dof,)).copy()
+        except (TypeError, ValueError):
+            raise SkinnyInputError(f"max_speed_rad_s must be a number or {dof} numbers, "
+                                   f"got {max_speed_rad_s!r}") from None
         if not np.all(np.isfinite(speed) & (speed > 0)):
             raise SkinnyInputError(f"max_speed_rad_s must be finite and > 0, got {speed}")
     speed.flags.writeable = False  # the plant's full scale: its own, read-only copy
@@ -242,7 +269,7 @@ def load(
     signals : "joint" (normalized angles) or "cartesian" (normalized segment vectors).
     trajectory : object with ``.angles`` (T, dof) rad, ``.dt`` (0.02 s) and ``.dof``
         (required: :func:`skinny_mj.load` defaults to the synthesized YMCA,
-        ``skinny_mj.trajectories.get("ymca", dof)``).
+        ``skinny_mj.trajectories.get("ymca", dof)``, and takes movement names and files).
     actuation : "velocity" (the kinematic servo; action = normalized joint velocity) or
         "torque" (motor twin; action = normalized torque, ctrl x gear N m).
     sensor_noise : std of the Gaussian noise on the sensed signals (normalized units).
@@ -257,6 +284,7 @@ def load(
     Environment with episodes of T - 1 control steps of 0.02 s; ``env.task`` exposes
     ``max_speed_rad_s``, ``signals``, ``setup``.
     """
+    check_seed(seed)
     setup = prepare(dof, signals, trajectory, actuation, sensor_noise, max_speed_rad_s,
                     speed_factor)
     physics = SkinnyPhysics.load(dof, actuation)

@@ -7,7 +7,7 @@ onto Skinny's joints. Pure NumPy/SciPy: no mujoco, no dm_control.
 >>> traj, report = load_movement("clip.amc", dof=8, asf="subject.asf")  # doctest: +SKIP
 """
 
-from skinny_mj.trajectories.library import get, load_movement, names
+from skinny_mj.trajectories.library import get, load_movement, names, resolve_trajectory
 from skinny_mj.trajectories.retarget import ArmClip, RetargetReport, retarget
 from skinny_mj.trajectories.samples import SAMPLE_ASF, SAMPLE_CLIPS, sample_clip
 from skinny_mj.trajectories.trajectory import Trajectory, excerpt
@@ -25,6 +25,7 @@ __all__ = [
     "letter_end_steps",
     "load_movement",
     "names",
+    "resolve_trajectory",
     "retarget",
     "sample_clip",
     "ymca",

@@ -34,7 +34,7 @@ import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
-from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory
+from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory, check_size
 
 __all__ = ["babble", "bridge", "min_jerk", "parse_babble_name", "BABBLE_KEYS"]
 
@@ -89,6 +89,7 @@ def babble(dof: int, *, seed: int = 0, duration_s: float = 20.0, v_min: float = 
     rng = np.random.default_rng(int(seed))
     lo, hi = (body.joint_ranges(dof) + [LIMIT_MARGIN_RAD, -LIMIT_MARGIN_RAD]).T
     steps = max(2, int(round(duration_s / dt)))
+    check_size(steps, dof, f"babble duration {duration_s:g} s: {steps} steps")
     out = np.empty((steps, dof))
     for j in range(dof):  # each DOF its own chain: the joint space is covered as a product
         q = rng.uniform(lo[j], hi[j])

@@ -20,6 +20,9 @@ Two generated names (not in :func:`names`, which lists the fixed movements):
 from __future__ import annotations
 
 import dataclasses
+import logging
+import numbers
+import os
 from collections.abc import Callable
 from pathlib import Path
 
@@ -34,7 +37,12 @@ from skinny_mj.trajectories.bvh import load_bvh
 from skinny_mj.trajectories.human import ymca_recorded
 from skinny_mj.trajectories.retarget import RetargetReport, clip_report, range_excess
 from skinny_mj.trajectories.retarget import retarget as retarget_clip
-from skinny_mj.trajectories.samples import SAMPLE_CLIPS, sample_clip
+from skinny_mj.trajectories.samples import (
+    SAMPLE_ASF,
+    SAMPLE_CLIPS,
+    SUBJECT_SKELETONS,
+    sample_clip,
+)
 from skinny_mj.trajectories.trajectory import Trajectory, excerpt
 from skinny_mj.trajectories.ymca import letter_end_steps, ymca
 
@@ -112,10 +120,12 @@ def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajec
     ``speed`` other than 1 is an error. The speed change comes before the repetitions.
     """
     _check_dof(dof)
-    base, _, suffix = str(name).strip().lower().partition("@")
+    base, at, suffix = str(name).strip().lower().partition("@")
     babbling = parse_babble_name(base)
     if base not in names() and babbling is None:
         raise SkinnyInputError(f"unknown movement {name!r}; valid names: {', '.join(names())}")
+    if at and not suffix:
+        raise SkinnyInputError(f"{name!r} has no speed after '@' (use e.g. 'ymca@0.5')")
     if suffix:
         if speed != 1.0:
             raise SkinnyInputError(f"{name!r} has a speed suffix; do not also pass speed={speed}")
@@ -136,13 +146,43 @@ def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajec
     return traj.with_name(label)
 
 
-def _find_asf(amc: Path) -> Path:
-    found = sorted(amc.parent.glob("*.asf")) + sorted(amc.parent.glob("*.ASF"))
-    found = sorted(set(found))
-    if len(found) != 1:
-        what = "no .asf" if not found else f"{len(found)} .asf files"
-        raise SkinnyInputError(f"{what} beside the .amc; pass the skeleton with asf=", path=amc)
-    return found[0]
+_log = logging.getLogger(__name__)
+_SKELETONS_SAID: set[tuple[str, str]] = set()  # (clip, skeleton) pairs already logged
+
+
+def find_asf(amc: Path) -> Path:
+    """The skeleton of the CMU clip ``amc``, beside it and named by its subject, the
+    clip's name up to the first "_" (``86_02.amc``: ``86.asf``; the shipped clips:
+    :data:`~skinny_mj.trajectories.samples.SUBJECT_SKELETONS`). Without one (another
+    subject's skeleton is never taken), a :class:`SkinnyInputError` asking for ``--asf``."""
+    subject = amc.stem.split("_")[0].lower()
+    wanted = {subject, SUBJECT_SKELETONS.get(subject, subject)}
+    skeletons = sorted(p for p in amc.parent.glob("*") if p.suffix.lower() == ".asf")
+    found = [p for p in skeletons if p.stem.lower() in wanted]
+    if len(found) == 1:
+        return found[0]
+    if found:
+        what = f"{len(found)} skeletons of subject {subject!r} ({', '.join(p.name for p in found)})"
+    else:
+        others = f"; beside it: {', '.join(p.name for p in skeletons)}" if skeletons else ""
+        what = f"no skeleton {subject}.asf of its subject{others}"
+    raise SkinnyInputError(f"{what}: pass the clip's skeleton with --asf (asf= in Python)",
+                           path=amc)
+
+
+def _say_skeleton(amc: Path, asf: Path, given: bool) -> None:
+    """Log which skeleton an .amc was read with, once per pair: a warning (shown on
+    stderr by default) when it was found beside a clip of the user's, info when it was
+    given or is the shipped clips' own."""
+    if (str(amc), str(asf)) in _SKELETONS_SAID:
+        return
+    _SKELETONS_SAID.add((str(amc), str(asf)))
+    if given:
+        _log.info("%s: skeleton %s (given)", amc.name, asf)
+    elif asf.resolve() == SAMPLE_ASF.resolve():
+        _log.info("%s: skeleton %s (the shipped clips')", amc.name, asf)
+    else:
+        _log.warning("%s: skeleton %s (beside it, by the clip's subject)", amc.name, asf)
 
 
 _FILE_SUFFIXES = (".npz", ".csv", ".amc", ".bvh")
@@ -158,8 +198,11 @@ def split_excerpt(text: str) -> tuple[str, tuple[float, float | None] | None]:
     (a library name such as ``ymca@1.5``, a plain path) comes back unchanged with None.
     """
     base, at, spec = str(text).rpartition("@")
-    if not at or Path(base).suffix.lower() not in _FILE_SUFFIXES or "=" not in spec:
+    if not at or Path(base).suffix.lower() not in _FILE_SUFFIXES or Path(text).exists():
         return str(text), None
+    if "=" not in spec:
+        raise SkinnyInputError(f"bad excerpt {spec!r} in {text!r}: use "
+                               "PATH@start=SECONDS,duration=SECONDS")
     values: dict[str, float] = {}
     for item in spec.split(","):
         key, eq, value = (part.strip() for part in item.partition("="))
@@ -190,7 +233,7 @@ def load_movement(
     retarget: str = "angles",
 ) -> tuple[Trajectory, RetargetReport]:
     """Any movement: a library name, a ``.npz``/``.csv`` trajectory, ``.amc`` (+ ``asf``,
-    or the single ``.asf`` in the same folder) or ``.bvh`` motion capture.
+    or its subject's skeleton beside it, :func:`find_asf`) or ``.bvh`` motion capture.
 
     Returns the trajectory (clipped into the joint ranges, at ``speed``, ``reps`` times)
     and a :class:`RetargetReport` saying how much was clipped (zero for library names).
@@ -201,7 +244,14 @@ def load_movement(
     """
     if retarget not in ("angles", "positions"):
         raise SkinnyInputError(f"retarget must be 'angles' or 'positions', got {retarget!r}")
+    for name, value in (("fps", fps), ("cutoff_hz", cutoff_hz)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Real)
+                                  or not (np.isfinite(value) and value > 0)):
+            raise SkinnyInputError(f"{name} must be a number > 0, got {value!r}")
     _check_dof(dof)
+    if not str(name_or_path).strip():
+        raise SkinnyInputError("empty movement name: give a name (`skinny trajectory "
+                               "list`) or a file")
     if str(name_or_path).strip().lower().startswith(SET_PREFIX):
         traj, report = training_set(str(name_or_path), dof, asf=asf, fps=fps,
                                     cutoff_hz=cutoff_hz, retarget=retarget)
@@ -214,6 +264,8 @@ def load_movement(
             traj = get(text, dof, speed=speed, reps=reps)
             excess = range_excess(traj.angles, dof)
             return traj, clip_report(excess, dof, source=text, source_fps=1.0 / traj.dt)
+        if Path(text).is_dir():
+            raise SkinnyInputError("a folder, not a movement file", path=text)
         raise SkinnyInputError(
             "unknown movement file type (use .npz, .csv, .amc with .asf, or .bvh)", path=text
         )
@@ -221,10 +273,16 @@ def load_movement(
     if not path.is_file() and str(path.parent) == "." and path.stem in SAMPLE_CLIPS \
             and suffix == ".amc":
         path = sample_clip(path.stem)  # a bare shipped clip name: md_02.amc, md_03.amc
+    if path.is_dir():
+        raise SkinnyInputError("a folder, not a movement file", path=path)
     if not path.is_file():
         raise SkinnyInputError("no such file", path=path)
     if suffix in (".npz", ".csv"):
         raw = Trajectory.load(path, dof=dof)
+        if len(raw) < 2 or abs(raw.dt - body.CONTROL_DT_S) > 1e-9:
+            raise SkinnyInputError(f"{len(raw)} step(s) every {raw.dt:g} s: a movement is at "
+                                   f"least 2 steps every {body.CONTROL_DT_S:g} s (50 Hz)",
+                                   path=path)
         if window is not None:
             raw = excerpt(raw, *window)
         clipped, _ = raw.clip_to_range()
@@ -233,13 +291,35 @@ def load_movement(
         traj = clipped
     else:
         if suffix == ".amc":
-            clip = load_asf_amc(Path(asf) if asf is not None else _find_asf(path), path, fps=fps)
+            skeleton = Path(asf) if asf is not None else find_asf(path)
+            clip = load_asf_amc(skeleton, path, fps=fps)
         else:
             clip = load_bvh(path, fps=fps)
         traj, report = retarget_clip(clip, dof, cutoff_hz=cutoff_hz, window_s=window,
                                      targets=retarget)
+        if suffix == ".amc":
+            _say_skeleton(path, skeleton, asf is not None)
     traj = traj.resample(speed).repeat(reps)
     return traj, report
+
+
+def resolve_trajectory(trajectory: object, dof: int) -> object:
+    """The movement a ``trajectory`` argument (of :func:`skinny_mj.load`, the gym envs)
+    names: None (the synthesized YMCA), any name or file the command line's
+    ``--trajectory`` takes (``"ymca@0.5"``, ``"babble:seed=3"``, ``"set:ymca+md_03.amc"``,
+    ``"clip.csv@start=2"``; :func:`load_movement`), a (T, dof) array of angles in rad, or
+    an object with ``.angles`` (T, dof) rad, ``.dt`` and ``.dof`` (a :class:`Trajectory`),
+    returned as it is. Anything else is a :class:`SkinnyInputError`."""
+    if trajectory is None:
+        return get("ymca", dof)
+    if isinstance(trajectory, str | os.PathLike):
+        return load_movement(trajectory, dof)[0]
+    if isinstance(trajectory, np.ndarray):
+        return Trajectory(trajectory)
+    if not hasattr(trajectory, "angles"):
+        raise SkinnyInputError(f"trajectory must be a movement name or file, (T, {dof}) "
+                               f"angles or a Trajectory, got {type(trajectory).__name__}")
+    return trajectory
 
 
 SET_PREFIX = "set:"
@@ -256,6 +336,27 @@ def set_pieces(name: str) -> list[str]:
         raise SkinnyInputError(f"bad training set {name!r}: use set:A+B+... with no empty "
                                "or nested pieces")
     return pieces
+
+
+def check_asf(movement: str | Path | None, asf: str | Path | None,
+              retarget: str = "angles") -> None:
+    """Refuse a skeleton (``--asf``) given for a movement with no ``.amc`` clip in it, or
+    ``retarget="positions"`` for one with no motion capture: either would silently go
+    unused."""
+    text = "" if movement is None else str(movement)
+    if asf is not None and not text.strip():
+        raise SkinnyInputError(f"--asf {asf} is the skeleton of an .amc clip: give the clip "
+                               "as the movement too")
+    if asf is None and retarget == "angles":
+        return
+    pieces = set_pieces(text) if text.strip().lower().startswith(SET_PREFIX) else [text]
+    suffixes = {Path(split_excerpt(p)[0].strip()).suffix.lower() for p in pieces}
+    if asf is not None and ".amc" not in suffixes:
+        raise SkinnyInputError(f"--asf {asf} is the skeleton of an .amc clip, and the "
+                               f"movement {text!r} has none: leave --asf out")
+    if retarget == "positions" and not suffixes & {".amc", ".bvh"}:
+        raise SkinnyInputError(f"--retarget positions reads motion capture (.amc, .bvh), and "
+                               f"the movement {text!r} has none: leave it out")
 
 
 def training_set(name: str, dof: int, *, asf: str | Path | None = None,

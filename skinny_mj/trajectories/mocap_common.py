@@ -15,6 +15,8 @@ from skinny_mj.errors import SkinnyInputError
 
 def read_lines(path: Path) -> list[tuple[int, str]]:
     """Non-empty, non-comment lines as (1-based line number, stripped text); CRLF ok."""
+    if path.is_dir():
+        raise SkinnyInputError("a folder, not a file", path=path)
     if not path.is_file():
         raise SkinnyInputError("no such file", path=path)
     try:

@@ -155,7 +155,7 @@ class Trajectory:
         from scipy.interpolate import PchipInterpolator
 
         n = max(2, int(round(len(self) / speed)))
-        _check_size(n, self.dof, f"speed {speed:g}: {n} steps of {self.name}")
+        check_size(n, self.dof, f"speed {speed:g}: {n} steps of {self.name}")
         src = np.arange(len(self), dtype=float)
         dst = np.linspace(0.0, len(self) - 1.0, n)
         angles = PchipInterpolator(src, self.angles, axis=0)(dst)
@@ -168,7 +168,7 @@ class Trajectory:
             raise SkinnyInputError(f"repetitions must be an integer >= 1, got {n!r}")
         if n == 1:
             return self
-        _check_size(int(n) * len(self), self.dof, f"{n} repetitions of {self.name}")
+        check_size(int(n) * len(self), self.dof, f"{n} repetitions of {self.name}")
         return self._map(np.tile(self.angles, (int(n), 1)), f"{self.name}x{n}",
                          lambda v: np.tile(v, (int(n), 1)))
 
@@ -236,6 +236,8 @@ class Trajectory:
     def load(cls, path: str | Path, dof: int | None = None) -> Trajectory:
         """Read a ``.npz`` or ``.csv`` trajectory; ``dof`` (if given) must match the file."""
         path = Path(path)
+        if path.is_dir():
+            raise SkinnyInputError("a folder, not a trajectory file", path=path)
         if not path.is_file():
             raise SkinnyInputError("no such trajectory file", path=path)
         suffix = path.suffix.lower()
@@ -302,7 +304,7 @@ def _parse_comment(text: str) -> dict[str, str]:
 
 def _load_csv(path: Path) -> Trajectory:
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
+        lines = path.read_text(encoding="utf-8-sig").splitlines()  # a spreadsheet's BOM
     except (OSError, UnicodeDecodeError) as exc:
         raise SkinnyInputError(f"cannot read ({exc})", path=path) from None
     meta: dict[str, str] = {}
@@ -372,7 +374,7 @@ def excerpt(traj: Trajectory, start_s: float, duration_s: float | None) -> Traje
                      lambda v: v[start : start + n])
 
 
-def _check_size(steps: int, dof: int, cause: str) -> None:
+def check_size(steps: int, dof: int, cause: str) -> None:
     """Refuse (one line) a movement of ``steps`` steps the memory cannot hold: its angles,
     the interpolation's or tiling's copies, explicit desired signals (about 6 arrays)."""
     check(Estimate({"movement": steps * (dof + 1) * 8 * 6}, {"movement": cause}),

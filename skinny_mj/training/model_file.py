@@ -1,0 +1,84 @@
+"""A saved inverse model (``model.npz`` of ``skinny train``, or a shipped model's name)
+read for ``skinny test``: a file that is not one, or whose metadata, configuration and
+weights disagree, is one :class:`~skinny_mj.errors.SkinnyInputError` naming the file."""
+
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skinny_mj.controllers.esn import ESN, read_metadata
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
+from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.parts import network_sizes
+from skinny_mj.training.presets import SHIPPED, model_path
+
+#: What reading a damaged .npz raises (zip errors, an empty file, a bad JSON config).
+_UNREADABLE = (OSError, ValueError, KeyError, TypeError, EOFError, NotImplementedError,
+               zipfile.BadZipFile)
+
+
+def read_model(model: str | Path) -> tuple[Path, ESN, dict[str, Any]]:
+    """``(path, network, metadata)`` of a saved model; the metadata's ``dof`` and
+    ``signals`` name a body and a signal set, ``max_speed_rad_s`` is (dof,) finite
+    speeds > 0 rad/s (as a float array)."""
+    path = model_path(model)  # a shipped model's name, or a file
+    if path.is_dir():
+        raise SkinnyInputError("a folder, not a model file", path=path)
+    if not path.is_file():
+        raise SkinnyInputError(f"no such model file (shipped models: {', '.join(SHIPPED)})",
+                               path=path)
+    try:
+        meta = read_metadata(path)
+        esn = ESN.load(path)
+    except _UNREADABLE as err:
+        text = " ".join(str(err).split()) or type(err).__name__
+        raise SkinnyInputError(f"not a model written by `skinny train` ({text})",
+                               path=path) from None
+    if not isinstance(meta, dict) or not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
+        raise SkinnyInputError("model has no Skinny metadata (dof, signals, max speed)",
+                               path=path)
+    try:
+        dof = body.check_dof(meta["dof"])
+        signals = body.check_signals(meta["signals"])
+    except SkinnyInputError as err:
+        raise SkinnyInputError(f"model metadata: {err}", path=path) from None
+    try:
+        speed = np.asarray(meta["max_speed_rad_s"], dtype=float)
+    except (TypeError, ValueError):
+        speed = np.zeros(0)
+    if speed.shape != (dof,) or not np.all(np.isfinite(speed) & (speed > 0)):
+        raise SkinnyInputError(f"model metadata: max_speed_rad_s must be {dof} finite speeds "
+                               f"> 0 rad/s, got {meta['max_speed_rad_s']!r}", path=path)
+    return path, esn, {**meta, "dof": dof, "signals": signals, "max_speed_rad_s": speed}
+
+
+def check_model(esn: ESN, config: TrainConfig, path: Path) -> None:
+    """Refuse a network that cannot run as ``config`` (its metadata's plant and training
+    configuration) says: one trained beside a forward model (the file holds the inverse
+    network only), one whose inputs and outputs are not the plant's, or whose weights
+    disagree with its own configuration (a model of another body, or an edited file)."""
+    if config.forward.kind != "none":
+        raise SkinnyInputError(f"the model was trained with a forward model (forward="
+                               f"{config.forward.kind}), which the file does not hold: "
+                               "`skinny test` runs a network trained without one", path=path)
+    _, n_out, n_in = network_sizes(config)
+    cfg = esn.cfg
+    if (cfg.n_inputs, cfg.n_outputs) != (n_in, n_out):
+        raise SkinnyInputError(f"the network has {cfg.n_inputs} inputs and {cfg.n_outputs} "
+                               f"outputs; its metadata's plant needs {n_in} and {n_out} "
+                               "(a model of another body, or an edited file)", path=path)
+    n = esn.W.shape[-1]
+    k = esn.W_in.shape[-1]
+    shapes = {"W": (esn.W.shape[-2:], (n, n)), "W_out": (esn.W_out.shape[-2:], (n_out, n + k)),
+              "W_back": (esn.W_back.shape[-2:], (n, n_out)), "W_in": (esn.W_in.shape[-2:], (n, k))}
+    wrong = [f"{name} {got}, expected {want}" for name, (got, want) in shapes.items()
+             if tuple(got) != want]
+    if wrong or k not in (n_in, n_in + 1):
+        raise SkinnyInputError(f"the network's weights disagree with its configuration: "
+                               f"{'; '.join(wrong) or f'W_in has {k} columns for {n_in} inputs'}",
+                               path=path)
