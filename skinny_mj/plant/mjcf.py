@@ -1,0 +1,105 @@
+"""The torque twin as MJCF files, for MuJoCo users: ``skinny_{2d,3d}_torque.xml`` (the
+robot) and ``scene_{2d,3d}_torque.xml`` (floor, light, camera; ``<include>`` the robot) in
+``models/skinny/``, so ``python -m mujoco.viewer --mjcf=models/skinny/scene_2d_torque.xml``
+opens the physical arm.
+
+The files are written, never edited: the robot is Skinny's XML with the MjSpec edits of
+:func:`skinny_mj.plant.model.load_spec` (``actuation="torque"``), saved by
+:meth:`mujoco.MjSpec.to_xml` as authored (``savecompiled`` and ``savecanonical`` off:
+default classes, ``fromto`` capsules, ``<motor>`` shortcuts and full-precision numbers
+kept); the scene is the velocity body's scene with its ``<include>`` pointed at the
+torque robot. The package itself still builds the twin in code (:func:`load_model`);
+``tests/test_mjcf.py`` checks that each shipped file compiles to that model, field by
+field. Regenerate after changing the XML or the twin's constants::
+
+    python -m skinny_mj.plant.mjcf models/skinny
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant import body
+from skinny_mj.plant.model import load_spec, xml_path
+
+REGENERATE = "python -m skinny_mj.plant.mjcf models/skinny"
+
+
+def torque_file_names(dof: int) -> tuple[str, str]:
+    """The torque twin's robot and scene file names: the velocity body's with
+    ``_torque`` before ``.xml`` (``skinny_2d_torque.xml``, ``scene_2d_torque.xml``)."""
+    spec = body.body_of(dof)
+    return (f"{Path(spec.robot).stem}_torque.xml", f"{Path(spec.scene).stem}_torque.xml")
+
+
+def _header(dof: int, source: str, what: str) -> str:
+    # no "--" in the text: an XML comment may not hold one
+    label = body.body_of(dof).label
+    return (f"<!-- GENERATED from {source} by `{REGENERATE}`: do not edit.\n"
+            f"     Skinny {label} ({dof} DOF), torque twin: {what}\n"
+            f"     Model card: README.md. tests/test_mjcf.py checks that this file compiles\n"
+            f"     to the model skinny_mj.plant.model.load_model({dof}, \"torque\") builds. -->\n")
+
+
+def torque_robot_xml(dof: int) -> str:
+    """The torque robot's MJCF text: ``load_spec(dof, "torque", scene=False)`` saved as
+    authored, under a comment saying where it comes from."""
+    spec = load_spec(dof, "torque", scene=False)
+    spec.compiler.savecompiled = False  # the spec as authored, not the compiled model
+    spec.compiler.savecanonical = False  # and in its own terms: fromto, <motor>, radians
+    spec.modelname = Path(torque_file_names(dof)[0]).stem
+    what = ("the robot's XML with <motor>\n"
+            "     actuators of the velocity servos' names (ctrl = torque / limit in [-1, 1],\n"
+            "     gear = limit in N m), gravity acting (no gravcomp), de Leva segment\n"
+            "     inertials, stiff joint limits, RK4 at 5 ms.")
+    return _header(dof, xml_path(dof, scene=False).name, what) + spec.to_xml()
+
+
+def torque_scene_xml(dof: int) -> str:
+    """The torque scene's MJCF text: the velocity scene with its ``<include>`` pointed at
+    the torque robot and its model renamed."""
+    robot, scene = xml_path(dof, scene=False).name, xml_path(dof)
+    torque_robot = torque_file_names(dof)[0]
+    text = scene.read_text()
+    include = f'<include file="{robot}"/>'
+    if text.count(include) != 1 or not text.lstrip().startswith("<!--"):
+        raise SkinnyInputError(f"{scene}: expected a leading comment and one {include}")
+    text = text.replace(include, f'<include file="{torque_robot}"/>')
+    text, renamed = re.subn(r'<mujoco model="[^"]*"',
+                            f'<mujoco model="{Path(torque_robot).stem}_scene"', text, count=1)
+    if not renamed:
+        raise SkinnyInputError(f"{scene}: no <mujoco model=...> to rename")
+    body_text = text[text.index("-->") + 3:].lstrip("\n")  # the scene's own comment goes
+    what = f"{scene.name} including {torque_robot}\n     (floor, light, camera \"front\")."
+    return _header(dof, scene.name, what) + body_text
+
+
+def write_torque_mjcf(dof: int, folder: Path) -> tuple[Path, Path]:
+    """Write the torque robot and scene of body ``dof`` into ``folder``; return their
+    paths (robot, scene)."""
+    folder = Path(folder)
+    robot_name, scene_name = torque_file_names(dof)
+    robot, scene = folder / robot_name, folder / scene_name
+    robot.write_text(torque_robot_xml(dof))
+    scene.write_text(torque_scene_xml(dof))
+    return robot, scene
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(
+        prog="python -m skinny_mj.plant.mjcf",
+        description="Write the torque twin's MJCF (robot and scene) for each body.")
+    parser.add_argument("folder", type=Path, help="where to write (models/skinny)")
+    parser.add_argument("--dof", type=int, nargs="+", default=[4, 8],
+                        help="the bodies (default: 4 8)")
+    args = parser.parse_args(argv)
+    for dof in args.dof:
+        for path in write_torque_mjcf(dof, args.folder):
+            print(path)
+
+
+if __name__ == "__main__":
+    main()
