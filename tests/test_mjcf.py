@@ -4,6 +4,8 @@ writes today, and steps 1 s of random torques cleanly (Menagerie's model test)."
 
 from __future__ import annotations
 
+import re
+
 import mujoco
 import numpy as np
 import pytest
@@ -78,6 +80,10 @@ def test_shipped_torque_file_is_tidy(dof):
     text = robot.read_text()
     assert text.startswith("<!-- GENERATED") and "python -m skinny_mj.plant.mjcf" in text
     assert 'angle="radian"' in text and "<motor " in text and 'gravcomp="' not in text
+    # the classes hold the joints' and motors' parameters; the elements name and place
+    elements = re.findall(r"<(?:joint|motor) name=[^>]*>", text)
+    assert len(elements) == 2 * dof
+    assert not [e for e in elements if re.search(r"gear|range|armature|sol|damping", e)]
     assert f'<include file="{robot.name}"/>' in scene.read_text()
 
 

@@ -4,13 +4,14 @@ robot) and ``scene_{2d,3d}_torque.xml`` (floor, light, camera; ``<include>`` the
 opens the physical arm.
 
 The files are written, never edited: the robot is Skinny's XML with the MjSpec edits of
-:func:`skinny_mj.plant.model.load_spec` (``actuation="torque"``), saved by
-:meth:`mujoco.MjSpec.to_xml` as authored (``savecompiled`` and ``savecanonical`` off:
-default classes, ``fromto`` capsules, ``<motor>`` shortcuts and full-precision numbers
-kept); the scene is the velocity body's scene with its ``<include>`` pointed at the
-torque robot. The package itself still builds the twin in code (:func:`load_model`);
-``tests/test_mjcf.py`` checks that each shipped file compiles to that model, field by
-field. Regenerate after changing the XML or the twin's constants::
+:func:`skinny_mj.plant.model.load_spec` (``actuation="torque"``), those edits moved into
+the default classes (a class per joint kind holds the joint and its motor, as in the
+velocity XML), saved by :meth:`mujoco.MjSpec.to_xml` as authored (``savecompiled`` and
+``savecanonical`` off: default classes, ``fromto`` capsules, ``<motor>`` shortcuts and
+full-precision numbers kept); the scene is the velocity body's scene with its
+``<include>`` pointed at the torque robot. The package itself still builds the twin in
+code (:func:`load_model`); ``tests/test_mjcf.py`` checks that each shipped file compiles
+to that model, field by field. Regenerate after changing the XML or the twin's constants::
 
     python -m skinny_mj.plant.mjcf models/skinny
 """
@@ -20,6 +21,9 @@ from __future__ import annotations
 import argparse
 import re
 from pathlib import Path
+
+import mujoco
+import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
@@ -44,10 +48,61 @@ def _header(dof: int, source: str, what: str) -> str:
             f"     to the model skinny_mj.plant.model.load_model({dof}, \"torque\") builds. -->\n")
 
 
+#: What the twin sets on the arm joints and motors (skinny_mj.plant.model._make_physical),
+#: moved into the default classes so the body's elements state geometry and names only:
+#: the same on every joint and motor (in every class), and per joint kind (in its class).
+_SHARED = {"joint": ("damping", "solref_limit", "solimp_limit"),
+           "actuator": ("ctrllimited", "ctrlrange", "forcelimited", "forcerange")}
+_PER_KIND = {"joint": ("armature", "actfrclimited", "actfrcrange"), "actuator": ("gear",)}
+
+
+def _one_value(elements: list, field: str) -> object:
+    values = [getattr(e, field) for e in elements]
+    if any(not np.array_equal(v, values[0]) for v in values):
+        raise SkinnyInputError(f"{field} differs where one default class should hold it: "
+                               f"{values}")
+    return values[0].copy() if isinstance(values[0], np.ndarray) else values[0]
+
+
+def _defaults_hold_the_motors(spec: mujoco.MjSpec, dof: int) -> None:
+    """Re-express the twin's per-element edits as Skinny's default classes, as the velocity
+    XML does (a class per joint kind holds the joint and its actuator): every class becomes
+    a motor class with the settings shared by all arm joints and motors, each joint kind's
+    class takes its own (gear, torque range, armature), and the classes of the other
+    body's joints go; the arm's capsules lose their masses, which the segments' explicit
+    inertials override. The compiled model is unchanged (tests/test_mjcf.py)."""
+    names = body.dof_names(dof)
+    elements = {"joint": [spec.joint(n) for n in names],
+                "actuator": [spec.actuator(n) for n in names]}
+    used = {e.classname.name for e in (*elements["joint"], *elements["actuator"],
+                                       *spec.geoms, *spec.sites)}
+    used |= {b.childclass for b in spec.bodies if b.childclass}
+    kinds = {j.classname.name for j in elements["joint"]}
+    for b in spec.bodies:  # an explicit <inertial> sets the arm's masses: the capsules' go
+        if b.explicitinertial:
+            for geom in b.geoms:
+                geom.mass = spec.find_default(geom.classname.name).geom.mass
+    for name in re.findall(r'<default class="([^"]+)"', spec.to_xml()):
+        default = spec.find_default(name)
+        if name not in used:
+            spec.delete(default)
+            continue
+        default.actuator.set_to_motor()
+        for kind, fields in _SHARED.items():
+            for field in fields:
+                setattr(getattr(default, kind), field, _one_value(elements[kind], field))
+        if name in kinds:
+            for kind, fields in _PER_KIND.items():
+                of_kind = [e for e in elements[kind] if e.classname.name == name]
+                for field in fields:
+                    setattr(getattr(default, kind), field, _one_value(of_kind, field))
+
+
 def torque_robot_xml(dof: int) -> str:
     """The torque robot's MJCF text: ``load_spec(dof, "torque", scene=False)`` saved as
     authored, under a comment saying where it comes from."""
     spec = load_spec(dof, "torque", scene=False)
+    _defaults_hold_the_motors(spec, dof)
     spec.compiler.savecompiled = False  # the spec as authored, not the compiled model
     spec.compiler.savecanonical = False  # and in its own terms: fromto, <motor>, radians
     spec.modelname = Path(torque_file_names(dof)[0]).stem
