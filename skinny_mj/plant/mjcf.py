@@ -41,11 +41,18 @@ def torque_file_names(dof: int) -> tuple[str, str]:
 
 def _header(dof: int, source: str, what: str) -> str:
     # no "--" in the text: an XML comment may not hold one
-    label = body.body_of(dof).label
-    return (f"<!-- GENERATED from {source} by `{REGENERATE}`: do not edit.\n"
-            f"     Skinny {label} ({dof} DOF), torque twin: {what}\n"
-            f"     Model card: README.md. tests/test_mjcf.py checks that this file compiles\n"
-            f"     to the model skinny_mj.plant.model.load_model({dof}, \"torque\") builds. -->\n")
+    spec = body.body_of(dof)
+    if spec.folder is None:  # Skinny's own: shipped, with a model card and a test
+        command = REGENERATE
+        checked = ("     Model card: README.md. tests/test_mjcf.py checks that this file compiles\n"
+                   f"     to the model skinny_mj.plant.model.load_model({dof}, \"torque\") "
+                   "builds.")
+    else:  # a registered body (docs/adding-a-body.md)
+        command = f"skinny_mj.plant.mjcf.write_torque_mjcf({dof}, folder)"
+        checked = (f"     It compiles to skinny_mj.plant.model.load_model({dof}, \"torque\") "
+                   "when written.")
+    return (f"<!-- GENERATED from {source} by `{command}`: do not edit.\n"
+            f"     Skinny {spec.label} ({dof} DOF), torque twin: {what}\n{checked} -->\n")
 
 
 #: What the twin sets on the arm joints and motors (skinny_mj.plant.model._make_physical),
