@@ -93,7 +93,7 @@ class PathTiming:
         i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(self.s) - 2)
         tau = t - times[i]
         s = self.s[i] + self.sd[i] * tau + 0.5 * self.sdd[i] * tau ** 2
-        return np.clip(s, self.s[i], self.s[i + 1])
+        return np.where(t >= times[-1], self.s[-1], np.clip(s, self.s[i], self.s[i + 1]))
 
     def path_speed(self, t: np.ndarray) -> np.ndarray:
         """ṡ(t) at times ``t`` (clipped to [0, duration])."""
