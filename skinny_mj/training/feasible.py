@@ -22,18 +22,21 @@ The shipped CMU clips need more torque than the motors have at full speed
     (s̈, ṡ²) cannot hold exactly; it is bounded from above by the tangent of the
     concave sqrt at ṡ0² (d ṡ <= |d| (ṡ² + ṡ0²) / (2 ṡ0)), exact at ṡ0 and conservative
     elsewhere, with ṡ0 = 1 first and then the previous pass's ṡ (:data:`PASSES` passes;
-    each pass's timing is feasible, and the next is never slower);
+    each pass's timing is feasible, and the previous one is feasible for the next, so
+    it is no slower up to toppra's numerical slack);
   - joint speed within :func:`skinny_mj.plant.path_dynamics.velocity_limits_rad_s`
     (30 rad/s; toppra's ``JointVelocityConstraint``), and ṡ <= 1.
 
   The timing is then sampled every control step (:func:`skinny_mj.trajectories.retime.
   resample`) and **checked with the project's own measure**: the held step torques of the
   sampled clip's clamped cubic spline (:func:`skinny_mj.plant.path_dynamics.
-  step_torque_ratio`) and its spline speeds. Sampling at 50 Hz and the spline through
-  the samples smooth the bang-bang path acceleration, which can ask a little more than
-  the plan at its switches; if the check finds more than ``torque_margin`` of a limit
-  (or a speed over its limit), the plan is redone with its limits scaled down by the
-  excess (at most :data:`MAX_CHECKS` times), so the returned clip always passes.
+  step_torque_ratio`) and its spline speeds. The plan holds at its grid points only,
+  and sampling at 50 Hz and the spline through the samples smooth its bang-bang path
+  acceleration, which together can ask more than the plan where the path speed drops
+  fast; if the check finds more than ``torque_margin`` of a limit (or a speed over its
+  limit), the plan is redone with its limits scaled down by the excess (at most
+  :data:`MAX_CHECKS` times; on the shipped clips the last plans use 0.80-0.84 of the
+  limits), so a returned clip passes (else :class:`SkinnyInputError`).
 
 A margin below 1 leaves a tracking controller headroom (the movement itself asks at
 most 0.9 of a limit; feedback corrects with the rest). A movement name may ask for the
