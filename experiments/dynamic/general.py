@@ -30,6 +30,10 @@ from skinny_mj.trajectories import load_movement
 
 #: Fastest speed (a factor of the clip's own, on a 0.01 grid from 0.6 down) at and below
 #: which no step of the clip's inverse dynamics exceeds a torque limit, per body (dof).
+#: Declared (the rows' results rest on them), and equal to the computation,
+#: :func:`skinny_mj.training.feasible.fastest_uniform_speed` (tests/test_retime.py).
+#: The clip re-timed locally instead (slower only where the limits need it):
+#: ``md_02.amc@feasible``.
 FEASIBLE_SPEED = {(4, "md_02.amc"): 0.18, (4, "md_03.amc"): 0.27,
                   (8, "md_02.amc"): 0.45, (8, "md_03.amc"): 0.44}
 #: Test column id -> (movement, speed: a factor, or None for the body's feasible speed).

@@ -43,10 +43,10 @@ from skinny_mj.progress import Progress as _Progress
 from skinny_mj.progress import progress_on as _progress_on
 from skinny_mj.recording import record_test, write_recording
 from skinny_mj.training.config import Movement, TrainConfig
+from skinny_mj.training.feasible import load_movement  # NAME@feasible too, else trajectories'
 from skinny_mj.training.imitation import imitation_metrics, movement_stats, saturation
 from skinny_mj.training.memory import steps_cause
 from skinny_mj.training.model_file import check_model, read_model
-from skinny_mj.trajectories import load_movement
 from skinny_mj.trajectories.library import SET_PREFIX, check_asf, set_pieces
 
 DEFAULT_RESULTS = Path("results")

@@ -125,6 +125,11 @@ def list_text(width: int | None = None) -> str:
         ("FILE.bvh", "BVH motion capture"),
         ("FILE@start=S,duration=D", "an excerpt of any file above, in seconds: "
                                     "md_02.amc@start=3,duration=6.26"),
+        ("ANY@feasible[=MARGIN]", "any movement (a name or a file) re-timed along its "
+                                  "own path for the torque twin of --dof: as fast as "
+                                  "shipped where the "
+                                  "torque limits allow, slower where not (at most MARGIN, "
+                                  "default 0.9, of a limit): md_02.amc@feasible"),
     ], width)
     lines += ["", "Generated:"]
     lines += columns([

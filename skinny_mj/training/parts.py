@@ -19,7 +19,7 @@ from skinny_mj.plant.ideal import max_speeds, true_commands
 from skinny_mj.plant.task import load
 from skinny_mj.training import torque
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.trajectories import load_movement
+from skinny_mj.training.feasible import load_movement  # NAME@feasible too, else trajectories'
 
 
 class RunStreams(NamedTuple):
