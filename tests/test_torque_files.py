@@ -10,8 +10,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from skinny_mj.plant.torque_files import torque_file_names, torque_robot_xml, torque_scene_xml
 from skinny_mj.plant.model import load_model, load_spec, models_dir
+from skinny_mj.plant.torque_files import torque_file_names, torque_robot_xml, torque_scene_xml
 
 DOFS = [4, 8]
 #: Model-level structs compared field by field beside MjModel's own arrays and sizes.

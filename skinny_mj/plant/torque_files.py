@@ -44,7 +44,8 @@ def _header(dof: int, source: str, what: str) -> str:
     spec = body.body_of(dof)
     if spec.folder is None:  # Skinny's own: shipped, with a model card and a test
         command = REGENERATE
-        checked = ("     Model card: README.md. tests/test_torque_files.py checks that this file compiles\n"
+        checked = ("     Model card: README.md. tests/test_torque_files.py checks that this file "
+                   "compiles\n"
                    f"     to the model skinny_mj.plant.model.load_model({dof}, \"torque\") "
                    "builds.")
     else:  # a registered body (docs/adding-a-body.md)
