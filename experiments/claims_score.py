@@ -35,7 +35,7 @@ from skinny_mj.experiments.claims_catalogue import (
     Check,
     Comparison,
 )
-from skinny_mj.experiments.claims_rules import MIN_RUNS, READINGS, RULES, RUNS, compare
+from skinny_mj.experiments.claims_rules import ALPHA, MIN_RUNS, READINGS, RULES, RUNS, compare
 
 from skinny_mj.engine.stats import SMOKE_NOTE, iter_runs
 from skinny_mj.errors import SkinnyInputError
@@ -43,6 +43,9 @@ from skinny_mj.errors import SkinnyInputError
 #: The studies the catalogue reads.
 STUDIES = tuple(sorted({c.study for c in CATALOGUE}
                        | {p.study for c in CATALOGUE for p in c.comparisons if p.study}))
+#: The (study, runs key) pairs some claim's column reads.
+KEYS = frozenset((p.study or c.study, "+".join(r for r in col if r not in METRIC_UNDER_READING)
+                  or "default") for c in CATALOGUE for col in c.columns for p in c.comparisons)
 #: The markers around the computed table in a results page (:func:`page_matches`).
 BEGIN, END = "<!-- claims computed: begin -->", "<!-- claims computed: end -->"
 
@@ -73,7 +76,12 @@ def parse_sources(entries: Sequence[str]) -> dict[Key, list[Path]]:
         if unknown:
             raise SkinnyInputError(f"--from {entry!r}: unknown reading {unknown[0]!r}; "
                                    f"known: {', '.join(READINGS)}")
-        out.setdefault((study, runs_key(readings)), []).append(Path(folder))
+        key = runs_key(readings)
+        if (study, key) not in KEYS:
+            known = sorted(k for s, k in KEYS if s == study)
+            raise SkinnyInputError(f"--from {entry!r}: no claim reads {study} under {key}; "
+                                   f"its claims read it under {', '.join(known)}")
+        out.setdefault((study, key), []).append(Path(folder))
     for (study, key), folders in out.items():
         points = max((len(READINGS[r].band) for r in key.split("+")), default=0)
         if len(folders) > max(points, 1):
@@ -139,14 +147,15 @@ def _num(v: float | None) -> float | None:
 def score_comparison(comp: Comparison, sweep: Sweep | None, column: Sequence[str],
                      need: int, missing: str = "") -> dict[str, Any]:
     """One comparison's verdict with its numbers (JSON-able)."""
-    desc = f"{comp.a} {comp.metric} {comp.relation} " + (
+    desc = ("not " if comp.negate else "") + f"{comp.a} {comp.metric} {comp.relation} " + (
         ", ".join(comp.b) if isinstance(comp.b, tuple) and all(isinstance(x, str)
                                                                for x in comp.b)
         else f"{comp.b}" + (f" {comp.metric_b}" if comp.metric_b else ""))
     out: dict[str, Any] = {"comparison": desc, "rule": comp.rule, "negate": comp.negate,
                            "outcome": "not testable", "weak": False, "p": None,
                            "mean_a": None, "mean_b": None, "n": [], "ratio": None,
-                           "reason": missing}
+                           "reason": missing,
+                           "folder": None if sweep is None else str(sweep.folder)}
     if sweep is None:
         return out
     kind = RULES[comp.rule].kind
@@ -213,7 +222,8 @@ def score_check(check: Check, sweeps: Mapping[Key, Sequence[Sweep]]) -> dict[str
             band = next((READINGS[r].band for r in column if READINGS[r].band), ())
             missing = "" if len(given) >= points else (
                 (f"{len(given)} of the {points} sweeps" if given else "no sweep")
-                + f" of {study} given under {key} (--from {study}:{key}=FOLDER"
+                + f" of {study} given under {key} (--from {study}"
+                + ("" if key == "default" else f":{key}") + "=FOLDER"
                 + (f", one per point of its band {band}" if band else "") + ")")
             for sweep in (given if not missing else [None]):
                 comps.append(score_comparison(comp, sweep, column, need, missing))
@@ -223,7 +233,7 @@ def score_check(check: Check, sweeps: Mapping[Key, Sequence[Sweep]]) -> dict[str
                         "status": ", ".join(dict.fromkeys(status)), "outcome": outcome,
                         "weak": weak, "reason": reason, "comparisons": comps})
     return {"id": check.id, "paper": check.paper, "line": check.line, "claim": check.claim,
-            "study": check.study, "runs_needed": need,
+            "quote": check.quote, "study": check.study, "runs_needed": need,
             "rules": sorted(check.rules), "columns": columns}
 
 
@@ -232,7 +242,7 @@ def score(sources: Mapping[Key, Sequence[Path]]) -> dict[str, Any]:
     sweeps = {(study, key): [Sweep(Path(f), study) for f in folders]
               for (study, key), folders in sources.items()}
     return {"sources": {f"{s}:{k}": [str(f) for f in fs] for (s, k), fs in sources.items()},
-            "smoke": any(sw.quick for group in sweeps.values() for sw in group),
+            "alpha": ALPHA, "smoke": any(sw.quick for group in sweeps.values() for sw in group),
             "claims": [score_check(c, sweeps) for c in CATALOGUE]}
 
 
@@ -285,7 +295,9 @@ def markdown(scored: Mapping[str, Any]) -> str:
     """The computed table between :data:`BEGIN` and :data:`END`, one line per claim and
     column, the counts under it."""
     esc = str.maketrans({"|": "\\|", "\n": " "})
-    lines = [BEGIN, ""]
+    command = " ".join(f"--from {key.removesuffix(':default')}={f}"
+                       for key, folders in scored["sources"].items() for f in folders)
+    lines = [BEGIN, "", f"Scored from the run files by `skinny claims {command}`.", ""]
     if scored["smoke"]:
         lines += [SMOKE_NOTE, ""]
     lines += ["| claim | paper | thesis line | rule | reading | verdict | numbers | reason |",
