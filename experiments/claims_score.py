@@ -153,7 +153,8 @@ def score_comparison(comp: Comparison, sweep: Sweep | None, column: Sequence[str
         else f"{comp.b}" + (f" {comp.metric_b}" if comp.metric_b else ""))
     out: dict[str, Any] = {"comparison": desc, "rule": comp.rule, "negate": comp.negate,
                            "outcome": "not testable", "weak": False, "p": None,
-                           "mean_a": None, "mean_b": None, "n": [], "ratio": None,
+                           "statistic": RULES[comp.rule].statistic, "stat_a": None,
+                           "stat_b": None, "n": [], "ratio": None,
                            "reason": missing,
                            "folder": None if sweep is None else str(sweep.folder)}
     if sweep is None:
@@ -161,8 +162,7 @@ def score_comparison(comp: Comparison, sweep: Sweep | None, column: Sequence[str
     kind = RULES[comp.rule].kind
     b: Any = comp.b
     if kind == "stable":  # per run: 1 finished, 0 diverged (errored runs are bugs)
-        a, why = [1.0 if s == "ok" else 0.0 for s, _ in sweep.rows.get(comp.a, [])
-                  if s != "error"], ""
+        a = [1.0 if s == "ok" else 0.0 for s, _ in sweep.rows.get(comp.a, []) if s != "error"]
         why = "" if comp.a in sweep.rows else f"row {comp.a} is not in the sweep"
     else:
         metric, scale = _metric(column, comp.metric)
@@ -185,9 +185,9 @@ def score_comparison(comp: Comparison, sweep: Sweep | None, column: Sequence[str
     outcome, weak = v.outcome, v.weak
     if comp.negate and outcome != "not testable":
         outcome, weak = ("does not hold" if v.holds else "holds"), False
-    mean_a, mean_b = _num(v.stat_a), _num(v.stat_b)
-    ratio = mean_a / mean_b if mean_a is not None and mean_b not in (None, 0.0) else None
-    out.update(outcome=outcome, weak=weak, p=_num(v.p), mean_a=mean_a, mean_b=mean_b,
+    stat_a, stat_b = _num(v.stat_a), _num(v.stat_b)
+    ratio = stat_a / stat_b if stat_a is not None and stat_b not in (None, 0.0) else None
+    out.update(outcome=outcome, weak=weak, p=_num(v.p), stat_a=stat_a, stat_b=stat_b,
                n=list(v.n), ratio=ratio,
                reason=("negated: " if comp.negate else "") + v.reason)
     return out
@@ -286,7 +286,8 @@ def _numbers(col: Mapping[str, Any]) -> str:
     c = failing[0] if failing else max(comps, key=lambda c: -1 if c["p"] is None else c["p"])
     n = ", ".join(map(str, c["n"]))
     held = sum(x["outcome"] == "holds" for x in col["comparisons"])
-    return (f"{c['comparison']}: {_fmt(c['mean_a'])} vs {_fmt(c['mean_b'])}, n {n}, "
+    return (f"{c['comparison']}: {c['statistic']} {_fmt(c['stat_a'])} vs "
+            f"{_fmt(c['stat_b'])}, n {n}, "
             f"p {_fmt(c['p'])}, ratio {_fmt(c['ratio'])} ({held} of "
             f"{len(col['comparisons'])} hold)")
 

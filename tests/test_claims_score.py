@@ -71,8 +71,10 @@ def test_every_verdict_is_reached_with_its_numbers(scored):
     assert e4["outcome"] == "holds" and not e4["weak"]
     (comp,) = e4["comparisons"]
     assert comp["n"] == [N, N] and comp["p"] < 0.05
-    assert comp["mean_a"] == pytest.approx(0.05, rel=0.01)
+    assert comp["stat_a"] == pytest.approx(0.05, rel=0.01)
     assert comp["ratio"] == pytest.approx(0.5, rel=0.02)
+    (e1,) = _column(scored, "E1")["comparisons"]  # worst run of 5 beats the best of 2
+    assert e1["outcome"] == "holds" and e1["statistic"] == "max / min" and e1["p"] is None
     e10 = _column(scored, "E10")  # motor 2.0, not within x1.5 of 0.5
     assert e10["outcome"] == "does not hold" and not e10["weak"]
     assert "outside" in e10["reason"]
@@ -193,6 +195,6 @@ def test_a_metric_reading_reads_its_metric_from_the_same_runs(tmp_path):
     assert _column(scored, "A10")["outcome"] == "holds"
     col = _column(scored, "A10", "mean-abs-difference")
     assert col["outcome"] == "does not hold" and "wrong direction" in col["reason"]
-    assert col["comparisons"][0]["mean_a"] == pytest.approx(0.16, rel=0.01)
+    assert col["comparisons"][0]["stat_a"] == pytest.approx(0.16, rel=0.01)
     recorded = _column(scored, "A10", "recorded+mean-abs-difference")
     assert "no sweep of paper-a given under recorded " in recorded["reason"]
