@@ -266,7 +266,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", help="Dask scheduler: `local` or tcp://HOST:PORT")
 
     p = sub.add_parser("claims", help="score every thesis claim from sweeps' run files "
-                       "(holds / does not hold / not testable, with the numbers)")
+                       "(holds / does not hold / not testable, with the numbers)",
+                       description="Score the thesis's claims (experiments/claims_catalogue.py) "
+                       "by the declared rules (experiments/claims_rules.py) over the run files "
+                       "of the sweeps given, under each reading column they cover; a band "
+                       "reading (gain-band) takes one --from per point.")
     p.add_argument("--from", dest="sources", action="append", required=True,
                    metavar="STUDY[:READINGS]=FOLDER", help="a sweep's folder and the study "
                    "(and reading column, e.g. paper-e:recorded) its runs are; repeat it")
