@@ -18,6 +18,7 @@ import numpy as np
 from skinny_mj import preflight
 from skinny_mj.cli import config_files as cf
 from skinny_mj.cli import memory
+from skinny_mj.cli.claims import cmd_claims  # noqa: F401 (the `skinny claims` handler)
 from skinny_mj.cli.config_files import file_config, train_config
 from skinny_mj.cli.config_flags import TEST_FLAGS, TRACK_FLAGS, changes, flag_names, given
 from skinny_mj.cli.memory import check_bench, check_export, check_sweep, check_train

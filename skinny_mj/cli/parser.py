@@ -286,6 +286,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", type=_scheduler,
                    help="Dask scheduler: `local` or tcp://HOST:PORT")
 
+    p = sub.add_parser("claims", help="score every thesis claim from sweeps' run files "
+                       "(holds / does not hold / not testable, with the numbers)",
+                       description="Score the thesis's claims (experiments/claims_catalogue.py) "
+                       "by the declared rules (experiments/claims_rules.py) over the run files "
+                       "of the sweeps given, under each reading column they cover; a band "
+                       "reading (gain-band) takes one --from per point.")
+    p.add_argument("--from", dest="sources", action="append", required=True,
+                   metavar="STUDY[:READINGS]=FOLDER", help="a sweep's folder and the study "
+                   "(and reading column, e.g. paper-e:recorded) its runs are; repeat it")
+    p.add_argument("--out", type=Path, help="folder for claims.md and claims.json "
+                   "(default: results/claims/<time>)")
+    p.add_argument("--overwrite", action="store_true", help="replace claims.md and "
+                   "claims.json in --out")
+
     p = sub.add_parser("bench", help="measure the fast path: ratios vs reservoirpy, physics, "
                        "the naive loop (prints a table)")
     p.add_argument("--quick", action="store_true", help="short timings; no full paper-E sweep")
