@@ -4,6 +4,9 @@
 plain loop) or :class:`TorqueActuation` (the torque twin, :mod:`skinny_mj.training.torque`).
 Each supplies the same parts, so :mod:`skinny_mj.training.loop` asks and never branches:
 
+- ``n_extra_inputs`` and ``true_commands``: the ESN inputs the hook appends, and the
+  inverse model's true target of a movement (the servo's analytic commands, the torque
+  twin's inverse-dynamics torques);
 - ``hook``: the rollout hook of a movement (:class:`skinny_mj.controllers.loop.Hook`; None
   for the servo);
 - ``teacher_inputs`` and ``one_step``: the true-target architecture's extra
@@ -24,6 +27,7 @@ import numpy as np
 
 from skinny_mj.controllers.methods import FELMethod
 from skinny_mj.plant import ideal
+from skinny_mj.plant.ideal import true_commands
 from skinny_mj.training import torque
 from skinny_mj.training.config import Torque, TrainConfig
 
@@ -33,6 +37,14 @@ class VelocityActuation:
     """The velocity servo (the thesis's kinematic plant): the plain loop."""
 
     cfg: TrainConfig
+
+    @property
+    def n_extra_inputs(self) -> int:
+        return 0
+
+    def true_commands(self, trajectory, max_speed_rad_s: np.ndarray) -> np.ndarray:
+        """(T-1, n_dof) the analytic velocity commands of ``trajectory``."""
+        return true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
 
     def hook(self, trajectory, max_speed_rad_s: np.ndarray, plant=None) -> None:
         return None
@@ -71,6 +83,15 @@ class TorqueActuation:
     @property
     def settings(self) -> Torque:
         return self.cfg.actuation
+
+    @property
+    def n_extra_inputs(self) -> int:
+        """:func:`skinny_mj.training.torque.n_extra_inputs`."""
+        return torque.n_extra_inputs(self.cfg)
+
+    def true_commands(self, trajectory, max_speed_rad_s: np.ndarray) -> np.ndarray:
+        """(T-1, n_dof) :func:`skinny_mj.training.torque.true_torques` of ``trajectory``."""
+        return torque.true_torques(self.cfg.plant.dof, trajectory)
 
     def hook(self, trajectory, max_speed_rad_s: np.ndarray, plant=None):
         """:func:`skinny_mj.training.torque.hook_for`."""
