@@ -16,6 +16,11 @@ readout to y_used = beta y_est + (1 - beta) y_ESN (beta = 1: the original method
 controller always sees the undelayed s(t). With ``inputs="sensed"`` (paper B) the
 desired position is left out of the ESN's input: [s_in(t)] (+ p(t)).
 
+The parts: the method (:class:`~skinny_mj.controllers.methods.Original` or
+:class:`~skinny_mj.controllers.methods.New`: epochs, K per epoch, learning cycles, β), the
+:class:`~skinny_mj.controllers.loop.Loop` (inputs, feedback or hook, forward model, delay),
+the :class:`Task` (desired signals, true commands, scored signals) and the :class:`Test`.
+
 One health check (:func:`health`) decides for training and testing alike whether a
 run diverged; a diverged run is silenced (state and readout zero) and excluded from
 every later fit, so it cannot poison its lockstep batch.

@@ -28,13 +28,22 @@ class Hook(Protocol):
     others, the motor error instead of the feedback controller's, a feed-forward added
     before the clip, a call after each step."""
 
-    n_inputs: int
+    n_inputs: int  # extra ESN inputs per step
 
-    def begin(self, plant, n_steps: int) -> None: ...
-    def inputs(self, t: int, plant) -> np.ndarray: ...
-    def u_error(self, t: int, desired: np.ndarray, sensed: np.ndarray, plant) -> np.ndarray: ...
-    def feedforward(self, t: int, plant) -> np.ndarray: ...
-    def after_step(self, t: int, plant) -> None: ...
+    def begin(self, plant, n_steps: int) -> None:
+        """Called once after the plant's reset, for a cycle of ``n_steps`` states."""
+
+    def inputs(self, t: int, plant) -> np.ndarray:
+        """(R, n_inputs) extra ESN inputs at step t."""
+
+    def u_error(self, t: int, desired: np.ndarray, sensed: np.ndarray, plant) -> np.ndarray:
+        """(R, n_dof) motor error at state t (t = 0 .. T-1)."""
+
+    def feedforward(self, t: int, plant) -> np.ndarray:
+        """(R, n_dof) command added before the clip (not learned)."""
+
+    def after_step(self, t: int, plant) -> None:
+        """Called after the plant moved from state t to t+1."""
 
 
 @runtime_checkable

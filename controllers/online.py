@@ -1,6 +1,6 @@
 """Online learning inside the closed loop: an RLS (FORCE-style) readout update per
 control step, an online learning rule (:class:`skinny_mj.controllers.learning.LearningRule`) for
-:func:`skinny_mj.controllers.fel.train`'s ``rule`` or :func:`skinny_mj.controllers.fel.rollout`'s
+:func:`skinny_mj.controllers.fel.train`'s ``rule`` or a :class:`skinny_mj.controllers.loop.Loop`'s
 ``online``.
 
 At step t the rollout knows u_error(t), so FEL's estimated target of the step before,
