@@ -190,18 +190,19 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
             input_rngs=[protocol.tt_input_rng(s) for s in run.seeds])
         _report(progress, 1, 1)
         return out
-    per_epoch = rule.learning_cycles + 2
-    total = rule.epochs * per_epoch
+    method = rule  # FEL: Original or New, the controllers' method types with their fit
+    per_epoch = method.learning_cycles + 2
+    total = method.epochs * per_epoch
 
     def tick(epoch: int, cycle: int, ro, y_used) -> None:
         _report(progress, epoch * per_epoch + cycle + 1, total)
 
     selector = make_rule(cfg, run.esn, len(run.desired) - 1)  # rule.fit (skinny_mj.training.fits)
-    out.feedback_share = act.recorder(rule, run.esn.n_runs)  # the actuation's, if any
+    out.feedback_share = act.recorder(method, run.esn.n_runs)  # the actuation's, if any
     loop = run.loop(act.hook(run.training, run.max_speed_rad_s, run.plant),
-                    protocol.feedback_of(rule.u_error_gain, rule.u_error_damping))
+                    protocol.feedback_of(method.u_error_gain, method.u_error_damping))
     out.fel = fel.train(run.esn, run.plant, fel.Task(run.desired, run.true_commands, run.scored),
-                        rule, loop, rule=selector,
+                        method, loop, rule=selector,
                         observe=_all(observe, out.feedback_share, tick))
     if rule.fit == "ridge-select":
         out.ridge_lambda = selector.chosen
