@@ -16,6 +16,11 @@ readout to y_used = beta y_est + (1 - beta) y_ESN (beta = 1: the original method
 controller always sees the undelayed s(t). With ``inputs="sensed"`` (paper B) the
 desired position is left out of the ESN's input: [s_in(t)] (+ p(t)).
 
+The parts: the method (:class:`~skinny_mj.controllers.methods.Original` or
+:class:`~skinny_mj.controllers.methods.New`: epochs, K per epoch, learning cycles, β), the
+:class:`~skinny_mj.controllers.loop.Loop` (inputs, feedback or hook, forward model, delay),
+the :class:`Task` (desired signals, true commands, scored signals) and the :class:`Test`.
+
 One health check (:func:`health`) decides for training and testing alike whether a
 run diverged; a diverged run is silenced (state and readout zero) and excluded from
 every later fit, so it cannot poison its lockstep batch.
@@ -23,71 +28,72 @@ every later fit, so it cannot poison its lockstep batch.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 from skinny_mj.controllers.esn import ESN
-from skinny_mj.controllers.feedback import (
-    FeedbackController,
-    fixed_gain,
-    linear_gain,
-    multiplicative_gain,
-)
 from skinny_mj.controllers.learning import Cycle, CycleFit, LearningRule, beta_target
+from skinny_mj.controllers.loop import INPUTS, Loop
+from skinny_mj.controllers.methods import FELMethod, New, Original
 from skinny_mj.controllers.metrics import motor_nrmse, position_nrmse
 from skinny_mj.controllers.plant import Plant
-from skinny_mj.controllers.rollout import INPUTS, Rollout, rollout, run_mean
+from skinny_mj.controllers.rollout import DEFAULT_LOOP, Rollout, rollout, run_mean
 
-__all__ = ["FELConfig", "INPUTS", "Rollout", "rollout", "run_mean", "health", "train",
-           "TrainResult", "evaluate", "EvalResult", "beta_target"]
+__all__ = ["INPUTS", "Loop", "Original", "New", "FELMethod", "Task", "Test", "Rollout",
+           "rollout", "run_mean", "health", "train", "TrainResult", "evaluate", "EvalResult",
+           "beta_target"]
 
-_METHODS = ("original", "new")
-_SCHEDULES = ("linear", "multiplicative", "fixed")
+#: FEL's observer: ``observe(epoch, cycle, ro, y_used)`` after every cycle
+Observer = Callable[[int, int, Rollout, "np.ndarray | None"], None]
 
 
 @dataclass(frozen=True)
-class FELConfig:
-    """Training schedule. Defaults: paper E experiment 5 (new method, beta 0.1, 3 cycles)."""
+class Task:
+    """The movement to track and how a cycle is scored.
 
-    method: str = "new"
-    beta: float = 0.1
-    learning_cycles: int = 3
-    epochs: int = 10
-    gain_schedule: str = "linear"
-    gain_factor: float = 0.9  # multiplicative schedule
-    gain_value: float = 0.65  # fixed schedule
-    delay_steps: int = 0
-    inputs: str = "desired+sensed"
+    desired : (T, n_sig) desired signals (repetitions already concatenated).
+    true_commands : (T-1, n_dof) analytic commands, for the motor error; None: no motor
+        error.
+    scored : indices of the signals the position error scores (None: all; paper B
+        scores the lagging arm's only).
+    """
+
+    desired: np.ndarray
+    true_commands: np.ndarray | None = None
+    scored: np.ndarray | None = None
+
+    @classmethod
+    def of(cls, task: Task | np.ndarray) -> Task:
+        """``task`` as a :class:`Task` (an array: the desired signals alone)."""
+        return task if isinstance(task, Task) else cls(np.asarray(task, float))
+
+
+@dataclass(frozen=True)
+class Test:
+    """A closed-loop test: ``washout_cycles`` unscored cycles (papers B, C: one
+    "initialization cycle"), then one scored cycle, no learning, feedback gain ``gain``
+    (K = 0: the inverse model alone; > 0: the feedback left on); ``noise``: reservoir
+    noise on, as the thesis's toolbox ran its tests."""
+
+    __test__: ClassVar[bool] = False  # not a pytest test class
+    gain: float = 0.0
+    washout_cycles: int = 0
+    noise: bool = False
 
     def __post_init__(self) -> None:
-        if self.method not in _METHODS:
-            raise ValueError(f"method must be one of {_METHODS}, got {self.method!r}")
-        if not 0 < self.beta <= 1:
-            raise ValueError(f"beta must be in (0, 1], got {self.beta}")
-        if self.learning_cycles < 1:
-            raise ValueError(f"learning cycles must be >= 1, got {self.learning_cycles}")
-        if self.gain_schedule not in _SCHEDULES:
-            raise ValueError(f"gain schedule must be one of {_SCHEDULES}, got "
-                             f"{self.gain_schedule!r}")
-        if self.delay_steps < 0:
-            raise ValueError(f"delay must be >= 0 steps, got {self.delay_steps}")
-        if self.inputs not in INPUTS:
-            raise ValueError(f"inputs must be one of {INPUTS}, got {self.inputs!r}")
-        self.gains()  # validates epochs and the schedule's parameters
+        if not (isinstance(self.gain, int | float) and math.isfinite(self.gain)
+                and self.gain >= 0):
+            raise ValueError(f"test gain must be >= 0, got {self.gain}")
+        if not (isinstance(self.washout_cycles, int) and self.washout_cycles >= 0):
+            raise ValueError(f"test washout cycles must be >= 0, got {self.washout_cycles}")
 
-    @property
-    def effective_beta(self) -> float:
-        """beta actually used: 1 for the original method."""
-        return 1.0 if self.method == "original" else self.beta
 
-    def gains(self) -> np.ndarray:
-        """Feedback gain K per epoch, (epochs,)."""
-        if self.gain_schedule == "linear":
-            return linear_gain(self.epochs)
-        if self.gain_schedule == "multiplicative":
-            return multiplicative_gain(self.epochs, self.gain_factor)
-        return fixed_gain(self.epochs, self.gain_value)
+#: the thesis's test: K = 0, no washout, no reservoir noise
+DEFAULT_TEST = Test()
 
 
 @dataclass
@@ -144,62 +150,57 @@ def _mark_failures(esn: ESN, ro: Rollout, result: TrainResult, epoch: int) -> No
 def train(
     esn: ESN,
     plant: Plant,
-    desired: np.ndarray,
-    cfg: FELConfig,
-    true_commands: np.ndarray | None = None,
-    progress: Callable[[int, int], None] | None = None,
-    feedback: FeedbackController | None = None,
-    forward=None,
-    scored: np.ndarray | None = None,
-    hook=None,
+    task: Task | np.ndarray,
+    method: FELMethod,
+    loop: Loop = DEFAULT_LOOP,
+    *,
     rule: LearningRule | None = None,
-    observe: Callable[[int, int, Rollout, np.ndarray | None], None] | None = None,
+    observe: Observer | None = None,
 ) -> TrainResult:
     """Train the inverse model ``esn`` (R runs) by FEL on ``plant``.
 
     Parameters
     ----------
-    desired : (T, n_sig) desired signals (repetitions already concatenated).
-    true_commands : (T-1, n_dof) analytic commands, for the motor-error curve.
-    progress : called as progress(epoch, cycle) after every cycle
-        (cycle 0 = washout, 1..C learning, C+1 evaluation).
-    forward : optional forward model; trained on every learning cycle unless
-        its ``mode`` is "serial".
-    scored : indices of the signals the position curve scores (default all; paper B
-        scores the lagging arm's only).
-    hook : optional rollout hook (:func:`rollout`), e.g. the torque loop.
+    task : the :class:`Task` (or its desired signals alone, (T, n_sig)).
+    method : :class:`~skinny_mj.controllers.methods.Original` or
+        :class:`~skinny_mj.controllers.methods.New`: epochs, gains, learning cycles, β.
+    loop : the :class:`~skinny_mj.controllers.loop.Loop` (its ``online`` learner is the
+        rule's, on the learning cycles); a forward model is trained on every learning
+        cycle unless its ``mode`` is "serial".
     rule : the learning rule (:class:`skinny_mj.controllers.learning.LearningRule`; default
         :class:`~skinny_mj.controllers.learning.CycleFit`, each learning cycle's fit alone by
         ``esn.fit``, the thesis's). It gets a :class:`~skinny_mj.controllers.learning.Cycle`
         (states, y_used, y_est, y_ESN, the runs alive, the epoch) through
         ``rule.washout(esn, cycle)`` after each washout cycle and ``rule.fit(esn,
         cycle)`` after each learning cycle; an online rule (``rule.online``) is also the
-        learning cycles' per-step ``online`` learner (:func:`rollout`; its per-step
-        target is blended with its own beta). Others:
+        learning cycles' per-step ``online`` learner (its per-step target is blended with
+        its own beta). Others:
         :class:`skinny_mj.controllers.ridge_select.RidgeSelector` (lambda per run on a validation
         cycle), :class:`skinny_mj.controllers.torque_readout.ForgettingReadout` and
         :class:`~skinny_mj.controllers.torque_readout.RLSReadout` (fits that remember earlier
         cycles), :class:`skinny_mj.controllers.online.OnlineRLS` (RLS at every step).
-    observe : optional diagnostics callback (paper E §5.1), called after every cycle as
-        ``observe(epoch, cycle, ro, y_used)`` (cycle numbered as for ``progress``);
-        ``y_used`` (R, T-1, n_dof) is the target the readout was fitted to on a learning
-        cycle, None on the washout and evaluation cycles. ``ro``'s arrays are reused by
-        the next cycle: copy what you keep. It must not change ``esn`` or ``ro``.
+    observe : optional callback (progress, diagnostics: paper E §5.1), called after every
+        cycle as ``observe(epoch, cycle, ro, y_used)`` (cycle 0 = washout, 1..C learning,
+        C+1 evaluation); ``y_used`` (R, T-1, n_dof) is the target the readout was fitted
+        to on a learning cycle, None on the washout and evaluation cycles. ``ro``'s arrays
+        are reused by the next cycle: copy what you keep. It must not change ``esn`` or
+        ``ro``.
     """
-    gains = cfg.gains()
-    n_runs, n_epochs = esn.n_runs, cfg.epochs
+    task = Task.of(task)
+    desired, forward = task.desired, loop.forward
+    gains = method.gains()
+    n_runs, n_epochs, n_cycles = esn.n_runs, method.epochs, method.learning_cycles
     result = TrainResult(
         position_nrmse=np.full((n_runs, n_epochs), np.nan),
         motor_nrmse=np.full((n_runs, n_epochs), np.nan),
         gains=gains, failed=np.zeros(n_runs, bool),
         fail_reason=[None] * n_runs, fail_epoch=[None] * n_runs,
     )
-    beta, rule = cfg.effective_beta, CycleFit() if rule is None else rule
+    beta, rule = method.beta, CycleFit() if rule is None else rule
     # one set of rollout arrays for the whole training: each rollout is used (fit,
     # metrics) before the next overwrites it, and the last one is the last evaluation
-    kw = {"feedback": feedback, "delay_steps": cfg.delay_steps, "forward": forward,
-          "buffers": {}, "inputs": cfg.inputs, "hook": hook}
-    online = rule if rule.online else None
+    loop = dataclasses.replace(loop, online=None, buffers={})
+    learning = loop.learning(rule if rule.online else None)
 
     def handed(ro: Rollout, epoch: int) -> Cycle:  # what the cycle hands the rule
         y_est = ro.y_est
@@ -210,14 +211,13 @@ def train(
         esn.reset()
         if forward is not None:
             forward.esn.reset()
-        ro = rollout(esn, plant, desired, gain, noise=True, **kw)
+        ro = rollout(esn, plant, desired, gain, loop, noise=True)
         _mark_failures(esn, ro, result, epoch)
         rule.washout(esn, handed(ro, epoch))
         if observe is not None:
             observe(epoch, 0, ro, None)
-        _tick(progress, epoch, 0)
-        for cycle in range(1, cfg.learning_cycles + 1):
-            ro = rollout(esn, plant, desired, gain, noise=True, online=online, **kw)
+        for cycle in range(1, n_cycles + 1):
+            ro = rollout(esn, plant, desired, gain, learning, noise=True)
             _mark_failures(esn, ro, result, epoch)
             learned = handed(ro, epoch)
             rule.fit(esn, learned)
@@ -225,17 +225,16 @@ def train(
                 forward.fit_rollout(ro, runs=learned.runs)
             if observe is not None:
                 observe(epoch, cycle, ro, learned.target)
-            _tick(progress, epoch, cycle)
-        ro = rollout(esn, plant, desired, gain, noise=False, **kw)
+        ro = rollout(esn, plant, desired, gain, loop, noise=False)
         _mark_failures(esn, ro, result, epoch)
         alive = ~result.failed
-        result.position_nrmse[alive, epoch] = _scored_nrmse(ro, desired, scored)[alive]
-        if true_commands is not None:
-            result.motor_nrmse[alive, epoch] = motor_nrmse(ro.commands, true_commands)[alive]
+        result.position_nrmse[alive, epoch] = _scored_nrmse(ro, task)[alive]
+        if task.true_commands is not None:
+            result.motor_nrmse[alive, epoch] = motor_nrmse(ro.commands,
+                                                           task.true_commands)[alive]
         result.last_rollout = ro
         if observe is not None:
-            observe(epoch, cfg.learning_cycles + 1, ro, None)
-        _tick(progress, epoch, cfg.learning_cycles + 1)
+            observe(epoch, n_cycles + 1, ro, None)
     return result
 
 
@@ -253,49 +252,33 @@ class EvalResult:
 def evaluate(
     esn: ESN,
     plant: Plant,
-    desired: np.ndarray,
-    true_commands: np.ndarray | None = None,
-    delay_steps: int = 0,
-    forward=None,
-    *,
-    inputs: str = "desired+sensed",
-    washout_cycles: int = 0,
-    scored: np.ndarray | None = None,
-    gain: float = 0.0,
-    hook=None,
-    noise: bool = False,
+    task: Task | np.ndarray,
+    loop: Loop = DEFAULT_LOOP,
+    test: Test = DEFAULT_TEST,
 ) -> EvalResult:
-    """Test: reset, ``washout_cycles`` cycles without scoring (papers B, C: one
-    "initialization cycle"), then one scored cycle; no noise, no learning, feedback
-    gain ``gain`` (K = 0: the inverse model alone; > 0: the feedback left on); ``hook``
-    as in :func:`rollout`; ``noise=True``: reservoir noise on, as the thesis's toolbox
-    ran its tests."""
-    if washout_cycles < 0:
-        raise ValueError(f"washout cycles must be >= 0, got {washout_cycles}")
+    """Test: reset, ``test.washout_cycles`` cycles without scoring, then one scored cycle
+    of ``loop`` with feedback gain ``test.gain``; no learning (``loop.online`` is not
+    used); reservoir noise only with ``test.noise``."""
+    task = Task.of(task)
+    desired, true_commands = task.desired, task.true_commands
     esn.reset()
-    if forward is not None:
-        forward.esn.reset()
-    kw = {"noise": noise, "delay_steps": delay_steps, "forward": forward, "inputs": inputs,
-          "hook": hook}
-    for _ in range(washout_cycles):
-        rollout(esn, plant, desired, gain, **kw)
-    ro = rollout(esn, plant, desired, gain, **kw)
+    if loop.forward is not None:
+        loop.forward.esn.reset()
+    loop = loop.learning(None)
+    for _ in range(test.washout_cycles):
+        rollout(esn, plant, desired, test.gain, loop, noise=test.noise)
+    ro = rollout(esn, plant, desired, test.gain, loop, noise=test.noise)
     reasons = health(esn, ro)
     failed = np.array([r is not None for r in reasons])
-    pos = np.where(failed, np.nan, _scored_nrmse(ro, desired, scored))
+    pos = np.where(failed, np.nan, _scored_nrmse(ro, task))
     mot = np.full(esn.n_runs, np.nan)
     if true_commands is not None:
         mot = np.where(failed, np.nan, motor_nrmse(ro.commands, true_commands))
     return EvalResult(pos, mot, failed, reasons, ro)
 
 
-def _scored_nrmse(ro: Rollout, desired: np.ndarray, scored: np.ndarray | None) -> np.ndarray:
+def _scored_nrmse(ro: Rollout, task: Task) -> np.ndarray:
     """Position NRMSE (R,) of the noise-free signals, over the ``scored`` ones (or all)."""
-    if scored is None:
-        return position_nrmse(ro.true_signals, desired)
-    return position_nrmse(ro.true_signals[:, :, scored], desired[:, scored])
-
-
-def _tick(progress: Callable[[int, int], None] | None, epoch: int, cycle: int) -> None:
-    if progress is not None:
-        progress(epoch, cycle)
+    if task.scored is None:
+        return position_nrmse(ro.true_signals, task.desired)
+    return position_nrmse(ro.true_signals[:, :, task.scored], task.desired[:, task.scored])

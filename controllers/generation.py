@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 from skinny_mj.controllers.esn import ESN
 from skinny_mj.controllers.learning import beta_target
+from skinny_mj.controllers.methods import check_beta
 from skinny_mj.controllers.readout import RLS
 
 FEEDBACKS = ("teacher", "blend")
@@ -60,8 +61,9 @@ def fit_beta(esn: ESN, inputs: np.ndarray, teacher: np.ndarray, washout: int, be
     there instead of with (1 − β)^cycles of the readout still missing."""
     if feedback not in FEEDBACKS:
         raise ValueError(f"feedback must be one of {FEEDBACKS}, got {feedback!r}")
-    if not 0 < beta <= 1 or cycles < 1:
-        raise ValueError(f"need beta in (0, 1] and cycles >= 1, got {beta}, {cycles}")
+    check_beta(beta)
+    if cycles < 1:
+        raise ValueError(f"cycles must be >= 1, got {cycles}")
     if min_improvement is not None and not 0 < min_improvement < 1:
         raise ValueError(f"min_improvement must be in (0, 1), got {min_improvement}")
     curve = np.full((esn.n_runs, cycles), np.nan)

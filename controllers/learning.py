@@ -13,7 +13,7 @@ calls it at three points:
   theirs);
 - :meth:`LearningRule.update` at every control step of a learning cycle, for a rule whose
   :attr:`~LearningRule.online` is True (the loop passes it as
-  :func:`skinny_mj.controllers.rollout.rollout`'s ``online``): the step before's extended state,
+  :class:`skinny_mj.controllers.loop.Loop`'s ``online``): the step before's extended state,
   ESN output and FEL target, one step late because u_error(t) completes y_est(t-1).
 
 The target a rule fits is FEL's blend (paper E's new method), :func:`beta_target`:

@@ -1,6 +1,6 @@
 """Online learning inside the closed loop: an RLS (FORCE-style) readout update per
 control step, an online learning rule (:class:`skinny_mj.controllers.learning.LearningRule`) for
-:func:`skinny_mj.controllers.fel.train`'s ``rule`` or :func:`skinny_mj.controllers.fel.rollout`'s
+:func:`skinny_mj.controllers.fel.train`'s ``rule`` or a :class:`skinny_mj.controllers.loop.Loop`'s
 ``online``.
 
 At step t the rollout knows u_error(t), so FEL's estimated target of the step before,
@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 from skinny_mj.controllers.esn import ESN
 from skinny_mj.controllers.learning import Cycle, LearningRule, beta_target
+from skinny_mj.controllers.methods import check_beta
 from skinny_mj.controllers.readout import RLS, linear_targets
 
 
@@ -45,8 +46,7 @@ class OnlineRLS(LearningRule):
                  runs: np.ndarray | None = None):
         if esn.W_out.dtype != np.float64:
             raise ValueError("online RLS needs a float64 ESN")
-        if not 0 < beta <= 1:
-            raise ValueError(f"beta must be in (0, 1], got {beta}")
+        check_beta(beta)
         self.esn, self.beta = esn, float(beta)
         self.runs = None if runs is None else np.asarray(runs, bool)
         self.rls = RLS(esn.W_out, ridge_lambda, forgetting) if states is None else \

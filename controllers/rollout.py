@@ -4,7 +4,8 @@ Step t (t = 0 .. T-2): sense s(t); ESN input [d(t+1); s_in(t)] (+ the forward mo
 prediction p(t), + a hook's extra inputs); u_error(t) from (d(t), s(t)); command =
 clip(y_ESN + K u_error, -1, 1); step the plant. ``s_in`` is the sensed signal delayed by
 ``delay_steps`` (paper A); the feedback controller always sees the undelayed s(t). With
-``inputs="sensed"`` (paper B) the desired position is left out of the ESN's input.
+``inputs="sensed"`` (paper B) the desired position is left out of the ESN's input. The
+loop's parts are a :class:`~skinny_mj.controllers.loop.Loop`.
 :mod:`skinny_mj.controllers.fel` builds the training and the test from these cycles.
 """
 
@@ -14,12 +15,13 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 from skinny_mj.controllers.esn import ESN
-from skinny_mj.controllers.feedback import FeedbackController
+from skinny_mj.controllers.loop import INPUTS, Loop
 from skinny_mj.controllers.plant import Plant
 
-#: What the inverse model sees besides the forward model's prediction: the desired next
-#: position and the sensed one (papers A, C, D, E), or the sensed one only (paper B).
-INPUTS = ("desired+sensed", "sensed")
+__all__ = ["INPUTS", "Loop", "Rollout", "rollout", "run_mean"]
+
+#: the plain loop: desired + sensed inputs, the default feedback controller, nothing else
+DEFAULT_LOOP = Loop()
 
 
 def run_mean(a: np.ndarray) -> np.ndarray:
@@ -83,40 +85,23 @@ def rollout(
     plant: Plant,
     desired: np.ndarray,
     gain: float | np.ndarray,
+    loop: Loop = DEFAULT_LOOP,
     *,
     noise: bool = True,
-    feedback: FeedbackController | None = None,
-    delay_steps: int = 0,
-    forward=None,
-    buffers: dict | None = None,
-    inputs: str = "desired+sensed",
-    hook=None,
-    online=None,
 ) -> Rollout:
-    """Run one cycle: plant reset to the first pose, ESN state carried on.
+    """Run one cycle of ``loop``: plant reset to the first pose, ESN state carried on.
 
     Parameters
     ----------
     desired : (T, n_sig) desired position signals, normalized.
     gain : K, scalar or (R,).
+    loop : the :class:`~skinny_mj.controllers.loop.Loop`: inputs, feedback controller or
+        actuation hook, forward model, online learner (at step t >= 1, once u_error(t)
+        is known, ``online.update(state(t-1), y_ESN(t-1), y_est(t-1))``), delay, buffers.
     noise : reservoir noise on (washout/learning) or off (evaluation/test).
-    forward : optional :class:`skinny_mj.controllers.forward_model.ForwardModel`, whose
-        prediction p(t) is appended to the inverse model's input.
-    inputs : "desired+sensed" (ESN input [d(t+1); s_in(t)]) or "sensed" ([s_in(t)]);
-        the forward model's p(t) is appended in both cases.
-    buffers : optional dict the rollout keeps its arrays in and reuses on the next call
-        with the same dict (fresh pages of a few MB per rollout cost about as much as
-        the control step); the returned Rollout's arrays are then views that the next
-        such call overwrites. :func:`train` passes one per training.
-    hook : optional :class:`skinny_mj.controllers.torque_fel.RolloutHook` (the torque loop): extra
-        ESN inputs after all others, the motor error instead of ``feedback``'s, a
-        feed-forward added before the clip, a call after each step. None: the plain loop.
-    online : optional online learning rule (:class:`skinny_mj.controllers.learning.LearningRule`,
-        e.g. :class:`skinny_mj.controllers.online.OnlineRLS`) updated inside the loop: at step
-        t >= 1, once u_error(t) is known, ``online.update(state(t-1), y_ESN(t-1),
-        y_est(t-1))``. None: no online learning.
     """
-    feedback = feedback or FeedbackController()
+    feedback, hook, forward, online = loop.feedback, loop.hook, loop.forward, loop.online
+    delay_steps, buffers = loop.delay_steps, loop.buffers
 
     def array(name: str, shape: tuple[int, ...], dtype=np.float64) -> np.ndarray:
         if buffers is None:
@@ -132,12 +117,10 @@ def rollout(
     # Time-major buffers (T, R, ...): each step writes contiguous rows, not R rows a
     # whole movement apart (scattered first touches of fresh pages cost more than the
     # writes). The Rollout holds their (R, T, ...) views.
-    if inputs not in INPUTS:
-        raise ValueError(f"inputs must be one of {INPUTS}, got {inputs!r}")
     if plant.n_runs != n_runs:
         raise ValueError(f"{n_runs} networks for {plant.n_runs} plant runs")
     n_sig, n_dof = plant.n_signals, plant.n_dof
-    n_des = desired.shape[1] if inputs == "desired+sensed" else 0
+    n_des = desired.shape[1] if loop.inputs == "desired+sensed" else 0
     sensed = array("sensed", (n_steps, n_runs, n_sig))
     true = array("true", (n_steps, n_runs, n_sig))
     first = plant.reset()

@@ -1,6 +1,7 @@
 """The torque loop: what :func:`skinny_mj.controllers.fel.rollout` adds on a torque plant.
 
-:func:`skinny_mj.controllers.fel.rollout` takes an optional ``hook`` (:class:`RolloutHook`): the
+A :class:`skinny_mj.controllers.loop.Loop` takes an optional ``hook``
+(:class:`~skinny_mj.controllers.loop.Hook`): the
 smallest set of calls that turns the velocity-servo loop into a torque loop without a
 second training loop. Per step t it asks the hook for
 
@@ -24,36 +25,18 @@ Pure NumPy: the plant supplies ``joint_velocities()`` (R, n_dof) rad/s,
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol
 
 import numpy as np
+from skinny_mj.controllers.loop import Hook
 from skinny_mj.controllers.torque_feedback import TorqueFeedbackController
 
-
-class RolloutHook(Protocol):
-    """What :func:`skinny_mj.controllers.fel.rollout` calls when given a ``hook``."""
-
-    n_inputs: int  # extra ESN inputs per step
-
-    def begin(self, plant, n_steps: int) -> None:
-        """Called once after the plant's reset, for a cycle of ``n_steps`` states."""
-
-    def inputs(self, t: int, plant) -> np.ndarray:
-        """(R, n_inputs) extra ESN inputs at step t."""
-
-    def u_error(self, t: int, desired: np.ndarray, sensed: np.ndarray, plant) -> np.ndarray:
-        """(R, n_dof) motor error at state t (t = 0 .. T-1)."""
-
-    def feedforward(self, t: int, plant) -> np.ndarray:
-        """(R, n_dof) command added before the clip (not learned)."""
-
-    def after_step(self, t: int, plant) -> None:
-        """Called after the plant moved from state t to t+1."""
+#: the rollout hook's protocol, :class:`skinny_mj.controllers.loop.Hook`
+RolloutHook = Hook
 
 
 @dataclass
 class TorqueLoop:
-    """The :class:`RolloutHook` of a torque plant (see the module docstring).
+    """The :class:`~skinny_mj.controllers.loop.Hook` of a torque plant (see the module docstring).
 
     Parameters
     ----------

@@ -4,7 +4,8 @@ Targets are the true commands (from an analytic inverse, computed elsewhere and
 passed in as an array). Teacher forcing: the inverse model's "current position"
 input is the desired position d(t), so the plant is not needed for training; it is
 used only in testing (closed loop, K = 0: :func:`skinny_mj.controllers.fel.evaluate`).
-Original method: one fitted cycle. New method: ``cycles`` cycles, each fitting
+The method is a :class:`~skinny_mj.controllers.methods.TrueTarget`; with β = 1 (the
+original method) one fitted cycle, else ``cycles`` cycles, each fitting
 y_used = beta y_true + (1 - beta) y_ESN (:func:`skinny_mj.controllers.learning.beta_target`) by a
 learning rule (default the pinv or ridge fit of each cycle alone). Every run starts
 with a reset and one washout cycle; the state carries over between cycles.
@@ -18,30 +19,11 @@ from dataclasses import dataclass
 import numpy as np
 from skinny_mj.controllers.esn import ESN
 from skinny_mj.controllers.learning import Cycle, CycleFit, LearningRule, beta_target
+from skinny_mj.controllers.methods import TrueTarget
 from skinny_mj.controllers.metrics import nrmse
 
-
-@dataclass(frozen=True)
-class TrueTargetConfig:
-    """method "original" (one cycle) or "new" (``cycles`` cycles with ``beta``)."""
-
-    method: str = "new"
-    beta: float = 0.1
-    cycles: int = 50
-    noise: bool = True
-    #: SD of Gaussian noise added to the teacher-forced inputs (not the targets) in
-    #: every training cycle, normalized signal units (0 = none, bit for bit)
-    input_noise: float = 0.0
-
-    def __post_init__(self) -> None:
-        if self.method not in ("original", "new"):
-            raise ValueError(f"method must be 'original' or 'new', got {self.method!r}")
-        if not 0 < self.beta <= 1:
-            raise ValueError(f"beta must be in (0, 1], got {self.beta}")
-        if self.cycles < 1:
-            raise ValueError(f"cycles must be >= 1, got {self.cycles}")
-        if not self.input_noise >= 0:
-            raise ValueError(f"input noise must be >= 0, got {self.input_noise}")
+__all__ = ["TrueTarget", "TrueTargetResult", "teacher_forced_inputs", "train_true_target",
+           "convergence_curve", "cycles_to_converge"]
 
 
 @dataclass
@@ -65,7 +47,9 @@ def train_true_target(
     esn: ESN,
     desired: np.ndarray,
     true_commands: np.ndarray,
-    cfg: TrueTargetConfig,
+    method: TrueTarget,
+    *,
+    noise: bool = True,
     one_step: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
     input_rngs: list[np.random.Generator] | None = None,
     extra_inputs: np.ndarray | None = None,
@@ -78,7 +62,9 @@ def train_true_target(
     desired : (T, n_sig) desired signals.  true_commands : (T-1, n_dof).
     one_step : optional map (positions (T-1, n_sig), commands (R, T-1, n_dof)) ->
         next positions (R, T-1, n_sig), for the teacher-forced position error.
-    input_rngs : one Generator per run for ``cfg.input_noise`` (needed when it is > 0).
+    method : :class:`~skinny_mj.controllers.methods.TrueTarget`: β, cycles, input noise.
+    noise : reservoir noise on in the training cycles.
+    input_rngs : one Generator per run for ``method.input_noise`` (needed when it is > 0).
     extra_inputs : optional (T-1, n_extra) teacher-forced inputs appended after
         [d(t+1); d(t)], as a rollout hook appends its own (the torque loop's desired
         velocities, :mod:`skinny_mj.controllers.torque_fel`).
@@ -93,16 +79,15 @@ def train_true_target(
         forced = np.concatenate([forced, np.asarray(extra_inputs, float)], axis=1)
     inputs = np.broadcast_to(forced, (esn.n_runs, *forced.shape))
     y_true = np.broadcast_to(true_commands, (esn.n_runs, *true_commands.shape))
-    beta = 1.0 if cfg.method == "original" else cfg.beta
-    cycles = 1 if cfg.method == "original" else cfg.cycles
+    beta, cycles, input_noise = method.beta, method.fitted_cycles, method.input_noise
     clean = inputs
-    if cfg.input_noise > 0 and (input_rngs is None or len(input_rngs) != esn.n_runs):
+    if input_noise > 0 and (input_rngs is None or len(input_rngs) != esn.n_runs):
         raise ValueError("input noise needs one Generator per run (input_rngs)")
 
     def noisy() -> np.ndarray:  # fresh noise per cycle: the toolbox's noisy teacher forcing
-        if cfg.input_noise == 0:
+        if input_noise == 0:
             return clean
-        return clean + np.stack([g.normal(0.0, cfg.input_noise, clean.shape[1:])
+        return clean + np.stack([g.normal(0.0, input_noise, clean.shape[1:])
                                  for g in input_rngs])
 
     rule = CycleFit(reuse_factors=True) if rule is None else rule
@@ -113,9 +98,9 @@ def train_true_target(
         return Cycle(states, beta_target(y_true, y_esn, beta), runs, 0, y_true, y_esn)
 
     esn.reset()
-    rule.washout(esn, handed(esn.run(noisy(), noise=cfg.noise)))
+    rule.washout(esn, handed(esn.run(noisy(), noise=noise)))
     for _ in range(cycles):
-        rule.fit(esn, handed(esn.run(noisy(), noise=cfg.noise)))
+        rule.fit(esn, handed(esn.run(noisy(), noise=noise)))
     esn.reset()
     esn.run(inputs, noise=False)
     outputs, _ = esn.run(inputs, noise=False)

@@ -111,7 +111,6 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Train the row's networks in lockstep, then perform cycle after cycle (pre,
     changed, undone) with the row's learner."""
     from skinny_mj.plant.perturb import PerturbedPlant
-    from skinny_mj.training import torque
     from skinny_mj.training.loop import PhysicsBatchError, build_run, train_run
 
     p = row.params
@@ -119,13 +118,14 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     run = build_run(config, seeds)
     trained = train_run(run).fel
     esn, plant = run.esn, PerturbedPlant(run.plant)
-    hook = torque.hook_for(config, run.training, run.max_speed_rad_s)
+    hook = run.actuation.hook(run.training, run.max_speed_rad_s)
     desired_angles = run.training.position_signals("joint")
     alive = ~trained.failed
     online = None
     if learner == "rls":
         online = OnlineRLS(esn, p["forgetting"], p["rls_lambda"],
                            states=np.array(trained.last_rollout.states), runs=alive)
+    loop = fel.Loop(hook=hook, online=online)
     pre, n_change = p["pre_cycles"], p["change_cycles"]
     n_cycles = pre + n_change + p["post_cycles"]
     curve = np.full((len(seeds), n_cycles), np.nan)
@@ -136,8 +136,8 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
             plant.set(**perturbation(p, change, plant.n_dof))
         elif c == pre + n_change:
             plant.undo()
-        ro = fel.rollout(esn, plant, run.desired, p["gain"], noise=learner == "fel-noise",
-                         online=online, hook=hook)
+        ro = fel.rollout(esn, plant, run.desired, p["gain"], loop,
+                         noise=learner == "fel-noise")
         ok = np.array([r is None for r in fel.health(esn, ro)]) & alive
         alive &= ok
         curve[alive, c] = position_nrmse(ro.true_signals, run.desired)[alive]
@@ -146,7 +146,7 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
         if learner in ("fel", "fel-noise") and alive.any():  # as in training: the new method
             esn.fit(ro.states, fel.beta_target(ro.y_est, ro.y_esn, config.rule.beta),
                     runs=alive)
-    warnings = torque.train_warnings(run) or 0  # the torque twin's, training and performance
+    warnings = run.actuation.train_warnings(run) or 0  # the torque twin's, training and performance
     if warnings and len(seeds) > 1:  # one shared MjData: run the seeds alone
         raise PhysicsBatchError(f"MuJoCo warnings in a lockstep batch of {len(seeds)} runs")
     out: list = []

@@ -43,8 +43,8 @@ def test_the_lagging_arm_gets_delayed_state_its_prediction_and_what_the_leader_s
         fm.esn.lead.W_out[..., -1] = -0.3
     esn = ESN(ESNConfig(8, 2, N, 0.5), seed=0)
     desired = position_signals(traj.angles, 4, "joint")
-    ro = fel.rollout(esn, plant, desired, 1.0, noise=False, inputs="sensed", delay_steps=2,
-                     forward=fm)
+    ro = fel.rollout(esn, plant, desired, 1.0,
+                     fel.Loop(inputs="sensed", forward=fm, delay_steps=2), noise=False)
     u = ro.states[0, :, N:N + 8]  # the inverse model's input [s(t - 2); p(t)]
     t = np.arange(len(u))
     np.testing.assert_array_equal(u[:, :4], ro.sensed[0, np.maximum(t - 2, 0)])

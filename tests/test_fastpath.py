@@ -252,12 +252,12 @@ def test_bench_control_step_figure_runs_and_reports_both_floors():
 def test_rollout_buffers_are_reused_and_change_nothing():
     _, _, desired, esn, plant = bench._lockstep_parts(3, 40)
     _, _, _, esn_b, plant_b = bench._lockstep_parts(3, 40)  # the same, seed by seed
-    buffers: dict = {}
+    loop = fel.Loop().with_buffers()
     for _ in range(2):
         plain = fel.rollout(esn, plant, desired, 0.5)
-        reused = fel.rollout(esn_b, plant_b, desired, 0.5, buffers=buffers)
+        reused = fel.rollout(esn_b, plant_b, desired, 0.5, loop)
         for name in ("commands", "y_esn", "u_error", "sensed", "true_signals", "angles",
                      "states"):
             np.testing.assert_array_equal(getattr(plain, name), getattr(reused, name))
-    assert np.shares_memory(reused.states, buffers["states"])
+    assert np.shares_memory(reused.states, loop.buffers["states"])
     assert reused.states.shape == (3, len(desired) - 1, esn.cfg.n_extended)

@@ -4,7 +4,17 @@ import numpy as np
 import pytest
 from skinny_mj.controllers.esn import ESN, ESNConfig, run_generators
 from skinny_mj.controllers.feedback import FeedbackController
-from skinny_mj.controllers.fel import FELConfig, evaluate, health, rollout, train
+from skinny_mj.controllers.fel import (
+    Loop,
+    New,
+    Original,
+    Task,
+    Test,
+    evaluate,
+    health,
+    rollout,
+    train,
+)
 from skinny_mj.controllers.metrics import nrmse, position_nrmse
 from skinny_mj.controllers.plant import ToyPlant, toy_movement
 
@@ -31,7 +41,7 @@ def test_rollout_shapes_and_y_est():
     # noise-free sensor the one-step correction puts the plant on d(t) at t + 1
     assert np.all(ro.y_esn == 0)
     plant.sensor_noise_std = 0.0
-    ro = rollout(esn, plant, desired, 1.0, feedback=FeedbackController(damping=0.0))
+    ro = rollout(esn, plant, desired, 1.0, Loop(feedback=FeedbackController(damping=0.0)))
     expected = np.broadcast_to(desired[1:-1], (2, t - 2, 4))
     np.testing.assert_allclose(ro.true_signals[:, 2:], expected, atol=1e-12)
     assert position_nrmse(ro.true_signals, desired).max() > 0.005  # but one step late
@@ -39,11 +49,11 @@ def test_rollout_shapes_and_y_est():
 
 def test_fel_reduces_test_error_over_epochs():
     plant, desired, commands, cfg = _setup(n_runs=3)
-    fel = FELConfig("new", beta=0.1, learning_cycles=3, epochs=6)
+    fel = New(beta=0.1, cycles=3, epochs=6)
     esn = ESN(cfg, n_runs=3, seed=2)
-    untrained = evaluate(esn, plant, desired, commands)
-    result = train(esn, plant, desired, fel, true_commands=commands)
-    trained = evaluate(esn, plant, desired, commands)
+    untrained = evaluate(esn, plant, Task(desired, commands))
+    result = train(esn, plant, Task(desired, commands), fel)
+    trained = evaluate(esn, plant, Task(desired, commands))
     assert not result.failed.any()
     assert np.all(trained.position_nrmse < 0.5 * untrained.position_nrmse)
     assert np.all(trained.motor_nrmse < 0.5 * untrained.motor_nrmse)
@@ -53,7 +63,7 @@ def test_fel_reduces_test_error_over_epochs():
 def test_beta_one_equals_original():
     plant, desired, _, cfg = _setup(seed=4)
     results = []
-    for fel in (FELConfig("original", 1.0, 1, epochs=3), FELConfig("new", 1.0, 1, epochs=3)):
+    for fel in (Original(cycles=1, epochs=3), New(beta=1.0, cycles=1, epochs=3)):
         plant, *_ = _setup(seed=4)
         esn = ESN(cfg, n_runs=2, seed=3)
         results.append((train(esn, plant, desired, fel).position_nrmse, esn.W_out.copy()))
@@ -64,7 +74,7 @@ def test_beta_one_equals_original():
 def test_lockstep_training_equals_single_runs():
     n_runs = 3
     plant, desired, _, cfg = _setup(n_runs=n_runs, plant_rngs=run_generators(9, n_runs))
-    fel = FELConfig("new", 0.3, 2, epochs=2)
+    fel = New(beta=0.3, cycles=2, epochs=2)
     batch = ESN(cfg, n_runs=n_runs, seed=5)
     curve = train(batch, plant, desired, fel).position_nrmse
     for r, (gen, pgen) in enumerate(zip(run_generators(5, n_runs), run_generators(9, n_runs),
@@ -81,8 +91,8 @@ def test_diverged_run_is_marked_failed_and_others_continue():
     esn = ESN(cfg, n_runs=2, seed=6)
     ticks = []
     esn.W_in[1] *= 1e4  # run 1 saturates its reservoir
-    result = train(esn, plant, desired, FELConfig("new", 0.1, 2, epochs=2),
-                   progress=lambda e, c: ticks.append((e, c)))
+    result = train(esn, plant, desired, New(beta=0.1, cycles=2, epochs=2),
+                   observe=lambda e, c, ro, y_used: ticks.append((e, c)))
     assert result.failed.tolist() == [False, True]
     assert "saturated" in result.fail_reason[1] and result.fail_epoch[1] == 0
     assert np.all(np.isfinite(result.position_nrmse[0]))
@@ -94,7 +104,7 @@ def test_diverged_run_is_marked_failed_and_others_continue():
 def test_delay_line_feeds_the_model_old_positions_only():
     plant, desired, _, cfg = _setup(n_runs=1, noise=0.0)
     esn = ESN(cfg, seed=7)
-    ro = rollout(esn, plant, desired, 1.0, delay_steps=3)
+    ro = rollout(esn, plant, desired, 1.0, Loop(delay_steps=3))
     sensed_part = ro.states[0, :, cfg.n_reservoir + 4 : cfg.n_reservoir + 8]
     np.testing.assert_allclose(sensed_part[5], ro.sensed[0, 2])
     np.testing.assert_allclose(sensed_part[1], ro.sensed[0, 0])
@@ -102,12 +112,17 @@ def test_delay_line_feeds_the_model_old_positions_only():
 
 def test_config_validation():
     with pytest.raises(ValueError, match="inputs"):
-        FELConfig(inputs="desired")
-    assert FELConfig("original", beta=0.1).effective_beta == 1.0
+        Loop(inputs="desired")
+    with pytest.raises(ValueError, match="delay"):
+        Loop(delay_steps=-1)
+    assert Original().beta == 1.0 and Original(cycles=2).learning_cycles == 2
+    assert New(beta=0.1).learning_cycles == 3  # paper E's Table 1
     with pytest.raises(ValueError, match="beta"):
-        FELConfig("new", beta=0.0)
-    with pytest.raises(ValueError, match="method"):
-        FELConfig("magic")
+        New(beta=0.0)
+    with pytest.raises(ValueError, match="gain schedule"):
+        New(gain_schedule="magic")
+    with pytest.raises(ValueError, match="washout"):
+        Test(washout_cycles=-1)
 
 
 def test_nrmse_definition():
@@ -121,7 +136,7 @@ def test_sensed_only_inputs_leave_the_desired_position_out():
     plant, desired, _, cfg = _setup(n_runs=1, noise=0.0)
     n_sig = desired.shape[1]
     small = ESNConfig(n_inputs=n_sig, n_outputs=cfg.n_outputs, n_reservoir=cfg.n_reservoir)
-    ro = rollout(ESN(small, seed=3), plant, desired, 1.0, inputs="sensed")
+    ro = rollout(ESN(small, seed=3), plant, desired, 1.0, Loop(inputs="sensed"))
     inputs_part = ro.states[0, :, small.n_reservoir:small.n_reservoir + n_sig]
     np.testing.assert_array_equal(inputs_part, ro.sensed[0, :-1])
 
@@ -141,7 +156,7 @@ def test_health_names_non_finite_commands():
 def test_evaluate_washout_cycles_run_before_the_scored_one():
     plant, desired, _, cfg = _setup(n_runs=1, noise=0.0)
     esn = ESN(cfg, seed=2)
-    one = evaluate(esn, plant, desired, washout_cycles=1)
+    one = evaluate(esn, plant, desired, test=Test(washout_cycles=1))
     esn.reset()
     rollout(esn, plant, desired, 0.0, noise=False)
     second = rollout(esn, plant, desired, 0.0, noise=False)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 from skinny_mj.controllers.esn import ESN, ESNConfig
-from skinny_mj.controllers.fel import FELConfig, rollout, train
+from skinny_mj.controllers.fel import Loop, New, rollout, train
 from skinny_mj.controllers.forward_model import ForwardModel, rollout_prediction_error
 from skinny_mj.controllers.metrics import nrmse
 from skinny_mj.controllers.plant import ToyPlant, toy_movement
@@ -36,15 +36,17 @@ def test_pretrained_forward_model_beats_the_no_change_guess():
 def test_serial_model_stays_frozen_and_parallel_model_learns_in_fel():
     plant, desired, commands = _setup()
     inv_cfg = ESNConfig(12, 4, n_reservoir=60, noise_level=0.2)
-    fel = FELConfig("new", 0.3, 2, epochs=2, delay_steps=2)
+    fel = New(beta=0.3, cycles=2, epochs=2)
     serial = _fm(mode="serial")
     serial.pretrain(desired, commands, delay_steps=2)
     frozen = serial.esn.W_out.copy()
-    train(ESN(inv_cfg, n_runs=2, seed=1), plant, desired, fel, forward=serial)
+    train(ESN(inv_cfg, n_runs=2, seed=1), plant, desired, fel,
+          Loop(forward=serial, delay_steps=2))
     np.testing.assert_array_equal(serial.esn.W_out, frozen)
 
     parallel = _fm(mode="parallel")
-    train(ESN(inv_cfg, n_runs=2, seed=1), plant, desired, fel, forward=parallel)
+    train(ESN(inv_cfg, n_runs=2, seed=1), plant, desired, fel,
+          Loop(forward=parallel, delay_steps=2))
     assert np.all(np.any(parallel.esn.W_out != 0, axis=(1, 2)))
 
 
@@ -53,13 +55,13 @@ def test_parallel_fit_on_a_rollout_aligns_states_with_the_next_position():
     plant.sensor_noise_std = 0.0
     fm = _fm(mode="parallel")
     inverse = ESN(ESNConfig(12, 4, n_reservoir=30), n_runs=2, seed=2)  # readout 0: feedback only
-    ro = rollout(inverse, plant, desired, 1.0, noise=False, delay_steps=1, forward=fm)
+    ro = rollout(inverse, plant, desired, 1.0, Loop(forward=fm, delay_steps=1), noise=False)
     assert ro.predictions.shape == ro.sensed.shape
     fm.fit_rollout(ro)
     fitted = nrmse(fm.esn.readout(ro.fm_states), ro.sensed[:, 1:])
     no_change = nrmse(ro.sensed[:, :-1], ro.sensed[:, 1:])
     assert np.all(fitted < 0.1 * no_change)
-    ro2 = rollout(inverse, plant, desired, 1.0, noise=False, delay_steps=1, forward=fm)
+    ro2 = rollout(inverse, plant, desired, 1.0, Loop(forward=fm, delay_steps=1), noise=False)
     assert np.all(rollout_prediction_error(ro2) < 0.3 * no_change)
 
 

@@ -35,7 +35,7 @@ def test_beta_target_is_the_blend_and_beta_one_the_target_itself():
 
 def _old_train(esn, plant, desired, cfg):
     """fel.train's loop as it was written before the seam: the blend inline, esn.fit."""
-    beta, curve = cfg.effective_beta, []
+    beta, curve = cfg.beta, []
     failed = np.zeros(esn.n_runs, bool)
 
     def mark(ro):
@@ -58,7 +58,8 @@ def _old_train(esn, plant, desired, cfg):
 
 @pytest.mark.parametrize("method,beta", [("new", 0.3), ("original", 1.0)])
 def test_default_rule_is_the_old_inline_fit_bit_for_bit(method, beta):
-    cfg = fel.FELConfig(method, beta, learning_cycles=2, epochs=3)
+    cfg = fel.New(beta=beta, cycles=2, epochs=3) if method == "new" \
+        else fel.Original(cycles=2, epochs=3)
     plant, desired, _, old = _setup()
     old_curve = _old_train(old, plant, desired, cfg)
     plant, desired, _, new = _setup()
@@ -91,12 +92,12 @@ def test_a_batch_rule_refits_the_runs_that_learn_and_only_those(name):
 
 
 def test_an_online_rule_learns_at_every_step_of_the_learning_cycles():
-    cfg = fel.FELConfig("original", 1.0, learning_cycles=2, epochs=3)
+    cfg = fel.Original(cycles=2, epochs=3)
     plant, desired, commands, esn = _setup(noise=0.0)
-    untrained = fel.evaluate(esn, plant, desired, commands).position_nrmse
+    untrained = fel.evaluate(esn, plant, fel.Task(desired, commands)).position_nrmse
     rule = OnlineRLS(esn, forgetting=1.0, ridge_lambda=1e-2)
     result = fel.train(esn, plant, desired, cfg, rule=rule)
-    trained = fel.evaluate(esn, plant, desired, commands).position_nrmse
+    trained = fel.evaluate(esn, plant, fel.Task(desired, commands)).position_nrmse
     assert not result.failed.any()
     assert rule.updates == cfg.epochs * cfg.learning_cycles * (len(desired) - 1)
     assert np.all(trained < 0.5 * untrained)

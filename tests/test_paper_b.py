@@ -96,7 +96,7 @@ def test_esn_sees_only_the_current_state_of_both_arms():
     q, plant = _plant()
     esn = ESN(ESNConfig(4, 2, 20, 0.5), seed=0)
     desired = position_signals(q, 4, "joint")
-    ro = fel.rollout(esn, plant, desired, 1.0, noise=False, inputs="sensed")
+    ro = fel.rollout(esn, plant, desired, 1.0, fel.Loop(inputs="sensed"), noise=False)
     # input block of the extended state [x; u; 1] is the sensed state s(t)
     np.testing.assert_allclose(ro.states[0, :, 20:24], ro.sensed[0, :-1])
     assert ro.commands.shape == (1, len(q) - 1, 2)

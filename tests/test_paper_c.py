@@ -25,8 +25,8 @@ def test_config_is_paper_c_section_3_5():
     assert (cfg.plant.sensor_noise, cfg.rule.epochs, cfg.learning_cycles) == (0.01, 150, 5)
     from skinny_mj.training.loop import build_run
 
-    fcfg = build_run(cfg, [0]).fel_config()
-    assert fcfg.effective_beta == 1.0  # u_target = u + u_error(t+1): the original target
+    fcfg = build_run(cfg, [0]).cfg.rule
+    assert fcfg.beta == 1.0  # u_target = u + u_error(t+1): the original target
     gains = fcfg.gains()
     assert gains.shape == (150,) and gains[0] == 1.0
     np.testing.assert_allclose(gains[1:] / gains[:-1], 0.9)  # -10 % per epoch

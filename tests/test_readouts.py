@@ -139,7 +139,7 @@ def test_online_hook_sees_each_steps_target_one_step_late_and_changes_nothing_el
     plain = {k: np.array(getattr(plain, k)) for k in ("commands", "states", "u_error")}
     esn.reset()
     rec = _Recorder()
-    hooked = fel.rollout(esn, _toy(), desired, 0.5, noise=False, online=rec)
+    hooked = fel.rollout(esn, _toy(), desired, 0.5, fel.Loop(online=rec), noise=False)
     assert np.array_equal(hooked.commands, plain["commands"])  # a no-op learner: same run
     assert len(rec.calls) == len(desired) - 1
     for t, (state, y_est) in enumerate(rec.calls):
@@ -153,7 +153,7 @@ def test_online_rls_learns_in_the_loop_in_lockstep():
     both, toy = _esn(2), _toy(2)
     rls = OnlineRLS(both, forgetting=1.0, ridge_lambda=1e-2)
     for _ in range(3):
-        ro = fel.rollout(both, toy, desired, 0.3, noise=False, online=rls)
+        ro = fel.rollout(both, toy, desired, 0.3, fel.Loop(online=rls), noise=False)
         errors.append(np.abs(ro.u_error).mean())
     assert errors[-1] < errors[0]  # online learning reduces the feedback's work
     assert rls.updates == 3 * (len(desired) - 1)
@@ -162,7 +162,7 @@ def test_online_rls_learns_in_the_loop_in_lockstep():
     plant = ToyPlant(1, np.zeros(2), np.array([[-1.5, 1.5]] * 2), np.ones(2),
                      rngs=[np.random.default_rng(11)])
     for _ in range(3):
-        fel.rollout(alone, plant, desired, 0.3, noise=False, online=one)
+        fel.rollout(alone, plant, desired, 0.3, fel.Loop(online=one), noise=False)
     assert np.array_equal(alone.W_out[0], both.W_out[1])
 
 

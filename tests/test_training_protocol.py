@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from skinny_mj.controllers.esn import ESN, ESNConfig
 from skinny_mj.controllers.feedback import FeedbackController
-from skinny_mj.controllers.fel import FELConfig, evaluate, train
+from skinny_mj.controllers.fel import Loop, New, Task, Test, evaluate, train
 from skinny_mj.controllers.plant import ToyPlant, toy_movement
-from skinny_mj.controllers.true_target import TrueTargetConfig, train_true_target
+from skinny_mj.controllers.true_target import TrueTarget, train_true_target
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
@@ -48,11 +48,12 @@ def test_u_error_gain_scales_u_error_and_training_follows():
                                   base)
     np.testing.assert_allclose(FeedbackController(gain=2.0).u_error(desired[5], sensed, plant),
                                2 * base)
-    fcfg = FELConfig(epochs=2, learning_cycles=1)
+    fcfg = New(epochs=2, cycles=1)
     runs = []
     for fb in (None, FeedbackController(gain=1.0), FeedbackController(gain=0.5)):
         p, d, c, ecfg = _toy()
-        runs.append(train(ESN(ecfg, n_runs=2, seed=1), p, d, fcfg, c, feedback=fb))
+        runs.append(train(ESN(ecfg, n_runs=2, seed=1), p, Task(d, c), fcfg,
+                          Loop() if fb is None else Loop(feedback=fb)))
     np.testing.assert_array_equal(runs[0].position_nrmse, runs[1].position_nrmse)
     assert not np.allclose(runs[0].position_nrmse, runs[2].position_nrmse)
 
@@ -78,8 +79,8 @@ def test_test_noise_is_a_parameter_off_by_default():
         plant, desired, commands, cfg = _toy()
         esn = ESN(cfg, n_runs=2, seed=1)
         esn.W_out[...] = np.random.default_rng(0).normal(0, 0.1, esn.W_out.shape)  # "trained"
-        kw = {} if noise is None else {"noise": noise}
-        results.append(evaluate(esn, plant, desired, commands, **kw).position_nrmse)
+        test = Test() if noise is None else Test(noise=noise)
+        results.append(evaluate(esn, plant, Task(desired, commands), test=test).position_nrmse)
     np.testing.assert_array_equal(results[0], results[1])
     assert not np.allclose(results[1], results[2])
 
@@ -90,19 +91,19 @@ def test_teacher_forcing_input_noise_perturbs_inputs_only_and_is_seeded():
     def fit(sd, seed=0):
         esn = ESN(cfg, n_runs=2, seed=1)
         rngs = [np.random.default_rng(seed + r) for r in range(2)]
-        tt = TrueTargetConfig(method="original", input_noise=sd)
+        tt = TrueTarget(beta=1.0, input_noise=sd)
         return train_true_target(esn, desired, commands, tt, input_rngs=rngs).motor_nrmse
 
     clean = fit(0.0)
     esn = ESN(cfg, n_runs=2, seed=1)
     np.testing.assert_array_equal(
-        clean, train_true_target(esn, desired, commands, TrueTargetConfig(method="original"))
+        clean, train_true_target(esn, desired, commands, TrueTarget(beta=1.0))
         .motor_nrmse)
     np.testing.assert_array_equal(fit(0.05), fit(0.05))
     assert np.all(fit(0.05) > clean)  # noisy inputs: the fit to clean inputs is worse
     with pytest.raises(ValueError):
         train_true_target(ESN(cfg, n_runs=2, seed=1), desired, commands,
-                          TrueTargetConfig(input_noise=0.1))
+                          TrueTarget(input_noise=0.1))
 
 
 def test_explicit_desired_signals_travel_with_the_trajectory(tmp_path):

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 from skinny_mj.controllers.esn import ESN, ESNConfig
-from skinny_mj.controllers.fel import evaluate
+from skinny_mj.controllers.fel import Task, evaluate
 from skinny_mj.controllers.plant import ToyPlant, toy_movement
 from skinny_mj.controllers.true_target import (
-    TrueTargetConfig,
+    TrueTarget,
     convergence_curve,
     cycles_to_converge,
     teacher_forced_inputs,
@@ -30,22 +30,22 @@ def test_teacher_forced_inputs():
 def test_true_target_training_fits_and_closed_loop_test_works():
     plant, desired, commands = _setup()
     esn = ESN(ESNConfig(8, 4, n_reservoir=100, noise_level=0.02), n_runs=2, seed=3)
-    untrained = evaluate(esn, plant, desired, commands)
+    untrained = evaluate(esn, plant, Task(desired, commands))
 
     def one_step(positions, cmds):  # joint-space toy: d(t) + c * speed * dt in signals
         return positions + cmds * plant.max_speed_rad_s * plant.dt * 2 / np.pi
 
-    result = train_true_target(esn, desired, commands, TrueTargetConfig("original"), one_step)
+    result = train_true_target(esn, desired, commands, TrueTarget(beta=1.0), one_step=one_step)
     assert result.outputs.shape == (2, len(desired) - 1, 4)
     assert np.all(result.motor_nrmse < 0.02) and np.all(result.position_nrmse < 0.002)
-    tested = evaluate(esn, plant, desired, commands)
+    tested = evaluate(esn, plant, Task(desired, commands))
     assert np.all(tested.position_nrmse < 0.5 * untrained.position_nrmse)
 
 
 def test_new_method_with_beta_one_equals_original():
     _, desired, commands = _setup()
     outs = []
-    for cfg in (TrueTargetConfig("original"), TrueTargetConfig("new", beta=1.0, cycles=1)):
+    for cfg in (TrueTarget(beta=1.0), TrueTarget(beta=1.0, cycles=1)):
         esn = ESN(ESNConfig(8, 4, n_reservoir=50, noise_level=0.2), seed=4)
         outs.append(train_true_target(esn, desired, commands, cfg).outputs)
     np.testing.assert_array_equal(outs[0], outs[1])
@@ -67,4 +67,4 @@ def test_convergence_is_slower_for_smaller_beta():
 
 def test_bad_config():
     with pytest.raises(ValueError, match="beta"):
-        TrueTargetConfig(beta=1.5)
+        TrueTarget(beta=1.5)

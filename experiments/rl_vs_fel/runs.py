@@ -90,8 +90,8 @@ def fel_curve(tc: TrainConfig, seed: int) -> tuple[list[dict], dict]:
     from skinny_mj.training import loop as training
 
     run = training.build_run(tc, [seed])
-    steps_per_epoch = (run.fel_config().learning_cycles + 2) * (len(run.desired) - 1)
-    last_cycle = run.fel_config().learning_cycles + 1
+    steps_per_epoch = (tc.learning_cycles + 2) * (len(run.desired) - 1)
+    last_cycle = tc.learning_cycles + 1
     clock = Clock()
     points = [point(0, (0.0, 0.0), clock.paused(lambda: _fel_test(run)))]
 

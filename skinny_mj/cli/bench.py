@@ -140,9 +140,9 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
     batch_state = np.empty((1, mujoco.mj_stateSize(batch, spec)))
     mujoco.mj_getState(batch, plant.data, batch_state[0], spec)
     runner = mj_rollout.Rollout(nthread=0)
-    buf: dict = {}  # the rollout arrays, reused as fel.train does
+    loop = fel.Loop().with_buffers()  # the rollout arrays, reused as fel.train does
     best = interleaved({
-        "control": lambda: fel.rollout(esn, plant, desired, 0.5, noise=True, buffers=buf),
+        "control": lambda: fel.rollout(esn, plant, desired, 0.5, loop, noise=True),
         "physics": lambda: runner.rollout([one] * N_RUNS, single_data, single_state,
                                           np.zeros((N_RUNS, steps, one.nu)), nstep=steps),
         "batch_physics": lambda: runner.rollout([batch], batch_data, batch_state,
@@ -186,11 +186,10 @@ def fast_vs_naive(n_steps: int, repeats: int) -> dict:
     traj, speed, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
     env_plant = EnvPlant(load(4, "cartesian", traj, max_speed_rad_s=speed, seed=0))
     one = ESN(esn.cfg, n_runs=1, seed=0)
-    bufs: tuple[dict, dict] = ({}, {})  # rollout arrays reused, as fel.train does
+    loops = (fel.Loop().with_buffers(), fel.Loop().with_buffers())  # as fel.train does
     best = interleaved({
-        "fast": lambda: fel.rollout(esn, plant, desired, 0.5, noise=True, buffers=bufs[0]),
-        "naive": lambda: fel.rollout(one, env_plant, desired, 0.5, noise=True,
-                                     buffers=bufs[1]),
+        "fast": lambda: fel.rollout(esn, plant, desired, 0.5, loops[0], noise=True),
+        "naive": lambda: fel.rollout(one, env_plant, desired, 0.5, loops[1], noise=True),
     }, repeats)
     steps = len(desired) - 1
     fast, naive = best["fast"] / (steps * N_RUNS), best["naive"] / steps

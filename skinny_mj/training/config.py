@@ -39,7 +39,11 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from skinny_mj.controllers import methods
 from skinny_mj.controllers.feedback import FeedbackController
+from skinny_mj.controllers.fel import Test
+from skinny_mj.controllers.loop import INPUTS
+from skinny_mj.controllers.methods import PAPER_CYCLES_FOR_BETA
 from skinny_mj.controllers.reservoir import ESNConfig
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant.body import ACTUATIONS, SIGNALS, check_actuation, check_dof, check_signals
@@ -56,16 +60,12 @@ METHODS = ("original", "new", "true-target", "none")
 #: three controllers alone, and FEL's teacher "inertia-pd"
 ARM_LAWS = {"ct": "ct", "id-pd": "id-pd", "pd-gravity": "pd-g", "inertia-pd": "fel"}
 FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS)
-INPUTS = ("desired+sensed", "sensed")
 FORWARD_INPUTS = ("sensed", "chained")
 FORWARD_SHARING = ("none", "predictions", "commands")
-GAIN_SCHEDULES = ("linear", "multiplicative", "fixed")
 ARMS = ("right", "left")
 RETARGETS = ("angles", "positions")
 FULL_SCALES = ("per-joint", "shared")
 BACKENDS = ("batch", "env")
-#: Learning cycles per epoch the paper derived from its Figure 3 (paper E, Table 1).
-PAPER_CYCLES_FOR_BETA = {0.3: 2, 0.1: 3, 0.05: 6}
 #: Reservoir noise the paper chose per method (paper E, Fig. 5).
 DEFAULT_NOISE = {"original": 0.03, "new": 0.2, "true-target": 0.2, "none": 0.0}
 
@@ -167,14 +167,21 @@ class Movement:
         ])
 
 
-@dataclass(frozen=True)
-class _FEL:
-    """Feedback-error learning's schedule, shared by its two methods."""
+def _input_checked(post_init) -> None:
+    """A controllers type's own checks, its refusals as the user's input errors."""
+    try:
+        post_init()
+    except SkinnyInputError:
+        raise
+    except ValueError as err:
+        raise SkinnyInputError(str(err)) from None
 
-    epochs: int = 10
-    gain_schedule: str = "linear"  # K per epoch: linear 1 -> 0, multiplicative, fixed
-    gain_factor: float = 0.9  # multiplicative: K = factor ** epoch (paper C)
-    gain_value: float = 0.65  # fixed: K (paper A)
+
+@dataclass(frozen=True)
+class _FEL(methods.FELMethod):
+    """Feedback-error learning's schedule (:class:`skinny_mj.controllers.methods.FELMethod`),
+    shared by its two methods, and how the training runs it."""
+
     u_error_gain: float = 1.0  # scalar on the feedback controller's u_error (unstated)
     #: the feedback controller's damped-least-squares lambda (signal per command units)
     u_error_damping: float = FeedbackController.damping
@@ -182,19 +189,10 @@ class _FEL:
     #: cycle ("ridge-select"), or remembering earlier cycles ("forgetting", "rls")
     fit: str = "cycle"
     forgetting: float = 0.8  # "forgetting"/"rls": old cycles' weight per learning cycle
-    #: learning cycles per epoch; None: 1 for the original method, paper E's Table 1 for
-    #: the new one
-    cycles: int | None = None
 
     def __post_init__(self) -> None:
+        _input_checked(super().__post_init__)  # the schedule's (and β's) own checks
         _check([
-            (isinstance(self.epochs, int) and self.epochs >= 1,
-             f"epochs must be >= 1, got {self.epochs}"),
-            (self.gain_schedule in GAIN_SCHEDULES,
-             f"gain schedule must be one of {GAIN_SCHEDULES}, got {self.gain_schedule!r}"),
-            (_at_least(self.gain_factor, 0) and 0 < self.gain_factor <= 1,
-             f"gain factor must be in (0, 1], got {self.gain_factor}"),
-            (_at_least(self.gain_value, 0), f"feedback gain must be >= 0, got {self.gain_value}"),
             (_at_least(self.u_error_gain, 0) and self.u_error_gain > 0,
              f"u_error gain must be > 0, got {self.u_error_gain}"),
             (_at_least(self.u_error_damping, 0),
@@ -202,52 +200,31 @@ class _FEL:
             (fits.known(self.fit), fits.refusal(self.fit)),
             (_at_least(self.forgetting, 0) and self.forgetting <= 1,
              f"forgetting must be in [0, 1], got {self.forgetting}"),
-            (self.cycles is None or (isinstance(self.cycles, int) and self.cycles >= 1),
-             f"cycles must be >= 1, got {self.cycles}"),
         ])
 
 
 @dataclass(frozen=True)
-class Original(_FEL):
-    """FEL's original method: the readout fitted to y_ESN + u_error (one learning cycle
-    an epoch unless ``cycles`` says more, as paper A)."""
-
-    kind: str = "original"
-    beta: ClassVar[float] = 1.0
+class Original(_FEL, methods.Original):
+    """FEL's original method (:class:`skinny_mj.controllers.methods.Original`): the readout
+    fitted to y_ESN + u_error (one learning cycle an epoch unless ``cycles`` says more, as
+    paper A)."""
 
 
 @dataclass(frozen=True)
-class New(_FEL):
-    """FEL's new method (paper E): the target blended, β (y_ESN + u_error) + (1 − β) y_ESN,
-    over ``cycles`` learning cycles an epoch (None: paper E's Table 1 for its β)."""
-
-    kind: str = "new"
-    beta: float = 0.1
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        _check([(_at_least(self.beta, 0) and 0 < self.beta <= 1,
-                 f"beta must be in (0, 1], got {self.beta}")])
+class New(_FEL, methods.New):
+    """FEL's new method (:class:`skinny_mj.controllers.methods.New`, paper E): the target
+    blended, β (y_ESN + u_error) + (1 − β) y_ESN, over ``cycles`` learning cycles an epoch
+    (None: paper E's Table 1 for its β)."""
 
 
 @dataclass(frozen=True)
-class TrueTarget:
-    """The true-target architecture (paper D): teacher-forced fits to the analytic
-    commands, ``cycles`` of them blended with ``beta`` (β = 1: one fit)."""
-
-    kind: str = "true-target"
-    beta: float = 0.1
-    cycles: int = 50
-    input_noise: float = 0.0  # Gaussian SD on the teacher-forced inputs
+class TrueTarget(methods.TrueTarget):
+    """The true-target architecture (:class:`skinny_mj.controllers.methods.TrueTarget`,
+    paper D): teacher-forced fits to the analytic commands, ``cycles`` of them blended
+    with ``beta`` (β = 1: one fit)."""
 
     def __post_init__(self) -> None:
-        _check([
-            (_at_least(self.beta, 0) and 0 < self.beta <= 1,
-             f"beta must be in (0, 1], got {self.beta}"),
-            (isinstance(self.cycles, int) and self.cycles >= 1,
-             f"true-target cycles must be >= 1, got {self.cycles}"),
-            (_at_least(self.input_noise, 0), f"input noise must be >= 0, got {self.input_noise}"),
-        ])
+        _input_checked(super().__post_init__)
 
 
 @dataclass(frozen=True)
@@ -289,20 +266,13 @@ class Forward:
 
 
 @dataclass(frozen=True)
-class TestSetup:
-    """The scored test after training."""
-
-    __test__: ClassVar[bool] = False  # not a pytest test class
-    gain: float = 0.0  # K at test: 0 = the ESN alone, > 0 = the feedback left on
-    washout_cycles: int = 0  # unscored cycles before the scored one (papers B, C)
-    noise: bool = False  # reservoir noise during the test (the thesis's toolbox: on)
+class TestSetup(Test):
+    """The scored test after training (:class:`skinny_mj.controllers.fel.Test`): K at test
+    (0 = the ESN alone, > 0 = the feedback left on), unscored cycles before the scored one
+    (papers B, C), reservoir noise during the test (the thesis's toolbox: on)."""
 
     def __post_init__(self) -> None:
-        _check([
-            (_at_least(self.gain, 0), f"test gain must be >= 0, got {self.gain}"),
-            (isinstance(self.washout_cycles, int) and self.washout_cycles >= 0,
-             f"test washout cycles must be >= 0, got {self.washout_cycles}"),
-        ])
+        _input_checked(super().__post_init__)
 
 
 _CROSS_CHECKS_OFF: contextvars.ContextVar[bool] = contextvars.ContextVar(
@@ -455,24 +425,9 @@ class TrainConfig:
 
     @property
     def learning_cycles(self) -> int:
-        """Learning cycles per epoch: the FEL rule's ``cycles``; by default 1 for the
-        original method, and for the new method paper E's Table 1 where it has β, else
-        enough cycles for (1 − β)^n to fall below 5 % over all epochs (which reproduces
-        the table for β = 0.1 and 0.05)."""
-        rule = self.rule
-        if not isinstance(rule, FEL_RULES):
-            return 1
-        if rule.cycles is not None:
-            return rule.cycles
-        if not isinstance(rule, New):
-            return 1
-        for beta, cycles in PAPER_CYCLES_FOR_BETA.items():
-            if abs(rule.beta - beta) < 1e-12:
-                return cycles
-        if rule.beta >= 1:
-            return 1
-        total = math.ceil(math.log(0.05) / math.log(1.0 - rule.beta))
-        return max(1, math.ceil(total / rule.epochs))
+        """Learning cycles per epoch: the FEL rule's (:attr:`skinny_mj.controllers.methods.
+        FELMethod.learning_cycles`), 1 for the other rules."""
+        return self.rule.learning_cycles if isinstance(self.rule, FEL_RULES) else 1
 
     def esn_config(self, n_inputs: int, n_outputs: int, n_reservoir: int | None = None
                    ) -> ESNConfig:

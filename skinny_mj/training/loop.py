@@ -32,12 +32,14 @@ import numpy as np
 
 from skinny_mj.controllers import fel
 from skinny_mj.controllers.esn import ESN
+from skinny_mj.controllers.feedback import FeedbackController
 from skinny_mj.controllers.forward_model import ForwardModel
-from skinny_mj.controllers.true_target import TrueTargetConfig, train_true_target
-from skinny_mj.plant import ideal
+from skinny_mj.controllers.loop import Loop
+from skinny_mj.controllers.true_target import train_true_target
 from skinny_mj.plant.bimanual import arm_signals
 from skinny_mj.threads import single_threaded
-from skinny_mj.training import protocol, torque
+from skinny_mj.training import protocol
+from skinny_mj.training.actuation import Actuation, actuation_of
 from skinny_mj.training.config import (  # noqa: F401  (re-exported: the training API in one place)
     DEFAULT_NOISE,
     METHODS,
@@ -100,14 +102,16 @@ class Run:
 
         return arm_signals(body.dof, body.signals, lagging_arm(self.cfg))
 
-    def fel_config(self) -> fel.FELConfig:
-        """The FEL rule's schedule as :class:`skinny_mj.controllers.fel.FELConfig`."""
-        cfg, rule = self.cfg, self.cfg.rule
-        return fel.FELConfig(method=rule.kind, beta=rule.beta,
-                             learning_cycles=cfg.learning_cycles, epochs=rule.epochs,
-                             gain_schedule=rule.gain_schedule, gain_factor=rule.gain_factor,
-                             gain_value=rule.gain_value, delay_steps=cfg.plant.delay,
-                             inputs=cfg.inputs)
+    @functools.cached_property
+    def actuation(self) -> Actuation:
+        """How the body is driven (:mod:`skinny_mj.training.actuation`)."""
+        return actuation_of(self.cfg)
+
+    def loop(self, hook=None, feedback: FeedbackController | None = None) -> Loop:
+        """The closed loop of the inverse model: ``cfg.inputs``, ``feedback`` (default the
+        plain controller), the actuation's ``hook``, the forward model, the delay."""
+        return Loop(self.cfg.inputs, feedback or FeedbackController(), hook, self.forward,
+                    delay_steps=self.cfg.plant.delay)
 
 
 @single_threaded
@@ -159,7 +163,7 @@ class Training:
     true_target: Any = None
     pretrain_prediction_nrmse: np.ndarray | None = None
     ridge_lambda: np.ndarray | None = None  # (R, E) lambda chosen per epoch (ridge-select)
-    feedback_share: Any = None  # torque body: torque_training.ShareRecorder
+    feedback_share: Any = None  # the actuation's recorder (torque: torque.ShareRecorder)
 
 
 @single_threaded
@@ -170,7 +174,7 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
     (:func:`skinny_mj.controllers.fel.train`,
     e.g. paper E §5.1's y_est / y_used per epoch; ignored by the true-target architecture)."""
     cfg, rule, out = run.cfg, run.cfg.rule, Training()
-    fwd, body, is_torque = cfg.forward, cfg.plant, isinstance(cfg.actuation, Torque)
+    fwd, body, act = cfg.forward, cfg.plant, run.actuation
     if run.forward is not None and fwd.kind in ("serial", "hybrid"):
         out.pretrain_prediction_nrmse = run.forward.pretrain(
             run.trajectory.position_signals(body.signals),
@@ -179,35 +183,27 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
     if isinstance(rule, NoLearning):  # the feedback controller alone: nothing to learn
         return out
     if isinstance(rule, TrueTarget):
-        tt = TrueTargetConfig(method="original" if rule.beta >= 1 else "new", beta=rule.beta,
-                              cycles=rule.cycles, noise=cfg.noise_level > 0,
-                              input_noise=rule.input_noise)
         out.true_target = train_true_target(
-            run.esn, run.desired, run.true_commands, tt,
-            one_step=None if is_torque else  # (kinematic one-step map)
-            ideal.one_step_positions(run.training, body.signals, run.max_speed_rad_s),
-            extra_inputs=torque.teacher_inputs(cfg, run.training, run.max_speed_rad_s)
-            if is_torque else None,
+            run.esn, run.desired, run.true_commands, rule, noise=cfg.noise_level > 0,
+            one_step=act.one_step(run.training, run.max_speed_rad_s),
+            extra_inputs=act.teacher_inputs(run.training, run.max_speed_rad_s),
             input_rngs=[protocol.tt_input_rng(s) for s in run.seeds])
         _report(progress, 1, 1)
         return out
-    fcfg = run.fel_config()
-    per_epoch = fcfg.learning_cycles + 2
-    total = rule.epochs * per_epoch
+    method = rule  # FEL: Original or New, the controllers' method types with their fit
+    per_epoch = method.learning_cycles + 2
+    total = method.epochs * per_epoch
 
-    def tick(epoch: int, cycle: int) -> None:
+    def tick(epoch: int, cycle: int, ro, y_used) -> None:
         _report(progress, epoch * per_epoch + cycle + 1, total)
 
     selector = make_rule(cfg, run.esn, len(run.desired) - 1)  # rule.fit (skinny_mj.training.fits)
-    if is_torque:  # the torque body: the feedback's share of the command
-        out.feedback_share = torque.ShareRecorder(fcfg.gains(), run.esn.n_runs,
-                                                  fcfg.learning_cycles, cfg.plant.dof)
-        observe = out.feedback_share if observe is None else _both(observe, out.feedback_share)
-    out.fel = fel.train(run.esn, run.plant, run.desired, fcfg, true_commands=run.true_commands,
-                        progress=tick, forward=run.forward, scored=run.scored,
-                        feedback=protocol.feedback_of(rule.u_error_gain, rule.u_error_damping),
-                        hook=torque.hook_for(cfg, run.training, run.max_speed_rad_s, run.plant),
-                        rule=selector, observe=observe)
+    out.feedback_share = act.recorder(method, run.esn.n_runs)  # the actuation's, if any
+    loop = run.loop(act.hook(run.training, run.max_speed_rad_s, run.plant),
+                    protocol.feedback_of(method.u_error_gain, method.u_error_damping))
+    out.fel = fel.train(run.esn, run.plant, fel.Task(run.desired, run.true_commands, run.scored),
+                        method, loop, rule=selector,
+                        observe=_all(observe, out.feedback_share, tick))
     if rule.fit == "ridge-select":
         out.ridge_lambda = selector.chosen
     return out
@@ -245,21 +241,19 @@ def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = N
     if plant is None:
         seeds = run.plant_seeds if plant_seeds is None else plant_seeds
         plant = make_plant(cfg, trajectory, seeds, run.max_speed_rad_s)
-        if cfg.torque is not None:  # the torque body's robustness test
-            torque.perturb(plant, cfg.torque.test_payload_kg, cfg.torque.test_mass_scale)
+        run.actuation.test_plant(plant)  # e.g. the torque body's robustness test
     desired = trajectory.position_signals(cfg.plant.signals)
-    hook = torque.hook_for(cfg, trajectory, run.max_speed_rad_s, plant)
+    hook = run.actuation.hook(trajectory, run.max_speed_rad_s, plant)
     commands = true_commands_of(cfg, trajectory, run.max_speed_rad_s)
-    ev = fel.evaluate(run.esn, plant, desired, commands, cfg.plant.delay, run.forward,
-                      inputs=cfg.inputs, washout_cycles=test.washout_cycles,
-                      scored=run.scored, noise=test.noise, gain=test.gain, hook=hook)
+    ev = fel.evaluate(run.esn, plant, fel.Task(desired, commands, run.scored), run.loop(hook),
+                      test)
     return [TestOutcome(
         position_nrmse=None if ev.failed[r] else float(ev.position_nrmse[r]),
         motor_nrmse=None if ev.failed[r] else float(ev.motor_nrmse[r]),
         failed=bool(ev.failed[r]), fail_reason=ev.fail_reason[r],
         rollout=ev.rollout.select(r), trajectory=trajectory, desired=desired,
         true_commands=commands,
-        torque=None if hook is None else torque.test_torques(hook, ev.rollout, plant, r),
+        torque=run.actuation.test_figures(hook, ev.rollout, plant, r),
     ) for r in range(run.esn.n_runs)]
 
 
@@ -330,13 +324,7 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
         curve = result.to_dict()
         metrics["train"] = {"gains": curve["gains"], "position_nrmse": curve["position_nrmse"][r],
                             "motor_nrmse": curve["motor_nrmse"][r]}
-        if trained.feedback_share is not None:
-            metrics["train"]["feedback_share"] = [float(v) for v in
-                                                  trained.feedback_share.share[r]]
-            metrics["train"]["error_signal_share"] = [
-                float(v) for v in trained.feedback_share.error_signal[r]]
-            metrics["train"]["limit_overshoot_rad"] = float(
-                trained.feedback_share.limit_overshoot_rad[r])
+        metrics["train"].update(run.actuation.recorded(trained.feedback_share, r))
         if trained.ridge_lambda is not None:
             metrics["train"]["ridge_lambda"] = [None if not np.isfinite(v) else float(v)
                                                 for v in trained.ridge_lambda[r]]
@@ -353,7 +341,7 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
                            "motor_nrmse": test.motor_nrmse}
     if test.torque is not None:
         metrics["test"]["torque"] = test.torque["metrics"]
-        metrics["train_warnings"] = torque.train_warnings(run)
+        metrics["train_warnings"] = run.actuation.train_warnings(run)
         n_warnings = physics_warnings(run, test)
         if n_warnings and not metrics["failed"]:  # MuJoCo reset a diverged simulation
             metrics.update(failed=True, fail_reason=f"physics diverged: {n_warnings} MuJoCo "
@@ -376,7 +364,7 @@ def physics_warnings(run: Run, test: TestOutcome) -> int:
     servo); counted over a lockstep batch's shared simulation."""
     if test.torque is None:
         return 0
-    return (torque.train_warnings(run) or 0) + int(test.torque["metrics"]["warnings"])
+    return (run.actuation.train_warnings(run) or 0) + int(test.torque["metrics"]["warnings"])
 
 
 class PhysicsBatchError(RuntimeError):
@@ -389,11 +377,14 @@ def esn_run(esn: ESN, r: int) -> ESN:
     return esn if esn.n_runs == 1 else esn.select([r])
 
 
-def _both(first: Callable[..., None], second: Callable[..., None]) -> Callable[..., None]:
-    def both(*args) -> None:
-        first(*args)
-        second(*args)
-    return both
+def _all(*observers: Callable[..., None] | None) -> Callable[..., None]:
+    """One FEL observer calling ``observers`` (those not None) in order."""
+    chosen = [o for o in observers if o is not None]
+
+    def every(*args) -> None:
+        for o in chosen:
+            o(*args)
+    return every
 
 
 def _report(progress: Callable[[int, int], None] | None, done: int, total: int) -> None:

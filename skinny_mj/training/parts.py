@@ -15,9 +15,9 @@ from skinny_mj.controllers.esn import ESN
 from skinny_mj.plant import body
 from skinny_mj.plant.adapters import BatchPlant, EnvPlant
 from skinny_mj.plant.bimanual import BimanualPlant, arm_dofs, arm_signals
-from skinny_mj.plant.ideal import max_speeds, true_commands
+from skinny_mj.plant.ideal import max_speeds
 from skinny_mj.plant.task import load
-from skinny_mj.training import torque
+from skinny_mj.training.actuation import actuation_of
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.feasible import load_movement  # NAME@feasible too, else trajectories'
 
@@ -93,7 +93,7 @@ def network_sizes(cfg: TrainConfig) -> tuple[int, int, int]:
     dofs = controlled_dofs(cfg)
     n_out = cfg.plant.dof if dofs is None else len(dofs)
     n_in = (n_sig if cfg.inputs == "desired+sensed" else 0) + n_sig \
-        + (0 if cfg.forward.kind == "none" else n_sig) + torque.n_extra_inputs(cfg)
+        + (0 if cfg.forward.kind == "none" else n_sig) + actuation_of(cfg).n_extra_inputs
     return n_sig, n_out, n_in
 
 
@@ -105,10 +105,7 @@ def lagging_arm(cfg: TrainConfig) -> str:
 def true_commands_of(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray) -> np.ndarray:
     """(T-1, n_controlled) the analytic commands of ``trajectory`` for the ESN's DOFs
     (torque body: the normalized inverse-dynamics torques)."""
-    if cfg.torque is not None:
-        return torque.true_torques(cfg.plant.dof, trajectory)
-
-    commands = true_commands(trajectory.angles, max_speed_rad_s, trajectory.dt)
+    commands = actuation_of(cfg).true_commands(trajectory, max_speed_rad_s)
     dofs = controlled_dofs(cfg)
     return commands if dofs is None else commands[:, dofs]
 

@@ -1,7 +1,7 @@
 """The torque body in the one training path: what ``actuation=torque`` adds.
 
-:mod:`skinny_mj.training.loop` calls these when ``cfg.actuation`` is a
-:class:`skinny_mj.training.config.Torque`:
+:class:`skinny_mj.training.actuation.TorqueActuation` (``cfg.actuation`` a
+:class:`skinny_mj.training.config.Torque`) supplies these to the training path:
 
 - :func:`hook_for`: the :class:`skinny_mj.controllers.torque_fel.TorqueLoop` of a movement (the
   rollout hook: velocity inputs, the PD teacher, the gravity feed-forward);
@@ -260,6 +260,13 @@ class ShareRecorder:
         fb = np.abs(ro.u_error[:, :-1]).mean(axis=(1, 2))
         self.error_signal[:, epoch] = fb / np.maximum(u, 1e-12)
         self.share[:, epoch] = self.gains[epoch] * self.error_signal[:, epoch]
+
+    def metrics(self, r: int) -> dict:
+        """Run r's figures (JSON-ready): ``feedback_share`` and ``error_signal_share`` per
+        epoch, ``limit_overshoot_rad``."""
+        return {"feedback_share": [float(v) for v in self.share[r]],
+                "error_signal_share": [float(v) for v in self.error_signal[r]],
+                "limit_overshoot_rad": float(self.limit_overshoot_rad[r])}
 
 
 def joint_nrmse(outcome) -> float:
