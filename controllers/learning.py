@@ -88,6 +88,11 @@ class LearningRule:
     def update(self, state: np.ndarray, y_esn: np.ndarray, y_est: np.ndarray) -> None:
         """Online, after step t: state (R, D), y_esn and y_est (R, n_out) of step t-1."""
 
+    def metrics(self, run: int) -> dict:
+        """What the rule reports about run ``run``'s training (JSON-ready; a training's
+        ``metrics.json`` adds it under ``train``): nothing unless overridden."""
+        return {}
+
 
 class CycleFit(LearningRule):
     """FEL's fit (the thesis's): each learning cycle alone, by the ESN's own solver

@@ -61,6 +61,11 @@ class RidgeSelector(LearningRule):
         self.chosen = np.full((esn.n_runs, n_epochs), np.nan)
         self._val: list[tuple[np.ndarray, np.ndarray, float] | None] = [None] * esn.n_runs
 
+    def metrics(self, run: int) -> dict:
+        """``ridge_lambda``: run ``run``'s lambda per epoch (None where not fitted)."""
+        return {"ridge_lambda": [None if not np.isfinite(v) else float(v)
+                                 for v in self.chosen[run]]}
+
     def washout(self, esn: ESN, cycle: Cycle) -> None:
         """Keep the cycle as the next validation cycle of its runs."""
         self._keep(cycle)

@@ -191,5 +191,5 @@ def test_train_takes_the_torque_teacher_and_readout_fit_flags(tmp_path):
                  "forgetting", "--readout-forgetting", "0.7", "--beta", "1", "--cycles", "1",
                  "--epochs", "1", "--reservoir", "30", "--out", str(out)]) == 0
     cfg = json.loads((out / "metrics.json").read_text())["config"]
-    assert (cfg["actuation.feedback"], cfg["rule.fit"], cfg["rule.forgetting"]) == \
+    assert (cfg["actuation.feedback"], cfg["rule.fit"], cfg["rule.fit.forgetting"]) == \
         ("inertia-pd", "forgetting", 0.7)

@@ -13,6 +13,7 @@ import re
 import shutil
 import subprocess
 import sys
+import types
 from pathlib import Path
 
 import pytest
@@ -48,7 +49,9 @@ def test_python_blocks_run(path, tmp_path, monkeypatch):
     # a page may register a body or a learning rule: for this test only
     for module, name in ((body, "BODIES"), (fits, "FITS")):
         monkeypatch.setattr(module, name, dict(getattr(module, name)))
-    namespace: dict = {"__name__": "__docs__"}
+    page = types.ModuleType("__docs__")  # a module of its own: a page may define a dataclass
+    monkeypatch.setitem(sys.modules, page.__name__, page)
+    namespace: dict = page.__dict__
     for line, code, skipped in python_blocks(path.read_text()):
         if skipped:
             continue

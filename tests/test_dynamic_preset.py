@@ -25,7 +25,7 @@ def test_torque_general_sets_its_fields_and_the_velocity_preset_is_untouched():
     assert seed == 3 and cfg.rule.epochs == 2  # a flag given overrides the preset
     assert {k: got[k] for k in want if k != "rule.epochs"} == \
         {k: v for k, v in want.items() if k != "rule.epochs"}
-    assert (cfg.actuation.kind, cfg.actuation.feedback, cfg.rule.fit) == (
+    assert (cfg.actuation.kind, cfg.actuation.feedback, cfg.rule.fit.kind) == (
         "torque", "inertia-pd", "forgetting")
     velocity, _ = _config(["train", "--preset", "general"])
     assert velocity == TrainConfig().override(preset_fields("general"))  # as before

@@ -56,3 +56,53 @@ def test_a_fit_may_name_its_builder_which_is_imported_when_the_rule_is_made(regi
     monkeypatch.setattr(torque, "readout_fitter", lambda cfg, esn, steps: ("torque", steps))
     rls = TrainConfig().override({"actuation": "torque", "rule.fit": "rls"})
     assert fits.make_rule(rls, None, 40) == ("torque", 40)
+
+
+def test_a_fits_settings_are_keys_of_rule_fit_and_sweep_axes(registry):
+    from dataclasses import dataclass
+
+    from skinny_mj.engine.grid import parse_assignment
+
+    @dataclass(frozen=True)
+    class Mine(fits.FitSettings):
+        lam0: float = 1e-2
+        decay: float = 0.2
+
+    fits.register_fit("mine", lambda cfg, esn, steps: (cfg.rule.fit.lam0, cfg.rule.fit.decay),
+                      settings=Mine)
+    cfg = TrainConfig().override({"rule.fit.lam0": 0.1, "rule.fit": "mine"})  # any order
+    assert fits.make_rule(cfg, None, 1) == (0.1, 0.2)
+    assert {k: v for k, v in cfg.to_dict().items() if k.startswith("rule.fit")} == {
+        "rule.fit": "mine", "rule.fit.lam0": 0.1, "rule.fit.decay": 0.2}
+    assert TrainConfig.from_dict(cfg.to_dict()) == cfg
+    assert parse_assignment("rule.fit.decay=0.5,0.9", cfg)[1] == [0.5, 0.9]
+    with pytest.raises(SkinnyInputError, match="not a setting of rule.fit=cycle"):
+        TrainConfig().override({"rule.fit.lam0": 0.1})
+    with pytest.raises(SkinnyInputError, match="a FitSettings subclass"):
+        fits.register_fit("bad", lambda cfg, esn, steps: None, settings=dict, replace=True)
+
+
+def test_rule_forgetting_is_an_alias_of_rule_fit_forgetting():
+    torque = {"actuation": "torque", "rule.fit": "rls"}
+    old = TrainConfig().override({**torque, "rule.forgetting": 0.9})
+    assert old == TrainConfig().override({**torque, "rule.fit.forgetting": 0.9})
+    assert old.rule.fit == fits.ForgettingSettings("rls", 0.9) and old.rule.forgetting == 0.9
+    # an old run file lists it with every fit: checked, then of no use to the fit
+    assert TrainConfig().override({"rule.forgetting": 0.8}) == TrainConfig()
+    for bad in ({"rule.forgetting": 1.5}, {**torque, "rule.fit.forgetting": -0.1}):
+        with pytest.raises(SkinnyInputError, match=r"forgetting must be in \[0, 1\]"):
+            TrainConfig().override(bad)
+    switched = old.override({"rule.fit": "forgetting"})  # the same settings type: kept
+    assert switched.rule.fit == fits.ForgettingSettings("forgetting", 0.9)
+    assert old.override({"rule.fit": "cycle"}).rule.fit == fits.FitSettings("cycle")
+
+
+def test_a_rule_reports_its_own_metrics():
+    import numpy as np
+    from skinny_mj.controllers.learning import CycleFit
+    from skinny_mj.controllers.ridge_select import RidgeSelector
+
+    assert CycleFit().metrics(0) == {}
+    selector = RidgeSelector.__new__(RidgeSelector)
+    selector.chosen = np.array([[0.1, np.nan]])
+    assert selector.metrics(0) == {"ridge_lambda": [0.1, None]}

@@ -103,7 +103,7 @@ def test_ridge_selector_picks_a_large_lambda_for_pure_noise_targets():
 
 
 def test_ridge_select_config_is_validated():
-    assert TrainConfig().rule.fit == "cycle"
+    assert TrainConfig().rule.fit.kind == "cycle"
     TrainConfig().override({"esn.readout": "ridge", "rule.fit": "ridge-select",
                             "rule": "original"})
     with pytest.raises(SkinnyInputError):

@@ -144,8 +144,8 @@ def default_of(key: str, cfg: TrainConfig | None = None) -> Any:
     """The default of ``key`` in ``cfg`` (default ``TrainConfig()``); a key of a type
     not chosen there (``rule.input_noise``) gives that type's default."""
     cfg = TrainConfig() if cfg is None else cfg
-    if "." not in key and dataclasses.is_dataclass(getattr(cfg, key, None)):
-        return getattr(getattr(cfg, key), overrides.KIND)  # a type's name
+    if _is_choice(cfg, key):
+        return getattr(overrides.node(cfg, key), overrides.KIND)  # a type's name
     return getattr(_owner(key, cfg), key.rpartition(".")[2])
 
 
@@ -153,9 +153,11 @@ def _metavar(key: str) -> str:
     """N (whole number), X (number) or TEXT, from the field's type."""
     if "." not in key:
         return "TEXT"
-    owner = _owner(key, TrainConfig())
-    allowed = typing.get_args(typing.get_type_hints(type(owner))[key.rpartition(".")[2]]) \
-        or (typing.get_type_hints(type(owner))[key.rpartition(".")[2]],)
+    try:
+        hint = overrides.field_type(TrainConfig(), key)  # (an old key: its new key's)
+    except SkinnyInputError:  # a key of a type not chosen by default
+        hint = typing.get_type_hints(type(_owner(key, TrainConfig())))[key.rpartition(".")[2]]
+    allowed = typing.get_args(hint) or (hint,)
     return "N" if int in allowed else "X" if float in allowed else "TEXT"
 
 
@@ -257,5 +259,5 @@ def flag_names(groups: Mapping[str, list[Flag]]) -> dict[str, str]:
 
 
 def _is_choice(cfg: TrainConfig, key: str) -> bool:
-    """Does ``key`` choose a type (``rule``, ``actuation``, ``forward``)?"""
-    return "." not in key and dataclasses.is_dataclass(getattr(cfg, key, None))
+    """Does ``key`` choose a type (``rule``, ``actuation``, ``forward``, ``rule.fit``)?"""
+    return dataclasses.is_dataclass(overrides.node(cfg, key))

@@ -185,10 +185,22 @@ class _FEL(methods.FELMethod):
     u_error_gain: float = 1.0  # scalar on the feedback controller's u_error (unstated)
     #: the feedback controller's damped-least-squares lambda (signal per command units)
     u_error_damping: float = FeedbackController.damping
-    #: the readout fits: each cycle alone ("cycle"), lambda chosen per fit on a validation
-    #: cycle ("ridge-select"), or remembering earlier cycles ("forgetting", "rls")
-    fit: str = "cycle"
-    forgetting: float = 0.8  # "forgetting"/"rls": old cycles' weight per learning cycle
+    #: the readout fit and its settings (``rule.fit=NAME``, ``rule.fit.<param>=value``;
+    #: :mod:`skinny_mj.training.fits`): each cycle alone ("cycle"), lambda chosen per fit
+    #: on a validation cycle ("ridge-select"), or remembering earlier cycles
+    #: ("forgetting", "rls": ``rule.fit.forgetting``, old cycles' weight per cycle)
+    fit: fits.FitSettings = fits.FitSettings()
+
+    #: old keys -> (the key they name now, the settings type checking a value the chosen
+    #: fit has no use for; old run files list ``rule.forgetting`` with every fit)
+    ALIASES: ClassVar[dict[str, tuple[str, type]]] = {
+        "forgetting": ("fit.forgetting", fits.ForgettingSettings)}
+
+    @property
+    def forgetting(self) -> float:
+        """``rule.fit.forgetting`` under its old name (a fit without it: its default,
+        what the old key held)."""
+        return getattr(self.fit, "forgetting", fits.ForgettingSettings.forgetting)
 
     def __post_init__(self) -> None:
         _input_checked(super().__post_init__)  # the schedule's (and β's) own checks
@@ -197,9 +209,9 @@ class _FEL(methods.FELMethod):
              f"u_error gain must be > 0, got {self.u_error_gain}"),
             (_at_least(self.u_error_damping, 0),
              f"u_error damping must be >= 0, got {self.u_error_damping}"),
-            (fits.known(self.fit), fits.refusal(self.fit)),
-            (_at_least(self.forgetting, 0) and self.forgetting <= 1,
-             f"forgetting must be in [0, 1], got {self.forgetting}"),
+            (isinstance(self.fit, fits.FitSettings) and fits.known(self.fit.kind)
+             and isinstance(self.fit, fits.FITS[self.fit.kind].settings),
+             fits.refusal(getattr(self.fit, "kind", self.fit))),
         ])
 
 
@@ -326,14 +338,14 @@ class TrainConfig:
                 ),
                 (self.inputs in INPUTS, f"inputs must be one of {INPUTS}, got {self.inputs!r}"),
                 (
-                    not fel or self.rule.fit != "ridge-select" or self.esn.readout == "ridge",
+                    not fel or self.rule.fit.kind != "ridge-select" or self.esn.readout == "ridge",
                     "rule.fit=ridge-select chooses the ridge lambda of FEL fits on a validation "
                     "cycle: it needs esn.readout=ridge",
                 ),  # (its body: the fit's own, skinny_mj.training.fits)
                 (
-                    not fel or self.actuation.kind in fits.FITS[self.rule.fit].bodies,
-                    f"rule.fit={getattr(self.rule, 'fit', '')} runs on actuation="
-                    f"{' or '.join(fits.FITS[self.rule.fit].bodies) if fel else ''}",
+                    not fel or self.actuation.kind in fits.FITS[self.rule.fit.kind].bodies,
+                    f"rule.fit={self.rule.fit.kind if fel else ''} runs on actuation="
+                    f"{' or '.join(fits.FITS[self.rule.fit.kind].bodies) if fel else ''}",
                 ),
                 (
                     sharing is None

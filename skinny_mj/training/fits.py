@@ -3,7 +3,10 @@ its learning rule (:class:`skinny_mj.controllers.learning.LearningRule`).
 
 The package's own: ``cycle`` (each learning cycle alone, the thesis's pinv or ridge fit),
 ``ridge-select`` (λ chosen per fit on a validation cycle; the velocity body),
-``forgetting`` and ``rls`` (remembering earlier cycles; the torque body). A new rule is
+``forgetting`` and ``rls`` (remembering earlier cycles; the torque body; their setting
+``rule.fit.forgetting``, :class:`ForgettingSettings`). A fit's hyper-parameters are its
+own :class:`FitSettings` dataclass, registered with it: the chosen fit's settings are
+the configuration's ``rule.fit``, each field a key ``rule.fit.<param>``. A new rule is
 one class in controllers plus one :func:`register_fit` line (its builder, or the builder's
 name ``"module:function"``, imported when a training makes its rule: the torque fits'
 builder lives in :mod:`skinny_mj.training.torque`, which imports the configuration, which
@@ -20,14 +23,14 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from skinny_mj import plugins
 from skinny_mj.controllers.ridge_select import RidgeSelector
 from skinny_mj.errors import SkinnyInputError
 
-__all__ = ["Fit", "FITS", "FIT_GROUP", "register_fit", "make_rule", "known", "check",
-           "refusal"]
+__all__ = ["Fit", "FitSettings", "ForgettingSettings", "FITS", "FIT_GROUP", "register_fit",
+           "make_rule", "known", "check", "refusal"]
 
 #: Entry-point group through which another package adds a fit (name = the fit's name,
 #: value = a :class:`Fit`).
@@ -40,12 +43,54 @@ Make = Callable[[Any, Any, int], Any]
 
 
 @dataclass(frozen=True)
+class FitSettings:
+    """A fit's settings, the value of ``rule.fit``: ``kind`` is the fit's name (the key
+    ``rule.fit=NAME`` chooses it); a fit with hyper-parameters subclasses this frozen
+    dataclass with one defaulted field per parameter, each then a key
+    ``rule.fit.<param>`` (``skinny sweep rule.fit.forgetting=0.8,0.9``). Its
+    ``__post_init__`` checks them (a ``ValueError`` names the setting)."""
+
+    kind: str = "cycle"
+
+    #: the registry answers for the subclasses (:mod:`skinny_mj.training.overrides`:
+    #: a choice of types whose members are registered at run time)
+    REGISTRY: ClassVar[bool] = True
+
+    @classmethod
+    def choose(cls, name: str) -> type:
+        """The settings type of the registered fit ``name`` (else the refusal)."""
+        return FITS[check(name)].settings
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        return tuple(FITS)
+
+    def __post_init__(self) -> None:
+        check(self.kind)
+
+
+@dataclass(frozen=True)
+class ForgettingSettings(FitSettings):
+    """The remembering fits' (``forgetting``, ``rls``) setting."""
+
+    kind: str = "forgetting"
+    forgetting: float = 0.8  # old cycles' weight per learning cycle, in [0, 1]
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if isinstance(self.forgetting, bool) or not 0 <= self.forgetting <= 1:
+            raise SkinnyInputError(f"forgetting must be in [0, 1], got {self.forgetting}")
+
+
+@dataclass(frozen=True)
 class Fit:
     """A readout fit: how to build it (a :data:`Make`, or its name ``"module:function"``),
-    and the bodies (actuation kinds) it runs on."""
+    the bodies (actuation kinds) it runs on, and the type of its settings (a
+    :class:`FitSettings`, its fields the fit's hyper-parameters with their defaults)."""
 
     make: Make | str
     bodies: tuple[str, ...] = ("velocity", "torque")
+    settings: type[FitSettings] = FitSettings
 
 
 def _cycle(cfg: Any, esn: Any, steps: int) -> None:
@@ -59,27 +104,31 @@ def _ridge_select(cfg: Any, esn: Any, steps: int) -> Any:
 FITS: dict[str, Fit] = {
     "cycle": Fit(_cycle),
     "ridge-select": Fit(_ridge_select, ("velocity",)),
-    "forgetting": Fit("skinny_mj.training.torque:readout_fitter", ("torque",)),
-    "rls": Fit("skinny_mj.training.torque:readout_fitter", ("torque",)),
+    "forgetting": Fit("skinny_mj.training.torque:readout_fitter", ("torque",),
+                      ForgettingSettings),
+    "rls": Fit("skinny_mj.training.torque:readout_fitter", ("torque",), ForgettingSettings),
 }
 
 
 def register_fit(name: str, make: Make | str, *, bodies: tuple[str, ...] = ("velocity", "torque"),
-                 replace: bool = False) -> None:
+                 settings: type[FitSettings] = FitSettings, replace: bool = False) -> None:
     """Make ``name`` a value of ``rule.fit``: ``make(cfg, esn, steps)`` builds its rule
-    (``make`` may be its name, ``"module:function"``). A name already taken is refused
-    unless ``replace``."""
+    (``make`` may be its name, ``"module:function"``), reading its hyper-parameters from
+    ``cfg.rule.fit`` (a ``settings``: a :class:`FitSettings` subclass whose fields are
+    the keys ``rule.fit.<param>``). A name already taken is refused unless ``replace``."""
     if not name or not isinstance(name, str):
         raise SkinnyInputError(f"a fit's name is a non-empty string, got {name!r}")
     if name in FITS and not replace:
         raise SkinnyInputError(f"fit {name!r} is registered already (replace=True to "
                                "change it)")
-    FITS[name] = Fit(make, tuple(bodies))
+    if not (isinstance(settings, type) and issubclass(settings, FitSettings)):
+        raise SkinnyInputError(f"a fit's settings are a FitSettings subclass, got {settings!r}")
+    FITS[name] = Fit(make, tuple(bodies), settings)
 
 
 def make_rule(cfg: Any, esn: Any, steps: int) -> Any:
     """The learning rule of ``cfg``'s FEL training (None: the default per-cycle fit)."""
-    make = FITS[cfg.rule.fit].make  # (the module's FITS, as registered)
+    make = FITS[cfg.rule.fit.kind].make  # (the module's FITS, as registered)
     if isinstance(make, str):
         module, _, name = make.partition(":")
         make = getattr(importlib.import_module(module), name)

@@ -162,7 +162,9 @@ class Training:
     fel: fel.TrainResult | None = None
     true_target: Any = None
     pretrain_prediction_nrmse: np.ndarray | None = None
-    ridge_lambda: np.ndarray | None = None  # (R, E) lambda chosen per epoch (ridge-select)
+    #: the FEL readout fit's rule (rule.fit; None: each cycle alone): its ``metrics(r)``,
+    #: if it has them, join run r's train metrics
+    rule: Any = None
     feedback_share: Any = None  # the actuation's recorder (torque: torque.ShareRecorder)
 
 
@@ -197,15 +199,13 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
     def tick(epoch: int, cycle: int, ro, y_used) -> None:
         _report(progress, epoch * per_epoch + cycle + 1, total)
 
-    selector = make_rule(cfg, run.esn, len(run.desired) - 1)  # rule.fit (skinny_mj.training.fits)
+    out.rule = make_rule(cfg, run.esn, len(run.desired) - 1)  # rule.fit (training.fits)
     out.feedback_share = act.recorder(method, run.esn.n_runs)  # the actuation's, if any
     loop = run.loop(act.hook(run.training, run.max_speed_rad_s, run.plant),
                     protocol.feedback_of(method.u_error_gain, method.u_error_damping))
     out.fel = fel.train(run.esn, run.plant, fel.Task(run.desired, run.true_commands, run.scored),
-                        method, loop, rule=selector,
+                        method, loop, rule=out.rule,
                         observe=_all(observe, out.feedback_share, tick))
-    if rule.fit == "ridge-select":
-        out.ridge_lambda = selector.chosen
     return out
 
 
@@ -325,9 +325,9 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
         metrics["train"] = {"gains": curve["gains"], "position_nrmse": curve["position_nrmse"][r],
                             "motor_nrmse": curve["motor_nrmse"][r]}
         metrics["train"].update(run.actuation.recorded(trained.feedback_share, r))
-        if trained.ridge_lambda is not None:
-            metrics["train"]["ridge_lambda"] = [None if not np.isfinite(v) else float(v)
-                                                for v in trained.ridge_lambda[r]]
+        reported = getattr(trained.rule, "metrics", None)  # the rule's own, if any
+        if reported is not None:
+            metrics["train"].update(reported(r))
         if result.failed[r]:
             metrics.update(failed=True, fail_reason=result.fail_reason[r],
                            fail_epoch=result.fail_epoch[r])

@@ -12,6 +12,14 @@ line, config files and studies::
     flatten(cfg)  # {"plant.dof": 4, ..., "rule": "new", "rule.beta": 0.1, ...}
     parse_value(cfg, "esn.n_reservoir", "400")  # 400 (the field's type)
 
+A choice may also be a *registry* (a dataclass base with ``REGISTRY`` and the class
+methods ``choose(name)`` -> the member type and ``names()``): its members are those
+registered when the key is set (``rule.fit=NAME``, :mod:`skinny_mj.training.fits`), and
+the chosen member's fields are keys too (``rule.fit.forgetting``). A type's ``ALIASES``
+(old name -> (the key it names now, relative; the type checking a value the chosen
+member has no field for)) keep an old key: it sets its new key, or, when the chosen type
+has no such setting, is checked and ignored (``rule.forgetting``).
+
 A key naming a type's field applies after the key that chooses the type, whatever the
 order given. An unknown key, a field the chosen type does not have, or a value of the
 wrong type is a :class:`SkinnyInputError` naming the key.
@@ -30,7 +38,7 @@ from typing import Any
 
 from skinny_mj.errors import SkinnyInputError
 
-__all__ = ["override", "flatten", "parse_value", "keys", "field_type", "KIND"]
+__all__ = ["override", "flatten", "parse_value", "keys", "field_type", "node", "KIND"]
 
 #: The field that names a union member's type.
 KIND = "kind"
@@ -54,7 +62,14 @@ def _kinds(cls: type) -> tuple[str, ...]:
         next(f.default for f in dataclasses.fields(cls) if f.name == KIND),)
 
 
+def _registry(annotation: Any) -> bool:
+    """Is ``annotation`` a choice of types kept in a registry (module docstring)?"""
+    return isinstance(annotation, type) and bool(getattr(annotation, "REGISTRY", False))
+
+
 def _member_of(annotation: Any, kind: str, key: str) -> type:
+    if _registry(annotation):
+        return annotation.choose(kind)  # (its own refusal of an unknown name)
     members = _members(annotation)
     for cls in members:
         if kind in _kinds(cls):
@@ -64,6 +79,8 @@ def _member_of(annotation: Any, kind: str, key: str) -> type:
 
 
 def _is_union(annotation: Any) -> bool:
+    if _registry(annotation):
+        return True
     members = _members(annotation)
     return bool(members) and all(_has(m, KIND) for m in members) \
         and (len(members) > 1 or hasattr(members[0], "KINDS"))
@@ -124,7 +141,9 @@ def _unknown(key: str, owner: Any, root: Any) -> SkinnyInputError:
     return SkinnyInputError(f"unknown config key {key!r}{hint}")
 
 
-def _node(cfg: Any, dotted: str) -> Any:
+def node(cfg: Any, dotted: str) -> Any:
+    """The value at the dotted key on ``cfg`` (a component or a leaf), or None when
+    ``cfg`` as it is has no such key."""
     for part in dotted.split("."):
         if not _has(cfg, part):
             return None
@@ -132,13 +151,21 @@ def _node(cfg: Any, dotted: str) -> Any:
     return cfg
 
 
+_node = node
+
+
 def _apply(node: Any, changes: Mapping[str, Any], prefix: str, root: Any) -> Any:
     """``node`` (at ``prefix``) with its relative dotted ``changes`` set: per field, a
     type chosen first, then its own settings; then ``node`` rebuilt once, so its checks
     see all the changes together (``rule=none`` with ``test.gain=1``)."""
     groups: dict[str, dict[str, Any]] = {}
+    aliases = getattr(type(node), "ALIASES", {})
+    legacy: dict[tuple[str, str], str] = {}  # (field, its key) set by an old key
     for key, value in changes.items():
         name, _, rest = key.partition(".")
+        if name in aliases and not rest and not _has(node, name):
+            name, _, rest = aliases[name][0].partition(".")
+            legacy[name, rest] = key
         groups.setdefault(name, {})[rest] = value
     new = {}
     for name, sub in groups.items():
@@ -148,6 +175,9 @@ def _apply(node: Any, changes: Mapping[str, Any], prefix: str, root: Any) -> Any
         annotation, current = _hints(type(node))[name], getattr(node, name)
         if "" in sub:
             current = _value(current, annotation, sub.pop(""), key)
+        for rest in [r for r in sub if (name, r) in legacy and not _has(current, r)]:
+            _unused_alias(aliases[legacy[name, rest]][1], rest, sub.pop(rest),
+                          prefix + legacy[name, rest])
         if sub:
             if not dataclasses.is_dataclass(current):
                 raise _unknown(f"{key}.{next(iter(sub))}", None, root)
@@ -160,6 +190,16 @@ def _apply(node: Any, changes: Mapping[str, Any], prefix: str, root: Any) -> Any
         raise SkinnyInputError(f"{owner}: {err}" if owner else str(err)) from None
     except (TypeError, ValueError) as err:  # a component's own check (e.g. ESNConfig's)
         raise SkinnyInputError(f"{prefix[:-1] or 'config'}: {err}") from None
+
+
+def _unused_alias(cls: type, name: str, value: Any, key: str) -> None:
+    """Check ``value`` of the old key ``key`` as ``cls``'s setting ``name`` would be,
+    then drop it: the chosen type has no use for it (as before it moved)."""
+    value = _checked(value, _hints(cls)[name], key)
+    try:
+        cls(**{name: value})
+    except (TypeError, ValueError) as err:
+        raise SkinnyInputError(f"{key}: {err}") from None
 
 
 def _value(current: Any, annotation: Any, value: Any, key: str) -> Any:
@@ -218,6 +258,13 @@ def field_type(cfg: Any, key: str) -> Any:
     """The annotation of the leaf ``key`` on ``cfg`` (a union field: ``str``)."""
     *owner, name = key.split(".")
     node = _node(cfg, ".".join(owner)) if owner else cfg
+    alias = getattr(type(node), "ALIASES", {}).get(name) if node is not None else None
+    if alias is not None and not _has(node, name):  # an old key: its new key's type
+        target = ".".join([*owner, alias[0]])
+        if _node(cfg, target.rpartition(".")[0]) is not None and \
+                _has(_node(cfg, target.rpartition(".")[0]), target.rpartition(".")[2]):
+            return field_type(cfg, target)
+        return _hints(alias[1])[alias[0].rpartition(".")[2]]
     if node is None or not _has(node, name) or name == KIND:
         raise _unknown(key, node, cfg)
     annotation = _hints(type(node))[name]

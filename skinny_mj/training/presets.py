@@ -108,7 +108,7 @@ TORQUE_GENERAL: dict[int, tuple[str, dict[str, Any]]] = {
         "--rows general`, the same as row 3d-general (unseen md_02 at 0.45x speed 0.0189, "
         "md_03 at 0.44x 0.0142, 10 seeds)",
         {"plant.dof": 8, **_TORQUE_FEL, "rule.epochs": 15, "actuation.omega": 20.0,
-         "rule.forgetting": 0.9}),
+         "rule.fit.forgetting": 0.9}),
 }
 #: The same names for ``--actuation torque`` (``general``: the 2D body's).
 TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {"general": TORQUE_GENERAL[4]}

@@ -226,15 +226,15 @@ def feasibility_report(dof: int, trajectory) -> list[str]:
 
 def readout_fitter(cfg: TrainConfig, esn, steps: int):
     """FEL's readout fit for ``rule.fit`` (None: each cycle alone, ``esn.fit``): the
-    normal equations with forgetting, or RLS, remembering ``rule.forgetting`` of the
+    normal equations with forgetting, or RLS, remembering ``rule.fit.forgetting`` of the
     statistics per learning cycle of ``steps`` samples; ridge ``esn.ridge_lambda`` with a
     ridge readout, else :data:`MEMORY_RIDGE`."""
-    rule = cfg.rule
+    fit = cfg.rule.fit
     ridge = cfg.esn.ridge_lambda if cfg.esn.readout == "ridge" else MEMORY_RIDGE
-    if rule.fit == "forgetting":
-        return ForgettingReadout(esn, rule.forgetting, ridge)
-    if rule.fit == "rls":
-        return RLSReadout(esn, steps, rule.forgetting, ridge)
+    if fit.kind == "forgetting":
+        return ForgettingReadout(esn, fit.forgetting, ridge)
+    if fit.kind == "rls":
+        return RLSReadout(esn, steps, fit.forgetting, ridge)
     return None
 
 
