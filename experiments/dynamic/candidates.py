@@ -53,7 +53,7 @@ _INSCALE, _SCALE, _CYCLES = "esn.input_scaling", "movement.full_scale_factor", "
 _RIDGE = {"esn.readout": "ridge"}
 REC_3D_SCREEN: dict[str, dict] = {
     "vscale-ymca": {"movement.max_speed_from": "ymca"}, "scale1": {_SCALE: 1.0},
-    "forget0.9": {"rule.forgetting": 0.9}, "cycles10": {_CYCLES: 10},
+    "forget0.9": {"rule.fit.forgetting": 0.9}, "cycles10": {_CYCLES: 10},
     "n1000": {"esn.n_reservoir": 1000}, "inscale0.5": {_INSCALE: 0.5},
     "inscale2": {_INSCALE: 2.0}, "sr0.9": {"esn.spectral_radius": 0.9},
     "ridge1e-3": {**_RIDGE, "esn.ridge_lambda": 1e-3},
@@ -70,12 +70,12 @@ REC_3D_SCREEN: dict[str, dict] = {
     "omega15+inscale0.5": {OMEGA: 15.0, _INSCALE: 0.5},
     "omega10+inscale0.5+cycles10": {OMEGA: 10.0, _INSCALE: 0.5, _CYCLES: 10},
     "omega20+ridge1e-1": {OMEGA: 20.0, **_RIDGE, "esn.ridge_lambda": 1e-1},
-    "omega20+forget0.9": {OMEGA: 20.0, "rule.forgetting": 0.9},
+    "omega20+forget0.9": {OMEGA: 20.0, "rule.fit.forgetting": 0.9},
     "omega20+n1000": {OMEGA: 20.0, "esn.n_reservoir": 1000},
     "omega20+epochs30": {OMEGA: 20.0, "rule.epochs": 30},
-    "omega20+forget0.9+ridge1e-1": {OMEGA: 20.0, "rule.forgetting": 0.9, **_RIDGE,
+    "omega20+forget0.9+ridge1e-1": {OMEGA: 20.0, "rule.fit.forgetting": 0.9, **_RIDGE,
                                     "esn.ridge_lambda": 1e-1},
-    "omega20+forget0.95": {OMEGA: 20.0, "rule.forgetting": 0.95},
+    "omega20+forget0.95": {OMEGA: 20.0, "rule.fit.forgetting": 0.95},
 }
 #: The screen's choice (the lowest mean position NRMSE over the row's first 3 seeds, see
 #: docs/results/dynamic.md): the teacher's poles at 20 rad/s (omega dt = 0.4 at 50 Hz) and
