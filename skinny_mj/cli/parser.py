@@ -112,7 +112,10 @@ def _dof(text: str) -> int:
         raise argparse.ArgumentTypeError(str(err)) from None
 
 def _positive_int(text: str) -> int:
-    value = int(text)
+    try:
+        value = int(text)
+    except ValueError:  # else argparse's "invalid _positive_int value"
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text}")
     return value
@@ -368,7 +371,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "experiment" and args.config is not None:
         args.given = given_options(argv)  # which flags override the file
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
-    os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
+    if not os.environ.get("MUJOCO_GL", "").strip():  # unset, or set empty (`MUJOCO_GL= skinny`)
+        os.environ["MUJOCO_GL"] = "egl" if args.command == "render" else "disabled"
     previous = _on_sigterm(_terminate)
     restore_logs = to_stderr(args.log_level)  # diagnostics: plain lines on stderr
     try:
@@ -378,12 +382,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(list_text())
             sys.stdout.flush()
             return 0
-        from skinny_mj.cli import commands
-        from skinny_mj.preflight import check_gl
-        from skinny_mj.threads import one_blas_thread
+        from skinny_mj.preflight import check_gl  # imports no mujoco
 
         check_gl()  # a MUJOCO_GL mujoco refuses would fail at its import, as a traceback
+        from skinny_mj.cli import commands  # imports mujoco
         from skinny_mj.cli.flags import check_args
+        from skinny_mj.threads import one_blas_thread
 
         check_args(args)  # every numeric flag in its range (seed >= 0, ...), before any work
         with one_blas_thread():  # same bits whatever the machine's BLAS threads
@@ -392,6 +396,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return code
     except SkinnyInputError as err:
         print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
+        return 2
+    except ValueError as err:
+        if "null byte" not in str(err):  # a NUL in a name (argv from Python, a config file)
+            raise
+        print(f"skinny {args.command}: error: a file name holds a NUL byte ({err})",
+              file=sys.stderr)
         return 2
     except BrokenPipeError:  # the reader stopped reading (`skinny experiment list | head`)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit

@@ -42,9 +42,11 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from skinny_mj.errors import SkinnyInputError
 from skinny_mj.gym.env import (
     action_space,
     check_id,
+    check_seed,
     observation_space,
     resolve_trajectory,
 )
@@ -85,8 +87,9 @@ class SkinnyVectorEnv(VectorEnv):
         env_id: str | None = None,
         max_episode_steps: int | None = None,
     ):
-        if int(num_envs) < 1:
-            raise ValueError(f"num_envs must be >= 1, got {num_envs}")
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) \
+                or num_envs < 1:
+            raise SkinnyInputError(f"num_envs must be a whole number >= 1, got {num_envs!r}")
         self.num_envs = int(num_envs)
         self.render_mode = None
         self._plant_kwargs = dict(
@@ -133,6 +136,8 @@ class SkinnyVectorEnv(VectorEnv):
             raise ValueError("SkinnyVectorEnv resets all sub-environments together "
                              f"(lockstep plant); got reset_mask={mask}")
         if seed is not None:
+            for one in (list(seed) if isinstance(seed, Sequence | np.ndarray) else [seed]):
+                check_seed(one)  # -1 or 1.5: one line, not Gymnasium's or NumPy's error
             if isinstance(seed, int | np.integer):
                 super().reset(seed=int(seed))
                 seeds = [int(seed) + i for i in range(self.num_envs)]
