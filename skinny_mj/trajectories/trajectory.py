@@ -162,7 +162,8 @@ class Trajectory:
         from scipy.interpolate import PchipInterpolator
 
         n = max(2, int(round(len(self) / speed)))
-        check_size(n, self.dof, f"speed {speed:g}: {n} steps of {self.name}")
+        steps = str(n) if n < 10**15 else f"{n:.3g}"  # not 290 digits for speed 1e-300
+        check_size(n, self.dof, f"speed {speed:g}: {steps} steps of {self.name}")
         src = np.arange(len(self), dtype=float)
         dst = np.linspace(0.0, len(self) - 1.0, n)
         angles = PchipInterpolator(src, self.angles, axis=0)(dst)
@@ -377,8 +378,11 @@ def _is_float(text: str) -> bool:
 def excerpt(traj: Trajectory, start_s: float, duration_s: float | None) -> Trajectory:
     """Steps of ``traj`` from ``start_s`` for ``duration_s`` seconds (both >= 0, inside;
     ``duration_s`` None: to the end)."""
-    start = int(round(float(start_s) / traj.dt))
-    n = len(traj) - start if duration_s is None else int(round(float(duration_s) / traj.dt))
+    first = float(start_s) / traj.dt  # 1e308 s: inf steps, which int() cannot take
+    steps = None if duration_s is None else float(duration_s) / traj.dt
+    inside = math.isfinite(first) and (steps is None or math.isfinite(steps))
+    start = int(round(first)) if inside else -1
+    n = len(traj) - start if steps is None else int(round(steps)) if inside else 0
     if start < 0 or n < 1 or start + n > len(traj):
         what = "to the end" if duration_s is None else f"+ {duration_s:g} s"
         raise SkinnyInputError(
