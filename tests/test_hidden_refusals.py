@@ -257,3 +257,20 @@ def test_valid_gym_calls_still_work():
     env.step(np.full(4, 5.0, dtype=np.float32))  # clipped by the task
     obs, _ = _vector(seed=[0, 1])
     assert obs.shape[0] == 2
+
+
+@pytest.mark.parametrize("argv,says", [
+    (["experiment", "paper-d", "--quick"], "holds a sweep of experiment 'paper-e', not "
+                                           "'paper-d'; resume it with `skinny experiment "
+                                           "paper-e --resume`"),
+    (["experiment", "paper-e", "--quick"], "holds a different sweep of 'paper-e': its config"),
+])
+def test_resume_names_the_study_or_what_differs(argv, says, capsys, tmp_path):
+    out = tmp_path / "sw"
+    out.mkdir()
+    config = {"experiment": "paper-e", "config": {}, "rows": [], "base_seed": 0}
+    (out / "config.json").write_text(json.dumps(config))
+    err = _one_line([*argv, "--resume", "--workers", "1", "--out", str(out)], capsys)
+    assert says in err
+    assert json.loads((out / "config.json").read_text()) == config  # untouched
+    assert sorted(p.name for p in out.iterdir()) == ["config.json"]
