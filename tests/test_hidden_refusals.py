@@ -73,6 +73,15 @@ def bad(tmp_path_factory) -> Path:
                                    + (96).to_bytes(8, "little") + b"abcd")
     (root / "folder").mkdir()
     (root / "folder" / "run.rrd").write_bytes((root / "cut.rrd").read_bytes())
+    # JSON files that are no training config
+    for name, data in [
+        ("nested.json", {"esn": {"n_reservoir": 20}}),
+        ("test_metrics.json", {"model": "m.npz", "seed": 0, "test": {"position_nrmse": 0.1}}),
+        ("track_metrics.json", {"position_nrmse": 0.0, "max_speed_rad_s": [1.0] * 4}),
+        ("bench.json", {"quick": True, "load_avg_start": [0.0, 0.0, 0.0]}),
+        ("results.json", {"experiment": "paper-e", "n_runs": 2, "rows": []}),
+    ]:
+        (root / name).write_text(json.dumps(data))
     # models
     with np.load(_shipped("general-2d-joint")) as data:
         arrays = dict(data)
@@ -117,6 +126,14 @@ LONG = "x" * 300
     (["experiment", "paper-e", "--workers", "x"], "--workers: must be a whole number >= 1, "
                                                    "got 'x'"),
     (["render", "--width", "1e9"], "--width: must be a whole number >= 1, got '1e9'"),
+    # config files of the wrong kind
+    (["train", "--config", "{bad}/nested.json"], "nested.json: config keys are flat and "
+                                                 "dotted: write \"esn.n_reservoir\""),
+    (["train", "--config", "{bad}/test_metrics.json"], "this is a `skinny test` run's "
+                                                       "metrics.json, which holds no training"),
+    (["train", "--config", "{bad}/track_metrics.json"], "a `skinny track` run's metrics.json"),
+    (["train", "--config", "{bad}/bench.json"], "this is `skinny bench`'s results"),
+    (["sweep", "rule.epochs=1,2", "--config", "{bad}/results.json"], "a sweep's results.json"),
     # models for `skinny test`
     (["test", "--model", "{bad}/t4.csv"], "t4.csv: not a model written by `skinny train` "
                                           "(not an .npz archive)"),
@@ -168,6 +185,12 @@ def test_a_nul_byte_in_a_name_is_one_line(argv, capsys, tmp_path, monkeypatch):
 def test_view_refuses_an_empty_or_truncated_recording(name, says, bad, capsys):
     err = _one_line(["view", str(bad / name)], capsys)
     assert says in err
+
+
+def test_view_web_refuses_one_port_for_both_servers(bad, capsys):
+    err = _one_line(["view", str(bad / "t4.npz"), "--web", "--web-port", "9876", "--grpc-port",
+                     "9876"], capsys)
+    assert "--web-port 9876 and --grpc-port 9876 are one port" in err
 
 
 def test_render_writes_only_png(capsys, tmp_path, monkeypatch):
@@ -232,6 +255,9 @@ def _vector(num_envs=2, seed=None):
     (lambda: __import__("skinny_mj").load(sensor_noise=1e308), "sensor_noise must be in [0, 10]"),
     (lambda: Trajectory(np.zeros((3, 4)), dt=True), "dt must be a finite number > 0 s"),
     (lambda: Trajectory(np.zeros((3, 4)), dt="x"), "dt must be a finite number > 0 s"),
+    (lambda: __import__("skinny_mj").load(speed_factor=float("inf")),
+     "speed_factor must be a finite number > 0, got inf"),
+    (lambda: Trajectory(np.zeros((3, 4))).save("x\0.csv"), "holds a NUL byte"),
     (lambda: _gym().reset(seed=-1), "seed must be None or a whole number >= 0, got -1"),
     (lambda: _gym().reset(seed=1.5), "seed must be None or a whole number >= 0, got 1.5"),
     (lambda: _stepped(np.zeros((1, 4))), "action must be (4,) numbers, got shape (1, 4)"),

@@ -158,6 +158,9 @@ def view(path: str | Path, *, web: bool = False, web_port: int = DEFAULT_WEB_POR
     """Open the recordings under ``path`` (see :func:`find_recordings`) and wait for the
     viewer to close; headless (and not ``web``) or with ``dry_run``, print the command
     instead. Returns the exit code for ``skinny view``."""
+    if web and web_port == grpc_port:  # else rerun's own error, several lines, exit 1
+        raise SkinnyInputError(f"--web-port {web_port} and --grpc-port {grpc_port} are one "
+                               "port: the web page and its data need two")
     recordings = find_recordings(path)
     cmd = viewer_command(recordings, web=web, web_port=web_port, grpc_port=grpc_port,
                          bind=bind)

@@ -127,7 +127,8 @@ def prepare(
         raise SkinnyInputError(f"trajectory dt must be {CONTROL_DT_S} s (50 Hz), got {dt}")
     if max_speed_rad_s is None:
         if not (np.isfinite(speed_factor) and speed_factor > 0):
-            raise SkinnyInputError(f"speed_factor must be > 0, got {speed_factor!r}")
+            raise SkinnyInputError(f"speed_factor must be a finite number > 0, got "
+                                   f"{speed_factor!r}")
         speed = max_speeds(angles, dt, speed_factor)
     else:
         try:

@@ -31,7 +31,7 @@ import numpy as np
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path, atomic_write_text
 from skinny_mj.plant import body
-from skinny_mj.preflight import Estimate, check
+from skinny_mj.preflight import Estimate, check, check_path_name
 
 DEFAULT_DT_S = body.CONTROL_DT_S  # movements are sampled at the control rate
 #: Largest |angle| a movement may hold, rad (joint ranges are within +-pi; a larger
@@ -215,7 +215,7 @@ class Trajectory:
     # -- files ------------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
         """Write ``.npz`` or ``.csv`` (chosen by the suffix) atomically."""
-        path = Path(path)
+        path = check_path_name(path, "trajectory file")  # a NUL byte, a name too long
         suffix = path.suffix.lower()
         if suffix == ".npz":
             meta = {
