@@ -269,6 +269,8 @@ def _vector(num_envs=2, seed=None):
     (lambda: _vector(num_envs=0), "num_envs must be a whole number >= 1, got 0"),
     (lambda: _vector(seed=-1), "seed must be None or a whole number >= 0, got -1"),
     (lambda: _vector(seed=[0, -1]), "seed must be None or a whole number >= 0, got -1"),
+    (lambda: _vector(seed=[1]), "need 2 int seeds, got [1]"),
+    (lambda: _vector(num_envs=2.5), "num_envs must be a whole number >= 1, got 2.5"),
 ])
 def test_the_api_and_gym_raise_a_skinny_input_error(call, culprit):
     with pytest.raises(SkinnyInputError) as caught:

@@ -105,7 +105,7 @@ class SkinnyVectorEnv(VectorEnv):
         if max_episode_steps == -1:  # Gymnasium's "no time limit"
             max_episode_steps = None
         if max_episode_steps is not None and max_episode_steps < 1:
-            raise ValueError(f"max_episode_steps must be >= 1, got {max_episode_steps}")
+            raise SkinnyInputError(f"max_episode_steps must be >= 1, got {max_episode_steps}")
         self._limit = len(self.setup.desired) - 1 if max_episode_steps is None \
             else min(int(max_episode_steps), len(self.setup.desired) - 1)
         self.single_observation_space = observation_space(self.setup)
@@ -133,7 +133,7 @@ class SkinnyVectorEnv(VectorEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         mask = (options or {}).get("reset_mask")
         if mask is not None and not np.all(mask):
-            raise ValueError("SkinnyVectorEnv resets all sub-environments together "
+            raise SkinnyInputError("SkinnyVectorEnv resets all sub-environments together "
                              f"(lockstep plant); got reset_mask={mask}")
         if seed is not None:
             for one in (list(seed) if isinstance(seed, Sequence | np.ndarray) else [seed]):
@@ -144,7 +144,7 @@ class SkinnyVectorEnv(VectorEnv):
             else:
                 seeds = list(seed)
                 if len(seeds) != self.num_envs or any(s is None for s in seeds):
-                    raise ValueError(f"need {self.num_envs} int seeds, got {seed}")
+                    raise SkinnyInputError(f"need {self.num_envs} int seeds, got {seed}")
                 seeds = [int(s) for s in seeds]
             if seeds != self._fresh_seeds:
                 self.plant = BatchPlant(n_runs=self.num_envs, seeds=seeds, **self._plant_kwargs)
