@@ -73,6 +73,12 @@ def bad(tmp_path_factory) -> Path:
                                    + (96).to_bytes(8, "little") + b"abcd")
     (root / "folder").mkdir()
     (root / "folder" / "run.rrd").write_bytes((root / "cut.rrd").read_bytes())
+    chan = bvh.replace("CHANNELS 3 Zrotation Xrotation Yrotation",
+                       "CHANNELS 9 Zrotation Xrotation Yrotation", 1)
+    (root / "chan9.bvh").write_text(chan)
+    (root / "ghost.amc").write_text(amc.replace("rhumerus", "ghostbone"))
+    (root / "list.json").write_text("[1, 2]")
+    (root / "trunc.json").write_text('{"esn.n_reservoir": 2')
     # JSON files that are no training config
     for name, data in [
         ("nested.json", {"esn": {"n_reservoir": 20}}),
@@ -134,6 +140,23 @@ LONG = "x" * 300
     (["train", "--config", "{bad}/track_metrics.json"], "a `skinny track` run's metrics.json"),
     (["train", "--config", "{bad}/bench.json"], "this is `skinny bench`'s results"),
     (["sweep", "rule.epochs=1,2", "--config", "{bad}/results.json"], "a sweep's results.json"),
+    # already refused in one line when probed: kept as guards
+    (["track", "--trajectory", "{bad}/chan9.bvh"], "chan9.bvh:9: CHANNELS says 9 but names 3"),
+    (["track", "--trajectory", "{bad}/ghost.amc", "--asf", "{bad}/tiny.asf"],
+     "unknown bone 'ghostbone' (not in tiny.asf)"),
+    (["track", "--trajectory", "set:set:ymca+y"], "bad training set 'set:set:ymca+y'"),
+    (["track", "--trajectory", "babble:duration=-1"], "babble duration must be > 0 s"),
+    (["track", "--trajectory", "babble:bogus=1"], "bad babble name 'babble:bogus=1'"),
+    (["trajectory", "export", "ymca"], "o: export writes .npz or .csv"),  # --out o: no suffix
+    (["sweep", "rule.epochs="], "a sweep axis is KEY=VALUE[,VALUE...], got 'rule.epochs='"),
+    (["train", "--config", "{bad}/list.json"], "list.json: a config file holds a JSON object"),
+    (["train", "--config", "{bad}/trunc.json"], "trunc.json: not a JSON config file"),
+    (["train", "esn.n_reservoir=abc"], "esn.n_reservoir must be a whole number, got 'abc'"),
+    (["train", "rule.beta=[1]"], "rule.beta must be a number, got '[1]'"),
+    (["train", "esn.a.b=1"], "unknown config key 'esn.a.b'"),
+    (["train", "x="], "unknown config key 'x'"),
+    (["train", "--beta", "-0"], "beta must be in (0, 1], got -0.0"),
+    (["train", "--speed", "1e308"], "speed must be in (0, 10], got 1e+308"),
     # models for `skinny test`
     (["test", "--model", "{bad}/t4.csv"], "t4.csv: not a model written by `skinny train` "
                                           "(not an .npz archive)"),
