@@ -187,6 +187,16 @@ def test_an_out_name_too_long_is_bad_input_not_the_machine(argv, capsys, tmp_pat
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("command", ["demo", "track", "train", "test --model m.npz",
+                                     "trajectory export ymca", "experiment paper-e", "sweep x=1",
+                                     "bench", "render"])
+def test_an_empty_out_is_refused_not_taken_as_here(command, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    err = _one_line([*command.split(), "--out", ""], capsys)
+    assert "--out: '' names no file or folder" in err
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("argv", [
     ["track", "--out", "a\0b"],
     ["trajectory", "export", "ymca", "--out", "a\0b.csv"],
