@@ -41,10 +41,10 @@ from pathlib import Path
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.io import atomic_write_bytes
 
-__all__ = ["GL_BACKENDS", "MIN_FREE_BYTES", "RUN_FILES", "check_gl", "check_writable",
-           "check_writable_file", "check_free_space", "cleaned_on_failure", "check_run_folder",
-           "check_new_file", "timestamp", "new_folder", "run_folder", "Estimate",
-           "available_bytes", "check", "fmt_bytes"]
+__all__ = ["GL_BACKENDS", "MIN_FREE_BYTES", "RUN_FILES", "check_gl", "check_path_name",
+           "check_writable", "check_writable_file", "check_free_space", "cleaned_on_failure",
+           "check_run_folder", "check_new_file", "timestamp", "new_folder", "run_folder",
+           "Estimate", "available_bytes", "check", "fmt_bytes"]
 
 #: MUJOCO_GL values mujoco accepts on Linux (mujoco/rendering/classic/gl_context.py);
 #: any other value makes ``import mujoco`` itself raise.
@@ -81,7 +81,7 @@ def check_writable(folder: str | Path) -> Path:
         If the file system is read-only, the folder is not writable, or the disk is
         full; either message names the folder and the reason.
     """
-    folder = Path(folder)
+    folder = check_path_name(folder)
     existing = folder
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent
@@ -102,10 +102,38 @@ def check_writable(folder: str | Path) -> Path:
     return folder
 
 
+def check_path_name(path: str | Path, option: str = "--out") -> Path:
+    """Refuse a path no file system takes, as bad input naming ``option``: a NUL byte
+    (``ValueError`` deep in ``os``), or a name longer than the file system allows
+    (``ENAMETOOLONG``, which would otherwise read as a fault of the machine)."""
+    text = os.fspath(path)
+    if "\0" in str(text):
+        raise SkinnyInputError(f"{option} {str(text)!r} holds a NUL byte; choose another name")
+    path = Path(path)
+    existing = path.absolute()
+    while existing != existing.parent:
+        try:
+            if existing.exists():
+                break
+        except OSError:  # ENAMETOOLONG on the way up: the part names are checked below
+            pass
+        existing = existing.parent
+    try:
+        name_max = os.pathconf(existing, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        name_max = 255
+    long = [part for part in path.parts if len(os.fsencode(part)) > name_max]
+    if long:
+        raise SkinnyInputError(f"{option}: the name {long[0][:40]}... is "
+                               f"{len(os.fsencode(long[0]))} bytes, more than the "
+                               f"{name_max} the file system allows; choose a shorter name")
+    return path
+
+
 def check_writable_file(path: str | Path, option: str = "--out") -> Path:
     """Check that the file ``path`` can be written (its folder as :func:`check_writable`
     checks one, and ``path`` itself not a folder), before the work that makes it."""
-    path = Path(path)
+    path = check_path_name(path, option)
     if path.is_dir():
         raise SkinnyInputError(f"{option} {path} is a folder; give a file name")
     check_writable(path.parent if str(path.parent) else Path("."))
@@ -161,7 +189,7 @@ def check_run_folder(out: str | Path, overwrite: bool, option: str = "--out") ->
     """Refuse (:class:`SkinnyInputError`) a run's output folder ``out`` that would lose
     results in silence: a file, a folder holding files (unless ``overwrite`` and they
     include a run's), see the module docstring."""
-    out = Path(out)
+    out = check_path_name(out, option)
     if out.exists() and not out.is_dir():
         raise SkinnyInputError(f"{option} is a file, not a folder; choose a folder", path=out)
     entries = _visible(out) if out.is_dir() else []
@@ -179,7 +207,7 @@ def check_run_folder(out: str | Path, overwrite: bool, option: str = "--out") ->
 def check_new_file(path: str | Path, overwrite: bool, option: str = "--out") -> Path:
     """Refuse (:class:`SkinnyInputError`) an output file that exists, unless ``overwrite``;
     then check it can be written (:func:`check_writable_file`)."""
-    path = Path(path)
+    path = check_path_name(path, option)
     if path.exists() and not path.is_dir() and not overwrite:
         raise SkinnyInputError(f"{option} already exists; replace it with --overwrite, or "
                                "choose another name", path=path)

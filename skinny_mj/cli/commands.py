@@ -350,6 +350,9 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
 def cmd_render(args: argparse.Namespace) -> int:
     if args.trajectory is None and args.frame != 0:  # not silently the rest pose
         raise SkinnyInputError(f"--frame {args.frame} needs --trajectory (a movement's frame)")
+    if Path(args.out).suffix.lower() != ".png":  # not PNG bytes under another name
+        raise SkinnyInputError(f"--out: render writes a PNG: give a name ending in .png, got "
+                               f"{args.out}")
     check_new_file(args.out, args.overwrite)
     angles = None
     if args.trajectory is not None:

@@ -62,6 +62,17 @@ def read_json(path: str | Path) -> dict[str, Any]:
     return data
 
 
+#: The JSON other commands write, told apart from a training config by their keys.
+_OTHER_FILES = [
+    (lambda d: "model" in d and "test" in d, "a `skinny test` run's metrics.json"),
+    (lambda d: "position_nrmse" in d and "max_speed_rad_s" in d,
+     "a `skinny track` run's metrics.json"),
+    (lambda d: "load_avg_start" in d or "esn_run_vs_reservoirpy" in d,
+     "`skinny bench`'s results"),
+    (lambda d: "experiment" in d and "n_runs" in d, "a sweep's results.json"),
+]
+
+
 def read_train_file(path: str | Path) -> tuple[dict[str, Any], int | None]:
     """The TrainConfig dict and seed in ``path``: a run's ``metrics.json`` (its
     ``config`` and ``seed``) or a bare TrainConfig dict (seed None)."""
@@ -69,6 +80,18 @@ def read_train_file(path: str | Path) -> tuple[dict[str, Any], int | None]:
     if "experiment" in data and "options" in data:
         raise SkinnyInputError("this is a sweep's config.json: repeat it with `skinny "
                                f"experiment {data['experiment']} --config {path}`", path=path)
+    if not isinstance(data.get("config"), dict):
+        for looks, what in _OTHER_FILES:
+            if looks(data):
+                raise SkinnyInputError(f"this is {what}, which holds no training config: give "
+                                       "a `skinny train` run's metrics.json or a config of "
+                                       "dotted keys (esn.n_reservoir, ...)", path=path)
+        nested = [k for k, v in data.items() if isinstance(v, dict) and "." not in k]
+        if nested:  # {"esn": {"n_reservoir": 20}}: the keys are flat and dotted
+            inner = next(iter(data[nested[0]]), "KEY")
+            raise SkinnyInputError(f"config keys are flat and dotted: write "
+                                   f"\"{nested[0]}.{inner}\": ..., not a section "
+                                   f"\"{nested[0]}\": {{...}}", path=path)
     if isinstance(data.get("config"), dict):
         seed = data.get("seed")
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)

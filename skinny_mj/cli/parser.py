@@ -111,8 +111,20 @@ def _dof(text: str) -> int:
     except (SkinnyInputError, ValueError) as err:
         raise argparse.ArgumentTypeError(str(err)) from None
 
+def _out_path(text: str) -> Path:
+    """argparse type of ``--out``: a path, not empty (``Path("")`` is the current folder:
+    an unset shell variable would write there)."""
+    if not str(text).strip():
+        raise argparse.ArgumentTypeError(f"{text!r} names no file or folder (an unset shell "
+                                         "variable?); give one (--out . for here)")
+    return Path(text)
+
+
 def _positive_int(text: str) -> int:
-    value = int(text)
+    try:
+        value = int(text)
+    except ValueError:  # else argparse's "invalid _positive_int value"
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text}")
     return value
@@ -167,12 +179,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("demo", help="train with the defaults (paper E, exp. 5) and show the result")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--out", type=Path, help="output folder (default: results/demo/<time>)")
+    p.add_argument("--out", type=_out_path, help="output folder (default: results/demo/<time>)")
 
     p = sub.add_parser("track", help="run the analytic ideal controller through the task")
     p.config_flags = "TRACK_FLAGS"
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--out", type=Path, help="output folder (default: results/track/<time>)")
+    p.add_argument("--out", type=_out_path, help="output folder (default: results/track/<time>)")
 
     p = sub.add_parser("train", help="train an ESN inverse model (FEL or true target)",
                        description="Train an ESN inverse model. Settings: TrainConfig's "
@@ -185,7 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.config_flags = "TRAIN_FLAGS"
     p.add_argument("--seed", type=int, default=argparse.SUPPRESS, help="the run's seed "
                    "(default: the --config file's, else 0)")
-    p.add_argument("--out", type=Path, help="output folder (default: results/train/<time>)")
+    p.add_argument("--out", type=_out_path, help="output folder (default: results/train/<time>)")
     p.add_argument("--config", type=Path, help="repeat a run: its metrics.json (or a bare "
                    "config JSON of dotted keys); flags given as well override its settings")
     p.add_argument("--preset", choices=("general",), help="a named configuration; flags "
@@ -210,7 +222,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "general-2d-cartesian, general-3d-cartesian")
     p.config_flags = "TEST_FLAGS"
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--out", type=Path, help="output folder (default: results/test/<time>)")
+    p.add_argument("--out", type=_out_path, help="output folder (default: results/test/<time>)")
 
     p = sub.add_parser("trajectory", help="list or export movements")
     tsub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
@@ -230,7 +242,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--asf", type=Path)
     e.add_argument("--speed", type=float, default=1.0)
     e.add_argument("--reps", type=_positive_int, default=1)
-    e.add_argument("--out", type=Path, required=True, help="FILE.npz or FILE.csv")
+    e.add_argument("--out", type=_out_path, required=True, help="FILE.npz or FILE.csv")
     e.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
 
     p = sub.add_parser("experiment", help="reproduce a paper's table and figures (a sweep)",
@@ -241,7 +253,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "or `list`")
     p.add_argument("--runs", type=_positive_int, help="runs per row (default: the paper's)")
     p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
-    p.add_argument("--out", type=Path, help="output folder (default: results/<name>/<time>)")
+    p.add_argument("--out", type=_out_path, help="output folder (default: results/<name>/<time>)")
     p.add_argument("--resume", action="store_true", help="continue the sweep in --out: skip "
                    "its ok and failed runs, rerun errored ones (rows may differ)")
     p.add_argument("--overwrite", action="store_true", help="replace the sweep already in "
@@ -280,7 +292,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "--quick for its row, else 2 epochs; 2 runs per row unless --runs")
     p.add_argument("--rows", type=_rows, help="comma-separated row ids to run (default: all)")
     p.add_argument("--workers", type=_positive_int, help="parallel processes (default: all cores)")
-    p.add_argument("--out", type=Path, help="output folder (default: results/sweep/<time>)")
+    p.add_argument("--out", type=_out_path, help="output folder (default: results/sweep/<time>)")
     p.add_argument("--resume", action="store_true", help="continue the sweep in --out")
     p.add_argument("--overwrite", action="store_true", help="replace the sweep in --out")
     p.add_argument("--scheduler", type=_scheduler,
@@ -303,7 +315,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="measure the fast path: ratios vs reservoirpy, physics, "
                        "the naive loop (prints a table)")
     p.add_argument("--quick", action="store_true", help="short timings; no full paper-E sweep")
-    p.add_argument("--out", type=Path, help="write every figure to FILE.json")
+    p.add_argument("--out", type=_out_path, help="write every figure to FILE.json")
     p.add_argument("--workers", type=_positive_int,
                    help="processes for paper_e_full_s (default: all cores)")
 
@@ -313,7 +325,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--frame", type=int, default=0)
     p.add_argument("--width", type=_positive_int, default=640)
     p.add_argument("--height", type=_positive_int, default=480)
-    p.add_argument("--out", type=Path, required=True)
+    p.add_argument("--out", type=_out_path, required=True)
 
     p = sub.add_parser("view", help="open a recording (or a results folder's) in the rerun "
                        "viewer; headless, print the command (or save a --screenshot)")
@@ -382,7 +394,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "experiment" and args.config is not None:
         args.given = given_options(argv)  # which flags override the file
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
-    os.environ.setdefault("MUJOCO_GL", "egl" if args.command == "render" else "disabled")
+    if not os.environ.get("MUJOCO_GL", "").strip():  # unset, or set empty (`MUJOCO_GL= skinny`)
+        os.environ["MUJOCO_GL"] = "egl" if args.command == "render" else "disabled"
     previous = _on_sigterm(_terminate)
     restore_logs = to_stderr(args.log_level)  # diagnostics: plain lines on stderr
     try:
@@ -392,12 +405,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(list_text())
             sys.stdout.flush()
             return 0
-        from skinny_mj.cli import commands
-        from skinny_mj.preflight import check_gl
-        from skinny_mj.threads import one_blas_thread
+        from skinny_mj.preflight import check_gl  # imports no mujoco
 
         check_gl()  # a MUJOCO_GL mujoco refuses would fail at its import, as a traceback
+        from skinny_mj.cli import commands  # imports mujoco
         from skinny_mj.cli.flags import check_args
+        from skinny_mj.threads import one_blas_thread
 
         check_args(args)  # every numeric flag in its range (seed >= 0, ...), before any work
         with one_blas_thread():  # same bits whatever the machine's BLAS threads
@@ -406,6 +419,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return code
     except SkinnyInputError as err:
         print(f"skinny {args.command}: error: {_one_line(err)}", file=sys.stderr)
+        return 2
+    except ValueError as err:
+        if "null byte" not in str(err):  # a NUL in a name (argv from Python, a config file)
+            raise
+        print(f"skinny {args.command}: error: a file name holds a NUL byte ({err})",
+              file=sys.stderr)
         return 2
     except BrokenPipeError:  # the reader stopped reading (`skinny experiment list | head`)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit

@@ -23,6 +23,7 @@ import shlex
 import shutil
 import signal
 import socket
+import struct
 import subprocess
 import sys
 import time
@@ -55,6 +56,7 @@ def find_recordings(path: str | Path) -> list[Path]:
     if path.is_file():
         if path.suffix.lower() != ".rrd":
             raise SkinnyInputError("not a rerun recording (.rrd)", path=path)
+        check_rrd(path)
         return [path]
     if not path.is_dir():
         raise SkinnyInputError("no such recording or results folder", path=path)
@@ -63,7 +65,44 @@ def find_recordings(path: str | Path) -> list[Path]:
                                               for part in p.relative_to(path).parts))
     if not found:
         raise SkinnyInputError("holds no .rrd recording", path=path)
+    for rrd in found:
+        check_rrd(rrd)
     return found
+
+
+#: An .rrd stream's header: magic (``RRF`` and a format digit), the writer's version, and
+#: options (compression, serializer); then, with the protobuf serializer (2), messages of a
+#: (kind, length) u64 header and their bytes, up to an End message (kind 0).
+_RRD_HEADER = 12
+_PROTOBUF = 2
+
+
+def check_rrd(path: Path) -> None:
+    """Refuse a file the viewer would fail on later, in its own window or log: an empty
+    or truncated ``.rrd``, or one that is no rerun recording at all. Only what the file's
+    framing shows is checked (no decoding); a stream of another serializer passes."""
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(_RRD_HEADER)
+            if len(head) < _RRD_HEADER or not head.startswith(b"RRF"):
+                what = "empty" if not head else "not a rerun recording (no RRF header)"
+                raise SkinnyInputError(f"{what}; write one with skinny train, test, track "
+                                       "or experiment", path=path)
+            if head[9] != _PROTOBUF:
+                return
+            size, offset = path.stat().st_size, _RRD_HEADER
+            while offset + 16 <= size:
+                fh.seek(offset)
+                kind, length = struct.unpack("<QQ", fh.read(16))
+                offset += 16 + length
+                if kind == 0:  # End
+                    return
+            if offset > size:
+                raise SkinnyInputError(f"truncated recording: a message runs past the end of "
+                                       f"the file ({size} bytes)", path=path)
+    except OSError as err:
+        raise SkinnyInputError(f"cannot read the recording ({err.strerror or err})",
+                               path=path) from None
 
 
 def has_display(environ: Mapping[str, str] | None = None) -> bool:
@@ -119,6 +158,9 @@ def view(path: str | Path, *, web: bool = False, web_port: int = DEFAULT_WEB_POR
     """Open the recordings under ``path`` (see :func:`find_recordings`) and wait for the
     viewer to close; headless (and not ``web``) or with ``dry_run``, print the command
     instead. Returns the exit code for ``skinny view``."""
+    if web and web_port == grpc_port:  # else rerun's own error, several lines, exit 1
+        raise SkinnyInputError(f"--web-port {web_port} and --grpc-port {grpc_port} are one "
+                               "port: the web page and its data need two")
     recordings = find_recordings(path)
     cmd = viewer_command(recordings, web=web, web_port=web_port, grpc_port=grpc_port,
                          bind=bind)

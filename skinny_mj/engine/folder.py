@@ -76,14 +76,30 @@ def prepare_out_dir(experiment: Any, out_dir: Path, runs: int, resume: bool,
             raise SkinnyInputError(f"not a sweep's config.json ({exc})",
                                    path=config_path) from exc
         if same != {k: config[k] for k in same}:
-            raise SkinnyInputError("holds a different sweep (experiment, config, rows or "
-                                   "seed differ); use a new --out", path=config_path)
+            raise SkinnyInputError(_difference(same, config), path=config_path)
         old["resumes"] = [*old.get("resumes", []), {"at": now, **invocation}]
         atomic_write_json(config_path, to_jsonable(old))
         return
     config.update(invocation, started_at=now, python=sys.version.split()[0],
                   numpy=np.__version__, resumes=[])
     atomic_write_json(config_path, to_jsonable(config))
+
+
+#: What each recorded key of a sweep's config.json is, in a refusal to resume it.
+_WHAT = {"config": "config (--quick, --movement, --dof, --signals, --protocol)",
+         "rows": "rows (--rows, --quick)", "base_seed": "seed"}
+
+
+def _difference(old: dict[str, Any], new: dict[str, Any]) -> str:
+    """Why ``--resume`` refuses a folder: the study it holds, or what of its sweep differs."""
+    if old["experiment"] != new["experiment"]:
+        how = ("skinny sweep KEY=V1,V2 --resume" if old["experiment"] == "sweep"
+               else f"skinny experiment {old['experiment']} --resume")
+        return (f"holds a sweep of experiment {old['experiment']!r}, not "
+                f"{new['experiment']!r}; resume it with `{how}`, or use a new --out")
+    differ = [_WHAT[k] for k in _WHAT if old[k] != new[k]]
+    return (f"holds a different sweep of {new['experiment']!r}: its {' and '.join(differ)} "
+            "differ; resume it with the options it was started with, or use a new --out")
 
 
 def _entries(folder: Path) -> list[str]:

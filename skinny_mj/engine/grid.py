@@ -53,7 +53,10 @@ def parse_assignment(item: str, base: Any) -> tuple[str, list[Any], list[str]]:
         raise SkinnyInputError(f"a sweep axis is KEY=VALUE[,VALUE...], got {item!r}")
     texts = [t.strip() for t in next(csv.reader([values], quotechar="'",
                                                 skipinitialspace=True))]
-    if any(not t for t in texts) or len(set(texts)) != len(texts):
+    if any(not t for t in texts):
+        raise SkinnyInputError(f"{key}: an empty value in {values!r}; give values as "
+                               "V1,V2,... with none empty")
+    if len(set(texts)) != len(texts):
         raise SkinnyInputError(f"{key}: values must be given once each, got {values!r}")
     return key, [parse_value(base, key, t) for t in texts], texts
 
@@ -102,8 +105,11 @@ def grid_study(items: Sequence[str], *, study: Study | None = None, row: str | N
         if len(parsed[i][1]) == 1:  # (actuation=torque) makes its settings parseable
             probe = probe.override({parsed[i][0]: parsed[i][1][0]}, check=False)
     axes = [parsed[i] for i in range(len(items))]
-    if len({k for k, _, _ in axes}) != len(axes):
-        raise SkinnyInputError("each key may be swept once")
+    keys = [k for k, _, _ in axes]
+    if len(set(keys)) != len(keys):
+        twice = next(k for k in keys if keys.count(k) > 1)
+        raise SkinnyInputError(f"{twice} is given twice: each key may be swept once (give "
+                               f"its values together, {twice}=V1,V2,...)")
     fixed = {k: v[0] for k, v, _ in axes if len(v) == 1}
     swept = [a for a in axes if len(a[1]) > 1] or axes
     if fixed:

@@ -113,7 +113,12 @@ class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         env_id: str | None = None,
     ):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+            raise SkinnyInputError(f"render_mode must be None or 'rgb_array', got "
+                                   f"{render_mode!r}")
+        for name, value in (("width", width), ("height", height)):
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+                raise SkinnyInputError(f"{name} must be a whole number of pixels >= 1, got "
+                                       f"{value!r}")
         if render_mode is not None:
             check_rendering()  # MUJOCO_GL=disabled: one line saying how to turn it on
         self.render_mode = render_mode
@@ -137,6 +142,7 @@ class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        check_seed(seed)
         super().reset(seed=seed)
         self.dm_control_env.task.rng = self.np_random  # the noise stream is the Env's Generator
         ts = self.dm_control_env.reset()
@@ -171,3 +177,13 @@ def _flat(observation: dict[str, np.ndarray]) -> np.ndarray:
     return np.concatenate(
         [observation["sensed"], observation["desired"], observation["desired_next"]]
     )
+
+
+def check_seed(seed: Any) -> None:
+    """Refuse a ``reset(seed=...)`` the CLI's ``--seed`` would refuse, as a
+    :class:`SkinnyInputError` (Gymnasium's own check raises its ``error.Error``, not a
+    ``ValueError``, from deep in its seeding)."""
+    if seed is None:
+        return
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise SkinnyInputError(f"seed must be None or a whole number >= 0, got {seed!r}")

@@ -42,9 +42,11 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from skinny_mj.errors import SkinnyInputError
 from skinny_mj.gym.env import (
     action_space,
     check_id,
+    check_seed,
     observation_space,
     resolve_trajectory,
 )
@@ -85,8 +87,9 @@ class SkinnyVectorEnv(VectorEnv):
         env_id: str | None = None,
         max_episode_steps: int | None = None,
     ):
-        if int(num_envs) < 1:
-            raise ValueError(f"num_envs must be >= 1, got {num_envs}")
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) \
+                or num_envs < 1:
+            raise SkinnyInputError(f"num_envs must be a whole number >= 1, got {num_envs!r}")
         self.num_envs = int(num_envs)
         self.render_mode = None
         self._plant_kwargs = dict(
@@ -102,7 +105,7 @@ class SkinnyVectorEnv(VectorEnv):
         if max_episode_steps == -1:  # Gymnasium's "no time limit"
             max_episode_steps = None
         if max_episode_steps is not None and max_episode_steps < 1:
-            raise ValueError(f"max_episode_steps must be >= 1, got {max_episode_steps}")
+            raise SkinnyInputError(f"max_episode_steps must be >= 1, got {max_episode_steps}")
         self._limit = len(self.setup.desired) - 1 if max_episode_steps is None \
             else min(int(max_episode_steps), len(self.setup.desired) - 1)
         self.single_observation_space = observation_space(self.setup)
@@ -130,16 +133,18 @@ class SkinnyVectorEnv(VectorEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         mask = (options or {}).get("reset_mask")
         if mask is not None and not np.all(mask):
-            raise ValueError("SkinnyVectorEnv resets all sub-environments together "
+            raise SkinnyInputError("SkinnyVectorEnv resets all sub-environments together "
                              f"(lockstep plant); got reset_mask={mask}")
         if seed is not None:
+            for one in (list(seed) if isinstance(seed, Sequence | np.ndarray) else [seed]):
+                check_seed(one)  # -1 or 1.5: one line, not Gymnasium's or NumPy's error
             if isinstance(seed, int | np.integer):
                 super().reset(seed=int(seed))
                 seeds = [int(seed) + i for i in range(self.num_envs)]
             else:
                 seeds = list(seed)
                 if len(seeds) != self.num_envs or any(s is None for s in seeds):
-                    raise ValueError(f"need {self.num_envs} int seeds, got {seed}")
+                    raise SkinnyInputError(f"need {self.num_envs} int seeds, got {seed}")
                 seeds = [int(s) for s in seeds]
             if seeds != self._fresh_seeds:
                 self.plant = BatchPlant(n_runs=self.num_envs, seeds=seeds, **self._plant_kwargs)

@@ -64,6 +64,9 @@ _ELBOW_3D = JointSpec("elbow_flexion", "forearm", (0.0, 1.0, 0.0), (0.0, 5 * np.
 ACTUATIONS = ("velocity", "torque")
 #: The control step, s (50 Hz: the thesis's 200 Hz capture, every 4th sample kept).
 CONTROL_DT_S = 0.02
+#: Largest sensor noise std (normalized units): 10x the signals' whole range [-1, 1] is
+#: noise only; far larger finite values overflow to inf in the noise and the errors.
+MAX_SENSOR_NOISE = 10.0
 #: Entry-point group through which another package adds a body (a :class:`Body`).
 BODY_GROUP = "skinny_mj.bodies"
 

@@ -26,20 +26,29 @@ from skinny_mj.plant.physics import LIMIT_MARGIN_RAD, SkinnyPhysics, servo_ctrl
 
 CONTROL_DT_S = body.CONTROL_DT_S
 SIGNALS = body.SIGNALS
+MAX_SENSOR_NOISE = body.MAX_SENSOR_NOISE
 
 
 def finite_actions(action: Any, shape: tuple[int, ...]) -> np.ndarray:
-    """``action`` as a float array of ``shape``; a NaN or infinite entry is refused
-    (``ValueError`` naming where): clipping cannot say what such a command meant."""
+    """``action`` as a float array of ``shape``; another shape, or a NaN or infinite entry,
+    is refused (:class:`SkinnyInputError`, a ``ValueError``, naming where): clipping cannot
+    say what such a command meant."""
     try:
-        out = np.asarray(action, dtype=float).reshape(shape)
+        given = np.shape(action)
+    except ValueError:  # ragged nested lists
+        given = "a ragged list"
+    if np.iscomplexobj(action):
+        raise SkinnyInputError(f"action must be {shape} real numbers, got complex values")
+    try:
+        out = np.asarray(action, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"action must be {shape} numbers, got {np.shape(action)}: {exc}") \
-            from None
+        raise SkinnyInputError(f"action must be {shape} numbers, got {given}: {exc}") from None
+    if out.shape != tuple(shape):  # (1, 4) for (4,) is a batch, not an action: no reshape
+        raise SkinnyInputError(f"action must be {shape} numbers, got shape {given}")
     if not np.all(np.isfinite(out)):
         where = tuple(int(i) for i in np.argwhere(~np.isfinite(out))[0])
-        raise ValueError(f"action {where} is {out[where]}: actions must be finite "
-                         "(finite values outside [-1, 1] are clipped)")
+        raise SkinnyInputError(f"action {where} is {out[where]}: actions must be finite "
+                               "(finite values outside [-1, 1] are clipped)")
     return out
 
 
@@ -95,8 +104,10 @@ def prepare(
     body.check_actuation(actuation)
     sensor_noise = _number("sensor_noise", sensor_noise)
     speed_factor = _number("speed_factor", speed_factor)
-    if not (np.isfinite(sensor_noise) and sensor_noise >= 0):
-        raise SkinnyInputError(f"sensor_noise must be finite and >= 0, got {sensor_noise!r}")
+    if not (np.isfinite(sensor_noise) and 0 <= sensor_noise <= MAX_SENSOR_NOISE):
+        raise SkinnyInputError(f"sensor_noise must be in [0, {MAX_SENSOR_NOISE:g}] (the std "
+                               f"of noise on signals normalized to [-1, 1]), got "
+                               f"{sensor_noise!r}")
     if trajectory is None:  # the plant has no movement of its own (it imports none)
         raise SkinnyInputError("the plant needs a trajectory; skinny_mj.load's default is "
                                "the synthesized YMCA, skinny_mj.trajectories.get('ymca', dof)")
@@ -116,7 +127,8 @@ def prepare(
         raise SkinnyInputError(f"trajectory dt must be {CONTROL_DT_S} s (50 Hz), got {dt}")
     if max_speed_rad_s is None:
         if not (np.isfinite(speed_factor) and speed_factor > 0):
-            raise SkinnyInputError(f"speed_factor must be > 0, got {speed_factor!r}")
+            raise SkinnyInputError(f"speed_factor must be a finite number > 0, got "
+                                   f"{speed_factor!r}")
         speed = max_speeds(angles, dt, speed_factor)
     else:
         try:

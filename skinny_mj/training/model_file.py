@@ -32,11 +32,19 @@ def read_model(model: str | Path) -> tuple[Path, ESN, dict[str, Any]]:
     if not path.is_file():
         raise SkinnyInputError(f"no such model file (shipped models: {', '.join(SHIPPED)})",
                                path=path)
+    if not zipfile.is_zipfile(path):  # else numpy's "pickled data ... allow_pickle" advice
+        raise SkinnyInputError("not a model written by `skinny train` (not an .npz archive)",
+                               path=path)
     try:
         meta = read_metadata(path)
+        _check_weights(path)
         esn = ESN.load(path)
+    except SkinnyInputError:
+        raise
     except _UNREADABLE as err:
         text = " ".join(str(err).split()) or type(err).__name__
+        if "allow_pickle" in text:  # numpy's advice to load it unsafely: not ours to give
+            text = "it holds pickled Python objects, which are not loaded: they can run code"
         raise SkinnyInputError(f"not a model written by `skinny train` ({text})",
                                path=path) from None
     if not isinstance(meta, dict) or not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
@@ -55,6 +63,25 @@ def read_model(model: str | Path) -> tuple[Path, ESN, dict[str, Any]]:
         raise SkinnyInputError(f"model metadata: max_speed_rad_s must be {dof} finite speeds "
                                f"> 0 rad/s, got {meta['max_speed_rad_s']!r}", path=path)
     return path, esn, {**meta, "dof": dof, "signals": signals, "max_speed_rad_s": speed}
+
+
+#: The arrays of the network's weights in a model file (its state x, y is reset by a test).
+_WEIGHTS = ("W", "W_in", "W_back", "W_out")
+
+
+def _check_weights(path: Path) -> None:
+    """Refuse weights no training writes: complex (float() would drop the imaginary part,
+    warning) or NaN or infinite (the first command would be NaN, the plant unstable)."""
+    with np.load(path, allow_pickle=False) as data:
+        for name in _WEIGHTS:
+            w = data[name]
+            if not np.issubdtype(w.dtype, np.floating):
+                raise SkinnyInputError(f"the weights {name} are {w.dtype}, not real numbers "
+                                       "(an edited file?)", path=path)
+            if not np.all(np.isfinite(w)):
+                where = tuple(int(i) for i in np.argwhere(~np.isfinite(w))[0])
+                raise SkinnyInputError(f"the weights {name} hold {w[where]} at {where}: not a "
+                                       "model a training wrote (an edited file?)", path=path)
 
 
 def check_model(esn: ESN, config: TrainConfig, path: Path) -> None:

@@ -168,11 +168,18 @@ def parse_amc(path: str | Path, skeleton: Skeleton) -> dict[str, np.ndarray]:
     lines = read_lines(path)
     frames: list[dict[str, list[float]]] = []
     frame_lines: list[int] = []
+    frame_numbers: list[int] = []
     for no, line in lines:
         tok = line.split()
         if tok[0].startswith(":"):
             continue
         if len(tok) == 1 and tok[0].isdigit():
+            if frame_numbers and int(tok[0]) != frame_numbers[-1] + 1:
+                raise SkinnyInputError(
+                    f"frame {int(tok[0])} follows frame {frame_numbers[-1]}: frames must be "
+                    "numbered one after another (one missing, or out of order?)",
+                    path=path, line=no)
+            frame_numbers.append(int(tok[0]))
             frames.append({})
             frame_lines.append(no)
             continue

@@ -135,9 +135,12 @@ def parse_bvh(path: str | Path) -> BvhMotion:
             raise SkinnyInputError("expected 'Frames:' and 'Frame Time:'", path=path, line=no)
         i += 1
     data = lines[i:]
-    if frames is None or frame_time is None or len(data) != int(frames):
-        got = len(data)
-        raise SkinnyInputError(f"MOTION says {frames} frames, the file has {got}", path=path)
+    if frames is None or frame_time is None:
+        missing = "Frames:" if frames is None else "Frame Time:"
+        raise SkinnyInputError(f"MOTION has no {missing!r} line", path=path)
+    if len(data) != int(frames):
+        raise SkinnyInputError(f"MOTION says {int(frames)} frames, the file has {len(data)}",
+                               path=path)
     values = np.empty((len(data), n_channels))
     for row, (no, line) in enumerate(data):
         values[row] = to_floats(line.split(), path, no, count=n_channels)

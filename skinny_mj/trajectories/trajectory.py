@@ -31,7 +31,7 @@ import numpy as np
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path, atomic_write_text
 from skinny_mj.plant import body
-from skinny_mj.preflight import Estimate, check
+from skinny_mj.preflight import Estimate, check, check_path_name
 
 DEFAULT_DT_S = body.CONTROL_DT_S  # movements are sampled at the control rate
 #: Largest |angle| a movement may hold, rad (joint ranges are within +-pi; a larger
@@ -58,6 +58,9 @@ class Trajectory:
     desired: dict | None = None  # {signals: (T, n_signals)} explicit desired signals
 
     def __post_init__(self) -> None:
+        if np.iscomplexobj(self.angles):  # float() would drop the imaginary part, warning
+            raise SkinnyInputError(f"trajectory {self.name!r}: angles must be real numbers, "
+                                   f"got {np.asarray(self.angles).dtype}")
         try:
             a = np.array(self.angles, dtype=float)
         except (TypeError, ValueError) as exc:
@@ -83,9 +86,13 @@ class Trajectory:
                 f"trajectory {self.name!r}: angle {a[t, j]:g} rad at step {t}, DOF {j} is not "
                 f"a joint angle (|angle| <= {MAX_ABS_ANGLE_RAD:g} rad)"
             )
-        dt = float(self.dt)
-        if not (math.isfinite(dt) and dt > 0):
-            raise SkinnyInputError(f"trajectory {self.name!r}: dt must be > 0 s, got {self.dt!r}")
+        try:
+            dt = float(self.dt)
+        except (TypeError, ValueError):
+            dt = math.nan
+        if isinstance(self.dt, bool) or not (math.isfinite(dt) and dt > 0):
+            raise SkinnyInputError(f"trajectory {self.name!r}: dt must be a finite number > 0 "
+                                   f"s, got {self.dt!r}")
         a.setflags(write=False)
         object.__setattr__(self, "angles", a)
         object.__setattr__(self, "dt", dt)
@@ -155,7 +162,8 @@ class Trajectory:
         from scipy.interpolate import PchipInterpolator
 
         n = max(2, int(round(len(self) / speed)))
-        check_size(n, self.dof, f"speed {speed:g}: {n} steps of {self.name}")
+        steps = str(n) if n < 10**15 else f"{n:.3g}"  # not 290 digits for speed 1e-300
+        check_size(n, self.dof, f"speed {speed:g}: {steps} steps of {self.name}")
         src = np.arange(len(self), dtype=float)
         dst = np.linspace(0.0, len(self) - 1.0, n)
         angles = PchipInterpolator(src, self.angles, axis=0)(dst)
@@ -207,7 +215,7 @@ class Trajectory:
     # -- files ------------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
         """Write ``.npz`` or ``.csv`` (chosen by the suffix) atomically."""
-        path = Path(path)
+        path = check_path_name(path, "trajectory file")  # a NUL byte, a name too long
         suffix = path.suffix.lower()
         if suffix == ".npz":
             meta = {
@@ -255,6 +263,8 @@ class Trajectory:
 
 
 def _load_npz(path: Path) -> Trajectory:
+    if path.is_file() and path.stat().st_size and not zipfile.is_zipfile(path):
+        raise SkinnyInputError("not a readable trajectory npz (not an .npz archive)", path=path)
     try:
         with np.load(path, allow_pickle=False) as data:
             if "angles" not in data.files or "meta" not in data.files:
@@ -268,7 +278,10 @@ def _load_npz(path: Path) -> Trajectory:
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, NotImplementedError) as exc:
         # zip errors, pickled objects, bad JSON (BadZipFile: a zip header with no zip after
         # it; NotImplementedError: a zip version or compression zipfile cannot read)
-        raise SkinnyInputError(f"not a readable trajectory npz ({exc})", path=path) from None
+        text = str(exc)
+        if "allow_pickle" in text:  # numpy's advice to load it unsafely: not ours to give
+            text = "it holds pickled Python objects, which are not loaded: they can run code"
+        raise SkinnyInputError(f"not a readable trajectory npz ({text})", path=path) from None
     if not isinstance(meta, dict):
         raise SkinnyInputError("'meta' must be a JSON object", path=path)
     if angles.ndim != 2 or angles.shape[1] not in body.BODIES:
@@ -277,12 +290,17 @@ def _load_npz(path: Path) -> Trajectory:
     if names is not None and (not isinstance(names, list)
                               or tuple(names) != body.dof_names(angles.shape[1])):
         raise SkinnyInputError(f"DOF names {names} do not match dof={angles.shape[1]}", path=path)
-    if meta.get("dof", angles.shape[1]) != angles.shape[1]:
+    dof = meta.get("dof", angles.shape[1])
+    if isinstance(dof, bool) or not isinstance(dof, int):
+        raise SkinnyInputError(f"meta dof must be a whole number, got {dof!r}", path=path)
+    if dof != angles.shape[1]:
         raise SkinnyInputError(
             f"meta says dof={meta['dof']} but angles have {angles.shape[1]} columns", path=path
         )
-    if not np.issubdtype(angles.dtype, np.number):
-        raise SkinnyInputError(f"angles must be numbers, got dtype {angles.dtype}", path=path)
+    if not np.issubdtype(angles.dtype, np.number) or np.issubdtype(angles.dtype,
+                                                                    np.complexfloating):
+        raise SkinnyInputError(f"angles must be real numbers, got dtype {angles.dtype}",
+                               path=path)
     bad = np.argwhere(~np.isfinite(angles))
     if len(bad):
         raise SkinnyInputError(f"non-finite angle at step {bad[0][0]}, DOF {bad[0][1]}", path=path)
@@ -344,8 +362,7 @@ def _load_csv(path: Path) -> Trajectory:
     if header is None or not rows:
         raise SkinnyInputError("no header or no data rows", path=path)
     try:
-        dt = float(meta.get("dt", DEFAULT_DT_S))
-        return Trajectory(np.array(rows), dt, meta.get("name", path.stem))
+        return Trajectory(np.array(rows), meta.get("dt", DEFAULT_DT_S), meta.get("name", path.stem))
     except (SkinnyInputError, ValueError) as exc:
         raise SkinnyInputError(str(exc), path=path) from None
 
@@ -361,8 +378,11 @@ def _is_float(text: str) -> bool:
 def excerpt(traj: Trajectory, start_s: float, duration_s: float | None) -> Trajectory:
     """Steps of ``traj`` from ``start_s`` for ``duration_s`` seconds (both >= 0, inside;
     ``duration_s`` None: to the end)."""
-    start = int(round(float(start_s) / traj.dt))
-    n = len(traj) - start if duration_s is None else int(round(float(duration_s) / traj.dt))
+    first = float(start_s) / traj.dt  # 1e308 s: inf steps, which int() cannot take
+    steps = None if duration_s is None else float(duration_s) / traj.dt
+    inside = math.isfinite(first) and (steps is None or math.isfinite(steps))
+    start = int(round(first)) if inside else -1
+    n = len(traj) - start if steps is None else int(round(steps)) if inside else 0
     if start < 0 or n < 1 or start + n > len(traj):
         what = "to the end" if duration_s is None else f"+ {duration_s:g} s"
         raise SkinnyInputError(
