@@ -68,7 +68,7 @@ class ESNConfig:
             (self.n_reservoir >= 1, f"reservoir size N must be >= 1, got {self.n_reservoir}"),
             (
                 np.isfinite(self.spectral_radius) and self.spectral_radius >= 0,
-                f"spectral radius must be >= 0, got {self.spectral_radius}",
+                f"spectral radius must be a finite number >= 0, got {self.spectral_radius}",
             ),
             (
                 self.connectivity is None or 0 < self.connectivity <= 1,

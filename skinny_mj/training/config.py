@@ -46,7 +46,14 @@ from skinny_mj.controllers.loop import INPUTS
 from skinny_mj.controllers.methods import PAPER_CYCLES_FOR_BETA
 from skinny_mj.controllers.reservoir import ESNConfig
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.plant.body import ACTUATIONS, SIGNALS, check_actuation, check_dof, check_signals
+from skinny_mj.plant.body import (
+    ACTUATIONS,
+    MAX_SENSOR_NOISE,
+    SIGNALS,
+    check_actuation,
+    check_dof,
+    check_signals,
+)
 from skinny_mj.training import fits, overrides
 from skinny_mj.training.legacy import LEGACY_KEYS, from_legacy, is_legacy
 
@@ -95,8 +102,8 @@ class Plant:
         check_dof(self.dof)
         check_signals(self.signals)
         _check([
-            (_at_least(self.sensor_noise, 0),
-             f"sensor noise must be >= 0, got {self.sensor_noise}"),
+            (_at_least(self.sensor_noise, 0) and self.sensor_noise <= MAX_SENSOR_NOISE,
+             f"sensor noise must be in [0, {MAX_SENSOR_NOISE:g}], got {self.sensor_noise}"),
             (isinstance(self.delay, int) and self.delay >= 0,
              f"delay must be >= 0 steps, got {self.delay}"),
             (self.leading_arm is None or self.leading_arm in ARMS,
