@@ -123,8 +123,8 @@ LONG = "x" * 300
     (["track", "--trajectory", "{bad}/t4.csv@start=0,duration=1e308"], "excerpt 0 s + "
                                                                        "1e+308 s is outside"),
     # numbers and names the file system or the plant cannot take
-    (["track", "--sensor-noise", "1e308"], "sensor_noise must be in [0, 10]"),
-    (["train", "plant.sensor_noise=1e308"], "sensor_noise must be in [0, 10]"),
+    (["track", "--sensor-noise", "1e308"], "sensor noise must be in [0, 10]"),
+    (["train", "plant.sensor_noise=1e308"], "sensor noise must be in [0, 10]"),
     (["sweep", "rule.epochs=1,,2"], "rule.epochs: an empty value in '1,,2'"),
     (["sweep", "rule.epochs=1", "rule.epochs=2"], "rule.epochs is given twice"),
     (["sweep", "esn.spectral_radius=0.5", "--runs", "nan"], "--runs: must be a whole number "
