@@ -10,13 +10,22 @@ from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.plant.model import TORQUE_GEAR_NM, load_model, models_dir, xml_path
 from skinny_mj.plant.physics import SkinnyPhysics
+from skinny_mj.plant.torque_files import torque_file_names
 
 VARIANTS = [(d, a) for d in (4, 8) for a in ("velocity", "torque")]
 
 
-@pytest.mark.parametrize("dof,actuation", VARIANTS)
-def test_one_second_of_random_control_is_clean(dof, actuation):
-    model = load_model(dof, actuation)
+def _model(dof: int, actuation: str, source: str) -> mujoco.MjModel:
+    """The model the package builds, or the shipped torque MJCF file (``source``)."""
+    if source == "built":
+        return load_model(dof, actuation)
+    return mujoco.MjModel.from_xml_path(str(models_dir() / torque_file_names(dof)[1]))
+
+
+@pytest.mark.parametrize("dof,actuation,source", [*((d, a, "built") for d, a in VARIANTS),
+                                                  (4, "torque", "file"), (8, "torque", "file")])
+def test_one_second_of_random_control_is_clean(dof, actuation, source):
+    model = _model(dof, actuation, source)
     data = mujoco.MjData(model)
     rng = np.random.default_rng(0)
     lo, hi = model.actuator_ctrlrange.T

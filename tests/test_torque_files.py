@@ -1,6 +1,6 @@
 """The torque twin's shipped MJCF (models/skinny/*_torque.xml): each file compiles to the
 model the package builds in code, field by field and exactly, is what the generator
-writes today, and steps 1 s of random torques cleanly (Menagerie's model test)."""
+writes today (Menagerie's model test, 1 s of random torques, runs on it in tests/test_model.py)."""
 
 from __future__ import annotations
 
@@ -85,17 +85,3 @@ def test_shipped_torque_file_is_tidy(dof):
     assert len(elements) == 2 * dof
     assert not [e for e in elements if re.search(r"gear|range|armature|sol|damping", e)]
     assert f'<include file="{robot.name}"/>' in scene.read_text()
-
-
-@pytest.mark.parametrize("dof", DOFS)
-def test_one_second_of_random_torques_in_the_shipped_file_is_clean(dof):
-    model = mujoco.MjModel.from_xml_path(str(models_dir() / torque_file_names(dof)[1]))
-    data = mujoco.MjData(model)
-    rng = np.random.default_rng(0)
-    lo, hi = model.actuator_ctrlrange.T
-    for _ in range(int(round(1.0 / model.opt.timestep))):
-        data.ctrl[:] = rng.uniform(lo, hi)
-        mujoco.mj_step(model, data)
-    assert all(w.number == 0 for w in data.warning)
-    assert np.all(np.isfinite(data.qpos)) and np.all(np.isfinite(data.qvel))
-    assert np.all(np.isfinite(data.qacc)) and np.all(np.isfinite(data.actuator_force))
