@@ -45,7 +45,9 @@ def test_computed_torque_floor_is_lower_on_the_feasible_clip():
     assert out["n_test_failed"] == 0 and "train_position_nrmse" not in out
     # the same controller: the slowed clip, within the limits, is tracked far better
     assert out["md_03-feasible__position_nrmse"] < 0.2 * out["md_03__position_nrmse"]
-    assert out["md_03-feasible__max_torque_ratio"] <= 1 + 1e-9
+    # commands are clipped to the limits, so a ratio of exactly 1 is saturation: at full
+    # speed the clip needs more torque than the motors have, and computed torque saturates
+    assert out["md_03__max_torque_ratio"] == 1.0
 
 
 def test_a_learned_row_trains_once_and_tests_every_column():
@@ -63,7 +65,8 @@ def test_a_learned_row_trains_once_and_tests_every_column():
         assert math.isfinite(out["train_position_nrmse"])
         for col in ("md_03-feasible", "ymca"):
             assert out[f"{col}__position_nrmse"] > 0
-            assert out[f"{col}__max_torque_ratio"] <= 1 + 1e-9
+            # never saturated (a clipped command reaches exactly 1): within the limits
+            assert out[f"{col}__max_torque_ratio"] < 0.999
     assert outs[0]["ymca__position_nrmse"] != outs[1]["ymca__position_nrmse"]  # two seeds
 
 
