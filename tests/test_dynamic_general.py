@@ -46,6 +46,9 @@ def test_computed_torque_floor_is_lower_on_the_feasible_clip():
     # the same controller: the slowed clip, within the limits, is tracked far better
     assert out["md_03-feasible__position_nrmse"] < 0.2 * out["md_03__position_nrmse"]
     assert out["md_03-feasible__max_torque_ratio"] <= 1 + 1e-9
+    # per column, the figures in a roboticist's units too (tests/test_robot_metrics.py)
+    assert out["md_03-feasible__rms_error_deg"] < out["md_03__rms_error_deg"]
+    assert out["md_03__hand_error_cm"] > 0 and out["md_03__abs_work_j"] > 0
 
 
 def test_a_learned_row_trains_once_and_tests_every_column():
