@@ -84,3 +84,15 @@ def timing_lag(actual: np.ndarray, target: np.ndarray, max_lag: int) -> int:
     score = [np.mean(a[k:] * b[:t - k]) if k >= 0 else np.mean(a[:t + k] * b[-k:])
              for k in range(-max_lag, max_lag + 1)]
     return int(np.argmax(score)) - max_lag
+
+
+def torque_use(applied_nm: np.ndarray, velocity_rad_s: np.ndarray,
+               dt: float) -> dict[str, np.ndarray]:
+    """Per-run torque use (each (R,)) of applied torques ``applied_nm`` (R, T, n_dof) N m
+    and the joint velocities ``velocity_rad_s`` (R, T, n_dof) rad/s they act on, ``dt`` s
+    per step: ``torque_rms_nm``, the RMS torque over steps and DOFs, N m; ``abs_work_j``,
+    the mechanical work magnitude sum over steps and DOFs of |tau qd| dt, J."""
+    tau = np.asarray(applied_nm, float)
+    power = np.abs(tau * np.asarray(velocity_rad_s, float)).sum(axis=2)
+    return {"torque_rms_nm": np.sqrt(np.mean(tau**2, axis=(1, 2))),
+            "abs_work_j": power.sum(axis=1) * dt}

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from skinny_mj.controllers.loop import Hook
+from skinny_mj.controllers.metrics import torque_use
 from skinny_mj.controllers.torque_feedback import TorqueFeedbackController
 
 #: the rollout hook's protocol, :class:`skinny_mj.controllers.loop.Hook`
@@ -121,7 +122,10 @@ class TorqueLoop:
 
         mean_abs_torque_nm : mean |applied torque| over steps and DOFs, N m;
         max_commanded_ratio / max_applied_ratio : max |torque| / limit (<= 1 within the
-        limits); energy_j : positive mechanical work of the motors, sum max(tau qd, 0) dt, J.
+        limits); energy_j : positive mechanical work of the motors, sum max(tau qd, 0) dt, J;
+        torque_rms_nm : RMS applied torque over steps and DOFs, N m; abs_work_j : mechanical
+        work magnitude of the motors, sum |tau qd| dt over DOFs and steps, J
+        (:func:`skinny_mj.controllers.metrics.torque_use`).
         """
         # contiguous (R, T-1, n_dof): each run's sums in the order it has alone (lockstep)
         applied = np.ascontiguousarray(np.swapaxes(self.applied_nm, 0, 1))
@@ -133,4 +137,5 @@ class TorqueLoop:
             "max_commanded_ratio": np.abs(commands).max(axis=(1, 2)),
             "max_applied_ratio": (np.abs(applied) / self._limit).max(axis=(1, 2)),
             "energy_j": power.sum(axis=1) * dt,
+            **torque_use(applied, qd, dt),
         }

@@ -48,6 +48,9 @@ def test_computed_torque_floor_is_lower_on_the_feasible_clip():
     # commands are clipped to the limits, so a ratio of exactly 1 is saturation: at full
     # speed the clip needs more torque than the motors have, and computed torque saturates
     assert out["md_03__max_torque_ratio"] == 1.0
+    # per column, the figures in a roboticist's units too (tests/test_robot_metrics.py)
+    assert out["md_03-feasible__rms_error_deg"] < out["md_03__rms_error_deg"]
+    assert out["md_03__hand_error_cm"] > 0 and out["md_03__abs_work_j"] > 0
 
 
 def test_a_learned_row_trains_once_and_tests_every_column():

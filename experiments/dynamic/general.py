@@ -59,7 +59,8 @@ def load_test(column: str, dof: int):
 def run_batch(config: TrainConfig, row, seeds: list[int]) -> list:
     """Train the row's R networks once in lockstep (nothing for a controller alone), then
     test them on every column of ``row.params["tests"]``."""
-    from skinny_mj.training.loop import build_run, evaluate, train_run
+    from skinny_mj.training.imitation import TORQUE_METRICS
+    from skinny_mj.training.loop import build_run, evaluate, test_robot_metrics, train_run
 
     start = time.perf_counter()
     dof = config.plant.dof
@@ -80,6 +81,9 @@ def run_batch(config: TrainConfig, row, seeds: list[int]) -> list:
                         f"{col}__max_torque_ratio": max(tq["max_commanded_ratio"],
                                                          tq["max_applied_ratio"]),
                         f"{col}__limit_overshoot_rad": tq["limit_overshoot_rad"]})
+            # joint error (deg), hand error (cm), lag (s), RMS torque (N m), |work| (J)
+            robot = {**test_robot_metrics(run, test), **{k: tq[k] for k in TORQUE_METRICS}}
+            out.update({f"{col}__{k}": v for k, v in robot.items()})
     wall = (time.perf_counter() - start) / len(seeds)
     for r, out in enumerate(outs):
         out["wall_s"] = wall

@@ -118,7 +118,8 @@ GOALS = {"2d": 0.03, "3d": 0.06}
 ARM_GOALS = {"2d": 0.010, "3d": 0.008}
 CT_JOINT_GOAL, TORQUE_BUDGET = 0.008, 1.5
 TABLE_COLUMNS = {"position_nrmse": "test position NRMSE", "joint_nrmse": "joint-angle NRMSE",
-                 "motor_nrmse": "test motor NRMSE",
+                 "rms_error_deg": "RMS joint error (°)", "peak_error_deg": "peak joint error (°)",
+                 "hand_error_cm": "RMS hand error (cm)", "motor_nrmse": "test motor NRMSE",
                  "mean_abs_torque_nm": "mean |τ| (N m)", "energy_j": "motor work (J)",
                  "max_torque_ratio": "max |τ|/limit",
                  "limit_overshoot_rad": "past a joint limit (rad)", "warnings": "MuJoCo warnings",
@@ -282,6 +283,7 @@ def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
 
 def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Several seeds of one row in lockstep; seed by seed what each gets alone."""
+    from skinny_mj.training.imitation import robot_figures
     from skinny_mj.training.loop import train_batch
     from skinny_mj.training.torque import joint_nrmse
 
@@ -308,6 +310,8 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
             metrics["max_torque_ratio"] = max(tq["max_commanded_ratio"],
                                               tq["max_applied_ratio"])
             metrics["warnings"] = tq["warnings"] + (m.get("train_warnings") or 0)
+        # joint error (deg), hand error (cm), lag (s); torque body: RMS torque, |work|
+        metrics.update(robot_figures(m))
         out.append(metrics)
     return out
 

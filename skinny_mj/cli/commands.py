@@ -45,7 +45,12 @@ from skinny_mj.progress import progress_on as _progress_on
 from skinny_mj.recording import record_test, write_recording
 from skinny_mj.training.config import Movement, TrainConfig
 from skinny_mj.training.feasible import load_movement  # NAME@feasible too, else trajectories'
-from skinny_mj.training.imitation import imitation_metrics, movement_stats, saturation
+from skinny_mj.training.imitation import (
+    imitation_metrics,
+    movement_stats,
+    robot_figures,
+    saturation,
+)
 from skinny_mj.training.memory import steps_cause
 from skinny_mj.training.model_file import check_model, read_model
 from skinny_mj.trajectories.library import SET_PREFIX, check_asf, set_pieces
@@ -206,6 +211,20 @@ def _fmt(v: float | None) -> str:
     return "failed" if v is None else f"{v:.4f}"
 
 
+def _robot_line(metrics: dict) -> str:
+    """The test's figures in a roboticist's units (:func:`robot_figures`) as one line
+    ('' when the test has none, e.g. a diverged network)."""
+    f = robot_figures(metrics)
+    if f.get("rms_error_deg") is None:
+        return ""
+    line = (f"  joint error RMS {f['rms_error_deg']:.2f}°, peak {f['peak_error_deg']:.2f}°; "
+            f"hand error RMS {f['hand_error_cm']:.2f} cm, peak {f['peak_hand_error_cm']:.2f} "
+            f"cm; lag {f['lag_s']:+.2f} s")
+    if f.get("torque_rms_nm") is not None:
+        line += f"; torque RMS {f['torque_rms_nm']:.3f} N m, |work| {f['abs_work_j']:.3f} J"
+    return line
+
+
 def cmd_train(args: argparse.Namespace) -> int:
     cfg, seed = train_config(args)
     out = _out_dir(args, "train")
@@ -220,6 +239,8 @@ def cmd_train(args: argparse.Namespace) -> int:
         return 1
     print(f"test position NRMSE {_fmt(m['test']['position_nrmse'])}, motor NRMSE "
           f"{_fmt(m['test']['motor_nrmse'])}, {m['wall_s']:.1f} s -> {out}")
+    if line := _robot_line(m):
+        print(line)
     return 0
 
 
@@ -257,7 +278,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_test(args: argparse.Namespace) -> int:
-    from skinny_mj.training.loop import TrainConfig, evaluate, run_of, run_streams
+    from skinny_mj.training.loop import (
+        TrainConfig,
+        evaluate,
+        run_of,
+        run_streams,
+        test_robot_metrics,
+    )
 
     path, esn, meta = read_model(args.model)  # a shipped model's name, or a file
     dof, signals = meta["dof"], meta["signals"]
@@ -287,6 +314,9 @@ def cmd_test(args: argparse.Namespace) -> int:
         "fail_reason": test.fail_reason,
         "test": {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse},
     }
+    # joint error (deg), hand error (cm), lag (s), as the train command's test dict has them
+    if not test.failed:
+        metrics["test"].update(test_robot_metrics(run, test))
     if test.torque is not None:  # torque body: limits, |torque|, work, MuJoCo warnings
         metrics["test"]["torque"] = test.torque["metrics"]
     if not test.failed and cfg.torque is None:  # DTW, within 5°, lag
@@ -308,12 +338,14 @@ def cmd_test(args: argparse.Namespace) -> int:
         return 1
     print(f"test on {traj.name}: position NRMSE {_fmt(test.position_nrmse)}, motor NRMSE "
           f"{_fmt(test.motor_nrmse)} -> {out}")
+    if line := _robot_line(metrics):
+        print(line)
     extra = metrics.get("imitation", {})
     if extra:
         dtw = extra.get("dtw_nrmse")
         print(f"  DTW NRMSE {'n/a (pip install dtaidistance)' if dtw is None else f'{dtw:.4f}'}"
-              f", within 5°: {100 * extra['within5']:.1f} % of steps, lag {extra['lag_s']:+.2f}"
-              f" s, commands beyond full scale: {100 * extra['saturated']:.1f} %")
+              f", within 5°: {100 * extra['within5']:.1f} % of steps, "
+              f"commands beyond full scale: {100 * extra['saturated']:.1f} %")
     return 0
 
 

@@ -58,8 +58,19 @@ def train_metrics(config: TrainConfig, seeds: list[int],
     from skinny_mj.training.loop import train_batch
 
     return [RunFailed(o.metrics.get("fail_reason") or "diverged") if o.metrics["failed"]
-            else {name: read_metric(o.metrics, where) for name, where in metrics.items()}
+            else _with_robot_figures({name: read_metric(o.metrics, where)
+                                      for name, where in metrics.items()}, o.metrics)
             for o in train_batch(config, seeds)]
+
+
+def _with_robot_figures(picked: dict[str, Any], metrics: Mapping[str, Any]) -> dict[str, Any]:
+    """``picked`` (a study's metrics) and, after them, every run file's figures in a
+    roboticist's units (:func:`skinny_mj.training.imitation.robot_figures`) the study does
+    not name itself."""
+    from skinny_mj.training.imitation import robot_figures
+
+    extra = robot_figures(dict(metrics))
+    return {**picked, **{k: v for k, v in extra.items() if k not in picked}}
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,29 @@ from skinny_mj.plant import body
 from skinny_mj.training.dtw import available, dtw_nrmse
 from skinny_mj.trajectories import Trajectory, ik
 
-__all__ = ["WITHIN_DEG", "imitation_metrics", "movement_stats", "saturation"]
+__all__ = ["ROBOT_METRICS", "TORQUE_METRICS", "WITHIN_DEG", "imitation_metrics",
+           "movement_stats", "robot_figures", "robot_metrics", "saturation"]
+
+#: The run files' figures a roboticist reads (:func:`robot_metrics`), beside the NRMSEs
+#: (the torque body's ``torque_rms_nm`` and ``abs_work_j`` are in the test's ``torque``
+#: figures, :meth:`skinny_mj.controllers.torque_fel.TorqueLoop.metrics`).
+ROBOT_METRICS = ("rms_error_deg", "peak_error_deg", "hand_error_cm", "peak_hand_error_cm",
+                 "lag_s")
+#: The torque body's torque use of a test (its ``torque`` figures): RMS torque (N m) and
+#: mechanical work magnitude sum |tau qd| dt (J).
+TORQUE_METRICS = ("torque_rms_nm", "abs_work_j")
+
+
+def robot_figures(metrics: dict[str, Any]) -> dict[str, Any]:
+    """The :data:`ROBOT_METRICS` and (torque body) :data:`TORQUE_METRICS` of a training's
+    metrics (:func:`skinny_mj.training.loop.train_batch`), flat, for a run file; None
+    where a figure is missing (a diverged network)."""
+    test = metrics.get("test") or {}
+    out = {k: test.get(k) for k in ROBOT_METRICS}
+    torque = test.get("torque")
+    if torque is not None:
+        out.update({k: torque.get(k) for k in TORQUE_METRICS})
+    return out
 
 #: Tolerance of the "within" fraction, degrees.
 WITHIN_DEG = 5.0
@@ -37,11 +59,40 @@ def saturation(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarray) -> fl
     return float(np.mean(np.abs(raw) > 1.0 + 1e-9))
 
 
+def robot_metrics(produced: np.ndarray, wanted: np.ndarray, dof: int,
+                  dt: float) -> dict[str, float]:
+    """A test's errors in a roboticist's units, for the produced joint angles ``produced``
+    (T, >= dof) rad (extra columns ignored) against the movement's ``wanted`` (T, dof) rad,
+    steps ``dt`` s apart. Step 0 (the shared first pose) is not scored.
+
+    ``rms_error_deg``: RMS joint-angle error over joints and steps, degrees;
+    ``peak_error_deg``: the largest |joint-angle error|, degrees; ``hand_error_cm`` /
+    ``peak_hand_error_cm``: RMS over arms and steps / largest distance between the
+    produced and the desired hand (the wrist, the forearm's end, by the body's forward
+    kinematics :func:`skinny_mj.plant.body.arm_points`), cm; ``lag_s``: the timing lag
+    (cross-correlation shift of the normalized angles, as :func:`imitation_metrics`;
+    positive = the produced movement is late), s."""
+    produced = np.asarray(produced, dtype=float)[..., :dof]
+    wanted = np.asarray(wanted, dtype=float)
+    err = produced[1:] - wanted[1:]
+    hand = body.arm_points(produced, dof)[..., 2, :] - body.arm_points(wanted, dof)[..., 2, :]
+    dist_cm = 100.0 * np.linalg.norm(hand[1:], axis=-1)  # (T-1, 2 arms)
+    max_lag = min(25, (len(wanted) - 1) // 3)
+    return {"rms_error_deg": float(np.degrees(np.sqrt(np.mean(err**2)))),
+            "peak_error_deg": float(np.degrees(np.abs(err).max())),
+            "hand_error_cm": float(np.sqrt(np.mean(dist_cm**2))),
+            "peak_hand_error_cm": float(dist_cm.max()),
+            "lag_s": timing_lag(body.normalize_angles(produced, dof),
+                                body.normalize_angles(wanted, dof), max_lag) * dt}
+
+
 def imitation_metrics(outcome, dof: int, *, dtw: bool = True) -> dict[str, Any]:
     """One run's figures on one test (a :class:`skinny_mj.training.loop.TestOutcome`):
     ``position_nrmse``, ``motor_nrmse``, ``dtw_nrmse`` (position signals, 1 s band;
     None when dtaidistance is missing), ``within5`` (mean over joints) and
-    ``within5_per_joint``, ``rmse_deg`` and ``rmse_deg_per_joint``, ``lag_s`` (positive
+    ``within5_per_joint``, ``rmse_deg`` (the mean over joints of each joint's RMS error;
+    not :func:`robot_metrics`'s ``rms_error_deg``, the RMS over joints and steps, which the
+    commands print) and ``rmse_deg_per_joint``, ``lag_s`` (positive
     = the produced movement is late), ``cartesian_position_nrmse`` (the produced joint
     angles scored on Cartesian signals). Step 0 (the shared first pose) is not scored."""
     test = outcome.trajectory

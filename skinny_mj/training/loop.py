@@ -52,6 +52,7 @@ from skinny_mj.training.config import (  # noqa: F401  (re-exported: the trainin
     relative_cost,
 )
 from skinny_mj.training.fits import make_rule
+from skinny_mj.training.imitation import ROBOT_METRICS, robot_metrics
 from skinny_mj.training.parts import (  # noqa: F401  (re-exported)
     RunStreams,
     arm_forward_models,
@@ -338,7 +339,7 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
         metrics["test"] = {"position_nrmse": None, "motor_nrmse": None}
     else:
         metrics["test"] = {"position_nrmse": test.position_nrmse,
-                           "motor_nrmse": test.motor_nrmse}
+                           "motor_nrmse": test.motor_nrmse, **test_robot_metrics(run, test)}
     if test.torque is not None:
         metrics["test"]["torque"] = test.torque["metrics"]
         metrics["train_warnings"] = run.actuation.train_warnings(run)
@@ -347,6 +348,8 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
             metrics.update(failed=True, fail_reason=f"physics diverged: {n_warnings} MuJoCo "
                            "warning(s) in training or test")
             metrics["test"].update(position_nrmse=None, motor_nrmse=None)
+            for key in ROBOT_METRICS:  # no figures of a diverged simulation
+                metrics["test"].pop(key, None)
     if trained.pretrain_prediction_nrmse is not None:
         metrics["pretrain_prediction_nrmse"] = float(trained.pretrain_prediction_nrmse[r])
     metrics.update(
@@ -357,6 +360,13 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
     )
     return TrainOutcome(run.cfg, run.seeds[r], metrics, esn_run(run.esn, r), test,
                         run.max_speed_rad_s)
+
+
+def test_robot_metrics(run: Run, test: TestOutcome) -> dict[str, float]:
+    """A test's :func:`skinny_mj.training.imitation.robot_metrics` (joint error in degrees,
+    hand error in cm, lag in s) of its produced joint angles against its movement's."""
+    return robot_metrics(test.rollout.angles[0], test.trajectory.angles, run.cfg.plant.dof,
+                         test.trajectory.dt)
 
 
 def physics_warnings(run: Run, test: TestOutcome) -> int:
