@@ -138,9 +138,7 @@ class ESN:
                 out -= 0.5
             else:
                 g.standard_normal(out=out)
-            out *= level
-            if out is not block:
-                block[...] = out
+            np.multiply(out, level, out=block)  # scaled and, from a scratch block, copied
         self._noise_pos = 0
 
     # -- verbs ---------------------------------------------------------------------
@@ -184,18 +182,14 @@ class ESN:
                              f"shape {(n_runs, cfg.n_extended)}")
         ext[:, n_res:-1] = np.reshape(u, (n_runs, cfg.n_inputs))
         ext[:, -1] = cfg.bias
-        u1 = ext[:, n_res:, None]
-        a = self._sparse
+        a, pre = self._sparse, np.zeros((n_runs, n_res), self.dtype)
         if a is None:
             pre = np.matmul(self.W, self.x[..., None])[..., 0]
-        else:  # W x summed from zero, then + W_in u1: bit for bit what CSR gave
-            pre = np.zeros((n_runs, n_res), self.dtype)
-            x = np.ascontiguousarray(self.x, self.dtype)
-            if self._matvec is None:
-                pre += (a @ x.reshape(-1)).reshape(n_runs, n_res)
-            else:
-                self._matvec(*self._kernel_args, x, pre)
-        pre += np.matmul(self.W_in, u1)[..., 0]
+        elif self._matvec is None:  # W x summed from zero, then + W_in u1: bit for bit CSR's
+            pre += (a @ np.ascontiguousarray(self.x, self.dtype).reshape(-1)).reshape(pre.shape)
+        else:
+            self._matvec(*self._kernel_args, np.ascontiguousarray(self.x, self.dtype), pre)
+        pre += np.matmul(self.W_in, ext[:, n_res:, None])[..., 0]
         if cfg.output_feedback:
             y_prev = self.y if feedback is None else np.asarray(feedback, self.dtype)
             pre += np.matmul(self.W_back, y_prev[..., None])[..., 0]
@@ -204,10 +198,10 @@ class ESN:
             x = (1.0 - cfg.leak_rate) * self.x + cfg.leak_rate * x
         if noise and cfg.noise_level > 0:
             x += self._noise()
-        self.x = x
-        ext[:, :n_res] = x
+        self.x = ext[:, :n_res] = x
         self.extended = ext
-        self.y = self._activate(np.matmul(self.W_out, ext[..., None])[..., 0])
+        y = np.matmul(self.W_out, ext[..., None])[..., 0]
+        self.y = np.tanh(y, out=y) if cfg.readout_activation == "tanh" else y
         return self.y
 
     def run(

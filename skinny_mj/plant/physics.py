@@ -10,6 +10,8 @@ stays inside its range.
 
 from __future__ import annotations
 
+import functools
+
 import mujoco
 import numpy as np
 from dm_control import mujoco as dm_mujoco
@@ -95,15 +97,33 @@ def segment_jacobian(
     """
     n, n_dof = axes.shape[0], axes.shape[1]
     seg, dof = pairs
-    # Only the turning pairs, (R, P, 3), each product over all R x P at once: on tiny
-    # arrays NumPy pays per call and per innermost run, so nothing is broadcast.
-    a = axes[:, dof]
-    e = ((points[:, :, 1:] - points[:, :, :-1]).reshape(n, 4, 3) / lengths[:, None])[:, seg]
-    cross = np.stack([a[..., (k + 1) % 3] * e[..., (k + 2) % 3]  # mju_cross: a_i e_j - a_j e_i
-                      - a[..., (k + 2) % 3] * e[..., (k + 1) % 3] for k in comps], axis=-1)
-    out = np.zeros((n, 4, len(comps), n_dof))
-    out[:, seg, :, dof] = cross.transpose(1, 0, 2)  # (P, R, comp): the indexed dims first
+    dof_ij, seg_ij, ij, flat = _cross_indices(tuple(comps), seg.tobytes(), dof.tobytes(), n_dof)
+    c = len(comps)
+    # Only the turning pairs' components i then j of each signal component k (i = k + 1,
+    # j = k + 2, mod 3), (R, P, 2 comp), each gathered once: on tiny arrays NumPy pays
+    # per call and per innermost run, so nothing is broadcast.
+    a = axes[:, dof_ij, ij]
+    e = ((points[:, :, 1:] - points[:, :, :-1]).reshape(n, 4, 3) / lengths[:, None])[
+        :, seg_ij, ij]
+    # mju_cross, every component at once: (a x e)_k = a_i e_j - a_j e_i, (R, P, comp)
+    cross = a[..., :c] * e[..., c:] - a[..., c:] * e[..., :c]
+    out = np.zeros((n, 4 * c * n_dof))
+    out[:, flat] = cross.reshape(n, -1)  # each (pair, comp) to its (segment, comp, DOF)
     return out.reshape(n, 4 * len(comps), n_dof)
+
+
+@functools.lru_cache(maxsize=32)
+def _cross_indices(comps: tuple[int, ...], seg: bytes, dof: bytes, n_dof: int
+                   ) -> tuple[np.ndarray, ...]:
+    """For :func:`segment_jacobian`: index arrays (P, 2 comp) of the pairs' DOFs, of
+    their segments and of the components i then j of each signal component k
+    (i = k + 1, j = k + 2, mod 3); and the flat position in a (4, comp, n_dof) block of
+    each (pair, comp), pairs major."""
+    k = np.asarray(comps)
+    s, d = np.frombuffer(seg, np.intp), np.frombuffer(dof, np.intp)
+    ij = np.concatenate([(k + 1) % 3, (k + 2) % 3])[None, :]
+    flat = (s[:, None] * len(comps) + np.arange(len(comps))) * n_dof + d[:, None]
+    return d[:, None], s[:, None], ij, flat.reshape(-1)
 
 
 def _segment_pairs(model: mujoco.MjModel, site_ids: np.ndarray,
