@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from skinny_mj.experiments import claims_catalogue as cat
+from skinny_mj.experiments import claims_rules
 from skinny_mj.experiments.claims_rules import READINGS, RULES, RUNS
 
 from skinny_mj.engine import registry
@@ -48,8 +49,9 @@ def _rows_read(comp: cat.Comparison) -> list[str]:
     return rows
 
 
-def test_the_module_is_not_a_study():
-    path = Path(cat.__file__)
+@pytest.mark.parametrize("module", [cat, claims_rules], ids=lambda m: m.__name__)
+def test_the_module_is_not_a_study(module):
+    path = Path(module.__file__)
     tree = ast.parse(path.read_text(encoding="utf-8"))
     names = {t.id for s in tree.body if isinstance(s, ast.Assign)
              for t in s.targets if isinstance(t, ast.Name)}

@@ -3,15 +3,10 @@ edge cases (significant, weak, tie, the close-to band's edges, too few runs)."""
 
 from __future__ import annotations
 
-import ast
-from pathlib import Path
-
 import numpy as np
 import pytest
 from skinny_mj.experiments import claims_rules as cr
 from skinny_mj.experiments.claims_rules import RULES, Verdict, compare
-
-SOURCE = Path(cr.__file__)
 
 
 def _runs(mean: float, sd: float, n: int = 20, seed: int = 0) -> np.ndarray:
@@ -19,15 +14,6 @@ def _runs(mean: float, sd: float, n: int = 20, seed: int = 0) -> np.ndarray:
     z = np.random.default_rng(seed).standard_normal(n)
     z = (z - z.mean()) / z.std(ddof=1)
     return mean + sd * z
-
-
-def test_the_module_is_not_a_study():
-    tree = ast.parse(SOURCE.read_text(encoding="utf-8"))
-    names = {t.id for s in tree.body if isinstance(s, ast.Assign)
-             for t in s.targets if isinstance(t, ast.Name)}
-    assert "NAME" not in names and "STUDY" not in names
-    from skinny_mj.engine import registry
-    assert registry.declared_name(SOURCE) is None
 
 
 def test_rules_are_frozen_and_declared_once():
