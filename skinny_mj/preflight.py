@@ -41,15 +41,17 @@ from pathlib import Path
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.io import atomic_write_bytes
 
-__all__ = ["GL_BACKENDS", "MIN_FREE_BYTES", "RUN_FILES", "check_gl", "check_path_name",
+__all__ = ["GL_BACKENDS", "GL_OFF", "MIN_FREE_BYTES", "RUN_FILES", "check_gl", "check_path_name",
            "check_writable", "check_writable_file", "check_free_space", "cleaned_on_failure",
            "check_run_folder", "check_new_file", "timestamp", "new_folder", "run_folder",
            "Estimate", "available_bytes", "check", "fmt_bytes"]
 
-#: MUJOCO_GL values mujoco accepts on Linux (mujoco/rendering/classic/gl_context.py);
-#: any other value makes ``import mujoco`` itself raise.
-GL_BACKENDS = ("disable", "disabled", "off", "false", "0", "enable", "enabled", "on",
-               "true", "1", "glfw", "", "glx", "egl", "osmesa")
+#: MUJOCO_GL values that turn rendering off (mujoco/rendering/classic/gl_context.py).
+GL_OFF = ("disable", "disabled", "off", "false", "0")
+#: MUJOCO_GL values mujoco accepts on Linux (the same file); any other value makes
+#: ``import mujoco`` itself raise.
+GL_BACKENDS = (*GL_OFF, "enable", "enabled", "on", "true", "1", "glfw", "", "glx", "egl",
+               "osmesa")
 #: Bytes the probe writes: enough to see a disk that is already full, not to fill one.
 _PROBE_BYTES = 4096
 #: Free space an output folder needs before a command starts (a run's JSON, model and

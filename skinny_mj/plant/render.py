@@ -17,16 +17,13 @@ import numpy as np
 
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.io import atomic_path
+from skinny_mj.preflight import GL_OFF
 
 # A pose that shows every DOF: right arm raised and bent, left arm half raised.
 _SHOW_POSE = {
     4: [2.3, 0.9, 1.2, 0.4],
     8: [2.3, 0.3, 0.4, 0.9, 1.2, -0.3, -0.4, 0.4],
 }
-
-
-#: MUJOCO_GL values that turn rendering off (mujoco/rendering/classic/gl_context.py).
-GL_OFF = ("disable", "disabled", "off", "false", "0")
 
 
 def check_rendering() -> None:
