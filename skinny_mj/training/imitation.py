@@ -24,7 +24,7 @@ from skinny_mj.plant import body
 from skinny_mj.training.dtw import available, dtw_nrmse
 from skinny_mj.trajectories import Trajectory, ik
 
-__all__ = ["ROBOT_METRICS", "TORQUE_METRICS", "WITHIN_DEG", "imitation_metrics",
+__all__ = ["ROBOT_METRICS", "TORQUE_METRICS", "WITHIN_DEG", "imitation_metrics", "lag_s",
            "movement_stats", "robot_figures", "robot_metrics", "saturation"]
 
 #: The run files' figures a roboticist reads (:func:`robot_metrics`), beside the NRMSEs
@@ -59,6 +59,15 @@ def saturation(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarray) -> fl
     return float(np.mean(np.abs(raw) > 1.0 + 1e-9))
 
 
+def lag_s(produced: np.ndarray, wanted: np.ndarray, dof: int, dt: float) -> float:
+    """The timing lag of ``produced`` (T, >= dof) rad behind ``wanted`` (T, dof) rad, in s
+    (steps ``dt`` apart; positive = late): the cross-correlation shift of the normalized
+    angles, searched up to 25 steps or a third of the movement."""
+    max_lag = min(25, (len(wanted) - 1) // 3)
+    return timing_lag(body.normalize_angles(produced, dof),
+                      body.normalize_angles(wanted, dof), max_lag) * dt
+
+
 def robot_metrics(produced: np.ndarray, wanted: np.ndarray, dof: int,
                   dt: float) -> dict[str, float]:
     """A test's errors in a roboticist's units, for the produced joint angles ``produced``
@@ -77,13 +86,11 @@ def robot_metrics(produced: np.ndarray, wanted: np.ndarray, dof: int,
     err = produced[1:] - wanted[1:]
     hand = body.arm_points(produced, dof)[..., 2, :] - body.arm_points(wanted, dof)[..., 2, :]
     dist_cm = 100.0 * np.linalg.norm(hand[1:], axis=-1)  # (T-1, 2 arms)
-    max_lag = min(25, (len(wanted) - 1) // 3)
     return {"rms_error_deg": float(np.degrees(np.sqrt(np.mean(err**2)))),
             "peak_error_deg": float(np.degrees(np.abs(err).max())),
             "hand_error_cm": float(np.sqrt(np.mean(dist_cm**2))),
             "peak_hand_error_cm": float(dist_cm.max()),
-            "lag_s": timing_lag(body.normalize_angles(produced, dof),
-                                body.normalize_angles(wanted, dof), max_lag) * dt}
+            "lag_s": lag_s(produced, wanted, dof, dt)}
 
 
 def imitation_metrics(outcome, dof: int, *, dtw: bool = True) -> dict[str, Any]:
@@ -99,13 +106,11 @@ def imitation_metrics(outcome, dof: int, *, dtw: bool = True) -> dict[str, Any]:
     produced, wanted = outcome.rollout.angles[0], test.angles
     within = fraction_within(produced[1:], wanted[1:], np.radians(WITHIN_DEG))
     rmse = np.degrees(rmse_per_signal(produced[1:], wanted[1:]))
-    max_lag = min(25, (len(test) - 1) // 3)
     out: dict[str, Any] = {
         "position_nrmse": outcome.position_nrmse, "motor_nrmse": outcome.motor_nrmse,
         "within5": float(within.mean()), "within5_per_joint": [float(v) for v in within],
         "rmse_deg": float(rmse.mean()), "rmse_deg_per_joint": [float(v) for v in rmse],
-        "lag_s": timing_lag(body.normalize_angles(produced, dof),
-                            body.normalize_angles(wanted, dof), max_lag) * test.dt,
+        "lag_s": lag_s(produced, wanted, dof, test.dt),
     }
     # the same produced movement scored on Cartesian segment vectors, whatever signals the
     # network saw, so joint- and Cartesian-signal models compare on one scale
