@@ -19,7 +19,7 @@ from skinny_mj.controllers.torque_arm import (
 from skinny_mj.controllers.torque_readout import ForgettingReadout, RLSReadout
 
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.training import torque as torque_training
+from skinny_mj.plant.path_dynamics import torque_dynamics
 from skinny_mj.training.loop import TrainConfig
 
 
@@ -72,7 +72,7 @@ def test_a_readout_fit_leaves_runs_that_do_not_learn():
 def test_computed_torque_on_the_desired_state_is_the_inverse_dynamics():
     # e = 0 at the middle of the step: the law's torque is M qdd + c + b qd, which is
     # mj_inverse at that state (joint damping included), and its feedback part is 0
-    dyn = torque_training._dynamics(8)
+    dyn = torque_dynamics(8)
     rng = np.random.default_rng(3)
     q, qd, qdd = rng.uniform(-0.5, 0.5, 8), rng.normal(0, 1, 8), rng.normal(0, 5, 8)
     dt = 0.02

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinny_mj.cli.parser import main
+from skinny_mj.plant.path_dynamics import torque_dynamics
 from skinny_mj.training import torque as torque_training
 from skinny_mj.trajectories import get
 
@@ -13,7 +14,7 @@ from skinny_mj.trajectories import get
 def test_feasibility_figures_follow_the_step_torques():
     traj = get("ymca", 4)
     f = torque_training.feasibility(4, traj)
-    tau = torque_training._dynamics(4).trajectory_torques_nm(traj.angles, traj.dt)
+    tau = torque_dynamics(4).trajectory_torques_nm(traj.angles, traj.dt)
     limit = torque_training.torque_limits_nm(4)
     np.testing.assert_allclose(f["peak_ratio"], np.abs(tau).max(axis=0) / limit)
     np.testing.assert_allclose(f["mean_abs_nm"], np.abs(tau).mean(axis=0))
@@ -47,7 +48,7 @@ def test_arm_state_matches_the_one_robot_dynamics():
     plant.reset()
     plant.step(np.full((2, 8), 0.3))
     state = BatchArmState(plant, gravity=True)(plant.true_signals())
-    dyn = torque_training._dynamics(8)
+    dyn = torque_dynamics(8)
     for r in range(2):
         q, qd = plant.joint_angles()[r], plant.joint_velocities()[r]
         np.testing.assert_allclose(state.mass[r], dyn.mass_matrix(q), atol=1e-12)

@@ -44,8 +44,8 @@ from skinny_mj.controllers.torque_fel import TorqueLoop
 from skinny_mj.controllers.torque_readout import ForgettingReadout, RLSReadout
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
-from skinny_mj.plant.dynamics import BatchArmState, Dynamics, feasibility_lines
-from skinny_mj.plant.model import load_model
+from skinny_mj.plant.dynamics import BatchArmState, feasibility_lines
+from skinny_mj.plant.path_dynamics import torque_dynamics
 from skinny_mj.plant.perturb import perturb  # noqa: F401  (re-exported: the robustness test plant)
 from skinny_mj.training.config import ARM_LAWS, Torque, TrainConfig
 
@@ -56,15 +56,11 @@ from skinny_mj.training.config import ARM_LAWS, Torque, TrainConfig
 MEMORY_RIDGE = 1e-2
 ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0}
 
-@functools.lru_cache(maxsize=4)
-def _dynamics(dof: int):
-    return Dynamics(load_model(dof, "torque"))
-
 
 @functools.lru_cache(maxsize=8)
 def controller(dof: int, signals: str) -> TorqueFeedbackController:
     """The PD teacher of the torque body (see the module docstring)."""
-    dyn = _dynamics(dof)
+    dyn = torque_dynamics(dof)
     inertia_min, _ = dyn.inertia_range()
     gains = TorqueGains.from_limits(dyn.torque_limits_nm(), inertia_min, dt=body.CONTROL_DT_S)
     if signals == "joint":
@@ -76,7 +72,7 @@ def controller(dof: int, signals: str) -> TorqueFeedbackController:
 
 def torque_limits_nm(dof: int) -> np.ndarray:
     """(n_dof,) peak torques, N m (what a normalized command of 1 means)."""
-    return _dynamics(dof).torque_limits_nm()
+    return torque_dynamics(dof).torque_limits_nm()
 
 
 def desired_velocities_rad_s(angles: np.ndarray, dt: float) -> np.ndarray:
@@ -93,7 +89,7 @@ def true_torques(dof: int, trajectory) -> np.ndarray:
     """(T-1, n_dof) the zero-order-hold inverse-dynamics torques of ``trajectory``
     divided by the limits (normalized torque; can exceed 1 where the movement asks
     more than the motors have)."""
-    dyn = _dynamics(dof)
+    dyn = torque_dynamics(dof)
     return dyn.normalize(dyn.trajectory_torques_nm(trajectory.angles, trajectory.dt))
 
 
@@ -119,7 +115,7 @@ def desired_motion(dof: int, trajectory, with_id: bool = False) -> DesiredMotion
     t = dt * np.arange(len(angles))
     spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
     mid = t[:-1] + 0.5 * dt
-    tau = _dynamics(dof).trajectory_torques_nm(angles, dt) if with_id else None
+    tau = torque_dynamics(dof).trajectory_torques_nm(angles, dt) if with_id else None
     return DesiredMotion.from_samples(angles, spline(t, 1), dt, spline(mid), spline(mid, 1),
                                       tau)
 
@@ -215,7 +211,7 @@ def train_warnings(run) -> int | None:
 def feasibility(dof: int, trajectory) -> dict[str, np.ndarray]:
     """:meth:`skinny_mj.plant.dynamics.Dynamics.feasibility` of ``trajectory`` on the torque
     twin."""
-    return _dynamics(dof).feasibility(trajectory.angles, trajectory.dt)
+    return torque_dynamics(dof).feasibility(trajectory.angles, trajectory.dt)
 
 
 def feasibility_report(dof: int, trajectory) -> list[str]:
