@@ -126,7 +126,7 @@ def _dies_on(seed_to_kill: int | None):
 def test_a_killed_worker_is_reported_and_resume_recovers(tmp_path):
     from skinny_mj.engine.experiment import run_seed
 
-    victim = run_seed(0, 1, 3)
+    victim = run_seed(0, "b", 3)
     rows = (Row("a"), Row("b"))
     exp = Experiment("kill", rows, _dies_on(victim), runs=6)
     with pytest.raises(SkinnyEnvironmentError, match="worker process died.*--resume"):

@@ -57,8 +57,8 @@ def test_the_three_exps_of_a_run_start_from_one_network(tmp_path):
     runs = [r for r in _load(run_sweep(seeds, tmp_path, workers=1, progress=False), tmp_path)]
     for k in range(3):  # row 1's seed of run k, in all three rows
         assert {r["row"]: r["metrics"]["seed"] for r in runs if r["run_index"] == k} == \
-            dict.fromkeys(pee.EXPS, float(run_seed(0, 0, k)))
-    engine = [run_seed(0, 0, 2)]
+            dict.fromkeys(pee.EXPS, float(run_seed(0, pee.EXPS[0], k)))
+    engine = [run_seed(0, pee.EXPS[0], 2)]
     nets = [build_run(_config(e, TINY), [engine[0]]).esn for e in pee.EXPS]
     for esn in nets[1:]:
         for name in ("W", "W_in", "W_back", "W_out"):
@@ -69,7 +69,7 @@ def test_the_three_exps_of_a_run_start_from_one_network(tmp_path):
 
 def test_the_hook_changes_no_result_and_measures_the_blend(short):
     cfg = _config("5", short)
-    seed = run_seed(0, 0, 0)
+    seed = run_seed(0, pee.EXPS[0], 0)
     plain = train_batch(cfg, [seed])[0]
     run = build_run(cfg, [seed])
     diag = pee.EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory), 1,

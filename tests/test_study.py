@@ -91,8 +91,8 @@ def test_sweep_runs_the_custom_run_with_the_sweeps_seeds(tmp_path):
     results = run_sweep(exp, tmp_path, workers=1, progress=False)
     runs = {(r["row"], r["run_index"]): r for r in Results(results, tmp_path).runs()}
     assert runs[("b", 0)]["metrics"]["reservoir"] == 35
-    assert runs[("c", 1)]["seed"] == run_seed(0, 0, 1) == runs[("c", 1)]["metrics"]["seed"]
-    assert runs[("q", 0)]["seed"] == run_seed(0, 3, 0)  # over the rows this sweep has
+    assert runs[("c", 1)]["seed"] == run_seed(0, "a", 1) == runs[("c", 1)]["metrics"]["seed"]
+    assert runs[("q", 0)]["seed"] == run_seed(0, "q", 0)  # by the row's id
     config = json.loads((tmp_path / "config.json").read_text())["config"]
     assert config["after_rows"] == {"rule.epochs": 2} and config["base"]["esn.n_reservoir"] == 200
     assert Results(results, tmp_path).values("c", "k") == [4, 4]
@@ -205,8 +205,8 @@ def test_skinny_sweep_runs_resumes_and_refuses_in_one_line(tmp_path, capsys):
     table = (out / "table.md").read_text()
     assert "| esn.spectral_radius=0.9 | 0 / 1 |" in table and "position_nrmse" in table
     files = sorted(p.name for p in (out / "runs").glob("*.json"))
-    assert files == [f"esn.spectral_radius={v}-{run_seed(0, i, 0)}.json"
-                     for i, v in enumerate(("0.5", "0.9"))]
+    assert files == [f"esn.spectral_radius={v}-{run_seed(0, f'esn.spectral_radius={v}', 0)}.json"
+                     for v in ("0.5", "0.9")]
     before = {p: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
     assert main([*args, "--resume"]) == 0
     assert {p: p.stat().st_mtime_ns for p in (out / "runs").iterdir()} == before

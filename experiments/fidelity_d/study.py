@@ -13,7 +13,7 @@ normalized units, its own seed stream) {0, 0.01, 0.03, 0.05} × reservoir size N
   (:func:`in_thesis_range`), to check the thesis's test ordering 1 > 2 > 3a ≈ 3b ≈ 4.
 
 A group per cell (``<movement>-n<N>-i<noise>``) runs its five exps. Seeds follow the
-engine's ``run_seed`` (row index, run index), so stage 2 reuses stage 1's exp 1, 2 runs
+engine's ``run_seed`` (row id, run index), so stage 2 reuses stage 1's exp 1, 2 runs
 with ``--resume`` into the same folder.
 
 The thesis (paper D Table 1, TT): position train NRMSE 0.0033-0.0092, position test

@@ -142,7 +142,7 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     from skinny_mj.training.loop import build_run, evaluate, train_run
 
     shared = list(seeds)
-    keep = {run_seed(BASE_SEED, 0, k) for k in range(SERIES_RUNS)}  # the kept signals
+    keep = {run_seed(BASE_SEED, EXPS[0], k) for k in range(SERIES_RUNS)}  # the kept signals
     run = build_run(config, shared)
     diag = EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory),
                             len(shared), run.cfg.rule.epochs, run.cfg.learning_cycles)

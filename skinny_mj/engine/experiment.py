@@ -19,9 +19,10 @@ name: the name is the study's whatever the movement, so the default output folde
 **An Experiment holds ALL its rows**, always; ``build`` never filters them. Selection
 is the engine's: ``run_sweep(..., rows=["5", "fig4"])`` takes row ids and group names
 (``Experiment.groups``: group name -> row ids, e.g. ``{"table": ("1", ..., "6")}``).
-A run's seed is ``run_seed(base_seed, row_index, run_index)``, ``row_index`` the row's
-(or its ``Row.seeds_of`` row's) place in the full ``Experiment.rows``, so ``--rows``
-reproduces the full sweep's files bit for bit. An unknown entry raises
+A run's seed is ``run_seed(base_seed, row_id, run_index)``, ``row_id`` the row's (or its
+``Row.seeds_of`` row's) id: a seed depends on what the row is called, never on where it
+stands, so rows can be added, reordered and deleted without moving any other row's
+numbers, and ``--rows`` reproduces the full sweep's files bit for bit. An unknown entry raises
 :class:`SkinnyInputError` naming the known ids and groups.
 
 **A run** is ``run_one(row, seed) -> Mapping`` of metrics (numbers are aggregated; other
@@ -107,6 +108,7 @@ from skinny_mj.engine.sweep import (
     execute_run,
     iter_dask,
     iter_joblib,
+    run_seed,
 )
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
@@ -168,12 +170,6 @@ class Experiment:
                     f"and not be a row id itself (members {list(members)}, rows {ids})")
         object.__setattr__(self, "rows", tuple(self.rows))
         object.__setattr__(self, "groups", groups)
-
-
-def run_seed(base_seed: int, row_index: int, run_index: int) -> int:
-    """Seed of one run: a 32-bit int drawn from ``SeedSequence([base, row, run])``."""
-    seq = np.random.SeedSequence([int(base_seed), int(row_index), int(run_index)])
-    return int(seq.generate_state(1, dtype=np.uint32)[0])
 
 
 def _entries(rows: Sequence[str] | str) -> list[str]:
@@ -241,8 +237,8 @@ def _key(job: RunSpec | list[RunSpec]) -> str:
 
 
 def _run_specs(experiment: Experiment, runs: int, selected: Sequence[Row]) -> list[RunSpec]:
-    chosen, pos = {r.row_id for r in selected}, {r.row_id: i for i, r in enumerate(experiment.rows)}
-    return [RunSpec(row, i, k, run_seed(experiment.base_seed, pos[row.seeds_of or row.row_id], k))
+    chosen = {r.row_id for r in selected}
+    return [RunSpec(row, i, k, run_seed(experiment.base_seed, row.seeds_of or row.row_id, k))
             for k in range(runs) for i, row in enumerate(experiment.rows)
             if row.row_id in chosen and (row.runs is None or k < row.runs)]
 

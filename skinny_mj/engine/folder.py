@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from skinny_mj.engine.stats import to_jsonable
+from skinny_mj.engine.sweep import SEEDING
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
 
@@ -58,6 +59,7 @@ def config_dict(experiment: Any, runs: int) -> dict[str, Any]:
         "groups": {g: list(m) for g, m in experiment.groups.items()},
         "runs": runs,
         "base_seed": experiment.base_seed,
+        "seeding": SEEDING,
     })
 
 
@@ -71,7 +73,8 @@ def prepare_out_dir(experiment: Any, out_dir: Path, runs: int, resume: bool,
     if resume and config_path.is_file():
         try:
             old = json.loads(config_path.read_text())
-            same = {k: old.get(k) for k in ("experiment", "config", "rows", "base_seed")}
+            same = {k: old.get(k) for k in ("experiment", "config", "rows", "base_seed",
+                                             "seeding")}
         except (ValueError, AttributeError) as exc:
             raise SkinnyInputError(f"not a sweep's config.json ({exc})",
                                    path=config_path) from exc
@@ -87,7 +90,8 @@ def prepare_out_dir(experiment: Any, out_dir: Path, runs: int, resume: bool,
 
 #: What each recorded key of a sweep's config.json is, in a refusal to resume it.
 _WHAT = {"config": "config (--quick, --movement, --dof, --signals, --protocol)",
-         "rows": "rows (--rows, --quick)", "base_seed": "seed"}
+         "rows": "rows (--rows, --quick)", "base_seed": "seed",
+         "seeding": "seeding (this version seeds a run by its row's id, not its position)"}
 
 
 def _difference(old: dict[str, Any], new: dict[str, Any]) -> str:

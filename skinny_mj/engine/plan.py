@@ -11,7 +11,7 @@ study ``takes``, any other refused in one line), the row's overrides (and, under
 (``Study.own_options``) sets no config key: the study its function returns is planned. A
 quick sweep keeps ``Quick.rows`` (default: every row) in the study's order, a full sweep
 every row but the ``quick_only`` ones, and a run's seed is
-``run_seed(base_seed, row_index, run_index)`` over the rows the sweep has.
+``run_seed(base_seed, row_id, run_index)``: the row's id, not its place, fixes its seeds.
 """
 
 from __future__ import annotations

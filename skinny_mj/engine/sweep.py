@@ -12,6 +12,7 @@ results.
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
 import json
 import re
 import time
@@ -26,11 +27,31 @@ from skinny_mj.engine.stats import to_jsonable
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.threads import single_threaded
 
-__all__ = ["THREAD_ENV", "SAFE_NAME", "Row", "RunSpec", "RunFailed", "one_of_batch",
+__all__ = ["THREAD_ENV", "SEEDING", "SAFE_NAME", "run_seed", "stable_hash", "Row", "RunSpec", "RunFailed", "one_of_batch",
            "execute_run", "execute_batch", "iter_joblib", "iter_dask"]
 
 #: The BLAS/OpenMP thread variables pinned to 1 in every worker process.
 THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+#: How :func:`run_seed` derives seeds; ``config.json`` records it and ``--resume`` refuses
+#: a sweep folder seeded another way (before it, seeds came from a row's position).
+SEEDING = "row-id"
+
+
+def stable_hash(text: str) -> int:
+    """A 64-bit integer of ``text`` that is the same on every machine, Python and run
+    (Python's own ``hash`` of a string is salted per process)."""
+    return int.from_bytes(hashlib.sha256(text.encode("utf-8")).digest()[:8], "little")
+
+
+def run_seed(base_seed: int, row_id: str, run_index: int) -> int:
+    """Seed of one run: a 32-bit int drawn from
+    ``SeedSequence([base, stable_hash(row_id), run])``."""
+    if not isinstance(row_id, str):
+        raise TypeError(f"run_seed takes a row id (str), not {type(row_id).__name__}")
+    seq = np.random.SeedSequence([int(base_seed), stable_hash(row_id), int(run_index)])
+    return int(seq.generate_state(1, dtype=np.uint32)[0])
 
 
 #: A row's or an experiment's name: a plain file-name word (no "..", no hidden file).
