@@ -61,6 +61,7 @@ from skinny_mj.experiments.dynamic import general
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.imitation import robot_figures
 from skinny_mj.training.presets import preset_fields
 
 NAME = "dynamic"
@@ -251,7 +252,6 @@ def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
 
 def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Several seeds of one row in lockstep; seed by seed what each gets alone."""
-    from skinny_mj.training.imitation import robot_figures
     from skinny_mj.training.loop import train_batch
     from skinny_mj.training.torque import joint_nrmse
 
