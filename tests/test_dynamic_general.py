@@ -81,11 +81,9 @@ def test_the_preset_row_is_what_skinny_train_preset_general_trains():
     cli, _ = train_config(build_parser().parse_args(
         ["train", "--preset", "general", "--actuation", "torque"]))
     assert cfg == cli
-    # the 3D body's own preset: its row, on the 3D candidates' seeds, and the candidate
-    # it was chosen as
-    cfg3, row3 = _row("3d-general")
+    # the 3D body's own preset: its row, with the stiffer teacher of the group omega20
+    cfg3, _ = _row("3d-general")
     cli3, _ = train_config(build_parser().parse_args(
         ["train", "--preset", "general", "--actuation", "torque", "--dof", "8"]))
-    assert cfg3 == cli3 and row3.seeds_of == "3d-general-babble60+ymca"
-    assert cfg3 == _row("3d-general-babble240+ymca-omega20+forget0.9-n200")[0]
+    assert cfg3 == cli3
     assert (cfg3.plant.dof, cfg3.actuation.omega, cfg3.esn.n_reservoir) == (8, 20.0, 200)

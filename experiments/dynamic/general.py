@@ -26,6 +26,7 @@ from skinny_mj.experiments.claims import values
 
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.imitation import TORQUE_METRICS
 from skinny_mj.trajectories import load_movement
 
 #: Fastest speed (a factor of the clip's own, on a 0.01 grid from 0.6 down) at and below
@@ -59,7 +60,6 @@ def load_test(column: str, dof: int):
 def run_batch(config: TrainConfig, row, seeds: list[int]) -> list:
     """Train the row's R networks once in lockstep (nothing for a controller alone), then
     test them on every column of ``row.params["tests"]``."""
-    from skinny_mj.training.imitation import TORQUE_METRICS
     from skinny_mj.training.loop import build_run, evaluate, test_robot_metrics, train_run
 
     start = time.perf_counter()

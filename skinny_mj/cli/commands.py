@@ -22,6 +22,7 @@ from skinny_mj.cli.claims import cmd_claims  # noqa: F401 (the `skinny claims` h
 from skinny_mj.cli.config_files import file_config, train_config
 from skinny_mj.cli.config_flags import TEST_FLAGS, TRACK_FLAGS, changes, flag_names, given
 from skinny_mj.cli.memory import check_bench, check_export, check_sweep, check_train
+from skinny_mj.cli.movement_list import list_text
 from skinny_mj.cli.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
 from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.engine import folder, protocols, registry
@@ -30,7 +31,7 @@ from skinny_mj.engine.grid import grid_study
 from skinny_mj.engine.stats import SMOKE_NOTE
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
-from skinny_mj.plant import body
+from skinny_mj.plant import body, task
 from skinny_mj.plant.ideal import IdealController
 from skinny_mj.plant.render import render_png
 from skinny_mj.plots import learning_curve_png
@@ -43,6 +44,8 @@ from skinny_mj.preflight import (
 from skinny_mj.progress import Progress as _Progress
 from skinny_mj.progress import progress_on as _progress_on
 from skinny_mj.recording import record_test, write_recording
+from skinny_mj.training import loop
+from skinny_mj.training import torque as torque_training
 from skinny_mj.training.config import Movement, TrainConfig
 from skinny_mj.training.feasible import load_movement  # NAME@feasible too, else trajectories'
 from skinny_mj.training.imitation import (
@@ -113,14 +116,12 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
 
 # -- track ------------------------------------------------------------------------------
 def cmd_track(args: argparse.Namespace) -> int:
-    from skinny_mj.plant.task import load
-
     cfg = _flag_config(args, TRACK_FLAGS)
     dof, signals, mv = cfg.plant.dof, cfg.plant.signals, cfg.movement
     out = _out_dir(args, "track")
     traj, report = _load_movement(
         mv, dof, memory.check_track(dof, body.n_signals(dof, signals)))
-    env = load(dof, signals, traj, sensor_noise=cfg.plant.sensor_noise, seed=args.seed)
+    env = task.load(dof, signals, traj, sensor_noise=cfg.plant.sensor_noise, seed=args.seed)
     ctrl = IdealController(traj.angles, env.task.max_speed_rad_s, traj.dt)
     ts = env.reset()
     angles, true_sig = [env.physics.joint_angles()], [env.physics.position_signals(signals)]
@@ -195,11 +196,9 @@ def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
 def _train_and_write(cfg, seed: int, args: argparse.Namespace, out: Path, title: str,
                      preset: str | None = None):
     """Train, then write the run (:func:`_write_run`); the outcome and the folder."""
-    from skinny_mj.training.loop import train
-
     bar = _Progress(title, args.quiet)
     try:
-        outcome = train(cfg, seed, progress=bar)
+        outcome = loop.train(cfg, seed, progress=bar)
     finally:
         bar.close()
     with _writing(args, out) as out:
@@ -245,8 +244,6 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from skinny_mj.training.loop import TrainConfig
-
     cfg = TrainConfig()  # paper E, experiment 5
     out = _out_dir(args, "demo")
     check_train(cfg, "the demo")
@@ -278,14 +275,6 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_test(args: argparse.Namespace) -> int:
-    from skinny_mj.training.loop import (
-        TrainConfig,
-        evaluate,
-        run_of,
-        run_streams,
-        test_robot_metrics,
-    )
-
     path, esn, meta = read_model(args.model)  # a shipped model's name, or a file
     dof, signals = meta["dof"], meta["signals"]
 
@@ -304,8 +293,9 @@ def cmd_test(args: argparse.Namespace) -> int:
     except SkinnyInputError as err:
         raise SkinnyInputError(f"model metadata holds a bad config ({err})", path=path) from None
     check_model(esn, cfg, path)  # a model of another body, an edited file
-    run = run_of(cfg, esn, meta["max_speed_rad_s"], traj, [run_streams(args.seed).plant_seed])
-    (test,) = evaluate(run)
+    run = loop.run_of(cfg, esn, meta["max_speed_rad_s"], traj,
+                      [loop.run_streams(args.seed).plant_seed])
+    (test,) = loop.evaluate(run)
     metrics: dict[str, Any] = {
         "model": str(path), "trained_on": meta.get("trained_on"),
         "trajectory": str(asked.movement.trajectory),
@@ -316,7 +306,7 @@ def cmd_test(args: argparse.Namespace) -> int:
     }
     # joint error (deg), hand error (cm), lag (s), as the train command's test dict has them
     if not test.failed:
-        metrics["test"].update(test_robot_metrics(run, test))
+        metrics["test"].update(loop.test_robot_metrics(run, test))
     if test.torque is not None:  # torque body: limits, |torque|, work, MuJoCo warnings
         metrics["test"]["torque"] = test.torque["metrics"]
     if not test.failed and cfg.torque is None:  # DTW, within 5°, lag
@@ -352,8 +342,6 @@ def cmd_test(args: argparse.Namespace) -> int:
 # -- trajectory / render ----------------------------------------------------------------
 def cmd_trajectory(args: argparse.Namespace) -> int:
     if args.action == "list":
-        from skinny_mj.cli.movement_list import list_text
-
         print(list_text())
         return 0
     if args.action == "show":
@@ -364,8 +352,6 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
         for key, value in movement_stats(traj).items():
             print(f"  {key:32} {value:.4g}")
         if getattr(args, "actuation", "velocity") == "torque":
-            from skinny_mj.training import torque as torque_training
-
             print("torque twin: inverse-dynamics torques of the movement against the limits")
             for line in torque_training.feasibility_report(args.dof, traj):
                 print(line)

@@ -1,6 +1,7 @@
 """The ``skinny`` command line.
 
-Every sub-command imports what it needs when it runs, so ``skinny --help`` is quick.
+Every sub-command imports NumPy, MuJoCo and the study it needs when it runs, so ``skinny
+--help`` is quick.
 User errors (bad files, names, parameters, an ``--out`` that holds results or cannot be a
 folder) end with one line on stderr and exit code 2; the machine's (a read-only or full
 disk, no rendering backend) with one line and exit code 1.
@@ -16,7 +17,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from skinny_mj.cli.logs import LEVELS, to_stderr
+from skinny_mj.cli.study_help import list_text, study_help
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.preflight import check_gl  # imports no mujoco
+from skinny_mj.threads import one_blas_thread
 
 
 class _Parser(argparse.ArgumentParser):
@@ -71,8 +75,6 @@ class _ExperimentHelp(argparse.Action):
             parser.print_help()
             parser.exit()
         os.environ.setdefault("MUJOCO_GL", "disabled")  # before a study imports mujoco
-        from skinny_mj.cli.study_help import study_help
-
         try:
             text = study_help(name)
         except SkinnyInputError as err:
@@ -399,18 +401,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     previous = _on_sigterm(_terminate)
     restore_logs = to_stderr(args.log_level)  # diagnostics: plain lines on stderr
     try:
-        if args.command == "experiment" and args.name == "list":  # reads the studies' source
-            from skinny_mj.cli.study_help import list_text  # only: no NumPy, no study
-
+        if args.command == "experiment" and args.name == "list":  # reads the studies' source:
+            # no NumPy, no study
             print(list_text())
             sys.stdout.flush()
             return 0
-        from skinny_mj.preflight import check_gl  # imports no mujoco
-
         check_gl()  # a MUJOCO_GL mujoco refuses would fail at its import, as a traceback
         from skinny_mj.cli import commands  # imports mujoco
         from skinny_mj.cli.flags import check_args
-        from skinny_mj.threads import one_blas_thread
 
         check_args(args)  # every numeric flag in its range (seed >= 0, ...), before any work
         with one_blas_thread():  # same bits whatever the machine's BLAS threads

@@ -32,6 +32,7 @@ from skinny_mj.engine.sweep import one_of_batch
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training import overrides
 from skinny_mj.training.config import TrainConfig, relative_cost
+from skinny_mj.training.imitation import robot_figures
 
 # The study's types (skinny_mj.engine.study's Study, Row, Metric, RunBatch), named for the
 # reader only: the study module imports this one to build its sweep, not the other way round.
@@ -67,8 +68,6 @@ def _with_robot_figures(picked: dict[str, Any], metrics: Mapping[str, Any]) -> d
     """``picked`` (a study's metrics) and, after them, every run file's figures in a
     roboticist's units (:func:`skinny_mj.training.imitation.robot_figures`) the study does
     not name itself."""
-    from skinny_mj.training.imitation import robot_figures
-
     extra = robot_figures(dict(metrics))
     return {**picked, **{k: v for k, v in extra.items() if k not in picked}}
 

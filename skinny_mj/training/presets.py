@@ -103,9 +103,8 @@ TORQUE_GENERAL: dict[int, tuple[str, dict[str, Any]]] = {
     8: ("torque twin, 3D, joint-angle signals, trained on 240 s of motor babbling at peak "
         "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
         "inertia-scaled PD teacher at poles of 20 rad/s, beta = 1, 3 cycles x 15 epochs, "
-        "readout on the normal equations with forgetting 0.9: row "
-        "3d-general-babble240+ymca-omega20+forget0.9-n200 of `skinny experiment dynamic "
-        "--rows general`, the same as row 3d-general (unseen md_02 at 0.45x speed 0.0189, "
+        "readout on the normal equations with forgetting 0.9: row 3d-general of `skinny "
+        "experiment dynamic --rows general` (unseen md_02 at 0.45x speed 0.0189, "
         "md_03 at 0.44x 0.0142, 10 seeds)",
         {"plant.dof": 8, **_TORQUE_FEL, "rule.epochs": 15, "actuation.omega": 20.0,
          "rule.fit.forgetting": 0.9}),
