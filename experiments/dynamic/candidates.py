@@ -36,7 +36,7 @@ GENERAL_VARIANTS: dict[str, dict] = {
 PRESET_MOVE = {"movement.trajectory": f"set:babble:seed=0,duration=60,{SLOW}+ymca"}
 GENERAL_LATE: dict[str, dict] = {
     "2d-general-babble60+ymca-n500": {**PRESET_MOVE, "esn.n_reservoir": 500},
-    "2d-general-babble60+ymca-epochs30": {**PRESET_MOVE, "rule.epochs": 30},
+    "2d-general-babble60+ymca-epochs30": {**PRESET_MOVE, "method.epochs": 30},
     "3d-general-babble60+ymca-n200": {**PRESET_MOVE, "plant.dof": 8},
     "2d-general-babble60+ymca-n100": {**PRESET_MOVE, "esn.n_reservoir": 100},
 }
@@ -49,11 +49,11 @@ GENERAL_3D = ("babble60+ymca", "babble120+ymca")
 #: ``omega``: the inertia-scaled PD teacher's poles (the row's: 5 rad/s), ``inscale``: the
 #: ESN's input scaling (1), ``scale``: the full-scale factor of the velocity inputs (2)
 OMEGA = "actuation.omega"
-_INSCALE, _SCALE, _CYCLES = "esn.input_scaling", "movement.full_scale_factor", "rule.cycles"
+_INSCALE, _SCALE, _CYCLES = "esn.input_scaling", "movement.full_scale_factor", "method.cycles"
 _RIDGE = {"esn.readout": "ridge"}
 REC_3D_SCREEN: dict[str, dict] = {
     "vscale-ymca": {"movement.max_speed_from": "ymca"}, "scale1": {_SCALE: 1.0},
-    "forget0.9": {"rule.fit.forgetting": 0.9}, "cycles10": {_CYCLES: 10},
+    "forget0.9": {"method.fit.forgetting": 0.9}, "cycles10": {_CYCLES: 10},
     "n1000": {"esn.n_reservoir": 1000}, "inscale0.5": {_INSCALE: 0.5},
     "inscale2": {_INSCALE: 2.0}, "sr0.9": {"esn.spectral_radius": 0.9},
     "ridge1e-3": {**_RIDGE, "esn.ridge_lambda": 1e-3},
@@ -70,12 +70,12 @@ REC_3D_SCREEN: dict[str, dict] = {
     "omega15+inscale0.5": {OMEGA: 15.0, _INSCALE: 0.5},
     "omega10+inscale0.5+cycles10": {OMEGA: 10.0, _INSCALE: 0.5, _CYCLES: 10},
     "omega20+ridge1e-1": {OMEGA: 20.0, **_RIDGE, "esn.ridge_lambda": 1e-1},
-    "omega20+forget0.9": {OMEGA: 20.0, "rule.fit.forgetting": 0.9},
+    "omega20+forget0.9": {OMEGA: 20.0, "method.fit.forgetting": 0.9},
     "omega20+n1000": {OMEGA: 20.0, "esn.n_reservoir": 1000},
-    "omega20+epochs30": {OMEGA: 20.0, "rule.epochs": 30},
-    "omega20+forget0.9+ridge1e-1": {OMEGA: 20.0, "rule.fit.forgetting": 0.9, **_RIDGE,
+    "omega20+epochs30": {OMEGA: 20.0, "method.epochs": 30},
+    "omega20+forget0.9+ridge1e-1": {OMEGA: 20.0, "method.fit.forgetting": 0.9, **_RIDGE,
                                     "esn.ridge_lambda": 1e-1},
-    "omega20+forget0.95": {OMEGA: 20.0, "rule.fit.forgetting": 0.95},
+    "omega20+forget0.95": {OMEGA: 20.0, "method.fit.forgetting": 0.95},
 }
 #: The screen's choice (the lowest mean position NRMSE over the row's first 3 seeds, see
 #: docs/results/dynamic.md): the teacher's poles at 20 rad/s (omega dt = 0.4 at 50 Hz) and
@@ -94,7 +94,7 @@ GENERAL_3D_LATE: dict[str, dict] = {
     f"3d-general-babble60+ymca-{REC_3D_CHOICE}": CHOSEN,
     f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n200": {**CHOSEN, **_N200},
     f"3d-general-babble60+ymca-{REC_3D_CHOICE}-n200-epochs30": {**CHOSEN, **_N200,
-                                                                "rule.epochs": 30},
+                                                                "method.epochs": 30},
     f"3d-general-babble120+ymca-{REC_3D_CHOICE}-n200": {**CHOSEN, **_N200,
                                                         **GENERAL_VARIANTS["babble120+ymca"]},
     "3d-general-babble60+ymca-omega20-n200": {OMEGA: 20.0, **_N200},
