@@ -108,11 +108,12 @@ class Run:
         """How the body is driven (:mod:`skinny_mj.training.actuation`)."""
         return actuation_of(self.cfg)
 
-    def loop(self, hook=None, feedback: FeedbackController | None = None) -> Loop:
+    def loop(self, hook=None, feedback: FeedbackController | None = None, rule=None) -> Loop:
         """The closed loop of the inverse model: ``cfg.inputs``, ``feedback`` (default the
-        plain controller), the actuation's ``hook``, the forward model, the delay."""
+        plain controller), the actuation's ``hook``, the forward model, the delay, and the
+        learning rule FEL refits the readout with (None: each cycle alone)."""
         return Loop(self.cfg.inputs, feedback or FeedbackController(), hook, self.forward,
-                    delay_steps=self.cfg.plant.delay)
+                    delay_steps=self.cfg.plant.delay, rule=rule)
 
 
 @single_threaded
@@ -203,10 +204,9 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
     out.rule = make_rule(cfg, run.esn, len(run.desired) - 1)  # method.fit (training.fits)
     out.feedback_share = act.recorder(method, run.esn.n_runs)  # the actuation's, if any
     loop = run.loop(act.hook(run.training, run.max_speed_rad_s, run.plant),
-                    protocol.feedback_of(method.u_error_gain, method.u_error_damping))
+                    protocol.feedback_of(method.u_error_gain, method.u_error_damping), out.rule)
     out.fel = fel.train(run.esn, run.plant, fel.Task(run.desired, run.true_commands, run.scored),
-                        method, loop, rule=out.rule,
-                        observe=_all(observe, out.feedback_share, tick))
+                        method, loop, observe=_all(observe, out.feedback_share, tick))
     return out
 
 
