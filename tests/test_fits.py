@@ -68,8 +68,9 @@ def test_a_fits_settings_are_keys_of_method_fit_and_sweep_axes(registry):
         lam0: float = 1e-2
         decay: float = 0.2
 
-    fits.register_fit("mine", lambda cfg, esn, steps: (cfg.method.fit.lam0, cfg.method.fit.decay),
-                      settings=Mine)
+    fit = fits.register_fit("mine", lambda cfg, esn, steps: (cfg.method.fit.lam0,
+                                                             cfg.method.fit.decay), settings=Mine)
+    assert fit is fits.FITS["mine"] and fit.settings is Mine  # what a package publishes
     cfg = TrainConfig().override({"method.fit.lam0": 0.1, "method.fit": "mine"})  # any order
     assert fits.make_rule(cfg, None, 1) == (0.1, 0.2)
     assert {k: v for k, v in cfg.to_dict().items() if k.startswith("method.fit")} == {
@@ -80,6 +81,50 @@ def test_a_fits_settings_are_keys_of_method_fit_and_sweep_axes(registry):
         TrainConfig().override({"method.fit.lam0": 0.1})
     with pytest.raises(SkinnyInputError, match="a FitSettings subclass"):
         fits.register_fit("bad", lambda cfg, esn, steps: None, settings=dict, replace=True)
+
+
+def test_skinny_sweep_sweeps_both_settings_of_another_packages_rule(registry, monkeypatch,
+                                                                  tmp_path):
+    """A rule published through the entry-point group, as docs/adding-a-learning-rule.md
+    says: ``skinny sweep`` finds it by name and sweeps its two hyper-parameters."""
+    import json
+    from dataclasses import dataclass
+    from types import SimpleNamespace
+
+    from skinny_mj.controllers.learning import CycleFit
+
+    from skinny_mj import plugins
+    from skinny_mj.cli.parser import main
+
+    @dataclass(frozen=True)
+    class Two(fits.FitSettings):
+        kind: str = "two"
+        lam0: float = 1e-2
+        decay: float = 0.2
+
+    built = []
+
+    def make(cfg, esn, steps):
+        built.append((cfg.method.fit.lam0, cfg.method.fit.decay))
+        return CycleFit()
+
+    published = SimpleNamespace(name="two", value="pkg:FIT", load=lambda: fits.Fit(make,
+                                                                                 settings=Two))
+    monkeypatch.setattr(plugins, "entry_points",
+                        lambda group: [published] if group == fits.FIT_GROUP else [])
+    plugins.load_group.cache_clear()
+    try:
+        assert main(["sweep", "method.fit=two", "method.fit.lam0=0.1,0.01",
+                     "method.fit.decay=0.2,0.5", "method.epochs=1", "esn.n_reservoir=20",
+                     "--runs", "1", "--workers", "1", "--out", str(tmp_path / "s"), "-q"]) == 0
+    finally:
+        plugins.load_group.cache_clear()
+    grid = [(0.01, 0.2), (0.01, 0.5), (0.1, 0.2), (0.1, 0.5)]
+    assert sorted(built) == grid  # each cell's training built the rule with its settings
+    runs = [json.loads(p.read_text()) for p in (tmp_path / "s" / "runs").glob("*.json")]
+    assert sorted((r["params"]["method.fit.lam0"], r["params"]["method.fit.decay"])
+                  for r in runs) == grid
+    assert all(r["status"] == "ok" and r["metrics"]["position_nrmse"] > 0 for r in runs)
 
 
 def test_method_forgetting_is_an_alias_of_method_fit_forgetting():

@@ -7,15 +7,17 @@ The package's own: ``cycle`` (each learning cycle alone, the thesis's pinv or ri
 ``method.fit.forgetting``, :class:`ForgettingSettings`). A fit's hyper-parameters are its
 own :class:`FitSettings` dataclass, registered with it: the chosen fit's settings are
 the configuration's ``method.fit``, each field a key ``method.fit.<param>``. A new rule is
-one class in controllers plus one :func:`register_fit` line (its builder, or the builder's
-name ``"module:function"``, imported when a training makes its rule: the torque fits'
-builder lives in :mod:`skinny_mj.training.torque`, which imports the configuration, which
-imports this registry); then
+one file (its settings, its :class:`~skinny_mj.controllers.learning.LearningRule`) plus one
+:func:`register_fit` line (its builder, or the builder's name ``"module:function"``,
+imported when a training makes its rule: the torque fits' builder lives in
+:mod:`skinny_mj.training.torque`, which imports the configuration, which imports this
+registry); then
 ``TrainConfig().override({"method.fit": NAME})``, ``skinny train method.fit=NAME`` and
 ``skinny sweep method.fit=cycle,NAME`` choose it (see the docs page "Adding a learning
 rule"). :func:`register_fit` changes one Python process; for the command line and a
 sweep's worker processes, another package publishes its :class:`Fit` through the
-entry-point group :data:`FIT_GROUP`, read the first time a name is not known.
+entry-point group :data:`FIT_GROUP` (the :class:`Fit` :func:`register_fit` returns), read
+the first time a name is not known.
 """
 
 from __future__ import annotations
@@ -111,11 +113,13 @@ FITS: dict[str, Fit] = {
 
 
 def register_fit(name: str, make: Make | str, *, bodies: tuple[str, ...] = ("velocity", "torque"),
-                 settings: type[FitSettings] = FitSettings, replace: bool = False) -> None:
+                 settings: type[FitSettings] = FitSettings, replace: bool = False) -> Fit:
     """Make ``name`` a value of ``method.fit``: ``make(cfg, esn, steps)`` builds its rule
     (``make`` may be its name, ``"module:function"``), reading its hyper-parameters from
     ``cfg.method.fit`` (a ``settings``: a :class:`FitSettings` subclass whose fields are
-    the keys ``method.fit.<param>``). A name already taken is refused unless ``replace``."""
+    the keys ``method.fit.<param>``). A name already taken is refused unless ``replace``.
+    Returns the registered :class:`Fit`, which a package publishes under ``name`` in
+    :data:`FIT_GROUP` for other processes (the command line, a sweep's workers)."""
     if not name or not isinstance(name, str):
         raise SkinnyInputError(f"a fit's name is a non-empty string, got {name!r}")
     if name in FITS and not replace:
@@ -124,6 +128,7 @@ def register_fit(name: str, make: Make | str, *, bodies: tuple[str, ...] = ("vel
     if not (isinstance(settings, type) and issubclass(settings, FitSettings)):
         raise SkinnyInputError(f"a fit's settings are a FitSettings subclass, got {settings!r}")
     FITS[name] = Fit(make, tuple(bodies), settings)
+    return FITS[name]
 
 
 def make_rule(cfg: Any, esn: Any, steps: int) -> Any:
