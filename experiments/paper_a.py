@@ -57,8 +57,8 @@ MODEL = TrainConfig().override({
     "plant.dof": 4, "plant.signals": "joint", "plant.sensor_noise": 0.01,
     "esn.n_reservoir": 1000, "esn.spectral_radius": 0.1, "esn.noise_level": 0.2,
     "forward": "parallel", "forward.reservoir": 100,
-    "rule": "original", "rule.cycles": 5, "rule.epochs": 10, "rule.gain_schedule": "fixed",
-    "rule.gain_value": 0.65})
+    "method": "original", "method.cycles": 5, "method.epochs": 10, "method.gain_schedule": "fixed",
+    "method.gain_value": 0.65})
 
 
 def row_id(architecture: str, delay: int) -> str:
@@ -276,7 +276,7 @@ STUDY = Study(
     columns=("performance_nrmse", "feedback_share", "prediction_nrmse",
              "pretrain_prediction_nrmse", "test_position_nrmse", "wall_s"),
     # a smoke test (N = 100 / 50, 2 epochs of 2 learning cycles, 2 delays, 2 runs)
-    quick=Quick({"esn.n_reservoir": 100, "rule.epochs": 2, "rule.cycles": 2}, runs=2,
+    quick=Quick({"esn.n_reservoir": 100, "method.epochs": 2, "method.cycles": 2}, runs=2,
                 rows=tuple(row_id(a, d) for a in ARCHITECTURES for d in QUICK_DELAYS)),
     report=report,
 )

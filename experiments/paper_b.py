@@ -64,8 +64,8 @@ GOOD_REL, FAIL_REL, GOOD_LAG_DEG = 0.3, 0.6, 20.0
 MODEL = TrainConfig().override({
     "plant.dof": 4, "plant.signals": "joint", "plant.leading_arm": "right",
     "plant.sensor_noise": 0.01, "inputs": "sensed", "esn.n_reservoir": 100,
-    "rule": "new", "rule.beta": 0.01, "rule.cycles": 5, "test.washout_cycles": 1,
-    "rule.epochs": 50,  # not stated; 10 (papers D/E) leaves 1:2 unlearned at β = 0.01
+    "method": "new", "method.beta": 0.01, "method.cycles": 5, "test.washout_cycles": 1,
+    "method.epochs": 50,  # not stated; 10 (papers D/E) leaves 1:2 unlearned at β = 0.01
     "esn.spectral_radius": 0.5,  # not stated; SPEC §5 default
     "esn.noise_level": 0.2,  # not stated; reservoir noise of the new method (papers D/E)
 })
@@ -249,5 +249,5 @@ STUDY = Study(
     rows=tuple(Row(name, {"movement.trajectory": PREFIX + name}, params=asdict(p))
                for name, p in PATTERNS.items()),
     run_batch=run_batch, columns=COLUMNS, takes=("dof", "signals"),
-    quick=Quick({"rule.epochs": 2}, runs=1), report=report,
+    quick=Quick({"method.epochs": 2}, runs=1), report=report,
 )

@@ -92,9 +92,9 @@ def trainings(config: TrainConfig, row: Row) -> dict[str, TrainConfig]:
     FEL's; TT fits the same network to the analytic commands, ``tt_cycles`` rounds, with
     the study parameter ``tt_input_noise`` on its teacher-forced inputs: unstated in the
     thesis, 0 unless a protocol reads it, see :mod:`skinny_mj.engine.protocols`)."""
-    return {"tt": config.override({"rule": "true-target", "rule.beta": config.rule.beta,
-                                   "rule.cycles": row.params["tt_cycles"],
-                                   "rule.input_noise": row.params.get("tt_input_noise", 0.0)}),
+    return {"tt": config.override({"method": "true-target", "method.beta": config.method.beta,
+                                   "method.cycles": row.params["tt_cycles"],
+                                   "method.input_noise": row.params.get("tt_input_noise", 0.0)}),
             "fel": config}
 
 
@@ -140,8 +140,8 @@ def _row(row_id: str, method: str, noise: bool, reps: int) -> Row:
     paper: dict[str, float] = {}
     for metric, (mean, var) in zip(COLUMNS, PAPER_TABLE_1[row_id], strict=True):
         paper[metric], paper[f"{metric}_var"] = mean, var
-    return Row(row_id, {"rule": method, **({"rule.beta": BETA} if new else {}),
-                        "rule.cycles": FEL_CYCLES if new else 1, "movement.reps": reps,
+    return Row(row_id, {"method": method, **({"method.beta": BETA} if new else {}),
+                        "method.cycles": FEL_CYCLES if new else 1, "movement.reps": reps,
                         "esn.noise_level": NOISE if noise else 0.0}, paper,
                params={"tt_cycles": TT_CYCLES}, quick={"tt_cycles": 3})
 
@@ -280,12 +280,12 @@ STUDY = Study(
     rows=tuple(_row(i, *e) for i, e in EXPERIMENTS.items()),
     # paper D §5-6: 3D, Cartesian, N = 200 (see above), spectral radius 0.5, sensor noise
     # 0.01, K 1 -> 0 over 10 gain values (epochs), TT new method: 50 rounds
-    base=TrainConfig().override({"plant.dof": 8, "rule.epochs": 10}),
+    base=TrainConfig().override({"plant.dof": 8, "method.epochs": 10}),
     run_batch=run_batch, trainings=trainings,
     columns={**COLUMNS, "fel_motor_test": "FEL motor test (extra)", "tt_failed": "TT failed",
              "fel_failed": "FEL failed"},
     # a smoke test, not a reproduction: 2 runs, 2 gain values, 3 TT rounds
-    quick=Quick({"rule.epochs": 2}, runs=2),
+    quick=Quick({"method.epochs": 2}, runs=2),
     report=report,
 )
 

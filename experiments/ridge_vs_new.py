@@ -10,7 +10,7 @@ modern dance md_02, seconds 3 to 9.26, the length of one YMCA):
   10
   repetitions, new method with β = 0.3, 0.1, 0.05;
 - ``<mv>-ridge1``, ``-ridge5``, ``-ridge10``: rows 1–3 (original method, reservoir noise
-  0.03) with ``esn.readout=ridge`` and ``rule.fit=ridge-select``: each fit's lambda from the
+  0.03) with ``esn.readout=ridge`` and ``method.fit=ridge-select``: each fit's lambda from the
   grid 1e-8 ... 10 (:data:`skinny_mj.controllers.ridge_select.RIDGE_GRID`) that best predicts the
   targets of the cycle before it (:class:`skinny_mj.controllers.ridge_select.RidgeSelector`);
 - ``<mv>-ridge-new``: row 5 (new method, β = 0.1) with the same ridge selection.
@@ -41,7 +41,7 @@ TABLE_COLUMNS = {"position_nrmse": "test position NRMSE", "motor_nrmse": "test m
                  "train_wall_s": "train wall (s)", "log10_lambda": "log10 λ (last epoch)"}
 #: Ridge rows: id suffix -> the paper E row whose schedule they take.
 RIDGE_ROWS = {"ridge1": "1", "ridge5": "2", "ridge10": "3", "ridge-new": "5"}
-RIDGE = {"esn.readout": "ridge", "rule.fit": "ridge-select"}
+RIDGE = {"esn.readout": "ridge", "method.fit": "ridge-select"}
 
 
 def md02_movement() -> str:
@@ -140,5 +140,5 @@ STUDY = Study(
     metrics={"position_nrmse": "test.position_nrmse", "motor_nrmse": "test.motor_nrmse",
              "train_wall_s": "wall_s", "log10_lambda": _log10_lambda,
              "ridge_lambda": _ridge_lambda},
-    columns=TABLE_COLUMNS, quick=Quick({"rule.epochs": 2}, runs=2), report=report,
+    columns=TABLE_COLUMNS, quick=Quick({"method.epochs": 2}, runs=2), report=report,
 )

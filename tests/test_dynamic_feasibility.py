@@ -62,7 +62,7 @@ def test_computed_torque_tracks_ymca_within_its_need():
     # the movement needs, and never at the limit
     from skinny_mj.training.loop import TrainConfig, train
 
-    o = train(TrainConfig().override(actuation="torque", rule="none", test__gain=1.0,
+    o = train(TrainConfig().override(actuation="torque", method="none", test__gain=1.0,
                                         actuation__feedback="ct"))
     tq = o.metrics["test"]["torque"]
     need = torque_training.feasibility(4, o.test.trajectory)["mean_abs_nm"].mean()

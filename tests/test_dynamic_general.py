@@ -39,7 +39,7 @@ def test_computed_torque_floor_is_lower_on_the_feasible_clip():
     from skinny_mj.experiments.dynamic import general
 
     cfg, row = _row("2d-general-arm-ct")
-    assert cfg.method == "none" and cfg.torque.feedback == "ct"
+    assert cfg.method.kind == "none" and cfg.torque.feedback == "ct"
     row = dataclasses.replace(row, params={"tests": ("md_03", "md_03-feasible")})
     (out,) = general.run_batch(cfg, row, [0])
     assert out["n_test_failed"] == 0 and "train_position_nrmse" not in out
@@ -59,7 +59,7 @@ def test_a_learned_row_trains_once_and_tests_every_column():
     from skinny_mj.experiments.dynamic import general
 
     cfg, row = _row("2d-general-first")
-    cfg = cfg.override({"rule.epochs": 1, "rule.cycles": 1, "esn.n_reservoir": 20,
+    cfg = cfg.override({"method.epochs": 1, "method.cycles": 1, "esn.n_reservoir": 20,
                         "movement.trajectory": "babble:seed=0,duration=1,vmin=0.5,vmax=4"})
     row = dataclasses.replace(row, params={"tests": ("md_03-feasible", "ymca")})
     outs = general.run_batch(cfg, row, [0, 1])

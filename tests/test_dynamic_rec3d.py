@@ -17,7 +17,7 @@ def _plan(**kw):
 def _changed(p, row_id: str, base_id: str) -> dict:
     base = p.config(base_id).to_dict()
     return {k: v for k, v in p.config(row_id).to_dict().items()
-            if base[k] != v and k != "learning_cycles"}  # (derived from rule.cycles)
+            if base[k] != v and k != "learning_cycles"}  # (derived from method.cycles)
 
 
 def test_stiff_rows_are_their_base_with_the_stiffer_teacher_on_its_seeds():

@@ -25,7 +25,7 @@ from skinny_mj.plant.task import load
 from skinny_mj.training.loop import TrainConfig, train, train_batch
 
 # new method, 2 epochs of 4 cycles, 313 steps
-TINY = TrainConfig().override(rule__epochs=2, rule__cycles=1)
+TINY = TrainConfig().override(method__epochs=2, method__cycles=1)
 
 
 def _same_outcome(a, b, atol: float = 0.0) -> None:
@@ -52,9 +52,9 @@ def test_fast_path_equals_dm_control_path_per_seed():
 
 @pytest.mark.parametrize("cfg", [
     TINY,
-    TrainConfig().override(rule="original", rule__epochs=2, movement__reps=2),
-    TrainConfig().override(rule="true-target", rule__cycles=3),
-    TrainConfig().override(plant__signals="joint", rule__epochs=1),
+    TrainConfig().override(method="original", method__epochs=2, movement__reps=2),
+    TrainConfig().override(method="true-target", method__cycles=3),
+    TrainConfig().override(plant__signals="joint", method__epochs=1),
 ])
 def test_lockstep_equals_one_at_a_time_bitwise(cfg):
     seeds = [1, 2, 3]

@@ -121,7 +121,7 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
     # a Cartesian candidate is its base row with one change, on the base row's seeds
     base, elbow = (full.config.config(r) for r in ("c3-babble15+ymca", "c3-babble15+ymca+elbow"))
     assert elbow == base.override({"plant.signals": "cartesian-elbow"})
-    assert full.config.config("c2-general+damp0.3").rule.u_error_damping == 0.3
+    assert full.config.config("c2-general+damp0.3").method.u_error_damping == 0.3
     seeds = {r.row_id: r.seeds_of for r in full.rows}
     assert seeds["c2-general+forward"] == "c2-general" and seeds["c2-general"] is None
     c3 = full.config.config("c3-md_03")
@@ -131,7 +131,7 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
     with pytest.raises(SkinnyInputError):
         g.STUDY.build(movement="ymca")
     config = full.config.config("j2-md_02-head").override(
-        {"esn.n_reservoir": 20, "rule.epochs": 1})
+        {"esn.n_reservoir": 20, "method.epochs": 1})
     row = dataclasses.replace(g.STUDY.row("j2-md_02-head"),
                               params={"tests": ("y-pure", "md_03-tail")})
     outs = g.run_batch(config, row, [1, 2])
@@ -168,7 +168,7 @@ def test_preset_general_sets_its_fields_and_flags_given_override_them():
     argv = ["train", "--preset", "general", "--epochs", "2", "--seed", "5"]
     cfg, seed = train_config(build_parser().parse_args(argv))
     want = preset_fields("general")
-    assert seed == 5 and cfg.rule.epochs == 2
+    assert seed == 5 and cfg.method.epochs == 2
     got = cfg.to_dict()
     assert {k: got[k] for k in want} == want  # untouched flags keep the preset's
     with pytest.raises(SkinnyInputError):

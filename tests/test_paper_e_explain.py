@@ -14,7 +14,7 @@ from skinny_mj.engine.experiment import Experiment, run_seed, run_sweep
 from skinny_mj.engine.study import Quick
 from skinny_mj.training.loop import build_run, evaluate, train_batch, train_run
 
-TINY = {"rule.epochs": 1, "esn.n_reservoir": 20}
+TINY = {"method.epochs": 1, "esn.n_reservoir": 20}
 
 
 def _config(exp: str, changes: dict):
@@ -73,7 +73,7 @@ def test_the_hook_changes_no_result_and_measures_the_blend(short):
     plain = train_batch(cfg, [seed])[0]
     run = build_run(cfg, [seed])
     diag = pee.EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory), 1,
-                                cfg.rule.epochs, cfg.learning_cycles)
+                                cfg.method.epochs, cfg.learning_cycles)
     trained = train_run(run, observe=diag).fel
     test = evaluate(run)[0]
     np.testing.assert_array_equal(run.esn.W_out, plain.esn.W_out)

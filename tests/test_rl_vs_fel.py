@@ -54,7 +54,7 @@ def test_env_scorer_equals_the_training_paths_test(actuation):
     policy on the same test seed are the same number, bit for bit."""
     from skinny_mj.training import loop as training
 
-    tc = TrainConfig().override({"actuation": actuation, "rule.epochs": 1})
+    tc = TrainConfig().override({"actuation": actuation, "method.epochs": 1})
     run = training.build_run(tc, [7])
     env = runs.make_env(tc, 7, velocity_inputs=actuation == "torque")
     zero = np.zeros(tc.plant.dof)
@@ -68,7 +68,7 @@ def test_env_scorer_equals_the_training_paths_test(actuation):
 def test_fel_curve_ends_at_the_test_of_train():
     from skinny_mj.training.loop import train
 
-    tc = TrainConfig().override({"rule.epochs": 2})
+    tc = TrainConfig().override({"method.epochs": 2})
     points, facts = runs.fel_curve(tc, 3)
     assert [p["steps"] for p in points] == [0, facts["steps_per_epoch"],
                                            2 * facts["steps_per_epoch"]]

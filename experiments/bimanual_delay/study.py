@@ -48,7 +48,7 @@ SPEEDS = paper_b.SPEEDS
 #: β = 0.1 with 3 learning cycles per epoch and 10 epochs (paper E's experiment 5) in
 #: place of paper B's β = 0.01, 5 cycles, 50 epochs; forward networks N = 100 (paper A;
 #: ``forward`` holds their settings, each row chooses whether it has them).
-MODEL = paper_b.MODEL.override({"rule.beta": 0.1, "rule.cycles": 3, "rule.epochs": 10,
+MODEL = paper_b.MODEL.override({"method.beta": 0.1, "method.cycles": 3, "method.epochs": 10,
                                 "forward": "parallel", "forward.reservoir": 100})
 
 
@@ -99,7 +99,7 @@ STUDY = Study(
             **{p: [row_id(p, a, d) for a in ARCHITECTURES for d in DELAYS] for p in PATTERNS}},
     columns=TABLE_COLUMNS,
     # a smoke test (2 epochs, one pattern, delays 0 and 4, one run), not a result
-    quick=Quick({"rule.epochs": 2, "rule.cycles": 1}, runs=1,
+    quick=Quick({"method.epochs": 2, "method.cycles": 1}, runs=1,
                 rows=tuple(row_id("phase0", a, d) for a in ARCHITECTURES for d in (0, 4))),
     # --dof 8 runs the patterns on the 3D body; the movements are paper B's patterns and
     # the signals its joint angles (the per-arm forward models need joint signals)

@@ -72,27 +72,27 @@ YMCA, RECORDED, CLIP = "ymca", "ymca-recorded", "md_02.amc@start=3,duration=6.26
 EPOCHS, ARM_EPOCHS = 10, 15
 #: controller id -> TrainConfig overrides
 CONTROLLERS = {
-    "pd": {"rule": "none", "test.gain": 1.0},
-    "ct": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "computed-torque"},
-    "fel-orig": {"rule": "original"},
-    "fel-new": {"rule": "new", "rule.beta": 0.1},
-    "fel-new-gff": {"rule": "new", "rule.beta": 0.1, "actuation.gravity_feedforward": True},
-    "tt": {"rule": "true-target", "rule.beta": 0.1},
+    "pd": {"method": "none", "test.gain": 1.0},
+    "ct": {"method": "none", "test.gain": 1.0, "actuation.feedback": "computed-torque"},
+    "fel-orig": {"method": "original"},
+    "fel-new": {"method": "new", "method.beta": 0.1},
+    "fel-new-gff": {"method": "new", "method.beta": 0.1, "actuation.gravity_feedforward": True},
+    "tt": {"method": "true-target", "method.beta": 0.1},
 }
 #: The arm's own dynamics (skinny_mj.controllers.torque_arm): the textbook controllers
 #: alone (K = 1) and FEL with the inertia-scaled PD teacher (beta = 1, 3 learning cycles
 #: per epoch, 15 epochs of K 1 -> 0; readout on the normal equations with forgetting
 #: 0.8, ridge 1e-2, or on each cycle alone, or by RLS)
-ARM_FEL = {"rule": "new", "rule.beta": 1.0, "rule.cycles": 3, "rule.epochs": ARM_EPOCHS,
-           "actuation.feedback": "inertia-pd", "rule.fit": "forgetting"}
+ARM_FEL = {"method": "new", "method.beta": 1.0, "method.cycles": 3, "method.epochs": ARM_EPOCHS,
+           "actuation.feedback": "inertia-pd", "method.fit": "forgetting"}
 ARM_CONTROLLERS = {
-    "arm-ct": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "ct"},
-    "arm-idpd": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "id-pd"},
-    "arm-pdg": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "pd-gravity"},
-    "arm-pd": {"rule": "none", "test.gain": 1.0, "actuation.feedback": "inertia-pd"},
+    "arm-ct": {"method": "none", "test.gain": 1.0, "actuation.feedback": "ct"},
+    "arm-idpd": {"method": "none", "test.gain": 1.0, "actuation.feedback": "id-pd"},
+    "arm-pdg": {"method": "none", "test.gain": 1.0, "actuation.feedback": "pd-gravity"},
+    "arm-pd": {"method": "none", "test.gain": 1.0, "actuation.feedback": "inertia-pd"},
     "fel-arm": ARM_FEL,
-    "fel-arm-cycle": {**ARM_FEL, "rule.fit": "cycle"},
-    "fel-arm-rls": {**ARM_FEL, "rule.fit": "rls"},
+    "fel-arm-cycle": {**ARM_FEL, "method.fit": "cycle"},
+    "fel-arm-rls": {**ARM_FEL, "method.fit": "rls"},
 }
 #: The 3D arm's ESN in the arm-dynamics rows (2D: the default 200 units), and its FEL's
 #: learning cycles per epoch (2D: 3)
@@ -101,7 +101,7 @@ ARM_3D_CYCLES = 6
 #: The 3D arm's stiffer teacher (group ``omega20``): the inertia-scaled PD's poles at 20 rad/s
 #: (omega dt = 0.4 at 50 Hz; the arm rows': 5) and the readout's statistics kept with
 #: forgetting 0.9 per learning cycle (the arm rows': 0.8)
-STIFF = {"actuation.omega": 20.0, "rule.fit.forgetting": 0.9}
+STIFF = {"actuation.omega": 20.0, "method.fit.forgetting": 0.9}
 #: The general rows' babbling speeds (rad/s), and 15 s of it: ``2d-general-first``'s movement
 SLOW = "vmin=0.5,vmax=4"
 BABBLE15 = f"babble:seed=0,duration=15,{SLOW}"
@@ -132,12 +132,12 @@ def _row(row_id: str, overrides: dict, epochs: int | None = None, factor: int = 
     ``factor``), None for a row that learns nothing by FEL."""
     if epochs is None:
         return Row(row_id, overrides)
-    return Row(row_id, {**overrides, "rule.epochs": epochs * factor},
-               quick={"rule.epochs": QUICK_EPOCHS * factor})
+    return Row(row_id, {**overrides, "method.epochs": epochs * factor},
+               quick={"method.epochs": QUICK_EPOCHS * factor})
 
 
 def _learns(changes: dict) -> bool:
-    return changes.get("rule") in ("original", "new")
+    return changes.get("method") in ("original", "new")
 
 
 def _rows() -> tuple[Row, ...]:
@@ -154,7 +154,7 @@ def _rows() -> tuple[Row, ...]:
             out.append(_row(f"2d-ymca-{pert}-{ctl}", {**ymca2, **CONTROLLERS["fel-new-gff"],
                                                       "test.gain": gain, **changes}, EPOCHS))
         out.append(_row(f"2d-ymca-{pert}-pd", {**ymca2, **CONTROLLERS["pd"], **changes}))
-    out.append(_row("2d-ymca-kinematic", {**ymca2, "actuation": "velocity", "rule": "new"},
+    out.append(_row("2d-ymca-kinematic", {**ymca2, "actuation": "velocity", "method": "new"},
                     EPOCHS))
     for bd, dof in BODIES.items():
         for ctl in ("pd", "ct", "fel-new", "fel-new-gff"):
@@ -164,7 +164,7 @@ def _rows() -> tuple[Row, ...]:
                             EPOCHS if _learns(changes) else None))
     for bd, dof in BODIES.items():  # the arm's own dynamics
         size = {} if dof == 4 else ARM_3D
-        cycles = {} if dof == 4 else {"rule.cycles": ARM_3D_CYCLES}
+        cycles = {} if dof == 4 else {"method.cycles": ARM_3D_CYCLES}
         for mv, traj in (("ymca", YMCA), ("rec", RECORDED)):
             for ctl, changes in ARM_CONTROLLERS.items():
                 if mv == "rec" and ctl in ("fel-arm-cycle", "fel-arm-rls"):
@@ -191,9 +191,9 @@ def _rows() -> tuple[Row, ...]:
 
 def _general_row(row_id: str, overrides: dict, seeds_of: str | None = None) -> Row:
     """A row tested on the unseen clips (:func:`general.run_batch`), joint-angle signals."""
-    learns = _learns(overrides) or "rule" not in overrides
+    learns = _learns(overrides) or "method" not in overrides
     row = _row(row_id, {"plant.signals": "joint", **overrides},
-               overrides.get("rule.epochs", ARM_EPOCHS) if learns else None)
+               overrides.get("method.epochs", ARM_EPOCHS) if learns else None)
     return Row(row.id, row.overrides, seeds_of=seeds_of, params={"tests": tuple(general.TESTS)},
                quick={**row.quick, "tests": ("md_02-feasible", "ymca")},
                run_batch=general.run_batch)
@@ -217,7 +217,7 @@ def _stiff_rows() -> tuple[Row, ...]:
     """Group ``omega20``: the 3D ``fel-arm`` rows with :data:`STIFF`, on the seeds of the row
     each changes, and the inertia-scaled PD alone with those poles on the recorded-like
     YMCA (the learner against its teacher alone)."""
-    base = {"plant.dof": 8, **ARM_FEL, **ARM_3D, "rule.cycles": ARM_3D_CYCLES}
+    base = {"plant.dof": 8, **ARM_FEL, **ARM_3D, "method.cycles": ARM_3D_CYCLES}
     out = []
     for mv, traj in (("rec", RECORDED), ("ymca", YMCA)):
         row = _row(f"3d-{mv}-fel-arm-omega20+forget0.9",

@@ -1,7 +1,7 @@
 """Paper D's fidelity: which true-target cell trains in the thesis's range, and tests how?
 
 Paper D's true-target (TT) half (``skinny_mj.experiments.paper_d.STUDY``'s rows and ``trainings``,
-imported) × Gaussian input noise on the teacher-forced inputs (``rule.input_noise``, SD in
+imported) × Gaussian input noise on the teacher-forced inputs (``method.input_noise``, SD in
 normalized units, its own seed stream) {0, 0.01, 0.03, 0.05} × reservoir size N {100, 200,
 400} × movement {recorded-like YMCA (``ymca-recorded``: never still, marker noise),
 ``ymca-smooth`` (today's ``ymca``)}. Row ids ``<movement>-n<N>-i<noise>-e<exp>``.
@@ -78,7 +78,7 @@ def trainings(config, row: Row) -> dict[str, Any]:
     """Paper D's TT training of the row's exp (``config``: its FEL config on the row's
     movement and N) with the row's input noise."""
     tt = paper_d.trainings(config, row)["tt"]
-    return {"tt": tt.override({"rule.input_noise": row.params["input_noise"]})}
+    return {"tt": tt.override({"method.input_noise": row.params["input_noise"]})}
 
 
 def run_batch(config, row: Row, seeds: list[int]) -> list:

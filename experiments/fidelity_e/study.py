@@ -44,7 +44,7 @@ def _row(m: str, g: float, e: str) -> Row:
     trajectory, retarget = _trajectory(m)
     paper = paper_e.STUDY.row(e)
     return Row(f"{m}-g{g:g}-e{e}", {**paper.overrides, "movement.trajectory": trajectory,
-                                    "movement.retarget": retarget, "rule.u_error_gain": g},
+                                    "movement.retarget": retarget, "method.u_error_gain": g},
                paper.paper, group=m)
 
 
@@ -75,7 +75,7 @@ STUDY = Study(
     rows=tuple(_row(m, g, e) for m in MOVEMENTS for g in GAINS for e in EXPS),
     runs=10,  # paper E ran 20; 10 fit a 2-core machine (the report says so)
     columns=("position_nrmse", "noisy_position_nrmse", "motor_nrmse", "noisy_motor_nrmse"),
-    quick=Quick({"rule.epochs": 2}, runs=2,
+    quick=Quick({"method.epochs": 2}, runs=2,
                 rows=tuple(f"{m}-g1-e{e}" for m in MOVEMENTS for e in EXPS)),
     takes=("dof", "signals"),  # the movements are the study's
 )

@@ -15,10 +15,10 @@ The rows of ``--rows general`` (:data:`GENERAL_ROWS`) measure the ``general`` pr
 each body and signal (2D and 3D, joint angles and Cartesian; ``j3`` is 3D joint angles)
 against the best row before it, and its ingredients: babbling that also moves to the
 joint limits and rests (``limits``, ``holds``), a longer babble, the feedback
-controller's correction weighted 3x in the learning targets (``rule.u_error_gain``).
+controller's correction weighted 3x in the learning targets (``method.u_error_gain``).
 The rows of ``--rows cartesian`` (:data:`CARTESIAN_ROWS`) change one thing in the
 Cartesian preset rows of before, on their seeds: the feedback controller's Jacobian
-damping (``rule.u_error_damping``), a forward model's prediction as an input, each
+damping (``method.u_error_damping``), a forward model's prediction as an input, each
 elbow's angle as an extra signal (``cartesian-elbow``, the presets since) and, in 3D,
 a longer babble before YMCA.
 
@@ -108,9 +108,9 @@ GENERAL_OF = {"j2": "j2-limits30-scale4", "j3": "j3-general", "c2": "c2-general+
 #: the elbow angles as extra signals (``cartesian-elbow``), and what the screen of those
 #: pointed to.
 CARTESIAN_VARIANTS: dict[str, dict] = {
-    "damp0.1": {"rule.u_error_damping": 0.1},
-    "damp0.3": {"rule.u_error_damping": 0.3},
-    "damp1": {"rule.u_error_damping": 1.0},
+    "damp0.1": {"method.u_error_damping": 0.1},
+    "damp0.3": {"method.u_error_damping": 0.3},
+    "damp1": {"method.u_error_damping": 1.0},
     "forward": {"forward": "parallel"},
     "elbow": {"plant.signals": "cartesian-elbow"},
     "elbow-babble30": {"plant.signals": "cartesian-elbow",
@@ -267,7 +267,7 @@ STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, run_batch=run_batch, runs=10,
     # paper E exp. 5's schedule (TrainConfig's defaults), 10 epochs, N = 200, one
     # unscored washout cycle before each test
-    base=TrainConfig().override({"rule.epochs": 10, "test.washout_cycles": 1,
+    base=TrainConfig().override({"method.epochs": 10, "test.washout_cycles": 1,
                                  "esn.n_reservoir": 200}),
     columns={"train_position_nrmse": "train pos", "ymca__position_nrmse": "YMCA pos",
              "md_02__position_nrmse": "md_02 pos", "md_03__position_nrmse": "md_03 pos",
@@ -276,7 +276,7 @@ STUDY = Study(
             "general": [f"{rep}-{ts}" for rep, ts in GENERAL_ROWS],
             "cartesian": [f"{CARTESIAN_BASE[rep]}+{v}" for rep, v in CARTESIAN_ROWS]},
     # a smoke test: N = 50, 2 epochs, 2 runs, 3 sets x 3 tests on j2
-    quick=Quick({"esn.n_reservoir": 50, "rule.epochs": 2}, runs=2,
+    quick=Quick({"esn.n_reservoir": 50, "method.epochs": 2}, runs=2,
                 rows=tuple(f"j2-{ts}" for ts in QUICK_SETS)),
     # the rows are the training sets and their bodies (select one with --rows j2|c2|c3|j3,
     # or --rows general)

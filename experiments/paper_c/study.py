@@ -93,8 +93,8 @@ QUICK_TESTS = ("ymca", "y", "ym", "mirror-left")
 BASE = TrainConfig().override({
     "plant.dof": 4, "plant.signals": "joint", "plant.sensor_noise": 0.01,
     "movement.max_speed_from": "ymca", "movement.full_scale": "per-joint",
-    "rule": "original", "rule.cycles": 5, "rule.epochs": 150,
-    "rule.gain_schedule": "multiplicative", "rule.gain_factor": 0.9,
+    "method": "original", "method.cycles": 5, "method.epochs": 150,
+    "method.gain_schedule": "multiplicative", "method.gain_factor": 0.9,
     "esn.n_reservoir": 1000, "esn.spectral_radius": 0.1, "esn.noise_level": 0.2,
     "test.washout_cycles": 1})
 
@@ -238,7 +238,7 @@ STUDY = Study(
              f"{REAL_ID}__position_nrmse": "test real pos", "wall_s": "wall s",
              "peak_rss_mb": "peak RSS MB"},
     # a smoke test: N = 100, 3 epochs, 2 runs, 3 training x 4 test movements
-    quick=Quick({"esn.n_reservoir": 100, "rule.epochs": 3}, runs=2, rows=QUICK_TRAIN,
+    quick=Quick({"esn.n_reservoir": 100, "method.epochs": 3}, runs=2, rows=QUICK_TRAIN,
                 params={"tests": QUICK_TESTS}),
     report="skinny_mj.experiments.paper_c.report:report",
 )

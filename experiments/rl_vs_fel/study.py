@@ -54,7 +54,7 @@ MOVEMENTS = ("ymca", "md02")
 CLIP = "md_02.amc@start=3,duration=6.26"
 #: CPU seconds per env step of each learner, measured on the 2D body (the schedule only).
 STEP_COST = {"fel": 1e-3, "ppo": 2e-3, "sac": 2.7e-2}
-#: Budgets in env steps per run (FEL's: its epochs, ``rule.epochs``), the RL runs' tests
+#: Budgets in env steps per run (FEL's: its epochs, ``method.epochs``), the RL runs' tests
 #: after the one before training, the thresholds of the reach columns, and ``quick``
 #: (smaller PPO/SAC batches, a smoke test).
 PARAMS = {"ppo_steps": 15_600,  # FEL's env steps: 10 epochs x (3 + 2) cycles x 312 steps
@@ -137,7 +137,7 @@ def estimate_bytes(config: TrainConfig, row: Row, runs: int):
 def cost(config: TrainConfig, row: Row) -> float:
     """One run's CPU seconds, roughly (the schedule only)."""
     learner = row.params["learner"]
-    steps = config.rule.epochs * 5 * 312 if learner == "fel" else budget(row.params, learner)
+    steps = config.method.epochs * 5 * 312 if learner == "fel" else budget(row.params, learner)
     return steps * STEP_COST[learner] * (2.0 if config.actuation.kind == "torque" else 1.0)
 
 
@@ -171,10 +171,10 @@ STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, run_batch=run_batch, runs=3, params=PARAMS,
     # paper E's experiment 5 (TrainConfig's defaults): N = 200, new method, β = 0.1,
     # 3 learning cycles per epoch, 10 epochs, K 1 -> 0; 2D, Cartesian signals
-    base=TrainConfig().override({"rule.epochs": 10}),
+    base=TrainConfig().override({"method.epochs": 10}),
     groups=_groups(), columns=_columns(PARAMS["thresholds"]),
     # a smoke test: 1 run per row, FEL 2 epochs, PPO 256 and SAC 100 env steps
-    quick=Quick({"rule.epochs": 2}, runs=1,
+    quick=Quick({"method.epochs": 2}, runs=1,
                 params={"ppo_steps": 256, "sac_steps": 100, "evals": 2, "quick": True}),
     cost=cost, memory=estimate_bytes, unavailable=unavailable_rows,
     report="skinny_mj.experiments.rl_vs_fel.report:report",

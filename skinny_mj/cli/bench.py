@@ -161,7 +161,7 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
 def lockstep_speedup(epochs: int, repeats: int) -> dict:
     """R = 20 paper-E exp-5 trainings (``epochs`` epochs) + tests in lockstep
     (``train_batch``) vs the same 20 one at a time (``train``); checks identical results."""
-    cfg = TrainConfig().override({"rule.epochs": epochs})
+    cfg = TrainConfig().override({"method.epochs": epochs})
     seeds = list(range(N_RUNS))
     out: dict[str, list] = {}
     best = interleaved({
@@ -203,11 +203,11 @@ def torque_over_kinematic(n_runs: int, repeats: int, epochs: int | None = None) 
     configs = {"torque": study.config("2d-ymca-fel-arm"),
                "kinematic": study.config("2d-ymca-kinematic")}
     if epochs is not None:
-        configs = {k: c.override({"rule.epochs": epochs}) for k, c in configs.items()}
+        configs = {k: c.override({"method.epochs": epochs}) for k, c in configs.items()}
     seeds = list(range(n_runs))
     best = interleaved({k: functools.partial(loop.train_batch, c, seeds)
                         for k, c in configs.items()}, repeats)
-    return {"R": n_runs, **{f"{k}_epochs": c.rule.epochs for k, c in configs.items()},
+    return {"R": n_runs, **{f"{k}_epochs": c.method.epochs for k, c in configs.items()},
             "torque_s": best["torque"], "kinematic_s": best["kinematic"],
             "ratio": best["torque"] / best["kinematic"]}
 

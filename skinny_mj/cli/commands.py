@@ -229,7 +229,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     out = _out_dir(args, "train")
     check_train(cfg)
     outcome, out = _train_and_write(cfg, seed, args, out,
-                                    f"{cfg.method} on {cfg.movement.trajectory}",
+                                    f"{cfg.method.kind} on {cfg.movement.trajectory}",
                                     preset=getattr(args, "preset", None))
     m = outcome.metrics
     if outcome.failed:

@@ -192,7 +192,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Train an ESN inverse model. Settings: TrainConfig's "
                        "defaults (paper E exp. 5), then --preset, then --config FILE, then the "
                        "flags and KEY=VALUE overrides given (any dotted config key, e.g. "
-                       "esn.spectral_radius=0.9 rule=original rule.epochs=2; a metrics.json's "
+                       "esn.spectral_radius=0.9 method=original method.epochs=2; a metrics.json's "
                        "\"config\" lists them all).")
     p.add_argument("overrides", nargs="*", metavar="KEY=VALUE",
                    help="set any config key (dotted), e.g. esn.leak_rate=0.5")

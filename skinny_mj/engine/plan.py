@@ -269,6 +269,7 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
         config = base.override({**r.overrides, **after})
         if tiny:  # the contract test's shrink: of its keys, those this row's config has
             have = set(overrides.keys(config))
-            config = config.override({k: v for k, v in study.tiny.items() if k in have})
+            config = config.override({k: v for k, v in study.tiny.items()
+                                      if overrides.canonical(config, k) in have})
         planned.append(PlannedRow(r, {**_study_params(study, quick), **r.params}, config))
     return Plan(study, base, after, quick, tuple(planned))

@@ -58,7 +58,7 @@ __all__ = ["Study", "Row", "Quick", "OPTIONS", "TINY"]
 OPTIONS = tuple(OPTION_KEYS)
 #: The contract test's shrink (after ``--quick``'s): one epoch of a small reservoir (each
 #: row takes the keys its config has: a true-target row has no epochs).
-TINY = {"rule.epochs": 1, "esn.n_reservoir": 20}
+TINY = {"method.epochs": 1, "esn.n_reservoir": 20}
 
 #: A metric: a dotted path into :func:`skinny_mj.training.loop.train_batch`'s metrics
 #: (``"test.position_nrmse"``), or a function of those metrics.

@@ -108,11 +108,12 @@ class Run:
         """How the body is driven (:mod:`skinny_mj.training.actuation`)."""
         return actuation_of(self.cfg)
 
-    def loop(self, hook=None, feedback: FeedbackController | None = None) -> Loop:
+    def loop(self, hook=None, feedback: FeedbackController | None = None, rule=None) -> Loop:
         """The closed loop of the inverse model: ``cfg.inputs``, ``feedback`` (default the
-        plain controller), the actuation's ``hook``, the forward model, the delay."""
+        plain controller), the actuation's ``hook``, the forward model, the delay, and the
+        learning rule FEL refits the readout with (None: each cycle alone)."""
         return Loop(self.cfg.inputs, feedback or FeedbackController(), hook, self.forward,
-                    delay_steps=self.cfg.plant.delay)
+                    delay_steps=self.cfg.plant.delay, rule=rule)
 
 
 @single_threaded
@@ -163,7 +164,7 @@ class Training:
     fel: fel.TrainResult | None = None
     true_target: Any = None
     pretrain_prediction_nrmse: np.ndarray | None = None
-    #: the FEL readout fit's rule (rule.fit; None: each cycle alone): its ``metrics(r)``,
+    #: the FEL readout fit's rule (method.fit; None: each cycle alone): its ``metrics(r)``,
     #: if it has them, join run r's train metrics
     rule: Any = None
     feedback_share: Any = None  # the actuation's recorder (torque: torque.ShareRecorder)
@@ -176,37 +177,36 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
     ``observe``: FEL's optional per-cycle diagnostics callback
     (:func:`skinny_mj.controllers.fel.train`,
     e.g. paper E §5.1's y_est / y_used per epoch; ignored by the true-target architecture)."""
-    cfg, rule, out = run.cfg, run.cfg.rule, Training()
+    cfg, method, out = run.cfg, run.cfg.method, Training()
     fwd, body, act = cfg.forward, cfg.plant, run.actuation
     if run.forward is not None and fwd.kind in ("serial", "hybrid"):
         out.pretrain_prediction_nrmse = run.forward.pretrain(
             run.trajectory.position_signals(body.signals),
             true_commands_of(cfg, run.trajectory, run.max_speed_rad_s),  # chained: one step
             0 if fwd.input == "chained" else body.delay, sensor_noise=body.sensor_noise)
-    if isinstance(rule, NoLearning):  # the feedback controller alone: nothing to learn
+    if isinstance(method, NoLearning):  # the feedback controller alone: nothing to learn
         return out
-    if isinstance(rule, TrueTarget):
+    if isinstance(method, TrueTarget):
         out.true_target = train_true_target(
-            run.esn, run.desired, run.true_commands, rule, noise=cfg.noise_level > 0,
+            run.esn, run.desired, run.true_commands, method, noise=cfg.noise_level > 0,
             one_step=act.one_step(run.training, run.max_speed_rad_s),
             extra_inputs=act.teacher_inputs(run.training, run.max_speed_rad_s),
             input_rngs=[protocol.tt_input_rng(s) for s in run.seeds])
         _report(progress, 1, 1)
         return out
-    method = rule  # FEL: Original or New, the controllers' method types with their fit
+    # FEL: Original or New, the controllers' method types with their fit
     per_epoch = method.learning_cycles + 2
     total = method.epochs * per_epoch
 
     def tick(epoch: int, cycle: int, ro, y_used) -> None:
         _report(progress, epoch * per_epoch + cycle + 1, total)
 
-    out.rule = make_rule(cfg, run.esn, len(run.desired) - 1)  # rule.fit (training.fits)
+    out.rule = make_rule(cfg, run.esn, len(run.desired) - 1)  # method.fit (training.fits)
     out.feedback_share = act.recorder(method, run.esn.n_runs)  # the actuation's, if any
     loop = run.loop(act.hook(run.training, run.max_speed_rad_s, run.plant),
-                    protocol.feedback_of(method.u_error_gain, method.u_error_damping))
+                    protocol.feedback_of(method.u_error_gain, method.u_error_damping), out.rule)
     out.fel = fel.train(run.esn, run.plant, fel.Task(run.desired, run.true_commands, run.scored),
-                        method, loop, rule=out.rule,
-                        observe=_all(observe, out.feedback_share, tick))
+                        method, loop, observe=_all(observe, out.feedback_share, tick))
     return out
 
 
@@ -318,7 +318,7 @@ def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
         metrics["train"] = {"motor_nrmse": float(tt.motor_nrmse[r]),
                             "position_nrmse": None if tt.position_nrmse is None
                             else float(tt.position_nrmse[r])}
-    elif trained.fel is None:  # rule=none: nothing was trained
+    elif trained.fel is None:  # method=none: nothing was trained
         metrics["train"] = {}
     else:
         result = trained.fel

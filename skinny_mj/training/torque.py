@@ -221,11 +221,11 @@ def feasibility_report(dof: int, trajectory) -> list[str]:
 
 
 def readout_fitter(cfg: TrainConfig, esn, steps: int):
-    """FEL's readout fit for ``rule.fit`` (None: each cycle alone, ``esn.fit``): the
-    normal equations with forgetting, or RLS, remembering ``rule.fit.forgetting`` of the
+    """FEL's readout fit for ``method.fit`` (None: each cycle alone, ``esn.fit``): the
+    normal equations with forgetting, or RLS, remembering ``method.fit.forgetting`` of the
     statistics per learning cycle of ``steps`` samples; ridge ``esn.ridge_lambda`` with a
     ridge readout, else :data:`MEMORY_RIDGE`."""
-    fit = cfg.rule.fit
+    fit = cfg.method.fit
     ridge = cfg.esn.ridge_lambda if cfg.esn.readout == "ridge" else MEMORY_RIDGE
     if fit.kind == "forgetting":
         return ForgettingReadout(esn, fit.forgetting, ridge)
