@@ -66,6 +66,6 @@ def test_the_chosen_poles_make_the_teacher_alone_track_the_recorded_ymca_closer(
     for row_id in ("3d-rec-arm-pd", chosen):
         (out,) = train_batch(p.config(row_id), [0])
         assert not out.failed
-        err[row_id] = out.metrics["test"]["position_nrmse"]
+        err[row_id] = out.test.position_nrmse
     assert np.isfinite(list(err.values())).all()
     assert err[chosen] < 0.5 * err["3d-rec-arm-pd"]

@@ -137,11 +137,15 @@ def test_quick_params_columns_and_the_studys_cost_memory_and_unavailable_hooks(t
         run_sweep(full, tmp_path, rows=["c"], workers=1, progress=False)
 
 
-def test_read_metric_follows_dotted_paths_or_calls():
-    m = {"test": {"position_nrmse": 0.1}, "wall_s": 2.0}
-    assert read_metric(m, "test.position_nrmse") == 0.1
-    assert read_metric(m, "test.nope") is None
-    assert read_metric(m, lambda d: d["wall_s"] * 2) == 4.0
+def test_read_metric_follows_dotted_paths_of_the_run_file_or_calls():
+    from skinny_mj.training.loop import train_batch
+
+    (result,) = train_batch(TrainConfig().override(
+        {"rule.epochs": 1, "rule.cycles": 1, "esn.n_reservoir": 20}), [0])
+    assert read_metric(result, "test.position_nrmse") == result.test.position_nrmse > 0
+    assert read_metric(result, "test.nope") is None
+    assert read_metric(result, "train.gains") == result.train.gains and len(result.train.gains) == 1
+    assert read_metric(result, lambda r: r.wall_s * 2) == result.wall_s * 2
 
 
 def test_a_study_checks_its_rows():

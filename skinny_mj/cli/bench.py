@@ -160,6 +160,7 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
 def lockstep_speedup(epochs: int, repeats: int) -> dict:
     """R = 20 paper-E exp-5 trainings (``epochs`` epochs) + tests in lockstep
     (``train_batch``) vs the same 20 one at a time (``train``); checks identical results."""
+    from skinny_mj.engine.results import test_figures
     from skinny_mj.training.loop import TrainConfig, train, train_batch
 
     cfg = TrainConfig().override({"rule.epochs": epochs})
@@ -169,8 +170,7 @@ def lockstep_speedup(epochs: int, repeats: int) -> dict:
         "lockstep": lambda: out.__setitem__("batch", train_batch(cfg, seeds)),
         "one_at_a_time": lambda: out.__setitem__("single", [train(cfg, s) for s in seeds]),
     }, repeats)
-    identical = all(a.metrics["test"] == b.metrics["test"]
-                    and a.metrics["train"] == b.metrics["train"]
+    identical = all(test_figures(a) == test_figures(b) and a.train == b.train
                     for a, b in zip(out["batch"], out["single"], strict=True))
     return {"R": N_RUNS, "epochs": epochs, "lockstep_s": best["lockstep"],
             "one_at_a_time_s": best["one_at_a_time"],
