@@ -212,10 +212,10 @@ def _fmt(v: float | None) -> str:
     return "failed" if v is None else f"{v:.4f}"
 
 
-def _robot_line(outcome) -> str:
-    """The test's figures in a roboticist's units (``RunResult.robot_figures``) as one
-    line ('' when the test has none, e.g. a diverged network)."""
-    f = outcome.robot_figures()
+def _robot_line(f: dict) -> str:
+    """The test's figures in a roboticist's units (``RunResult.robot_figures``: joint
+    error, hand error, lag; torque body: RMS torque, |work|) as one line ('' when the test
+    has none, e.g. a diverged network)."""
     if f.get("rms_error_deg") is None:
         return ""
     line = (f"  joint error RMS {f['rms_error_deg']:.2f}°, peak {f['peak_error_deg']:.2f}°; "
@@ -239,7 +239,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         return 1
     print(f"test position NRMSE {_fmt(test_position_nrmse(outcome))}, motor NRMSE "
           f"{_fmt(test_motor_nrmse(outcome))}, {outcome.wall_s:.1f} s -> {out}")
-    if line := _robot_line(outcome):
+    if line := _robot_line(outcome.robot_figures()):
         print(line)
     return 0
 
@@ -337,7 +337,7 @@ def cmd_test(args: argparse.Namespace) -> int:
         return 1
     print(f"test on {traj.name}: position NRMSE {_fmt(test.position_nrmse)}, motor NRMSE "
           f"{_fmt(test.motor_nrmse)} -> {out}")
-    if line := _robot_line(metrics):
+    if line := _robot_line({**test.robot_metrics(dof), **(test.torque_figures or {})}):
         print(line)
     extra = metrics.get("imitation", {})
     if extra:
