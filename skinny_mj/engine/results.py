@@ -19,7 +19,7 @@ from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.result import STANDARD, RunResult, Test, TrainFigures
 
 __all__ = ["Metric", "Metrics", "run_metrics", "test_figures", "read_metric",
-           "default_failure", "no_failure", "default_run", "test_position_nrmse",
+           "default_failure", "no_failure", "train_failure", "default_run", "test_position_nrmse",
            "test_motor_nrmse", "wall_s", "train_position_nrmse", "STANDARD_METRICS"]
 
 #: A metric: a function of a run's result (a :class:`RunResult`, or a mapping name ->
@@ -135,6 +135,14 @@ def default_failure(result: Any) -> str | None:
 def no_failure(result: Any) -> None:
     """A study's ``failure`` when a diverged training is data (its metrics say so)."""
     return None
+
+
+def train_failure(result: Any) -> str | None:
+    """A study's ``failure`` when only a diverged training fails a run (its tests'
+    failures are data): ``"epoch E: why"``."""
+    if not result.train.failed:
+        return None
+    return f"epoch {result.train.fail_epoch}: {result.train.fail_reason}"
 
 
 def _picked(result: Any, metrics: Metrics,

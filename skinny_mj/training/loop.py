@@ -37,7 +37,6 @@ from skinny_mj.controllers.esn import ESN
 from skinny_mj.controllers.feedback import FeedbackController
 from skinny_mj.controllers.forward_model import ForwardModel, rollout_prediction_error
 from skinny_mj.controllers.loop import Loop
-from skinny_mj.controllers.rollout import run_mean
 from skinny_mj.controllers.true_target import train_true_target
 from skinny_mj.plant.bimanual import arm_signals
 from skinny_mj.threads import single_threaded
@@ -74,6 +73,8 @@ from skinny_mj.training.result import (  # noqa: F401  (re-exported)
     Test,
     TestOutcome,
     TrainFigures,
+    feedback_share,
+    mean_abs_error,
 )
 
 
@@ -312,9 +313,7 @@ def _rollout_figures(run: Run, trained: Training) -> list[RolloutFigures] | None
     ro = None if trained.fel is None else trained.fel.last_rollout
     if ro is None:
         return None
-    mae = run_mean(np.abs(ro.true_signals - run.desired)) / 2.0
-    fb, ff = run_mean(np.abs(ro.commands - ro.y_esn)), run_mean(np.abs(ro.y_esn))
-    share = fb / np.maximum(fb + ff, 1e-12)
+    mae, share = mean_abs_error(ro.true_signals, run.desired), feedback_share(ro)
     ratio = ro.correction_ratio
     prediction = None if run.forward is None else rollout_prediction_error(ro)
     return [RolloutFigures(float(mae[r]), float(ratio[r]), float(share[r]),

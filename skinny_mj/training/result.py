@@ -16,11 +16,12 @@ from typing import Any
 import numpy as np
 
 from skinny_mj.controllers.esn import ESN
-from skinny_mj.controllers.rollout import Rollout
+from skinny_mj.controllers.rollout import Rollout, run_mean
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import ROBOT_METRICS, TORQUE_METRICS, robot_metrics
 
-__all__ = ["Test", "STANDARD", "TestOutcome", "TrainFigures", "RolloutFigures", "RunResult"]
+__all__ = ["Test", "STANDARD", "TestOutcome", "TrainFigures", "RolloutFigures", "RunResult",
+           "mean_abs_error", "feedback_share"]
 
 
 @dataclass(frozen=True)
@@ -111,6 +112,21 @@ class TrainFigures:
     def last_motor_nrmse(self) -> float | None:
         v = self.motor_nrmse
         return v[-1] if isinstance(v, list) else v
+
+
+def mean_abs_error(true_signals: np.ndarray, desired: np.ndarray) -> np.ndarray:
+    """Mean |desired - actual| as a fraction of the signal range 2, (R,) for (R, T, n)."""
+    return run_mean(np.abs(true_signals - desired)) / 2.0
+
+
+def feedback_share(ro: Rollout) -> np.ndarray:
+    """The feedback controller's share of the command, in [0, 1], (R,):
+    mean |u_feedback| / (mean |u_feedback| + mean |y_ESN|), with u_feedback = command -
+    y_ESN (the clipped K u_error). Unlike ``Rollout.correction_ratio`` (|u_feedback| /
+    |u|, which exceeds 1 when the inverse model and the feedback controller push against
+    each other) it reads directly as "the feedback controller's contribution in percent"."""
+    fb, ff = run_mean(np.abs(ro.commands - ro.y_esn)), run_mean(np.abs(ro.y_esn))
+    return fb / np.maximum(fb + ff, 1e-12)
 
 
 @dataclass
