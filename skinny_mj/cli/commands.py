@@ -27,7 +27,12 @@ from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.engine import folder, protocols, registry
 from skinny_mj.engine.experiment import default_out_dir, run_sweep
 from skinny_mj.engine.grid import grid_study
-from skinny_mj.engine.results import run_metrics, test_motor_nrmse, test_position_nrmse
+from skinny_mj.engine.results import (
+    run_metrics,
+    test_figures,
+    test_motor_nrmse,
+    test_position_nrmse,
+)
 from skinny_mj.engine.stats import SMOKE_NOTE
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
@@ -170,7 +175,7 @@ def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> Non
         learning_curve_png(out / "learning_curve.png", {"position NRMSE (evaluation cycle)": curve},
                            "position NRMSE", title=title, log_y=True,
                            xlabel="epoch (feedback gain K falls linearly from 1 to 0 in the last)")
-    record_test(out / "run.rrd", outcome, title, figures=metrics["test"])
+    record_test(out / "run.rrd", outcome, title, figures=test_figures(outcome))
     outcome.esn.save(out / "model.npz", metadata={
         "dof": cfg.plant.dof, "signals": cfg.plant.signals,
         "sensor_noise": cfg.plant.sensor_noise, "actuation": cfg.actuation.kind,
