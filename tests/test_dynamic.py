@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from skinny_mj.engine.results import run_metrics, test_figures
+from skinny_mj.engine import results
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.loop import TrainConfig, build_run, train_batch
 
@@ -41,7 +41,7 @@ def test_torque_lockstep_is_each_run_alone():
     both = train_batch(cfg, [3, 4])
     alone = train_batch(cfg, [4])[0]
     np.testing.assert_array_equal(both[1].test.rollout.commands, alone.test.rollout.commands)
-    assert test_figures(both[1]) == test_figures(alone)
+    assert results.test_figures(both[1]) == results.test_figures(alone)
 
 
 def test_3d_arm_fel_run_is_the_same_in_any_batch():
@@ -56,7 +56,7 @@ def test_3d_arm_fel_run_is_the_same_in_any_batch():
         other = train_batch(cfg, seeds)[seeds.index(5)]
         np.testing.assert_array_equal(other.test.rollout.commands, alone.test.rollout.commands)
         np.testing.assert_array_equal(other.esn.W_out, alone.esn.W_out)
-        assert test_figures(other) == test_figures(alone)
+        assert results.test_figures(other) == results.test_figures(alone)
 
 
 def test_controller_alone_stays_within_limits_without_warnings():
@@ -138,6 +138,6 @@ def test_a_diverged_simulation_fails_the_run_and_splits_a_batch(monkeypatch):
     cfg = TORQUE_PD
     (out,) = train_batch(cfg, [0])
     assert out.failed and "physics diverged" in out.fail_reason
-    assert run_metrics(out)["test"]["position_nrmse"] is None
+    assert results.run_metrics(out)["test"]["position_nrmse"] is None
     with pytest.raises(PhysicsBatchError):
         train_batch(cfg, [0, 1])
