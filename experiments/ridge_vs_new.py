@@ -29,6 +29,7 @@ import numpy as np
 from skinny_mj.experiments.claims import claim_lines
 from skinny_mj.experiments.paper_e import study as paper_e
 
+from skinny_mj.engine.results import STANDARD_METRICS, test_figures
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plots import boxplot_png
 from skinny_mj.recording import record_test
@@ -49,12 +50,13 @@ def md02_movement() -> str:
     return f"{sample_clip('md_02')}{MD02_EXCERPT}"
 
 
-def _ridge_lambda(metrics: dict) -> list | None:
-    return metrics["train"].get("ridge_lambda")
+def _ridge_lambda(result) -> list | None:
+    """The ridge λ the readout fit chose, per epoch (None: no ridge selection)."""
+    return result.train.extra.get("ridge_lambda")
 
 
-def _log10_lambda(metrics: dict) -> float | None:
-    lam = _ridge_lambda(metrics)
+def _log10_lambda(result) -> float | None:
+    lam = _ridge_lambda(result)
     return None if not lam or lam[-1] is None else float(np.log10(lam[-1]))
 
 
@@ -127,7 +129,8 @@ def _recordings(out_dir: Path, results, plan, mv: str) -> list[str]:
         path = out_dir / f"{row_id}_median_seed{run['seed']}.rrd"
         if not path.is_file():
             outcome = train(plan.config(row_id), int(run["seed"]))
-            record_test(path, outcome, f"{NAME} {row_id}, median run", {"row": row_id})
+            record_test(path, outcome, f"{NAME} {row_id}, median run", {"row": row_id},
+                        figures=test_figures(outcome))
         lines.append(f"recording: {path.name} (test position NRMSE "
                      f"{run['metrics']['position_nrmse']:.4f})")
     return lines
@@ -137,8 +140,7 @@ STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, runs=20,
     groups={"paper": tuple(f"{mv}-{i}" for mv in ("ymca", "md02") for i in paper_e.TABLE_1),
             "ridge": tuple(f"{mv}-{s}" for mv in ("ymca", "md02") for s in RIDGE_ROWS)},
-    metrics={"position_nrmse": "test.position_nrmse", "motor_nrmse": "test.motor_nrmse",
-             "train_wall_s": "wall_s", "log10_lambda": _log10_lambda,
+    metrics={**STANDARD_METRICS, "log10_lambda": _log10_lambda,
              "ridge_lambda": _ridge_lambda},
     columns=TABLE_COLUMNS, quick=Quick({"method.epochs": 2}, runs=2), report=report,
 )

@@ -77,7 +77,7 @@ from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.loop import train
 out = train(TrainConfig().override(method__epochs=3), 3)
 blas = max(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
-print(blas, out.metrics["test"]["position_nrmse"].hex(),
+print(blas, out.test.position_nrmse.hex(),
       hashlib.sha256(out.esn.W_out.tobytes()).hexdigest())
 """
 

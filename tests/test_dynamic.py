@@ -7,6 +7,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from skinny_mj.engine import results
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.loop import TrainConfig, build_run, train_batch
 
@@ -40,7 +41,7 @@ def test_torque_lockstep_is_each_run_alone():
     both = train_batch(cfg, [3, 4])
     alone = train_batch(cfg, [4])[0]
     np.testing.assert_array_equal(both[1].test.rollout.commands, alone.test.rollout.commands)
-    assert both[1].metrics["test"] == alone.metrics["test"]
+    assert results.test_figures(both[1]) == results.test_figures(alone)
 
 
 def test_3d_arm_fel_run_is_the_same_in_any_batch():
@@ -55,12 +56,12 @@ def test_3d_arm_fel_run_is_the_same_in_any_batch():
         other = train_batch(cfg, seeds)[seeds.index(5)]
         np.testing.assert_array_equal(other.test.rollout.commands, alone.test.rollout.commands)
         np.testing.assert_array_equal(other.esn.W_out, alone.esn.W_out)
-        assert other.metrics["test"] == alone.metrics["test"]
+        assert results.test_figures(other) == results.test_figures(alone)
 
 
 def test_controller_alone_stays_within_limits_without_warnings():
     (out,) = train_batch(TORQUE_PD, [0])
-    tq = out.metrics["test"]["torque"]
+    tq = out.test.torque_figures
     assert tq["within_limits"] and tq["warnings"] == 0 and tq["mean_abs_torque_nm"] > 0
     series = out.test.torque["series"]
     # the motors apply what was commanded (x gear): the limits are the only clamp
@@ -93,7 +94,7 @@ def test_true_target_learns_torques_with_velocity_inputs():
     (out,) = train_batch(TrainConfig().override({"actuation": "torque", "method": "true-target",
                                                   "method.beta": 1.0}), [0])
     assert not out.failed
-    assert out.metrics["train"]["motor_nrmse"] < 0.5  # teacher-forced fit of the torques
+    assert out.train.motor_nrmse < 0.5  # teacher-forced fit of the torques
 
 
 def test_dynamic_experiment_rows():
@@ -136,7 +137,7 @@ def test_a_diverged_simulation_fails_the_run_and_splits_a_batch(monkeypatch):
     monkeypatch.setattr(BatchPlant, "warning_count", lambda self: 3)
     cfg = TORQUE_PD
     (out,) = train_batch(cfg, [0])
-    assert out.failed and "physics diverged" in out.metrics["fail_reason"]
-    assert out.metrics["test"]["position_nrmse"] is None
+    assert out.failed and "physics diverged" in out.fail_reason
+    assert results.run_metrics(out)["test"]["position_nrmse"] is None
     with pytest.raises(PhysicsBatchError):
         train_batch(cfg, [0, 1])

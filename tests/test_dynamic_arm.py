@@ -132,10 +132,10 @@ def test_feedback_share_is_the_gain_times_the_error_signal():
         "method.fit": "forgetting"})
     from skinny_mj.training.loop import train
 
-    m = train(cfg, 0).metrics["train"]
-    np.testing.assert_allclose(m["feedback_share"],
-                               np.asarray(m["gains"]) * m["error_signal_share"])
-    assert m["error_signal_share"][0] > 0 and m["feedback_share"][-1] == 0.0
+    t = train(cfg, 0).train
+    np.testing.assert_allclose(t.extra["feedback_share"],
+                               np.asarray(t.gains) * t.extra["error_signal_share"])
+    assert t.extra["error_signal_share"][0] > 0 and t.extra["feedback_share"][-1] == 0.0
 
 
 @pytest.mark.parametrize("dof", [4, 8])

@@ -52,6 +52,6 @@ def test_the_stiffer_poles_make_the_teacher_alone_track_the_recorded_ymca_closer
     for row_id in ("3d-rec-arm-pd", "3d-rec-arm-pd-omega20"):
         (out,) = train_batch(p.config(row_id), [0])
         assert not out.failed
-        err[row_id] = out.metrics["test"]["position_nrmse"]
+        err[row_id] = out.test.position_nrmse
     assert np.isfinite(list(err.values())).all()
     assert err["3d-rec-arm-pd-omega20"] < 0.5 * err["3d-rec-arm-pd"]

@@ -161,8 +161,8 @@ def _train_row(row: Row, seed: int) -> dict:
                                             **({"method.epochs": 1} if fel else {}),
                                             **row.params}), seed)
     if outcome.failed:
-        raise RunFailed(outcome.metrics["fail_reason"])
-    return {"position_nrmse": outcome.metrics["test"]["position_nrmse"]}
+        raise RunFailed(outcome.fail_reason)
+    return {"position_nrmse": outcome.test.position_nrmse}
 
 
 def test_diverging_runs_are_failed_with_reasons_and_the_sweep_goes_on(tmp_path):

@@ -47,7 +47,7 @@ def test_a_short_run_equals_the_long_runs_checkpoint(arch, forward_input):
     if forward_input == "chained":
         return
     pa_row = paper_a.STUDY.row(f"{arch}-d3")
-    theirs = paper_a.run_batch(paper_a.STUDY.config(pa_row.id).override(
+    theirs = paper_a.STUDY.run(paper_a.STUDY.config(pa_row.id).override(
         {**TINY, "method.epochs": 2}), pa_row, SEEDS)
     for o, t in zip(long, theirs, strict=True):
         assert o["curve_train_nrmse"] == t["curve_performance_nrmse"]

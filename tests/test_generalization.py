@@ -134,7 +134,7 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
         {"esn.n_reservoir": 20, "method.epochs": 1})
     row = dataclasses.replace(g.STUDY.row("j2-md_02-head"),
                               params={"tests": ("y-pure", "md_03-tail")})
-    outs = g.run_batch(config, row, [1, 2])
+    outs = g.STUDY.run(config, row, [1, 2])
     assert len(outs) == 2
     for out in outs:
         assert out["train_steps"] == 250 and 0 < out["train_coverage"] <= 1
@@ -143,7 +143,7 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
             assert 0 <= out[f"{col}__clipped_ideal_nrmse"] <= out[f"{col}__position_nrmse"]
             assert 0 <= out[f"{col}__within5"] <= 1 and len(out[f"{col}__rmse_deg_per_joint"]) == 4
             assert out[f"{col}__dtw_nrmse"] > 0
-    single = g.run_batch(config, row, [2])
+    single = g.STUDY.run(config, row, [2])
     key = "md_03-tail__position_nrmse"
     assert single[0][key] == outs[1][key]  # lockstep == alone, bit for bit
 

@@ -22,7 +22,7 @@ def _tiny(arch: str, delay: int):
 
 def _run(arch: str, delay: int, seeds: list[int], config=None) -> list:
     row = paper_a.STUDY.row(paper_a.row_id(arch, delay))
-    return paper_a.run_batch(config or _tiny(arch, delay), row, seeds)
+    return paper_a.STUDY.run(config or _tiny(arch, delay), row, seeds)
 
 
 def _rows(delays: tuple[int, ...]) -> tuple[Row, ...]:

@@ -118,9 +118,9 @@ def test_lockstep_batch_equals_each_seed_alone():
     config = paper_b.MODEL.override({"movement.trajectory": "bimanual-freq1-2",
                                      "method.epochs": 2})
     row = paper_b.STUDY.row("freq1-2")
-    batch = paper_b.run_batch(config, row, [4, 5])
+    batch = paper_b.STUDY.run(config, row, [4, 5])
     for seed, out in zip([4, 5], batch, strict=True):
-        alone = paper_b.run_batch(config, row, [seed])[0]
+        alone = paper_b.STUDY.run(config, row, [seed])[0]
         assert {k: v for k, v in out.items() if k != "wall_s_run"} == \
             {k: v for k, v in alone.items() if k != "wall_s_run"}
 

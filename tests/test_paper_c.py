@@ -143,9 +143,9 @@ def test_lockstep_batch_equals_runs_one_at_a_time():
     row = quick.run_row("ymca")
     row = dataclasses.replace(row, params={**row.params, "tests": ("ymca", "y")})
     seeds = [3, 8]
-    batch = paper_c.run_batch(cfg, row, seeds)
+    batch = paper_c.STUDY.run(cfg, row, seeds)
     for seed, got in zip(seeds, batch, strict=True):
-        (want,) = paper_c.run_batch(cfg, row, [seed])
+        (want,) = paper_c.STUDY.run(cfg, row, [seed])
         assert set(got) == set(want)
         for key, value in want.items():
             if key not in ("wall_s", "train_wall_s", "peak_rss_mb"):

@@ -120,8 +120,8 @@ def test_report_writes_figures_and_claims(quick_sweep):
 def test_run_one_is_reproducible_from_its_seed():
     exp = paper_d.STUDY.build(quick=True)
     cfg = exp.config.config("2").override({"esn.n_reservoir": 30})
-    a, b = (paper_d.run_batch(cfg, paper_d.STUDY.row("2"), [7])[0] for _ in range(2))
-    c = paper_d.run_batch(cfg, paper_d.STUDY.row("2"), [8])[0]
+    a, b = (paper_d.STUDY.run(cfg, paper_d.STUDY.row("2"), [7])[0] for _ in range(2))
+    c = paper_d.STUDY.run(cfg, paper_d.STUDY.row("2"), [8])[0]
     keys = [*paper_d.COLUMNS]
     assert [a[k] for k in keys] == [b[k] for k in keys]
     assert not np.allclose([a[k] for k in keys], [c[k] for k in keys])

@@ -77,9 +77,9 @@ def test_the_hook_changes_no_result_and_measures_the_blend(short):
     trained = train_run(run, observe=diag).fel
     test = evaluate(run)[0]
     np.testing.assert_array_equal(run.esn.W_out, plain.esn.W_out)
-    assert trained.to_dict()["position_nrmse"][0] == plain.metrics["train"]["position_nrmse"]
+    assert trained.to_dict()["position_nrmse"][0] == plain.train.position_nrmse
     assert (test.position_nrmse, test.motor_nrmse) == (
-        plain.metrics["test"]["position_nrmse"], plain.metrics["test"]["motor_nrmse"])
+        plain.test.position_nrmse, plain.test.motor_nrmse)
     m = diag.metrics(0, None)
     assert np.shape(m["est_rough_per_cycle"]) == (1, 3)  # (epochs, learning cycles)
     # β = 0.1 with a smooth previous output: the fitted target is smoother than y_est

@@ -73,7 +73,7 @@ def test_fel_curve_ends_at_the_test_of_train():
     assert [p["steps"] for p in points] == [0, facts["steps_per_epoch"],
                                            2 * facts["steps_per_epoch"]]
     assert facts["steps_per_epoch"] == (3 + 2) * 312  # 3 learning cycles + washout + test
-    assert points[-1]["position_nrmse"] == train(tc, 3).metrics["test"]["position_nrmse"]
+    assert points[-1]["position_nrmse"] == train(tc, 3).test.position_nrmse
     assert points[-1]["position_nrmse"] < points[0]["position_nrmse"]
     assert 0 < points[1]["wall_s"] < points[2]["wall_s"]
     assert 0 < points[1]["cpu_s"] < points[2]["cpu_s"]

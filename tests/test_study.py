@@ -137,11 +137,15 @@ def test_quick_params_columns_and_the_studys_cost_memory_and_unavailable_hooks(t
         run_sweep(full, tmp_path, rows=["c"], workers=1, progress=False)
 
 
-def test_read_metric_follows_dotted_paths_or_calls():
-    m = {"test": {"position_nrmse": 0.1}, "wall_s": 2.0}
-    assert read_metric(m, "test.position_nrmse") == 0.1
-    assert read_metric(m, "test.nope") is None
-    assert read_metric(m, lambda d: d["wall_s"] * 2) == 4.0
+def test_read_metric_follows_dotted_paths_of_the_run_file_or_calls():
+    from skinny_mj.training.loop import train_batch
+
+    (result,) = train_batch(TrainConfig().override(
+        {"method.epochs": 1, "method.cycles": 1, "esn.n_reservoir": 20}), [0])
+    assert read_metric(result, "test.position_nrmse") == result.test.position_nrmse > 0
+    assert read_metric(result, "test.nope") is None
+    assert read_metric(result, "train.gains") == result.train.gains and len(result.train.gains) == 1
+    assert read_metric(result, lambda r: r.wall_s * 2) == result.wall_s * 2
 
 
 def test_a_study_checks_its_rows():
@@ -290,3 +294,42 @@ def test_compare_leaves_out_measurements_inside_a_metrics_records(tmp_path):
     path.write_text(json.dumps(record))
     assert compare.compare(tmp_path / "a", tmp_path / "b")[0] == [
         f"{path.name}: metrics differ in ['curve']"]
+
+
+def _y_movement(config):
+    from skinny_mj.trajectories import get
+
+    return get("y", config.plant.dof)
+
+
+def test_a_study_s_shapes_are_data_train_once_then_test_on_each():
+    """``tests=``: the networks are trained once and take every test in order (the
+    standard one, another movement, a changed test setting), each as ``evaluate`` gives it;
+    ``failure=`` says which results are failed runs; ``trainings=`` trains several
+    configurations from the same seeds."""
+    from dataclasses import replace
+
+    from skinny_mj.engine.experiment import RunFailed
+    from skinny_mj.engine.study import Test
+    from skinny_mj.training.loop import build_run, evaluate, train_run
+
+    cfg = TrainConfig().override({"method.epochs": 1, "method.cycles": 1, "esn.n_reservoir": 20})
+    study = Study("shapes", (Row("a"),), base=cfg, tests=(
+        Test(), Test("y", _y_movement), Test("noisy", overrides={"test.noise": True})),
+        metrics=lambda r: {name: t.position_nrmse for name, t in r.tests.items()})
+    (got,) = study.run(cfg, study.row("a"), [3])
+    run = build_run(cfg, [3])
+    train_run(run)
+    want = {"": evaluate(run)[0].position_nrmse,
+            "y": evaluate(run, _y_movement(cfg))[0].position_nrmse,
+            "noisy": evaluate(replace(run, cfg=cfg.override({"test.noise": True})))[0]
+            .position_nrmse}
+    assert got == want and got["noisy"] != got[""]
+    failing = replace(study, failure=lambda r: f"seed {r.seed}")
+    (failed,) = failing.run(cfg, study.row("a"), [3])
+    assert isinstance(failed, RunFailed) and str(failed) == "seed 3"
+    both = replace(study, tests=(Test(),), metrics=lambda rs: {
+        k: r.test.position_nrmse for k, r in rs.items()},
+        trainings=lambda c, row: {"one": c, "two": c.override({"esn.n_reservoir": 30})})
+    (pair,) = both.run(cfg, study.row("a"), [3])
+    assert pair["one"] == want[""] and pair["two"] != pair["one"]

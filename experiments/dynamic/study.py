@@ -56,13 +56,16 @@ position NRMSE; earlier goals (limit-scaled PD teacher) <= 0.03 (2D) and <= 0.06
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 from skinny_mj.experiments.dynamic import general
 
-from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.imitation import robot_figures
 from skinny_mj.training.presets import preset_fields
+
+if TYPE_CHECKING:
+    from skinny_mj.training.result import RunResult
 
 NAME = "dynamic"
 #: The movements: YMCA, the recorded-like YMCA (never still, marker noise) and the
@@ -250,38 +253,31 @@ def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
     return out
 
 
-def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """Several seeds of one row in lockstep; seed by seed what each gets alone."""
-    from skinny_mj.training.loop import train_batch
+def metrics(result: RunResult) -> dict[str, Any]:
+    """One run's metrics: the test's NRMSEs, joint-angle NRMSE and robot figures, the
+    learning curves, the torque figures."""
     from skinny_mj.training.torque import joint_nrmse
 
-    out = []
-    for o in train_batch(config, seeds):
-        m = o.metrics
-        if m["failed"]:
-            out.append(RunFailed(m.get("fail_reason") or "diverged"))
-            continue
-        metrics = {"position_nrmse": m["test"]["position_nrmse"],
-                   "motor_nrmse": m["test"]["motor_nrmse"], "train_wall_s": m["wall_s"],
-                   "joint_nrmse": joint_nrmse(o)}
-        train = m.get("train", {})
-        for key in ("position_nrmse", "feedback_share", "error_signal_share"):
-            if key in train:  # learning curves, per epoch (kept in the run file)
-                metrics[f"curve_{key}"] = train[key]
-        if "limit_overshoot_rad" in train:  # over every training cycle
-            metrics["train_limit_overshoot_rad"] = train["limit_overshoot_rad"]
-        tq = m["test"].get("torque")
-        if tq is not None:
-            metrics.update({k: tq[k] for k in ("mean_abs_torque_nm", "energy_j",
-                                               "max_commanded_ratio", "max_applied_ratio",
-                                               "limit_overshoot_rad")})
-            metrics["max_torque_ratio"] = max(tq["max_commanded_ratio"],
-                                              tq["max_applied_ratio"])
-            metrics["warnings"] = tq["warnings"] + (m.get("train_warnings") or 0)
-        # joint error (deg), hand error (cm), lag (s); torque body: RMS torque, |work|
-        metrics.update(robot_figures(m))
-        out.append(metrics)
-    return out
+    test, train = result.test, result.train
+    metrics = {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse,
+               "train_wall_s": result.wall_s, "joint_nrmse": joint_nrmse(result)}
+    if train.kind != "none":  # learning curves, per epoch (kept in the run file)
+        metrics["curve_position_nrmse"] = train.position_nrmse
+    for key in ("feedback_share", "error_signal_share"):
+        if key in train.extra:
+            metrics[f"curve_{key}"] = train.extra[key]
+    if "limit_overshoot_rad" in train.extra:  # over every training cycle
+        metrics["train_limit_overshoot_rad"] = train.extra["limit_overshoot_rad"]
+    tq = test.torque_figures
+    if tq is not None:
+        metrics.update({k: tq[k] for k in ("mean_abs_torque_nm", "energy_j",
+                                           "max_commanded_ratio", "max_applied_ratio",
+                                           "limit_overshoot_rad")})
+        metrics["max_torque_ratio"] = max(tq["max_commanded_ratio"], tq["max_applied_ratio"])
+        metrics["warnings"] = tq["warnings"] + (result.train_warnings or 0)
+    # joint error (deg), hand error (cm), lag (s); torque body: RMS torque, |work|
+    metrics.update(result.robot_figures())
+    return metrics
 
 
 ROWS = _rows()
@@ -294,7 +290,7 @@ STUDY = Study(
     # the base's (--movement replaces it)
     base=TrainConfig().override({"actuation": "torque", "plant.signals": "cartesian",
                                  "movement.trajectory": CLIP}),
-    run_batch=run_batch, columns=TABLE_COLUMNS,
+    metrics=metrics, columns=TABLE_COLUMNS,
     # a smoke test, not a reproduction: 2 runs, 2 epochs of each FEL row
     quick=Quick(runs=2, rows=QUICK_ROWS), takes=("movement", "signals"),
     report="skinny_mj.experiments.dynamic.report:report",

@@ -40,6 +40,7 @@ from skinny_mj.experiments import paper_a
 
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.result import feedback_share
 
 NAME = "fidelity-a"
 #: Epochs at which a run's metrics are recorded (those <= the row's epochs, and its last).
@@ -97,7 +98,7 @@ def _cycle_metrics(ro, desired: np.ndarray, prefix: str) -> dict[str, np.ndarray
     correction ratio only with the feedback on: in training)."""
     out = {f"{prefix}_mad": _mad(ro.true_signals, desired)}
     if prefix == "train":
-        out.update({"train_share": paper_a.feedback_share(ro),
+        out.update({"train_share": feedback_share(ro),
                     "train_ratio": np.array(ro.correction_ratio)})
     if ro.predictions is not None:
         out[f"{prefix}_pred_nrmse"] = rollout_prediction_error(ro)

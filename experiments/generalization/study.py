@@ -46,18 +46,21 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 from skinny_mj.controllers.metrics import position_nrmse
 
-from skinny_mj.engine.experiment import RunFailed
-from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.engine.results import train_failure
+from skinny_mj.engine.study import Quick, Row, Study, Test
 from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import imitation_metrics, saturation  # noqa: F401 (API)
 from skinny_mj.training.presets import preset_fields
 from skinny_mj.trajectories import load_movement
+
+if TYPE_CHECKING:
+    from skinny_mj.training.result import RunResult
 
 NAME = "generalization"
 #: Representation id -> (dof, signals); the matrix runs the first three.
@@ -171,43 +174,40 @@ def clipped_ideal_nrmse(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarr
                                 body.position_signals(angles, dof, signals))[0])
 
 
-def run_batch(tcfg: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """Train the row's R networks once in lockstep, then test them on every column of
-    ``row.params["tests"]``."""
-    from skinny_mj.training.loop import build_run, evaluate, train_run
+def test_movement(column: str, config: TrainConfig):
+    """Test column ``column``'s movement on ``config``'s body (:func:`load_test`)."""
+    return load_test(TESTS[column], config.plant.dof)
 
-    start = time.perf_counter()
-    dof = tcfg.plant.dof
-    run = build_run(tcfg, seeds)
-    result = train_run(run).fel
-    train_wall = (time.perf_counter() - start) / len(seeds)
-    traj = run.trajectory
-    outs: list = [{
-        "train_position_nrmse": float(result.position_nrmse[r, -1]),
-        "train_steps": len(traj), "train_wall_s": train_wall, "n_test_failed": 0,
+
+def tests(config: TrainConfig, row: Row) -> tuple[Test, ...]:
+    """Train the row's networks once, then test them on every column of
+    ``row.params["tests"]``."""
+    return tuple(Test(col, functools.partial(test_movement, col)) for col in row.params["tests"])
+
+
+def metrics(result: RunResult) -> dict:
+    """One run's training figures and its imitation metrics on every test column (a
+    diverged test counts in ``n_test_failed``)."""
+    config, traj = result.config, result.trajectory
+    dof, max_speed = config.plant.dof, result.max_speed_rad_s
+    out = {
+        "train_position_nrmse": result.train.last_position_nrmse,
+        "train_steps": len(traj), "train_wall_s": result.train_wall_s, "n_test_failed": 0,
         "train_coverage": coverage(traj.angles, dof),
         "train_speed_p99_rad_s": float(np.percentile(np.abs(traj.velocities()), 99)),
-        "max_speed_rad_s": [float(v) for v in run.max_speed_rad_s],
-    } for r in range(len(seeds))]
-    for col in row.params["tests"]:
-        test = load_test(TESTS[col], dof)
-        sat = saturation(test.angles, test.dt, run.max_speed_rad_s)
-        bound = clipped_ideal_nrmse(test.angles, test.dt, run.max_speed_rad_s,
-                                     tcfg.plant.signals)
-        for out, outcome in zip(outs, evaluate(run, test), strict=True):
-            out[f"{col}__saturated"] = sat
-            out[f"{col}__clipped_ideal_nrmse"] = bound
-            if outcome.failed:
-                out["n_test_failed"] += 1
-                continue
-            out.update({f"{col}__{k}": v
-                        for k, v in imitation_metrics(outcome, dof).items()})
-    wall = (time.perf_counter() - start) / len(seeds)
-    for r, out in enumerate(outs):
-        out["wall_s"] = wall
-        if result.failed[r]:
-            outs[r] = RunFailed(f"epoch {result.fail_epoch[r]}: {result.fail_reason[r]}")
-    return outs
+        "max_speed_rad_s": [float(v) for v in max_speed],
+    }
+    for col, outcome in result.tests.items():
+        test = outcome.trajectory
+        out[f"{col}__saturated"] = saturation(test.angles, test.dt, max_speed)
+        out[f"{col}__clipped_ideal_nrmse"] = clipped_ideal_nrmse(
+            test.angles, test.dt, max_speed, config.plant.signals)
+        if outcome.failed:
+            out["n_test_failed"] += 1
+            continue
+        out.update({f"{col}__{k}": v for k, v in imitation_metrics(outcome, dof).items()})
+    out["wall_s"] = result.wall_s
+    return out
 
 
 def coverage(angles: np.ndarray, dof: int, bins: int = 6) -> float:
@@ -264,7 +264,8 @@ ROWS = (*_ROWS, *(cartesian_row(_BY_ID[CARTESIAN_BASE[rep]], v) for rep, v in CA
 
 
 STUDY = Study(
-    name=NAME, description=__doc__, rows=ROWS, run_batch=run_batch, runs=10,
+    name=NAME, description=__doc__, rows=ROWS, runs=10,
+    tests=tests, metrics=metrics, failure=train_failure,  # train once, test on each
     # paper E exp. 5's schedule (TrainConfig's defaults), 10 epochs, N = 200, one
     # unscored washout cycle before each test
     base=TrainConfig().override({"method.epochs": 10, "test.washout_cycles": 1,

@@ -20,6 +20,7 @@ from skinny_mj.experiments.paper_e.study import (
 )
 
 from skinny_mj.engine.plan import Plan
+from skinny_mj.engine.results import test_figures, test_motor_nrmse, test_position_nrmse
 from skinny_mj.engine.stats import load_runs, markdown_table
 from skinny_mj.io import atomic_write_text
 from skinny_mj.plots import boxplot_png, line_sweep_png, pyplot, save_figure
@@ -330,9 +331,9 @@ def _record_run(path: Path, cfg: TrainConfig, row_id: str, seed: int, metrics: d
     """Re-train one run, write its test as an .rrd; True when it reproduces ``metrics``."""
     outcome = train(cfg, seed)
     record_test(path, outcome, f"paper E exp {row_id}, median run (seed {seed})",
-                {"row": row_id, "config": cfg.to_dict()})
-    return (outcome.metrics["test"]["position_nrmse"] == metrics.get("position_nrmse")
-            and outcome.metrics["test"]["motor_nrmse"] == metrics.get("motor_nrmse"))
+                {"row": row_id, "config": cfg.to_dict()}, figures=test_figures(outcome))
+    return (test_position_nrmse(outcome) == metrics.get("position_nrmse")
+            and test_motor_nrmse(outcome) == metrics.get("motor_nrmse"))
 
 def report(results, plan, out_dir: Path) -> str:
     """Figures 3–6, one ``.rrd`` of the median run per Table row, the movement line in

@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 from skinny_mj.controllers.true_target import convergence_curve
 
+from skinny_mj.engine.results import STANDARD_METRICS, train_position_nrmse
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
 
@@ -124,8 +125,7 @@ STUDY = Study(
     # the thesis's defaults are TrainConfig's: N = 200, spectral radius 0.5, sensor noise
     # 0.01, 10 epochs, K 1 -> 0
     base=TrainConfig(),
-    metrics={"position_nrmse": "test.position_nrmse", "motor_nrmse": "test.motor_nrmse",
-             "train_wall_s": "wall_s", "train_curve_position_nrmse": "train.position_nrmse"},
+    metrics={**STANDARD_METRICS, "train_curve_position_nrmse": train_position_nrmse},
     columns=TABLE_COLUMNS,
     # Fig. 3 "converged": the excess over the final value is below this share of the
     # initial excess (so the count does not depend on the ESN's fit floor)

@@ -40,6 +40,7 @@ from skinny_mj.controllers import fel
 from skinny_mj.controllers.esn import ESN, ESNConfig
 from skinny_mj.engine import registry
 from skinny_mj.engine.experiment import default_workers, run_sweep
+from skinny_mj.engine.results import test_figures
 from skinny_mj.plant import task
 from skinny_mj.plant.adapters import BatchPlant, EnvPlant
 from skinny_mj.plant.ideal import max_speeds
@@ -168,8 +169,7 @@ def lockstep_speedup(epochs: int, repeats: int) -> dict:
         "lockstep": lambda: out.__setitem__("batch", loop.train_batch(cfg, seeds)),
         "one_at_a_time": lambda: out.__setitem__("single", [loop.train(cfg, s) for s in seeds]),
     }, repeats)
-    identical = all(a.metrics["test"] == b.metrics["test"]
-                    and a.metrics["train"] == b.metrics["train"]
+    identical = all(test_figures(a) == test_figures(b) and a.train == b.train
                     for a, b in zip(out["batch"], out["single"], strict=True))
     return {"R": N_RUNS, "epochs": epochs, "lockstep_s": best["lockstep"],
             "one_at_a_time_s": best["one_at_a_time"],

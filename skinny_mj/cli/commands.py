@@ -28,6 +28,12 @@ from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.engine import folder, protocols, registry
 from skinny_mj.engine.experiment import default_out_dir, run_sweep
 from skinny_mj.engine.grid import grid_study
+from skinny_mj.engine.results import (
+    run_metrics,
+    test_figures,
+    test_motor_nrmse,
+    test_position_nrmse,
+)
 from skinny_mj.engine.stats import SMOKE_NOTE
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
@@ -51,7 +57,6 @@ from skinny_mj.training.feasible import load_movement  # NAME@feasible too, else
 from skinny_mj.training.imitation import (
     imitation_metrics,
     movement_stats,
-    robot_figures,
     saturation,
 )
 from skinny_mj.training.memory import steps_cause
@@ -160,31 +165,32 @@ def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> Non
     """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png; for a
     failed (diverged) run only metrics.json, which says why. The model's metadata says
     what it was trained on (``training``: movement, its pieces, steps, seconds, preset)."""
+    metrics = run_metrics(outcome)
     if outcome.failed:
-        atomic_write_json(out / "metrics.json", outcome.metrics)
+        atomic_write_json(out / "metrics.json", metrics)
         return
     cfg = outcome.config
-    train_curve = outcome.metrics["train"].get("position_nrmse")
+    train_curve = outcome.train.position_nrmse
     if isinstance(train_curve, list) and train_curve:  # FEL: one value per epoch
         curve = np.array([np.nan if v is None else v for v in train_curve], dtype=float)
         learning_curve_png(out / "learning_curve.png", {"position NRMSE (evaluation cycle)": curve},
                            "position NRMSE", title=title, log_y=True,
                            xlabel="epoch (feedback gain K falls linearly from 1 to 0 in the last)")
-    record_test(out / "run.rrd", outcome, title)
+    record_test(out / "run.rrd", outcome, title, figures=test_figures(outcome))
     outcome.esn.save(out / "model.npz", metadata={
         "dof": cfg.plant.dof, "signals": cfg.plant.signals,
         "sensor_noise": cfg.plant.sensor_noise, "actuation": cfg.actuation.kind,
         "max_speed_rad_s": [float(v) for v in outcome.max_speed_rad_s],
-        "trained_on": cfg.movement.trajectory, "config": outcome.metrics["config"],
+        "trained_on": cfg.movement.trajectory, "config": cfg.to_dict(),
         "training": _training_metadata(outcome, preset),
     })
-    atomic_write_json(out / "metrics.json", outcome.metrics)
+    atomic_write_json(out / "metrics.json", metrics)
 
 
 def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
     """What a model was trained on: the movement, its pieces (a ``set:``),
     steps and seconds per cycle, repetitions, the seed and the preset."""
-    mv, steps = outcome.config.movement, int(outcome.metrics["steps_per_cycle"])
+    mv, steps = outcome.config.movement, outcome.steps_per_cycle
     name = str(mv.trajectory)
     pieces = set_pieces(name) if name.lower().startswith(SET_PREFIX) else [name]
     return {"movement": name, "pieces": pieces, "asf": mv.asf, "speed": mv.speed,
@@ -210,10 +216,10 @@ def _fmt(v: float | None) -> str:
     return "failed" if v is None else f"{v:.4f}"
 
 
-def _robot_line(metrics: dict) -> str:
-    """The test's figures in a roboticist's units (:func:`robot_figures`) as one line
-    ('' when the test has none, e.g. a diverged network)."""
-    f = robot_figures(metrics)
+def _robot_line(f: dict) -> str:
+    """The test's figures in a roboticist's units (``RunResult.robot_figures``: joint
+    error, hand error, lag; torque body: RMS torque, |work|) as one line ('' when the test
+    has none, e.g. a diverged network)."""
     if f.get("rms_error_deg") is None:
         return ""
     line = (f"  joint error RMS {f['rms_error_deg']:.2f}°, peak {f['peak_error_deg']:.2f}°; "
@@ -231,14 +237,13 @@ def cmd_train(args: argparse.Namespace) -> int:
     outcome, out = _train_and_write(cfg, seed, args, out,
                                     f"{cfg.method.kind} on {cfg.movement.trajectory}",
                                     preset=getattr(args, "preset", None))
-    m = outcome.metrics
     if outcome.failed:
-        print(f"skinny train: run failed: {m.get('fail_reason')} (details in {out}/metrics.json)",
-              file=sys.stderr)
+        print(f"skinny train: run failed: {outcome.fail_reason} (details in "
+              f"{out}/metrics.json)", file=sys.stderr)
         return 1
-    print(f"test position NRMSE {_fmt(m['test']['position_nrmse'])}, motor NRMSE "
-          f"{_fmt(m['test']['motor_nrmse'])}, {m['wall_s']:.1f} s -> {out}")
-    if line := _robot_line(m):
+    print(f"test position NRMSE {_fmt(test_position_nrmse(outcome))}, motor NRMSE "
+          f"{_fmt(test_motor_nrmse(outcome))}, {outcome.wall_s:.1f} s -> {out}")
+    if line := _robot_line(outcome.robot_figures()):
         print(line)
     return 0
 
@@ -253,12 +258,11 @@ def cmd_demo(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     outcome, out = _train_and_write(cfg, args.seed, args, out, "demo: paper E exp. 5")
     wall = time.perf_counter() - start
-    m = outcome.metrics
     paper = registry.get("paper-e").row("5").paper
     rows = [
-        ("test position NRMSE", _fmt(m["test"]["position_nrmse"]),
+        ("test position NRMSE", _fmt(test_position_nrmse(outcome)),
          f"{paper['position_nrmse']:.4f}"),
-        ("test motor NRMSE", _fmt(m["test"]["motor_nrmse"]), f"{paper['motor_nrmse']:.4f}"),
+        ("test motor NRMSE", _fmt(test_motor_nrmse(outcome)), f"{paper['motor_nrmse']:.4f}"),
         ("wall time (s)", f"{wall:.1f}", "-"),
     ]
     ours_head = f"ours (seed {args.seed})"
@@ -269,7 +273,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(f"\nRecording: {out / 'run.rrd'}  (open it with: skinny view {out})")
     print(f"Also: {out / 'metrics.json'}, {out / 'learning_curve.png'}, {out / 'model.npz'}")
     if outcome.failed:
-        print(f"the run failed: {m.get('fail_reason')}", file=sys.stderr)
+        print(f"the run failed: {outcome.fail_reason}", file=sys.stderr)
         return 1
     return 0
 
@@ -328,7 +332,7 @@ def cmd_test(args: argparse.Namespace) -> int:
         return 1
     print(f"test on {traj.name}: position NRMSE {_fmt(test.position_nrmse)}, motor NRMSE "
           f"{_fmt(test.motor_nrmse)} -> {out}")
-    if line := _robot_line(metrics):
+    if line := _robot_line({**test.robot_metrics(dof), **(test.torque_figures or {})}):
         print(line)
     extra = metrics.get("imitation", {})
     if extra:

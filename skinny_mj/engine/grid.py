@@ -27,6 +27,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from skinny_mj.engine.plan import plan
+from skinny_mj.engine.results import STANDARD_METRICS
 from skinny_mj.engine.study import Row, Study
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
@@ -37,8 +38,7 @@ __all__ = ["NAME", "METRICS", "QUICK", "parse_assignment", "grid_study"]
 
 NAME = "sweep"
 #: What a grid reports without a ``--study``: the test of every run, and its wall time.
-METRICS = {"position_nrmse": "test.position_nrmse", "motor_nrmse": "test.motor_nrmse",
-           "train_wall_s": "wall_s"}
+METRICS = STANDARD_METRICS
 #: ``--quick`` without a study: these keys of the base (those it has), 2 runs per row.
 QUICK = {"method.epochs": 2}
 QUICK_RUNS = 2
@@ -133,5 +133,6 @@ def grid_study(items: Sequence[str], *, study: Study | None = None, row: str | N
                  rows=tuple(Row(r.id, r.overrides, params=base_row.params,
                                 run_batch=base_row.run_batch) for r in rows),
                  metrics=study.metrics, columns=study.columns, runs=runs, takes=(),
+                 tests=study.tests, failure=study.failure,
                  params=params, run_batch=study.run_batch, trainings=study.trainings,
                  cost=study.cost, memory=study.memory)

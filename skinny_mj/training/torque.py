@@ -267,7 +267,7 @@ class ShareRecorder:
 
 def joint_nrmse(outcome) -> float:
     """Test joint-angle NRMSE (each angle normalized to [-1, 1] over its range) of a
-    :class:`skinny_mj.training.loop.TrainOutcome` against its movement's angles."""
+    :class:`skinny_mj.training.result.RunResult` against its movement's angles."""
     dof = outcome.config.plant.dof
     angles = outcome.test.rollout.angles[:, :, :dof]
     return float(position_nrmse(body.normalize_angles(angles, dof),
