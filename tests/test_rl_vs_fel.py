@@ -168,7 +168,7 @@ def test_data_files_and_the_report_come_from_run_files_alone(tmp_path):
     assert (tmp_path / "out" / "rl-vs-fel_steps.png").stat().st_size > 0
     assert "| ymca | PPO | 2 | 4,000 |" in text and "not reached by 4,000" in text
     assert "| ymca | 0.05 | 1,560, 1.0 | PPO, 3,000, 3.0 | 1.9, 3.0 |" in text
-    assert "| ymca | 0.02 | 3,120, 2.0 | none reached | — |" in text
+    assert "| ymca | 0.02 | 3,120, 2.0 | none reached | > 1.3 (no RL by 4,000) |" in text
 
 
 @pytest.mark.parametrize("learner", ["ppo", "sac"])

@@ -1,10 +1,11 @@
 """Figures and tables of :mod:`skinny_mj.experiments.rl_vs_fel.study`, made from its
 curves' data files (:mod:`skinny_mj.experiments.rl_vs_fel.data`), never by training.
 
-- ``rl-vs-fel_steps.png`` / ``rl-vs-fel_cpu.png``: one panel per score (``ymca``,
-  ``clips@0.18``, ``clips@1``), the test position NRMSE (log) against env steps /
-  training CPU seconds (log), one thin line per curve and seed, a thick line per learner
-  (the mean over its seeds at their shared test points), the thresholds dashed.
+- ``rl-vs-fel_steps.png`` / ``rl-vs-fel_cpu.png``: one column per score (``ymca``,
+  ``clips@0.18``, ``clips@1``), the test position NRMSE (above) and RMS joint error in
+  degrees (below), log, against env steps / training CPU seconds (log), one thin line
+  per curve and seed, a thick line per learner (the mean over its seeds at their shared
+  test points), the thresholds dotted.
 - the reach table: per learner and score, the curves' final NRMSE and RMS joint error,
   and per threshold how many seeds reached it, the mean env steps and CPU seconds of the
   first test at or below it (or "not reached by N");
@@ -59,45 +60,52 @@ def series(records: list[dict]) -> dict[tuple[str, str], list[list[dict]]]:
     return out
 
 
-def _mean_curve(curves: list[list[dict]], x: str) -> tuple[np.ndarray, np.ndarray]:
-    """Mean x and NRMSE over seeds at their shared test points (the shortest curve's)."""
+def _mean_curve(curves: list[list[dict]], x: str, y: str) -> tuple[np.ndarray, np.ndarray]:
+    """Mean x and y over seeds at their shared test points (the shortest curve's)."""
     n = min(len(c) for c in curves)
     xs = np.mean([[p[x] for p in c[:n]] for c in curves], axis=0)
-    ys = np.array([[np.nan if p["nrmse"] is None else p["nrmse"] for p in c[:n]]
-                   for c in curves])
+    ys = np.array([[np.nan if p[y] is None else p[y] for p in c[:n]] for c in curves])
     return xs, np.nanmean(ys, axis=0) if np.isfinite(ys).any() else ys[0]
 
 
+#: The figures' rows: the curve's key, the axis label, the thresholds drawn
+ROWS = (("nrmse", "test position NRMSE", THRESHOLDS), ("deg", "RMS joint error (°)", ()))
+
+
 def curves_png(path: Path, found: dict, x: str) -> Path | None:
-    """The figure of every score's curves against ``x`` ("steps" or "cpu_s")."""
+    """The figure of every score's curves (NRMSE above, RMS joint error in degrees below)
+    against ``x`` ("steps" or "cpu_s")."""
     scores = list(dict.fromkeys(s for _, s in found))
     if not scores:
         return None
     plt = pyplot()
-    fig, axes = plt.subplots(1, len(scores), figsize=(5.0 * len(scores), 3.8), squeeze=False,
-                             sharey=True)
-    for ax, score in zip(axes[0], scores, strict=True):
-        for learner, (label, colour, style) in LEARNERS.items():
-            curves = found.get((learner, score))
-            if not curves:
-                continue
-            for c in curves:
-                pts = [p for p in c if p[x] > 0]  # a log axis: the test before training
-                ax.plot([p[x] for p in pts], [np.nan if p["nrmse"] is None else p["nrmse"]
-                                              for p in pts], color=colour, ls=style, lw=0.5,
-                        alpha=0.4)
-            xs, ys = _mean_curve(curves, x)
-            keep = xs > 0
-            ax.plot(xs[keep], ys[keep], color=colour, ls=style, lw=2, marker="o", ms=2.5,
-                    label=f"{label} ({len(curves)} seed{'s' * (len(curves) > 1)})")
-        for th in THRESHOLDS:
-            ax.axhline(th, color="grey", ls=":", lw=0.8)
-        ax.set(xscale="log", yscale="log", title=score,
-               xlabel="env steps" if x == "steps" else "training CPU time (s)")
-        ax.grid(alpha=0.3, which="both")
+    fig, axes = plt.subplots(len(ROWS), len(scores), figsize=(5.0 * len(scores), 7.2),
+                             squeeze=False, sharey="row", sharex="col")
+    for (y, ylabel, lines), ax_row in zip(ROWS, axes, strict=True):
+        for ax, score in zip(ax_row, scores, strict=True):
+            for learner, (label, colour, style) in LEARNERS.items():
+                curves = found.get((learner, score))
+                if not curves:
+                    continue
+                for c in curves:
+                    pts = [p for p in c if p[x] > 0]  # a log axis: the test before training
+                    ax.plot([p[x] for p in pts], [np.nan if p[y] is None else p[y]
+                                                  for p in pts], color=colour, ls=style,
+                            lw=0.5, alpha=0.4)
+                xs, ys = _mean_curve(curves, x, y)
+                keep = xs > 0
+                ax.plot(xs[keep], ys[keep], color=colour, ls=style, lw=2, marker="o", ms=2.5,
+                        label=f"{label} ({len(curves)} seed{'s' * (len(curves) > 1)})")
+            for th in lines:
+                ax.axhline(th, color="grey", ls=":", lw=0.8)
+            ax.set(xscale="log", yscale="log", title=score if y == "nrmse" else "")
+            ax.grid(alpha=0.3, which="both")
+        ax_row[0].set_ylabel(ylabel)
+    for ax in axes[-1]:
+        ax.set_xlabel("env steps" if x == "steps" else "training CPU time (s)")
+    for ax in axes[0]:
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=7, loc="lower left")
-    axes[0][0].set_ylabel("test position NRMSE")
     return save_figure(fig, path)
 
 
@@ -161,7 +169,7 @@ def ratio_table(found: dict) -> str:
                 ratio = f"{best[2] / f[1]:,.1f}, {best[3] / f[2]:,.1f}"
             elif fel_all and rl:  # a bound: no RL curve got there within its budget
                 most = max(max(c[-1]["steps"] for c in curves) for curves in rl.values())
-                ratio = f"> {most / f[1]:,.0f} (no RL by {most:,})"
+                ratio = f"> {most / f[1]:,.1f} (no RL by {most:,})"
             else:
                 ratio = "—"
             lines.append(f"| {score} | {th:g} | {fel_cell} | {rl_cell} | {ratio} |")

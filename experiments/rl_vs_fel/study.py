@@ -45,9 +45,10 @@ so that every run ends within an hour on one core; checkpoints go to the study's
 ``checkpoints`` folder under ``results/`` (:mod:`skinny_mj.experiments.rl_vs_fel.agents`).
 Group ``budget`` (``budget-ymca``, ``budget-general``: one regime's) holds every row up
 to the declared budgets (:data:`BUDGET`: PPO 10^6, SAC 10^5 env steps), ``extend`` the
-segments past them (PPO to 2 x 10^6, SAC to 2 x 10^5), ``search`` a short hyper-parameter search on YMCA only (:data:`SEARCH`, each a
-one-segment curve of :data:`SEARCH_STEPS`; a choice made there is a fit on YMCA, the
-training clip, never on the unseen clips). Tests: RL at :func:`runs.test_steps`
+segments past them (PPO to 2 x 10^6, SAC to 2 x 10^5), ``search`` a short
+hyper-parameter search on YMCA only (:data:`SEARCH`, each a one-segment curve of
+:data:`SEARCH_STEPS`; a choice made there is a fit on YMCA, the training clip, never on
+the unseen clips). Tests: RL at :func:`runs.test_steps`
 (log-spaced), FEL after every epoch. Per run: per score the final and best NRMSE, the
 final RMS joint error (deg) and for each threshold of :data:`THRESHOLDS` the env steps,
 CPU and wall time of the first test at or below it; the whole curve stays in the run
@@ -109,9 +110,9 @@ SEARCH: dict[str, tuple[str, dict[str, Any]]] = {
     "sac-start1000": ("sac", {"learning_starts": 1000}),
 }
 SEARCH_STEPS = {"ppo": 250_000, "sac": 25_000}
-#: CPU seconds per env step on the torque body, one core (measured, training only; see
-#: docs/results/rl-vs-fel.md): the schedule and the budget
-STEP_COST = {"fel": 3e-4, "ppo": 1.2e-3, "sac": 2.7e-2}
+#: CPU seconds per env step on the torque body, one core, training only (measured on YMCA
+#: on a shared 2-core machine, docs/results/rl-vs-fel.md): the schedule only
+STEP_COST = {"fel": 2.9e-4, "ppo": 2.5e-3, "sac": 2.4e-2}
 #: env steps of one pass of each regime's training movement, roughly (the schedule only)
 CYCLE_STEPS = {"ymca": 312, "general": 12_400}
 #: --quick: env steps of an RL row, FEL's epochs, the general regime's movement and test
