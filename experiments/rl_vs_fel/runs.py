@@ -161,8 +161,10 @@ def rl_segment(learner: str, gain: float, tc: TrainConfig, seed: int,
             raise SkinnyInputError(f"no checkpoint at {start} env steps in {folder}: run the "
                                    "curve's earlier segment first (the same checkpoints folder)")
         model, state = agents.load(folder / str(start), learner, venv, segment_seed)
-    tests = {col: TrackingEnv(tc, trajectory if t is None else t, v_max, plant_seed, gain,
-                              test=True) for col, t in columns.items()}
+    def test_env(t) -> TrackingEnv:  # a fresh plant each test: its noise restarts
+        return TrackingEnv(tc, trajectory if t is None else t, v_max, plant_seed, gain,
+                           test=True)
+
     washout = tc.test.washout_cycles
     due = [s for s in test_steps(end) if s > start or s == start == 0]
 
@@ -176,8 +178,8 @@ def rl_segment(learner: str, gain: float, tc: TrainConfig, seed: int,
             def predict(obs: np.ndarray) -> np.ndarray:
                 return self.model.predict(venv.normalize_obs(obs), deterministic=True)[0]
 
-            found = self.clock.paused(lambda: {c: score(predict, e, washout)
-                                               for c, e in tests.items()})
+            found = self.clock.paused(lambda: {c: score(predict, test_env(t), washout)
+                                               for c, t in columns.items()})
             self.points.append(point(self.num_timesteps, self.clock.elapsed(), found))
             due.pop(0)
 

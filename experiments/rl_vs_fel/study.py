@@ -46,8 +46,8 @@ so that every run ends within an hour on one core; checkpoints go to the study's
 Group ``budget`` (``budget-ymca``, ``budget-general``: one regime's) holds every row up
 to the declared budgets (:data:`BUDGET`: PPO 10^6, SAC 10^5 env steps), ``extend`` the
 segments past them (PPO to 2 x 10^6, SAC to 2 x 10^5), ``search`` a short
-hyper-parameter search on YMCA only (:data:`SEARCH`, each a one-segment curve of
-:data:`SEARCH_STEPS`; a choice made there is a fit on YMCA, the training clip, never on
+hyper-parameter search on YMCA only (:data:`SEARCH`, each one seed of a one-segment
+curve of :data:`SEARCH_STEPS`; a choice made there is a fit on YMCA, the training clip, never on
 the unseen clips). Tests: RL at :func:`runs.test_steps`
 (log-spaced), FEL after every epoch. Per run: per score the final and best NRMSE, the
 final RMS joint error (deg) and for each threshold of :data:`THRESHOLDS` the env steps,
@@ -93,7 +93,7 @@ REGIMES: dict[str, tuple[dict, dict, dict]] = {
 #: RL learner -> (stable-baselines3 algorithm, the teacher's gain in the command)
 RL = {"ppo": ("ppo", 0.0), "ppo-res": ("ppo", 1.0), "sac": ("sac", 0.0),
       "sac-res": ("sac", 1.0)}
-#: The learners of each regime (SAC on YMCA only: its env steps cost ~30x PPO's)
+#: The learners of each regime (SAC on YMCA only: an env step of SAC costs 7-10 of PPO's)
 LEARNERS = {"ymca": ("fel", *RL), "general": ("fel", "ppo", "ppo-res")}
 #: env steps per segment row, the declared budget, the extended one (group ``extend``)
 SEGMENT = {"ppo": 250_000, "sac": 25_000}
@@ -157,7 +157,7 @@ def _search_rows() -> list[Row]:
     out = []
     for name, (learner, changes) in SEARCH.items():
         algo = RL[learner][0]
-        out.append(Row(f"search-{name}", over, group="search", params={
+        out.append(Row(f"search-{name}", over, group="search", runs=1, params={
             "learner": learner, "regime": "ymca", "span": (0, SEARCH_STEPS[algo]),
             "curve": f"search-{name}", "segment": 0, "changes": changes, "tests": tests,
             "scores": scores}, quick={"span": (0, QUICK_STEPS[algo])}))
