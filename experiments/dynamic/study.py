@@ -35,7 +35,8 @@ Rows (ids ``<body>-<movement>-<controller>``), every one a :class:`TrainConfig` 
   teacher (poles at 20 rad/s, forgetting 0.9: :data:`STIFF`), and ``3d-rec-arm-pd-omega20``,
   that teacher alone.
 - ``general``: the torque ``general`` preset's rows (:mod:`skinny_mj.experiments.dynamic.general`):
-  computed torque (the floor), 15 s of slow babbling (``2d-general-first``) and the preset
+  computed torque, the torque-limited floor (``<body>-general-floor``: iLQR with the true
+  model and the whole movement known), 15 s of slow babbling (``2d-general-first``) and the preset
   of each body (``2d-general``, ``3d-general``).
 
 Groups ``2d`` and ``3d`` hold each body's rows (``--rows 3d``). ``--movement`` replaces
@@ -203,11 +204,18 @@ def _general_row(row_id: str, overrides: dict, seeds_of: str | None = None) -> R
 
 
 def _general_rows() -> tuple[Row, ...]:
-    """Computed torque on the test columns (the floor), 15 s of slow babbling
+    """Computed torque and the torque-limited floor (iLQR, one deterministic run) on the
+    test columns, 15 s of slow babbling
     (``2d-general-first``, on whose seeds the 2D preset runs) and the preset of each body
     (``skinny train --preset general --actuation torque [--dof 8]``)."""
     out = [_general_row(f"{bd}-general-arm-ct", {"plant.dof": dof, **ARM_CONTROLLERS["arm-ct"]})
            for bd, dof in BODIES.items()]
+    out += [Row(f"{bd}-general-floor", {"plant.dof": dof, "plant.signals": "joint",
+                                        "method": "none", "test.gain": 1.0},
+                runs=1, params={"tests": tuple(general.TESTS), "iterations": 150},
+                quick={"tests": ("ymca",), "iterations": 1},
+                run_batch=general.floor_batch)
+            for bd, dof in BODIES.items()]
     out.append(_general_row("2d-general-first", {"plant.dof": 4, "movement.trajectory":
                                                  BABBLE15, **ARM_FEL}))
     out.append(_general_row("2d-general", preset_fields("general", "torque", dof=4),
