@@ -92,7 +92,9 @@ class Run:
     @functools.cached_property
     def plant(self):
         """The training plant (built on first use: Fig. 3-style runs never need it)."""
-        return make_plant(self.cfg, self.training, self.plant_seeds, self.max_speed_rad_s)
+        plant = make_plant(self.cfg, self.training, self.plant_seeds, self.max_speed_rad_s)
+        self.actuation.training_plant(plant)
+        return plant
 
     @property
     def scored(self) -> np.ndarray | None:
@@ -112,7 +114,7 @@ class Run:
         """The closed loop of the inverse model: ``cfg.inputs``, ``feedback`` (default the
         plain controller), the actuation's ``hook``, the forward model, the delay."""
         return Loop(self.cfg.inputs, feedback or FeedbackController(), hook, self.forward,
-                    delay_steps=self.cfg.plant.delay)
+                    delay_steps=self.cfg.plant.delay + self.actuation.sensing_delay)
 
 
 @single_threaded
