@@ -5,8 +5,8 @@ import copy
 import mujoco
 import numpy as np
 import pytest
-
 from skinny_mj.controllers.adaptive_ct import ParameterRLS
+
 from skinny_mj.plant.dynamics import Dynamics
 from skinny_mj.plant.model import load_model
 from skinny_mj.plant.perturb import perturb

@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-
 from skinny_mj.controllers.sensing import JointSensing
+
 from skinny_mj.training import TrainConfig, train
 from skinny_mj.training.torque import joint_nrmse
 

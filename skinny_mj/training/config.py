@@ -58,7 +58,8 @@ from skinny_mj.training import fits, overrides
 from skinny_mj.training.legacy import LEGACY_KEYS, from_legacy, is_legacy
 
 __all__ = ["TrainConfig", "Plant", "Velocity", "Torque", "Movement", "Original", "New",
-           "TrueTarget", "NoLearning", "Encoders", "OracleSensing", "NoForward", "Forward", "TestSetup", "relative_cost",
+           "TrueTarget", "NoLearning", "Encoders", "OracleSensing", "NoForward", "Forward",
+           "TestSetup", "relative_cost",
            "check_dof", "check_signals", "check_actuation", "METHODS", "SIGNALS",
            "ACTUATIONS", "DEFAULT_NOISE", "PAPER_CYCLES_FOR_BETA", "ARM_LAWS", "LEGACY_KEYS"]
 
