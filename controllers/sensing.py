@@ -7,8 +7,11 @@ the sensed one:
 - angles: q_s(t) = q(t) + n(t), n ~ N(0, ``encoder_noise_rad``^2) per joint and step,
   each run's draws from its own ``np.random.Generator``;
 - velocities: the backward difference (q_s(t) - q_s(t-1)) / dt of the sensed angles
-  (``velocity="finite-difference"``; zero at the first step, where the arm starts at
-  rest), optionally low-passed by a first-order filter of cut-off
+  (``velocity="finite-difference"``: the velocity of half a step ago, to first order),
+  or the second-order one (1.5 q_s(t) - 2 q_s(t-1) + 0.5 q_s(t-2)) / dt
+  (``"finite-difference-2"``: the velocity now, to second order, at 1.8x the noise);
+  zero at the first step, where the arm starts at rest (the first difference at the
+  second); optionally low-passed by a first-order filter of cut-off
   ``velocity_filter_hz``: v(t) = a v(t-1) + (1 - a) fd(t), a = exp(-2 pi f_c dt);
   ``velocity="oracle"`` reads the true joint velocities instead;
 - delay: what the controllers see at step t is the sensed state of step t - ``delay_steps``
@@ -25,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 #: How the joint velocities are sensed.
-VELOCITIES = ("finite-difference", "oracle")
+VELOCITIES = ("finite-difference", "finite-difference-2", "oracle")
 
 
 @dataclass
@@ -72,6 +75,7 @@ class JointSensing:
         self._q = self._read(q_true)
         self._qd = np.asarray(qd_true, float).copy() if self.velocity == "oracle" \
             else np.zeros_like(self._q)
+        self._q_prev = None
         self._history.clear()
         for _ in range(self.delay_steps + 1):
             self._history.append((self._q, self._qd))
@@ -83,9 +87,11 @@ class JointSensing:
             qd = np.asarray(qd_true, float).copy()
         else:
             qd = (q - self._q) / self.dt
+            if self.velocity == "finite-difference-2" and self._q_prev is not None:
+                qd = (1.5 * q - 2.0 * self._q + 0.5 * self._q_prev) / self.dt
             if self._a:
                 qd = self._a * self._qd + (1.0 - self._a) * qd
-        self._q, self._qd = q, qd
+        self._q_prev, self._q, self._qd = self._q, q, qd
         self._history.append((q, qd))
 
     @property

@@ -70,3 +70,11 @@ def test_oracle_sensing_is_what_the_controllers_saw_before_and_encoders_differ()
     assert joint_nrmse(oracle) == joint_nrmse(again)
     assert joint_nrmse(enc) != joint_nrmse(oracle)
     assert joint_nrmse(enc) < 0.05  # computed torque still tracks on sensed information
+
+
+def test_the_second_order_difference_has_no_lag_on_a_parabola():
+    s = _sensing(velocity="finite-difference-2")
+    s.reset(np.zeros((1, 1)), np.zeros((1, 1)))
+    for k in range(1, 5):
+        s.update(np.array([[(0.02 * k) ** 2]]), np.zeros((1, 1)))
+    assert s.qd[0, 0] == pytest.approx(2 * 0.08)  # d/dt t^2 at t = 0.08 s

@@ -2,8 +2,8 @@
 model of the arm is wrong and they see only what a robot senses?
 
 Every row runs on the torque body (2D unless ``3d-``), YMCA, with the realistic sensing
-(``actuation.sensing=encoders``: encoder noise 5e-4 rad, finite-difference velocities at
-50 Hz) and controllers that know at most the nominal body (payload 0, masses x 1, no
+(``actuation.sensing=encoders``: encoder noise 5e-4 rad, second-order finite-difference
+velocities at 50 Hz) and controllers that know at most the nominal body (payload 0, masses x 1, no
 friction). Rows ``<body>-ymca-<mismatch>-<controller>``; the mismatch is the plant as it
 is, in training and test alike:
 
@@ -115,6 +115,7 @@ def _rows() -> tuple[Row, ...]:
 def _figures(run, test, label: str) -> dict:
     """One test's metrics, each key + ``label``."""
     from skinny_mj.controllers.metrics import position_nrmse
+
     from skinny_mj.plant import body
     from skinny_mj.training.loop import test_robot_metrics
 

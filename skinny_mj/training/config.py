@@ -74,7 +74,7 @@ FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS, "adaptive-ct")
 #: what the torque controllers' model is (``actuation.model``)
 MODELS = ("nominal", "true")
 #: how joint velocities are sensed (``actuation.sensing.velocity``)
-VELOCITY_SENSING = ("finite-difference", "oracle")
+VELOCITY_SENSING = ("finite-difference", "finite-difference-2", "oracle")
 FORWARD_INPUTS = ("sensed", "chained")
 FORWARD_SHARING = ("none", "predictions", "commands")
 ARMS = ("right", "left")
@@ -131,14 +131,16 @@ class Velocity:
 class Encoders:
     """What a robot senses of its joints (:class:`skinny_mj.controllers.sensing.JointSensing`):
     encoder angles with Gaussian noise ``encoder_noise`` (rad; 5e-4 rad ~ 0.03 deg, the
-    quantization noise of a 12-bit absolute encoder), velocities by backward difference of
-    the encoder angles at the 50 Hz control rate (``velocity="finite-difference"``,
-    optionally low-passed at ``velocity_filter_hz``; ``"oracle"``: the true velocities),
-    and ``delay`` control steps of latency (also on the ESN's position inputs)."""
+    quantization noise of a 12-bit absolute encoder), velocities by the second-order
+    backward difference of the encoder angles at the 50 Hz control rate
+    (``velocity="finite-difference-2"``; ``"finite-difference"``: the first-order one,
+    which lags by half a step; optionally low-passed at ``velocity_filter_hz``;
+    ``"oracle"``: the true velocities), and ``delay`` control steps of latency (also on
+    the ESN's position inputs)."""
 
     kind: str = "encoders"
     encoder_noise: float = 5e-4
-    velocity: str = "finite-difference"
+    velocity: str = "finite-difference-2"
     velocity_filter_hz: float | None = None
     delay: int = 0
 
