@@ -60,7 +60,7 @@ MISMATCHES = {
 #: where the model's error matters (the goal: the ESN with feedback >= 2x better than
 #: nominal computed torque there)
 MODEL_ERROR = ("payload0.5", "payload1", "friction")
-EPOCHS, QUICK_EPOCHS = 30, 2
+EPOCHS, QUICK_EPOCHS = 15, 2
 ADAPT_CYCLES, QUICK_ADAPT_CYCLES = 5, 1
 ESN = {"rule": "new", "rule.beta": 1.0, "rule.cycles": 3, "rule.epochs": EPOCHS,
        "actuation.feedback": "inertia-pd", "rule.fit": "forgetting", "test.gain": 0.0}
