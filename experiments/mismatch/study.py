@@ -40,6 +40,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from skinny_mj.experiments.mismatch.switch import LEARNERS, run_switch
 
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
@@ -170,9 +171,23 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     return dynamic_run(config, row, seeds)
 
 
-ROWS = _rows()
-QUICK_ROWS = tuple(row_id("2d", m, c) for m in ("none", "payload1", "delay")
-                   for c in CONTROLLERS)
+def _switch_rows() -> tuple[Row, ...]:
+    """The payload switched on mid-movement (:mod:`skinny_mj.experiments.mismatch.switch`)."""
+    out = []
+    for learner in LEARNERS:
+        keys = ESN if learner.startswith("esn") else CONTROLLERS[learner]
+        keys = {k: v for k, v in keys.items() if k != "test.washout_cycles"}
+        out.append(Row(f"2d-ymca-switch-{learner}", {"movement.trajectory": "ymca",
+                                                      "plant.dof": 4, **keys},
+                       group="switch", params={"learner": learner}, run_batch=run_switch,
+                       quick={"rule.epochs": QUICK_EPOCHS} if learner.startswith("esn")
+                       else {}))
+    return tuple(out)
+
+
+ROWS = (*_rows(), *_switch_rows())
+QUICK_ROWS = (*(row_id("2d", m, c) for m in ("none", "payload1", "delay")
+                for c in CONTROLLERS), "2d-ymca-switch-esn-rls", "2d-ymca-switch-ct-adaptive")
 STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, runs=10, takes=(),
     base=TrainConfig().override({"actuation": "torque", "plant.signals": "cartesian"}),

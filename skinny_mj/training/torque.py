@@ -157,9 +157,11 @@ def home_mass(dof: int) -> np.ndarray:
 
 
 def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
-             plant=None) -> TorqueLoop | None:
+             plant=None, nominal: bool | None = None) -> TorqueLoop | None:
     """The torque loop of ``trajectory`` (None for the velocity servo); the laws of
-    :mod:`skinny_mj.controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant)."""
+    :mod:`skinny_mj.controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant).
+    ``nominal``: the controllers use the nominal twin's model (None: :func:`nominal_model`;
+    True for a plant that will change while the loop runs)."""
     act, dof, signals = cfg.torque, cfg.plant.dof, cfg.plant.signals
     if act is None:
         return None
@@ -169,7 +171,9 @@ def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
         if plant is None or not hasattr(plant, "model"):
             raise SkinnyInputError(f"feedback {act.feedback!r} needs the lockstep plant "
                                    "(plant.backend=batch)")
-        state_of = BatchArmState(plant, gravity=law == "pd-g", nominal=nominal_model(act),
+        if nominal is None:
+            nominal = nominal_model(act)
+        state_of = BatchArmState(plant, gravity=law == "pd-g", nominal=nominal,
                                  sensing=sensing,
                                  constant_mass=home_mass(dof) if law == "fel-const" else None)
         common = dict(velocity_inputs=act.velocity_inputs,
