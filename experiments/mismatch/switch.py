@@ -9,6 +9,8 @@ model) and stays for ``POST`` more cycles. The controllers keep the nominal mode
   arm), its teacher on at K = ``GAIN``, its readout updated every control step by
   recursive least squares (:class:`skinny_mj.controllers.online.OnlineRLS`, forgetting
   ``FORGETTING`` per step, P_0 from the last training cycle's states with ridge 1);
+- ``esn-rls-0.99``: the same with forgetting 0.99 per step (a memory of ~100 steps, 2 s;
+  chosen after seeing ``esn-rls``'s slow recovery);
 - ``esn-frozen``: the same ESN and K, its readout left as trained;
 - ``ct-adaptive``: adaptive computed torque (its estimate running from the first cycle);
 - ``ct-nominal``: computed torque on the nominal model.
@@ -34,7 +36,9 @@ from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig
 
 PRE, POST, PAYLOAD_KG, GAIN, FORGETTING = 2, 8, 1.0, 0.5, 0.999
-LEARNERS = ("esn-rls", "esn-frozen", "ct-adaptive", "ct-nominal")
+LEARNERS = ("esn-rls", "esn-frozen", "ct-adaptive", "ct-nominal", "esn-rls-0.99")
+#: forgetting per step of each RLS learner
+RLS_FORGETTING = {"esn-rls": FORGETTING, "esn-rls-0.99": 0.99}
 
 
 class SwitchHook:
@@ -86,8 +90,8 @@ def run_switch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     if learner.startswith("esn"):
         trained = train_run(run).fel
         alive, reasons = ~trained.failed, trained.fail_reason
-        if learner == "esn-rls":
-            online = OnlineRLS(run.esn, FORGETTING, 1.0,
+        if learner in RLS_FORGETTING:
+            online = OnlineRLS(run.esn, RLS_FORGETTING[learner], 1.0,
                                states=np.array(trained.last_rollout.states), runs=alive)
     plant = run.plant
     hook = torque.hook_for(config, run.training, run.max_speed_rad_s, plant, nominal=True)
