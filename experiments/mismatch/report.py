@@ -17,6 +17,7 @@ from skinny_mj.experiments.mismatch.study import (
     MODEL_ERROR,
     row_id,
 )
+from skinny_mj.experiments.mismatch.switch import LEARNERS, PRE
 
 from skinny_mj.engine.stats import load_runs
 
@@ -93,12 +94,32 @@ def goals(records: list[dict], bd: str) -> list[str]:
     return out
 
 
+def switch_table(records: list[dict]) -> list[str]:
+    """Markdown: the payload switch per learner, mean position NRMSE per cycle."""
+    lines = ["| controller | before | switch cycle | +1 | +2 | +3 | last | recover (cycles) |",
+             "|---|---|---|---|---|---|---|---|"]
+    for learner in LEARNERS:
+        row = f"2d-ymca-switch-{learner}"
+        curves = [r["metrics"]["curve"] for r in records
+                  if r["row"] == row and r.get("status") == "ok"]
+        if not curves:
+            continue
+        c = np.mean(curves, axis=0)
+        rec = values(records, row, "recover_cycles")
+        cells = [np.mean(values(records, row, "pre_switch")), *c[PRE:PRE + 4], c[-1]]
+        lines.append(f"| {learner} | " + " | ".join(f"{v:.4f}" for v in cells)
+                     + f" | {np.mean(rec):.1f} |")
+    return lines
+
+
 def report(results: dict, plan, out_dir: Path) -> str:
-    """The table and the goals of each body with runs."""
+    """The table and the goals of each body with runs, and the payload switch."""
     records = load_runs(Path(out_dir))
     lines: list[str] = []
     for bd in BODIES:
-        if not any(r["row"].startswith(bd) for r in records):
+        if not any(r["row"].startswith(bd) and "-switch-" not in r["row"] for r in records):
             continue
         lines += [f"## {bd}", "", *table(records, bd), "", *goals(records, bd), ""]
+    if any("-switch-" in r["row"] for r in records):
+        lines += ["## Payload switched on mid-movement", "", *switch_table(records), ""]
     return "\n".join(lines) if lines else "no runs"
