@@ -31,8 +31,13 @@ Controllers (all on the same sensed state):
   ``none`` row's ESN (trained on the nominal arm) is also tested on every changed plant
   (``*_on_<mismatch>``): the network trained on the nominal arm, tested on the changed one.
 
+Groups: ``2d`` and ``3d`` (the 3D body: the dynamic study's 3D recipe for the ESN, 500
+units, 6 learning cycles per epoch, the teacher at 20 rad/s, forgetting 0.9), and
+``switch``: a 1 kg payload switched on mid-movement
+(:mod:`skinny_mj.experiments.mismatch.switch`).
+
 Seeds come from the engine (each row's own). ``--quick``: a smoke test (one run, three
-mismatches, two epochs, one adaptation cycle).
+mismatches and two switch rows, two epochs, one adaptation cycle).
 """
 
 from __future__ import annotations
