@@ -58,15 +58,23 @@ from skinny_mj.training import fits, overrides
 from skinny_mj.training.legacy import LEGACY_KEYS, from_legacy, is_legacy
 
 __all__ = ["TrainConfig", "Plant", "Velocity", "Torque", "Movement", "Original", "New",
-           "TrueTarget", "NoLearning", "NoForward", "Forward", "TestSetup", "relative_cost",
+           "TrueTarget", "NoLearning", "Encoders", "OracleSensing", "NoForward", "Forward",
+           "TestSetup", "relative_cost",
            "check_dof", "check_signals", "check_actuation", "METHODS", "SIGNALS",
            "ACTUATIONS", "DEFAULT_NOISE", "PAPER_CYCLES_FOR_BETA", "ARM_LAWS", "LEGACY_KEYS"]
 
 METHODS = ("original", "new", "true-target", "none")
 #: Laws of skinny_mj.controllers.torque_arm (inertia-scaled pole placement), by feedback name:
-#: three controllers alone, and FEL's teacher "inertia-pd"
-ARM_LAWS = {"ct": "ct", "id-pd": "id-pd", "pd-gravity": "pd-g", "inertia-pd": "fel"}
-FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS)
+#: three controllers alone, and FEL's teachers "inertia-pd" (M(q) of the controllers'
+#: model at the sensed pose) and "const-pd" (one constant M: the nominal body's at home)
+ARM_LAWS = {"ct": "ct", "id-pd": "id-pd", "pd-gravity": "pd-g", "inertia-pd": "fel",
+            "const-pd": "fel-const"}
+#: feedback names of loops of their own: adaptive computed torque
+FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS, "adaptive-ct")
+#: what the torque controllers' model is (``actuation.model``)
+MODELS = ("nominal", "true")
+#: how joint velocities are sensed (``actuation.sensing.velocity``)
+VELOCITY_SENSING = ("finite-difference", "finite-difference-2", "oracle")
 FORWARD_INPUTS = ("sensed", "chained")
 FORWARD_SHARING = ("none", "predictions", "commands")
 ARMS = ("right", "left")
@@ -120,8 +128,56 @@ class Velocity:
 
 
 @dataclass(frozen=True)
+class Encoders:
+    """What a robot senses of its joints (:class:`skinny_mj.controllers.sensing.JointSensing`):
+    encoder angles with Gaussian noise ``encoder_noise`` (rad; 5e-4 rad ~ 0.03 deg, the
+    quantization noise of a 12-bit absolute encoder), velocities by the second-order
+    backward difference of the encoder angles at the 50 Hz control rate
+    (``velocity="finite-difference-2"``; ``"finite-difference"``: the first-order one,
+    which lags by half a step; optionally low-passed at ``velocity_filter_hz``;
+    ``"oracle"``: the true velocities), and ``delay`` control steps of latency (also on
+    the ESN's position inputs)."""
+
+    kind: str = "encoders"
+    encoder_noise: float = 5e-4
+    velocity: str = "finite-difference-2"
+    velocity_filter_hz: float | None = None
+    delay: int = 0
+
+    def __post_init__(self) -> None:
+        _check([
+            (_at_least(self.encoder_noise, 0),
+             f"encoder noise must be >= 0 rad, got {self.encoder_noise}"),
+            (self.velocity in VELOCITY_SENSING,
+             f"velocity must be one of {VELOCITY_SENSING}, got {self.velocity!r}"),
+            (self.velocity_filter_hz is None or (_at_least(self.velocity_filter_hz, 0)
+                                                 and self.velocity_filter_hz > 0),
+             f"velocity filter must be none or > 0 Hz, got {self.velocity_filter_hz}"),
+            (isinstance(self.delay, int) and self.delay in (0, 1, 2),
+             f"sensing delay must be 0, 1 or 2 steps, got {self.delay}"),
+        ])
+
+
+@dataclass(frozen=True)
+class OracleSensing:
+    """The oracle's information: joint angles through the position sensors (their noise
+    mapped to the joints), noise-free joint velocities (a perfect tachometer), no delay."""
+
+    kind: str = "oracle"
+
+
+Sensing = Encoders | OracleSensing
+
+
+@dataclass(frozen=True)
 class Torque:
-    """The torque twin: mass, gravity, torque limits, and how it is taught and tested."""
+    """The torque twin: mass, gravity, torque limits, and how it is taught and tested.
+
+    The plant as it is may differ from the nominal body the controllers' model describes
+    (``payload_kg``, ``mass_scale``, ``friction_nm``, ``damping_nm_s_rad``: training and
+    test plant alike); ``test_*`` change the test plant alone. ``model``: what the
+    controllers' M(q) and bias come from, ``"nominal"`` (the nominal twin, payload 0,
+    masses x 1, no friction) or ``"true"`` (the plant's own model: an oracle)."""
 
     kind: str = "torque"
     feedback: str = "pd"  # FEL's teacher; "computed-torque", "ct", ...: a controller alone
@@ -129,11 +185,26 @@ class Torque:
     zeta: float = 1.0  # ARM_LAWS' damping ratio
     gravity_feedforward: bool = False  # add qfrc_bias / limit to the command (not learned)
     velocity_inputs: bool = True  # [qd_d(t+1); qd(t)] / v_max as extra inputs
+    sensing: Sensing = field(default_factory=Encoders)
+    model: str = "nominal"  # the controllers' model: "nominal" or "true" (oracle)
+    payload_kg: float = 0.0  # point mass at the right hand's CoM (training and test plant)
+    mass_scale: float = 1.0  # every arm link's mass and inertia x this (training and test)
+    friction_nm: float = 0.0  # unmodelled Coulomb friction of every arm joint, N m
+    damping_nm_s_rad: float = 0.0  # unmodelled viscous damping added to every arm joint
     test_payload_kg: float = 0.0  # point mass at the right hand's CoM in the test plant
     test_mass_scale: float = 1.0  # every arm link's mass and inertia x this at test
+    test_friction_nm: float = 0.0  # Coulomb friction added to every arm joint at test
 
     def __post_init__(self) -> None:
         _check([
+            (self.model in MODELS, f"model must be one of {MODELS}, got {self.model!r}"),
+            (_at_least(self.payload_kg, 0), f"payload must be >= 0 kg, got {self.payload_kg}"),
+            (_at_least(self.mass_scale, 0) and self.mass_scale > 0,
+             f"mass scale must be > 0, got {self.mass_scale}"),
+            (_at_least(self.friction_nm, 0) and _at_least(self.test_friction_nm, 0),
+             "friction must be >= 0 N m"),
+            (_at_least(self.damping_nm_s_rad, 0),
+             f"damping must be >= 0 N m s/rad, got {self.damping_nm_s_rad}"),
             (self.feedback in FEEDBACKS, f"feedback must be one of {FEEDBACKS}, "
                                          f"got {self.feedback!r}"),
             (self.omega is None or _at_least(self.omega, 0),

@@ -103,7 +103,9 @@ class Run:
     @functools.cached_property
     def plant(self):
         """The training plant (built on first use: Fig. 3-style runs never need it)."""
-        return make_plant(self.cfg, self.training, self.plant_seeds, self.max_speed_rad_s)
+        plant = make_plant(self.cfg, self.training, self.plant_seeds, self.max_speed_rad_s)
+        self.actuation.training_plant(plant)
+        return plant
 
     @property
     def scored(self) -> np.ndarray | None:
@@ -124,7 +126,7 @@ class Run:
         plain controller), the actuation's ``hook``, the forward model, the delay, and the
         learning rule FEL refits the readout with (None: each cycle alone)."""
         return Loop(self.cfg.inputs, feedback or FeedbackController(), hook, self.forward,
-                    delay_steps=self.cfg.plant.delay, rule=rule)
+                    delay_steps=self.cfg.plant.delay + self.actuation.sensing_delay, rule=rule)
 
 
 @single_threaded
