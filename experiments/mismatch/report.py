@@ -84,11 +84,15 @@ def goals(records: list[dict], bd: str) -> list[str]:
         if m == "none":
             continue
         v = mean(records, bd, m, "esn")
+        if np.isnan(v):  # that row was not swept
+            continue
         out.append(f"- {m}: ESN K = 0 {v:.4f} = {v / base:.2f}x its no-mismatch error "
                    f"(goal <= {GOAL_RATIO}x)")
     for m in MODEL_ERROR:
         k1, ct = mean(records, bd, m, "esn", "_k1"), mean(records, bd, m, "ct-nominal")
         ad = mean(records, bd, m, "ct-adaptive")
+        if np.isnan(k1) or np.isnan(ct):  # those rows were not swept
+            continue
         out.append(f"- {m}: ESN K = 1 {k1:.4f}, nominal CT {ct:.4f} ({ct / k1:.2f}x; goal >= "
                    f"{GOAL_VS_CT}x), adaptive CT {ad:.4f} ({ad / k1:.2f}x)")
     return out
