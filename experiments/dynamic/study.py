@@ -296,8 +296,11 @@ STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, runs=10, groups=_groups(ROWS),
     # every row on the torque twin with Cartesian signals; the md02 rows' movement is
     # the base's (--movement replaces it)
+    # the oracle's sensing (noise-free joint velocities): this study measures what the
+    # controllers can do at best, their model the nominal arm (the robustness rows' test
+    # plants differ from it); the mismatch study takes realistic sensing
     base=TrainConfig().override({"actuation": "torque", "plant.signals": "cartesian",
-                                 "movement.trajectory": CLIP}),
+                                 "movement.trajectory": CLIP, "actuation.sensing": "oracle"}),
     metrics=metrics, columns=TABLE_COLUMNS,
     # a smoke test, not a reproduction: 2 runs, 2 epochs of each FEL row
     quick=Quick(runs=2, rows=QUICK_ROWS), takes=("movement", "signals"),
