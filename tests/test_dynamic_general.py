@@ -79,11 +79,12 @@ def test_the_preset_row_is_what_skinny_train_preset_general_trains():
 
     cfg, _ = _row("2d-general")
     cli, _ = train_config(build_parser().parse_args(
-        ["train", "--preset", "general", "--actuation", "torque"]))
+        ["train", "--preset", "general", "--actuation", "torque", "actuation.sensing=oracle"]))
     assert cfg == cli
     # the 3D body's own preset: its row, with the stiffer teacher of the group omega20
     cfg3, _ = _row("3d-general")
     cli3, _ = train_config(build_parser().parse_args(
-        ["train", "--preset", "general", "--actuation", "torque", "--dof", "8"]))
+        ["train", "--preset", "general", "--actuation", "torque", "--dof", "8",
+         "actuation.sensing=oracle"]))
     assert cfg3 == cli3
     assert (cfg3.plant.dof, cfg3.actuation.omega, cfg3.esn.n_reservoir) == (8, 20.0, 200)
