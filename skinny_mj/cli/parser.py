@@ -274,7 +274,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "rows, runs); flags given as well override them")
     p.add_argument("--protocol", help="run the study under a named set of readings of the "
                    "thesis's unstated settings (`thesis`: the recorded-like YMCA, u_error gain "
-                   "2, ...; each with what it rests on: docs/results/claims.md)")
+                   "2, ...; `gain-0.5`, `gain-2`: the u_error scale's band; `b-noise-free`: "
+                   "paper B's reservoir without noise; a study's --help lists those that read "
+                   "its settings)")
 
     p = sub.add_parser("sweep", help="a grid over any config keys on the experiment engine: "
                        "skinny sweep esn.spectral_radius=0.5,0.9 --runs 20")
