@@ -154,7 +154,7 @@ def test_lockstep_batch_equals_runs_one_at_a_time():
 
 
 def test_lag_steps_finds_a_shift_of_the_output():
-    from skinny_mj.experiments.paper_c.report import lag_steps
+    from skinny_mj.experiments.paper_c.study import lag_steps
 
     t = np.linspace(0, 4 * np.pi, 300)
     desired = np.stack([np.sin(t), np.cos(t), np.zeros_like(t)], axis=1)

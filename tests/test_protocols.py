@@ -47,7 +47,8 @@ def test_thesis_reading_reaches_paper_d_true_target_half():
 def test_refusals_name_what_is_wrong_in_one_line(capsys):
     with pytest.raises(SkinnyInputError, match="reads no setting of 'generalization'"):
         protocols.apply("thesis", registry.get("generalization"), "generalization")
-    with pytest.raises(SkinnyInputError, match="unknown protocol 'nope'; protocols: thesis, gain-0.5, "):
+    with pytest.raises(SkinnyInputError,
+                       match="unknown protocol 'nope'; protocols: thesis, gain-0.5, "):
         protocols.get("nope")
     assert main(["experiment", "paper-a", "--protocol", "thesis", "--quick"]) == 2
     err = capsys.readouterr().err.strip()
