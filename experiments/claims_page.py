@@ -77,6 +77,18 @@ def count_table(scored: Mapping[str, Any]) -> list[str]:
     return lines
 
 
+def readings_table() -> list[str]:
+    """Every reading: its status, what it sets, the thesis's words it rests on."""
+    lines = ["| reading | status | what it sets | rests on |", "|---|---|---|---|"]
+    for r in READINGS.values():
+        words = f"“{r.quote}” (L{r.line})" if r.quote else ""
+        rests = "; ".join(x for x in (words, r.note) if x) or "—"
+        lines.append("| " + " | ".join(_cell(x) for x in (
+            r.name, r.status + ("" if r.counted else ": not counted"), r.settings, rests))
+            + " |")
+    return lines
+
+
 def sources_table(scored: Mapping[str, Any]) -> list[str]:
     if not scored["sources"]:
         return ["No sweep was given: every claim is not testable."]
@@ -119,6 +131,7 @@ def markdown(scored: Mapping[str, Any]) -> str:
         lines += [SMOKE_NOTE, ""]
     lines += [f"Computed by `skinny claims` (Welch's t-test, α = {ALPHA:g}, the mean; "
               "weak never counts). Count per reading column:", "", *count_table(scored), "",
+              "The readings (experiments/claims_rules.py):", "", *readings_table(), "",
               f"Sweeps scored (their extracts in `{EXTRACTS}/`):", "",
               *sources_table(scored), ""]
     for paper in PAPERS:
