@@ -67,11 +67,10 @@ def count_table(scored: Mapping[str, Any]) -> list[str]:
             label, status = "**counted** (each claim under its counted reading)", "—"
         else:
             label = name
-            status = ", ".join(dict.fromkeys(READINGS[r].status for r in name.split("+")))
-            if "fitted" in status:
-                status += " (fitted: not counted)"
-            elif "measured" in status:
-                status += " (shown, not counted)"
+            readings = [READINGS[r] for r in name.split("+")]
+            status = ", ".join(dict.fromkeys(r.status for r in readings))
+            if not all(r.counted for r in readings):
+                status += "; not counted"
         lines.append(f"| {label} | {status} | {c['holds']} | {c['does not hold']} "
                      f"({c['weak']}) | {c['not testable']} |")
     return lines

@@ -116,6 +116,7 @@ def test_quick_sweep_end_to_end(tmp_path):
         m = run["metrics"]
         for col in cols:
             assert np.isfinite(m[f"{col}__position_nrmse"]) and 0 <= m[f"{col}__position_nrmse"]
+            assert abs(m[f"{col}__lag_steps"]) <= paper_c.MAX_LAG_STEPS  # every pair's timing
         assert np.asarray(m["angles__ymca"]).shape == (len(get("ymca")), 4)
         assert len(m["train_curve_position_nrmse"]) == exp.config.config(run["row"]).rule.epochs
         assert 0 < m["peak_rss_mb"] < 2048
