@@ -9,11 +9,15 @@ reason: no sweep given for that study and reading, the row missing from the swee
 metric absent from its run files, or fewer ok runs than the declared run count.
 
 A source is ``STUDY[:READING+READING]=FOLDER``: the folder's runs are that study's under
-that reading column (default: ``default``). A reading that only changes how a metric is
-read (:data:`claims_catalogue.METRIC_UNDER_READING`) reads the same runs, so it is left
-out of the key. A band reading (``gain-band``) needs one folder per point of its band,
-given as repeated ``--from`` of the same key; the claim holds under the band only if it
-holds at every point (:data:`claims_rules.READINGS`).
+that reading column (default: ``default``), accepted only if its config.json shows the
+reading's planned command made it (:data:`claims_runs.PLAN`); FOLDER may be the sweep's
+extract (``.json``, :func:`claims_runs.extract`) instead, which scores the same. A
+reading that only changes how a metric is read
+(:data:`claims_catalogue.METRIC_UNDER_READING`) reads the same runs, so it is left out
+of the key. A band reading (``gain-band``) needs one folder per point of its band,
+given as repeated ``--from`` of the same key (in any order: each sweep's command says its
+point); the claim holds under the band only if it holds at every point
+(:data:`claims_rules.READINGS`).
 
 A claim is a conjunction of comparisons: one that does not hold decides it; else one that
 is not testable makes it not testable; else it holds. A negated comparison holds when the
