@@ -484,8 +484,8 @@ CATALOGUE: tuple[Check, ...] = (
           metric_b="train_elbow_range_rad"),
         C("y", "ymca__position_nrmse", ">", "ymca", "better")]),
     _c("C3", "Y -> YMCA better than Y pure -> YMCA (some elbow motion in training generalizes)",
-       "To find out how small perturbations in the joint is sufficient for generalization, "
-       "we tried training on Y and testing on YMCA.", 1253,
+       "To find out how small perturbations in the joint is sufficient for generalization",
+       1253,
        [C("y", "ymca__position_nrmse", "<", "y-pure", "better")],
        note="the inference the page draws from C2 with C6"),
     _c("C4", "mirror -> YMCA: a symmetric output, each arm the average of the two",
