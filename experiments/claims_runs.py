@@ -78,10 +78,9 @@ PLAN: dict[Key, tuple[tuple[str, ...], ...]] = {
 }
 #: Keys no command can make today, and why.
 NO_COMMAND = {
-    ("paper-c", "recorded"): "no sweep can make it: paper C's rows are YMCA and movements "
-                             "derived from it (Y, Y pure, YM, mirrors, speeds), which exist "
-                             "for the synthetic YMCA only (--movement adds a row, it does "
-                             "not replace them)",
+    ("paper-c", "recorded"): "paper C's rows are YMCA and movements derived from it (Y, Y "
+                             "pure, YM, mirrors, speeds), which exist for the synthetic YMCA "
+                             "only (--movement adds a row, it does not replace them)",
 }
 
 #: The options of a sweep's config.json that a command sets (the rest are the study's).
@@ -262,7 +261,7 @@ def plan_lines(parent: str = "results/claims-runs") -> list[str]:
     for (study, runs), commands in PLAN.items():
         lines.append(f"# {study} under {runs}")
         if not commands:
-            lines.append(f"#   {NO_COMMAND[(study, runs)]}")
+            lines.append(f"#   no sweep can make it: {NO_COMMAND[(study, runs)]}")
         for i, args in enumerate(commands):
             if args in made:
                 lines.append(f"#   {command_line(args)}: the sweep of {made[args]}")

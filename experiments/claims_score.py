@@ -275,7 +275,7 @@ def not_run(key: Key, given: Sequence[Sweep]) -> str:
     """Why ``key``'s sweeps are missing, with the commands that would make them."""
     commands = claims_runs.PLAN.get(key, ())
     if not commands:
-        return f"no sweep of {key[0]} under {key[1]}: {claims_runs.NO_COMMAND[key]}"
+        return f"no sweep can make {key[0]} under {key[1]}: {claims_runs.NO_COMMAND[key]}"
     have = {s.point for s in given}
     todo = [claims_runs.command_line(a) for i, a in enumerate(commands) if i not in have]
     head = (f"{len(given)} of the {len(commands)} sweeps of its band run" if given
