@@ -48,7 +48,7 @@ def test_each_command_makes_its_readings_runs(key):
         config = planned.config(row)
         recorded = "recorded" in ran.split("+")
         assert (config.movement.trajectory == "ymca-recorded") == recorded, args
-        gain = config.rule.u_error_gain
+        gain = config.method.u_error_gain
         if "gain-band" in ran:
             assert gain == READINGS["gain-band"].band[point], args
         elif "fitted-gain-2" in ran:

@@ -92,7 +92,7 @@ THESIS = Protocol(
             "ratio is x0.2-1.3 at gains 0.5 and 1 and x5.3 (recorded-like) / x5.6 (smooth) "
             "at gain 2, against the thesis's x4.4; at gain 2 exp 1's motor error is 0.455, "
             "the thesis's 0.474. The thesis states no scale",
-            overrides={"rule.u_error_gain": 2.0}, reproduces=True),
+            overrides={"method.u_error_gain": 2.0}, reproduces=True),
         Reading(
             "the true target's teacher-forcing input noise", ("paper-d",),
             "measured (fidelity-d, 10 seeds per cell): on the recorded-like YMCA with "
@@ -126,7 +126,7 @@ def _gain(gain: float) -> Protocol:
         description=f"the feedback controller's u_error scaled by {gain:g} (a point of the "
                     "declared band 0.5-2)",
         readings=(Reading("the scale of the feedback controller's u_error", _YMCA_STUDIES,
-                          _GAIN_BAND, overrides={"rule.u_error_gain": gain}),))
+                          _GAIN_BAND, overrides={"method.u_error_gain": gain}),))
 
 
 GAIN_LOW, GAIN_HIGH = _gain(0.5), _gain(2.0)

@@ -137,6 +137,7 @@ class BatchPlant:
             widen_ctrlrange(self.model, r * one.nu + self.layout.actuator_ids, self.setup)
         self.data = mujoco.MjData(self.model)
         self.rngs = [np.random.default_rng(s) for s in seeds]
+        self.seeds = seeds
         self.n_runs = n_runs
         self.n_dof = dof
         self.n_signals = self.setup.desired.shape[1]
