@@ -6,18 +6,16 @@ e.g. ("worst run of exp 5 beats the best of exp 2", "max", "5", "position_nrmse"
 over the ok runs only (a failed run diverged, an errored one is a bug), or n/a saying
 why a row has no value (not run, or every run failed or errored).
 
-:func:`tally` counts the verdicts of the project's table of every claim
-(docs/results/claims.md) per reading of the thesis's unstated settings, so the counts the
-page states are the table's: ``python -m skinny_mj.experiments.claims docs/results/claims.md``.
-Two of the table's reasons are measured here too: ``... claims c7 PAPER_C_SWEEP DOF`` (where
-the Y-trained networks' YM error lies) and ``... claims mirrors`` (how far each mirror
-movement leaves the joint ranges YMCA covers, 2D and 3D).
+Two measures behind paper C's claims are here too: ``python -m
+skinny_mj.experiments.claims c7 PAPER_C_SWEEP DOF`` (where the Y-trained networks' YM error
+lies) and ``... claims mirrors`` (how far each mirror movement leaves the joint ranges YMCA
+covers, 2D and 3D). The thesis's claims are scored by ``skinny claims``
+(:mod:`claims_score`).
 """
 
 from __future__ import annotations
 
 import operator
-import re
 import sys
 from collections import Counter
 from collections.abc import Sequence
@@ -79,63 +77,6 @@ def claim_lines(out_dir: Path, claims: Sequence[Claim]) -> str:
     return "\n".join(check(out_dir, c, runs)[1] for c in claims)
 
 
-# -- the claims table's count ---------------------------------------------------------
-#: A claim's id in the claims table: its paper's letter (S: paper E §5.1) and its number.
-CLAIM_ID = re.compile(r"^[ABCDES]\d+$")
-#: Verdict words, in the order they are counted (weak is a kind of holds).
-VERDICTS = ("holds", "weak", "does not hold", "not run")
-
-
-def _cells(line: str) -> list[str]:
-    """A Markdown table row's cells (an escaped ``\\|`` stays inside its cell)."""
-    return [c.strip() for c in re.split(r"(?<!\\)\|", line.strip().strip("|"))]
-
-
-def _verdict(cell: str) -> str:
-    word = cell.strip().rstrip(".").lower()
-    if word not in VERDICTS:
-        raise ValueError(f"unknown verdict {cell!r} (verdicts: {', '.join(VERDICTS)})")
-    return word
-
-
-def tally(markdown: str, readings: tuple[str, ...] = ("default", "thesis reading")
-          ) -> dict[str, Counter]:
-    """The verdicts of the claims table in ``markdown`` (docs/results/claims.md), counted
-    per reading: a table whose verdict column is ``verdict (default; thesis reading)``
-    gives one verdict per reading (``holds; weak``); a table with one ``verdict`` column is
-    of studies the readings do not change, so its verdict counts under each. Rows are
-    those whose first cell is a claim id (``E4``, ``S7``, ``D10``)."""
-    counts = {r: Counter() for r in readings}
-    column, per_reading = None, False
-    for line in markdown.splitlines():
-        if not line.lstrip().startswith("|"):
-            column = None
-            continue
-        cells = _cells(line)
-        if column is None:
-            column = next((i for i, c in enumerate(cells) if c.startswith("verdict")), None)
-            per_reading = column is not None and ";" in cells[column]
-            continue
-        if not CLAIM_ID.match(cells[0]):
-            continue
-        words = [_verdict(w) for w in cells[column].split(";")] if per_reading \
-            else [_verdict(cells[column])] * len(readings)
-        if len(words) != len(readings):
-            raise ValueError(f"claim {cells[0]}: {len(words)} verdicts for "
-                             f"{len(readings)} readings")
-        for reading, word in zip(readings, words, strict=True):
-            counts[reading][word] += 1
-    return counts
-
-
-def tally_lines(counts: dict[str, Counter]) -> list[str]:
-    """One line per reading: how many claims hold (of them weak), do not hold, were not
-    run, of how many."""
-    return [f"{reading}: {c['holds'] + c['weak']} of {sum(c.values())} hold "
-            f"({c['weak']} of them weak), {c['does not hold']} do not hold, "
-            f"{c['not run']} not run" for reading, c in counts.items()]
-
-
 # -- measured reasons (paper C's C1 and C7 in the claims table) ---------------------------
 def error_split(produced: np.ndarray, desired: np.ndarray, steps: np.ndarray
                 ) -> dict[str, Any]:
@@ -195,8 +136,7 @@ def _measure_mirrors() -> list[str]:
     return lines
 
 
-USAGE = ("usage: python -m skinny_mj.experiments.claims CLAIMS_MD | c7 PAPER_C_SWEEP DOF "
-         "| mirrors")
+USAGE = "usage: python -m skinny_mj.experiments.claims c7 PAPER_C_SWEEP DOF | mirrors"
 
 
 def _existing(path: str) -> Path:
@@ -206,13 +146,11 @@ def _existing(path: str) -> Path:
 
 
 def main(args: list[str]) -> str:
-    """The command line: the table's count, or one of the measured reasons."""
+    """The command line: one of the measured reasons."""
     if args == ["mirrors"]:
         return "\n".join(_measure_mirrors())
     if len(args) == 3 and args[0] == "c7" and args[2] in ("4", "8"):
         return "\n".join(_measure_c7(_existing(args[1]), int(args[2])))
-    if len(args) == 1:
-        return "\n".join(tally_lines(tally(_existing(args[0]).read_text(encoding="utf-8"))))
     raise SystemExit(USAGE)
 
 

@@ -9,11 +9,15 @@ reason: no sweep given for that study and reading, the row missing from the swee
 metric absent from its run files, or fewer ok runs than the declared run count.
 
 A source is ``STUDY[:READING+READING]=FOLDER``: the folder's runs are that study's under
-that reading column (default: ``default``). A reading that only changes how a metric is
-read (:data:`claims_catalogue.METRIC_UNDER_READING`) reads the same runs, so it is left
-out of the key. A band reading (``gain-band``) needs one folder per point of its band,
-given as repeated ``--from`` of the same key; the claim holds under the band only if it
-holds at every point (:data:`claims_rules.READINGS`).
+that reading column (default: ``default``), accepted only if its config.json shows the
+reading's planned command made it (:data:`claims_runs.PLAN`); FOLDER may be the sweep's
+extract (``.json``, :func:`claims_runs.extract`) instead, which scores the same. A
+reading that only changes how a metric is read
+(:data:`claims_catalogue.METRIC_UNDER_READING`) reads the same runs, so it is left out
+of the key. A band reading (``gain-band``) needs one folder per point of its band,
+given as repeated ``--from`` of the same key (in any order: each sweep's command says its
+point); the claim holds under the band only if it holds at every point
+(:data:`claims_rules.READINGS`).
 
 A claim is a conjunction of comparisons: one that does not hold decides it; else one that
 is not testable makes it not testable; else it holds. A negated comparison holds when the
@@ -29,6 +33,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from skinny_mj.experiments import claims_runs
 from skinny_mj.experiments.claims_catalogue import (
     CATALOGUE,
     METRIC_UNDER_READING,
@@ -37,7 +42,7 @@ from skinny_mj.experiments.claims_catalogue import (
 )
 from skinny_mj.experiments.claims_rules import ALPHA, MIN_RUNS, READINGS, RULES, RUNS, compare
 
-from skinny_mj.engine.stats import SMOKE_NOTE, iter_runs
+from skinny_mj.engine.stats import iter_runs
 from skinny_mj.errors import SkinnyInputError
 
 #: The studies the catalogue reads.
@@ -54,13 +59,13 @@ Key = tuple[str, str]  # (study, runs key: readings that change the runs, "+"-jo
 
 def runs_key(column: Sequence[str]) -> str:
     """The readings of ``column`` that change the runs, ``+``-joined (``default``: none)."""
-    runs = [r for r in column if r not in METRIC_UNDER_READING]
-    return "+".join(runs) or "default"
+    ran = [r for r in column if r not in METRIC_UNDER_READING]
+    return "+".join(ran) or "default"
 
 
 def parse_sources(entries: Sequence[str]) -> dict[Key, list[Path]]:
-    """``STUDY[:READINGS]=FOLDER`` entries -> {(study, runs key): [folders]}; a bad entry
-    is a one-line :class:`SkinnyInputError`."""
+    """``STUDY[:READINGS]=FOLDER`` entries (a sweep's folder, or its extract's ``.json``)
+    -> {(study, runs key): [sources]}; a bad entry is a one-line :class:`SkinnyInputError`."""
     out: dict[Key, list[Path]] = {}
     for entry in entries:
         head, sep, folder = entry.partition("=")
@@ -90,37 +95,71 @@ def parse_sources(entries: Sequence[str]) -> dict[Key, list[Path]]:
     return out
 
 
-class Sweep:
-    """One folder's run files, kept as (status, numeric metrics) per row."""
+def extract_sources(folder: Path) -> dict[Key, list[Path]]:
+    """Every extract in ``folder`` (``skinny claims --extract``), keyed as
+    :func:`parse_sources` keys its entries."""
+    files = sorted(Path(folder).glob("*.json"))
+    if not files:
+        raise SkinnyInputError("no claims extracts (*.json) here", path=folder)
+    return parse_sources([f"{d['study']}:{d['key']}={f}"
+                          for f in files for d in (claims_runs.read_extract(f),)])
 
-    def __init__(self, folder: Path, study: str) -> None:
-        self.folder, self.rows = folder, {}
+
+class Sweep:
+    """One sweep's runs as the claims read them: per row, (status, numeric metrics) per
+    run, from its folder's run files or from its extract (:mod:`claims_runs`)."""
+
+    def __init__(self, source: Path, key: Key) -> None:
+        self.source = Path(source)
+        if self.source.is_file():
+            data = claims_runs.read_extract(self.source)
+            if (data["study"], data["key"]) != key:
+                raise SkinnyInputError(f"an extract of {data['study']} under {data['key']}, "
+                                       f"not of {key[0]} under {key[1]}", path=source)
+        else:
+            data = self._from_folder(self.source, key)
+        self.extract = data
+        self.point, self.command, self.quick = data["point"], data["command"], data["quick"]
+        self.rows = {row: [(r["status"], r["metrics"]) for r in recs]
+                     for row, recs in data["rows"].items()}
+
+    @staticmethod
+    def _from_folder(folder: Path, key: Key) -> dict[str, Any]:
+        study = key[0]
+        records = []
         for path, rec in iter_runs(folder):
             if rec["experiment"] != study:
                 raise SkinnyInputError(f"holds a run of {rec['experiment']!r}, not of "
                                        f"{study!r}", path=path)
-            metrics = {k: v for k, v in rec["metrics"].items()
-                       if v is None or (isinstance(v, int | float) and not isinstance(v, bool))}
-            self.rows.setdefault(rec["row"], []).append((rec["status"], metrics))
-        if not self.rows:
+            records.append(rec)
+        if not records:
             raise SkinnyInputError("no run files in runs/", path=folder)
-        config = folder / "config.json"
         try:
-            options = json.loads(config.read_text()).get("options") or {}
-        except (OSError, ValueError, AttributeError):
-            options = {}
-        self.quick = bool(options.get("quick"))
+            config = json.loads((folder / "config.json").read_text())
+        except (OSError, ValueError):
+            config = {}
+        config = config if isinstance(config, dict) else {}
+        try:
+            point = claims_runs.plan_point(key, config)
+        except SkinnyInputError as exc:
+            raise SkinnyInputError(str(exc), path=folder) from None
+        command = claims_runs.sweep_command(config, study)
+        return claims_runs.extract(key, point, command, config, records)
+
+    def counts(self) -> Counter:
+        """Runs per status."""
+        return Counter(s for recs in self.rows.values() for s, _ in recs)
 
     def values(self, row: str, metric: str, scale: float = 1.0, transform: str = "",
                need: int = MIN_RUNS) -> tuple[list[float] | None, str]:
         """The finite values of ``metric`` over ``row``'s ok runs, or None and the reason
         they cannot be compared (the row is not in the sweep, no ok run stores the metric,
         fewer values than ``need``)."""
-        runs = self.rows.get(row)
-        if not runs:
+        runs_ = self.rows.get(row)
+        if not runs_:
             return None, f"row {row} is not in the sweep"
-        status = Counter(s for s, _ in runs)
-        ok = [m for s, m in runs if s == "ok"]
+        status = Counter(s for s, _ in runs_)
+        ok = [m for s, m in runs_ if s == "ok"]
         if ok and not any(metric in m for m in ok):
             return None, f"metric {metric} is absent from row {row}'s run files"
         vals = [float(m[metric]) * scale for m in ok
@@ -128,7 +167,7 @@ class Sweep:
         vals = [abs(v) for v in vals] if transform == "abs" else vals
         if len(vals) < need:
             return None, (f"row {row}: {len(vals)} ok runs with {metric} ({status['failed']} "
-                          f"failed, {status['error']} errored, of {len(runs)}) where {need} "
+                          f"failed, {status['error']} errored, of {len(runs_)}) where {need} "
                           "are needed")
         return vals, ""
 
@@ -156,7 +195,7 @@ def score_comparison(comp: Comparison, sweep: Sweep | None, column: Sequence[str
                            "statistic": RULES[comp.rule].statistic, "stat_a": None,
                            "stat_b": None, "n": [], "ratio": None,
                            "reason": missing,
-                           "folder": None if sweep is None else str(sweep.folder)}
+                           "sweep": None if sweep is None else sweep.command}
     if sweep is None:
         return out
     kind = RULES[comp.rule].kind
@@ -219,12 +258,7 @@ def score_check(check: Check, sweeps: Mapping[Key, Sequence[Sweep]]) -> dict[str
         for comp in check.comparisons:
             study, key = comp.study or check.study, runs_key(column)
             given = list(sweeps.get((study, key), ()))
-            band = next((READINGS[r].band for r in column if READINGS[r].band), ())
-            missing = "" if len(given) >= points else (
-                (f"{len(given)} of the {points} sweeps" if given else "no sweep")
-                + f" of {study} given under {key} (--from {study}"
-                + ("" if key == "default" else f":{key}") + "=FOLDER"
-                + (f", one per point of its band {band}" if band else "") + ")")
+            missing = "" if len(given) >= points else not_run((study, key), given)
             for sweep in (given if not missing else [None]):
                 comps.append(score_comparison(comp, sweep, column, need, missing))
         outcome, weak, reason = combine(comps)
@@ -237,11 +271,43 @@ def score_check(check: Check, sweeps: Mapping[Key, Sequence[Sweep]]) -> dict[str
             "rules": sorted(check.rules), "columns": columns}
 
 
-def score(sources: Mapping[Key, Sequence[Path]]) -> dict[str, Any]:
-    """Every catalogue claim scored from the folders of ``sources`` (:func:`parse_sources`)."""
-    sweeps = {(study, key): [Sweep(Path(f), study) for f in folders]
-              for (study, key), folders in sources.items()}
-    return {"sources": {f"{s}:{k}": [str(f) for f in fs] for (s, k), fs in sources.items()},
+def not_run(key: Key, given: Sequence[Sweep]) -> str:
+    """Why ``key``'s sweeps are missing, with the commands that would make them."""
+    commands = claims_runs.PLAN.get(key, ())
+    if not commands:
+        return f"no sweep can make {key[0]} under {key[1]}: {claims_runs.NO_COMMAND[key]}"
+    have = {s.point for s in given}
+    todo = [claims_runs.command_line(a) for i, a in enumerate(commands) if i not in have]
+    head = (f"{len(given)} of the {len(commands)} sweeps of its band run" if given
+            else "sweep not run")
+    return f"{head}: `" + "`; `".join(todo) + "`"
+
+
+def load(sources: Mapping[Key, Sequence[Path]]) -> dict[Key, list[Sweep]]:
+    """The sweeps of ``sources`` (folders or extracts), a band's in its points' order; one
+    sweep per point."""
+    out = {}
+    for key, paths in sources.items():
+        sweeps = sorted((Sweep(Path(p), key) for p in paths), key=lambda s: s.point)
+        points = [s.point for s in sweeps]
+        if len(set(points)) < len(points):
+            raise SkinnyInputError(f"--from {key[0]}:{key[1]}: two sweeps made by the same "
+                                   "command; a band takes one per point")
+        out[key] = sweeps
+    return out
+
+
+def score(sources: Mapping[Key, Sequence[Path]] | Mapping[Key, Sequence[Sweep]]
+          ) -> dict[str, Any]:
+    """Every catalogue claim scored from ``sources``: :func:`parse_sources`' folders or
+    extracts, or the sweeps :func:`load` made of them."""
+    sweeps = {k: list(v) for k, v in sources.items()}
+    if any(not isinstance(s, Sweep) for group in sweeps.values() for s in group):
+        sweeps = load(sources)  # type: ignore[arg-type]
+    return {"sources": [{"study": s, "key": k, "point": sw.point, "command": sw.command,
+                         "extract": claims_runs.extract_name((s, k), sw.point),
+                         "seeding": sw.extract.get("seeding"), "runs": dict(sw.counts())}
+                        for (s, k), group in sorted(sweeps.items()) for sw in group],
             "alpha": ALPHA, "smoke": any(sw.quick for group in sweeps.values() for sw in group),
             "claims": [score_check(c, sweeps) for c in CATALOGUE]}
 
@@ -271,58 +337,3 @@ def count_lines(scored: Mapping[str, Any]) -> list[str]:
         lines.append(f"{name}{note}: {c['holds']} of {total} hold, {c['does not hold']} do "
                      f"not hold ({c['weak']} of them weak), {c['not testable']} not testable")
     return lines
-
-
-def _fmt(v: float | None) -> str:
-    return "—" if v is None else f"{v:.3g}"
-
-
-def _numbers(col: Mapping[str, Any]) -> str:
-    """The deciding comparison's numbers: the first failing, else the largest p."""
-    comps = [c for c in col["comparisons"] if c["outcome"] != "not testable"]
-    if not comps:
-        return "—"
-    failing = [c for c in comps if c["outcome"] == "does not hold"]
-    c = failing[0] if failing else max(comps, key=lambda c: -1 if c["p"] is None else c["p"])
-    n = ", ".join(map(str, c["n"]))
-    held = sum(x["outcome"] == "holds" for x in col["comparisons"])
-    return (f"{c['comparison']}: {c['statistic']} {_fmt(c['stat_a'])} vs "
-            f"{_fmt(c['stat_b'])}, n {n}, "
-            f"p {_fmt(c['p'])}, ratio {_fmt(c['ratio'])} ({held} of "
-            f"{len(col['comparisons'])} hold)")
-
-
-def markdown(scored: Mapping[str, Any]) -> str:
-    """The computed table between :data:`BEGIN` and :data:`END`, one line per claim and
-    column, the counts under it."""
-    esc = str.maketrans({"|": "\\|", "\n": " "})
-    command = " ".join(f"--from {key.removesuffix(':default')}={f}"
-                       for key, folders in scored["sources"].items() for f in folders)
-    lines = [BEGIN, "", f"Scored from the run files by `skinny claims {command}`.", ""]
-    if scored["smoke"]:
-        lines += [SMOKE_NOTE, ""]
-    lines += ["| claim | paper | thesis line | rule | reading | verdict | numbers | reason |",
-              "|---|---|---|---|---|---|---|---|"]
-    for claim in scored["claims"]:
-        for col in claim["columns"]:
-            reading = col["column"] + (" (counted)" if col["counted"] else "")
-            verdict = col["outcome"] + (" (weak)" if col["weak"] else "")
-            cells = [claim["id"], claim["paper"], f"L{claim['line']}",
-                     ", ".join(claim["rules"]), reading, verdict, _numbers(col),
-                     col["reason"] or "—"]
-            lines.append("| " + " | ".join(c.translate(esc) for c in cells) + " |")
-    lines += ["", *(f"- {line}" for line in count_lines(scored)), "", END]
-    return "\n".join(lines) + "\n"
-
-
-def page_section(page: str) -> str | None:
-    """The computed section of a results page (markers included), None without one."""
-    start, end = page.find(BEGIN), page.find(END)
-    if start < 0 or end < start:
-        return None
-    return page[start:end + len(END)] + "\n"
-
-
-def page_matches(page: str, scored: Mapping[str, Any]) -> bool:
-    """Does the page's computed section equal the table scored from the run files?"""
-    return page_section(page) == markdown(scored)

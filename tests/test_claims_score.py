@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from skinny_mj.experiments import claims_page as page
 from skinny_mj.experiments import claims_score as cs
 
 from skinny_mj.cli.parser import main
@@ -22,9 +23,11 @@ N = 20  # paper E's declared run count (claims_rules.RUNS["E"])
 
 
 def write_runs(folder: Path, study: str, rows: dict[str, dict[str, object]], n: int = N,
-               status: dict[str, str] | None = None, quick: bool = False) -> Path:
+               status: dict[str, str] | None = None, quick: bool = False,
+               **options: str) -> Path:
     """Run files as the engine writes them: ``runs/<row>-<seed>.json``. ``rows``: row ->
-    {metric: mean (noisy, sd 1 % of it) or a list of per-run values}."""
+    {metric: mean (noisy, sd 1 % of it) or a list of per-run values}; ``options``: the
+    sweep's command-line options in its config.json (movement, protocol)."""
     rng = np.random.default_rng(0)
     (folder / "runs").mkdir(parents=True)
     for i, (row, metrics) in enumerate(rows.items()):
@@ -37,8 +40,8 @@ def write_runs(folder: Path, study: str, rows: dict[str, dict[str, object]], n: 
                    "seed": seed, "params": {}, "paper": {}, "status": st,
                    "metrics": values if st == "ok" else {}, "wall_s": 0.1}
             (folder / "runs" / f"{row}-{seed}.json").write_text(json.dumps(to_jsonable(rec)))
-    (folder / "config.json").write_text(json.dumps({"experiment": study,
-                                                    "options": {"quick": quick}}))
+    (folder / "config.json").write_text(json.dumps({"experiment": study, "seeding": "row-id",
+                                                    "options": {"quick": quick, **options}}))
     return folder
 
 
@@ -52,7 +55,7 @@ def _paper_e(folder: Path, **kw) -> Path:
         "4": {"position_nrmse": 0.05, "motor_nrmse": 0.1},
         "5": {"position_nrmse": 0.02, "motor_nrmse": 0.07,
               "train_wall_s": [v - 0.05 for v in tiny]},
-        "fig3-b0.3": {"position_nrmse": 0.1},  # cycles_to_converge not stored
+        "fig3-b0.3": {"position_nrmse": 0.1},  # no convergence curve stored
     }, **kw)
 
 
@@ -86,11 +89,12 @@ def test_every_verdict_is_reached_with_its_numbers(scored):
 
 def test_not_testable_says_the_measured_reason(tmp_path, scored):
     assert "row fig5a-nu0.03 is not in the sweep" in _column(scored, "E7")["reason"]
-    assert "metric cycles_to_converge is absent" in _column(scored, "E6")["reason"]
-    for name in ("recorded", "recorded+fitted-gain-2"):
+    assert "metric cycles_to_converge_tol1 is absent" in _column(scored, "E6")["reason"]
+    for name, command in (("recorded", "paper-e --movement ymca-recorded"),
+                          ("recorded+fitted-gain-2", "paper-e --protocol thesis")):
         col = _column(scored, "E4", name)
         assert col["outcome"] == "not testable"
-        assert "no sweep of paper-e given under recorded" in col["reason"]
+        assert f"sweep not run: `skinny experiment {command} --workers 1`" in col["reason"]
     assert _column(scored, "E4", "recorded")["counted"]
     few = write_runs(tmp_path / "few", "paper-e", {"2": {"position_nrmse": 0.1},
                                                    "4": {"position_nrmse": 0.05}}, n=3)
@@ -107,21 +111,41 @@ def test_failed_runs_are_counted_apart_and_not_in_the_means(tmp_path):
     assert col["outcome"] == "not testable" and "(20 failed, 0 errored, of 20)" in col["reason"]
 
 
+BAND = ({"movement": "ymca-recorded", "protocol": "gain-0.5"}, {"movement": "ymca-recorded"},
+        {"protocol": "thesis"})
+
+
 def test_a_band_column_needs_one_sweep_per_point_and_holds_only_at_all(tmp_path):
-    one = _paper_e(tmp_path / "g1")
+    one = _paper_e(tmp_path / "g1", **BAND[1])
     scored = cs.score(cs.parse_sources([f"paper-e:recorded+gain-band={one}"]))
     col = _column(scored, "E4", "recorded+gain-band")
-    assert col["outcome"] == "not testable" and "1 of the 3 sweeps" in col["reason"]
-    folders = [one, _paper_e(tmp_path / "g2"), _paper_e(tmp_path / "g3")]
+    assert col["outcome"] == "not testable"
+    assert col["reason"].startswith("1 of the 3 sweeps of its band run: `skinny experiment "
+                                    "paper-e --movement ymca-recorded --protocol gain-0.5")
+    folders = [_paper_e(tmp_path / "g3", **BAND[2]), one, _paper_e(tmp_path / "g2", **BAND[0])]
     scored = cs.score(cs.parse_sources([f"paper-e:recorded+gain-band={f}" for f in folders]))
     col = _column(scored, "E4", "recorded+gain-band")
     assert col["outcome"] == "holds" and len(col["comparisons"]) == 3
+    assert [c["sweep"] for c in col["comparisons"]] == [  # in the band's order
+        "skinny experiment paper-e --movement ymca-recorded --protocol gain-0.5",
+        "skinny experiment paper-e --movement ymca-recorded",
+        "skinny experiment paper-e --protocol thesis"]
 
+
+def test_a_sweep_made_by_another_command_than_its_reading_is_refused(tmp_path):
+    folder = _paper_e(tmp_path / "e")  # the defaults, given as the recorded reading
+    with pytest.raises(SkinnyInputError, match=re.escape(
+            "its runs were made with the study's defaults, not by the command paper-e under "
+            "recorded needs: skinny experiment paper-e --movement ymca-recorded")):
+        cs.score(cs.parse_sources([f"paper-e:recorded={folder}"]))
+    twice = [f"paper-e:recorded+gain-band={_paper_e(tmp_path / n, **BAND[0])}" for n in "ab"]
+    with pytest.raises(SkinnyInputError, match="two sweeps made by the same command"):
+        cs.score(cs.parse_sources(twice))
 
 def test_rescoring_twice_or_from_the_json_gives_the_same_count(tmp_path, scored):
     again = cs.score(cs.parse_sources([f"paper-e={tmp_path / 'e'}"]))
     assert cs.counts(again) == cs.counts(scored)
-    assert cs.markdown(again) == cs.markdown(scored)
+    assert page.markdown(again) == page.markdown(scored)
     back = json.loads(json.dumps(to_jsonable(scored)))
     assert cs.counts(back) == cs.counts(scored)
     counted = cs.counts(scored)["counted"]
@@ -129,9 +153,9 @@ def test_rescoring_twice_or_from_the_json_gives_the_same_count(tmp_path, scored)
 
 
 def test_the_page_check_compares_a_section_with_the_run_files(tmp_path, scored):
-    page = "# Every thesis claim\n\nProse.\n\n" + cs.markdown(scored) + "\nMore prose.\n"
-    assert cs.page_matches(page, scored)
-    assert not cs.page_matches("# no section\n", scored)
+    text = "# Every thesis claim\n\nProse.\n\n" + page.markdown(scored) + "\nMore prose.\n"
+    assert page.page_matches(text, scored)
+    assert not page.page_matches("# no section\n", scored)
     run = tmp_path / "e" / "runs" / "4-3000.json"  # row 4 (index 3) now worse than row 2
     for path in sorted((tmp_path / "e" / "runs").glob("4-*.json")):
         rec = json.loads(path.read_text())
@@ -139,7 +163,7 @@ def test_the_page_check_compares_a_section_with_the_run_files(tmp_path, scored):
         path.write_text(json.dumps(rec))
     assert run.is_file()
     rescored = cs.score(cs.parse_sources([f"paper-e={tmp_path / 'e'}"]))
-    assert not cs.page_matches(page, rescored)
+    assert not page.page_matches(text, rescored)
 
 
 @pytest.mark.parametrize("entry, words", [
@@ -171,11 +195,12 @@ def test_the_command_writes_both_files_prints_the_count_and_refuses_to_overwrite
     out = tmp_path / "out"
     assert main(["claims", "--from", f"paper-e={folder}", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert printed.startswith("counted: ") and "of 64 hold" in printed
+    assert any(line.startswith("counted: ") and "of 64 hold" in line
+               for line in printed.splitlines())
     assert "smoke test (--quick)" in printed
-    page = (out / "claims.md").read_text()
+    text = (out / "claims.md").read_text()
     data = json.loads((out / "claims.json").read_text())
-    assert cs.page_matches(page, data) and "Smoke test (--quick)" in page
+    assert page.page_matches(text, data) and "Smoke test (--quick)" in text
     assert main(["claims", "--from", f"paper-e={folder}", "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "already exists" in err and len(err.strip().splitlines()) == 1
@@ -197,4 +222,5 @@ def test_a_metric_reading_reads_its_metric_from_the_same_runs(tmp_path):
     assert col["outcome"] == "does not hold" and "wrong direction" in col["reason"]
     assert col["comparisons"][0]["stat_a"] == pytest.approx(0.16, rel=0.01)
     recorded = _column(scored, "A10", "recorded+mean-abs-difference")
-    assert "no sweep of paper-a given under recorded " in recorded["reason"]
+    assert ("sweep not run: `skinny experiment paper-a --movement ymca-recorded --workers 1`"
+            in recorded["reason"])

@@ -116,6 +116,7 @@ def test_quick_sweep_end_to_end(tmp_path):
         m = run["metrics"]
         for col in cols:
             assert np.isfinite(m[f"{col}__position_nrmse"]) and 0 <= m[f"{col}__position_nrmse"]
+            assert abs(m[f"{col}__lag_steps"]) <= paper_c.MAX_LAG_STEPS  # every pair's timing
         assert np.asarray(m["angles__ymca"]).shape == (len(get("ymca")), 4)
         assert len(m["train_curve_position_nrmse"]) == exp.config.config(run["row"]).method.epochs
         assert 0 < m["peak_rss_mb"] < 2048
@@ -154,7 +155,7 @@ def test_lockstep_batch_equals_runs_one_at_a_time():
 
 
 def test_lag_steps_finds_a_shift_of_the_output():
-    from skinny_mj.experiments.paper_c.report import lag_steps
+    from skinny_mj.experiments.paper_c.study import lag_steps
 
     t = np.linspace(0, 4 * np.pi, 300)
     desired = np.stack([np.sin(t), np.cos(t), np.zeros_like(t)], axis=1)

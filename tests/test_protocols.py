@@ -47,7 +47,8 @@ def test_thesis_reading_reaches_paper_d_true_target_half():
 def test_refusals_name_what_is_wrong_in_one_line(capsys):
     with pytest.raises(SkinnyInputError, match="reads no setting of 'generalization'"):
         protocols.apply("thesis", registry.get("generalization"), "generalization")
-    with pytest.raises(SkinnyInputError, match="unknown protocol 'nope'; protocols: thesis"):
+    with pytest.raises(SkinnyInputError,
+                       match="unknown protocol 'nope'; protocols: thesis, gain-0.5, "):
         protocols.get("nope")
     assert main(["experiment", "paper-a", "--protocol", "thesis", "--quick"]) == 2
     err = capsys.readouterr().err.strip()
@@ -59,3 +60,19 @@ def test_a_studys_help_names_the_protocols_that_read_its_settings():
 
     assert "Protocols (--protocol NAME): thesis (the training data;" in study_help("paper-e")
     assert "--protocol NAME" not in study_help("generalization")
+    assert "b-noise-free (paper B's reservoir noise)" in " ".join(study_help("paper-b").split())
+    assert "gain-0.5 (the scale of the feedback controller's u_error)" \
+        in " ".join(study_help("paper-d").split())
+
+
+def test_the_gain_band_and_paper_bs_noise_free_reservoir_set_only_their_key():
+    for name, key, value, study_name in (("gain-0.5", "method.u_error_gain", 0.5, "paper-e"),
+                                         ("gain-2", "method.u_error_gain", 2.0, "paper-e"),
+                                         ("b-noise-free", "esn.noise_level", 0.0, "paper-b")):
+        study = protocols.apply(name, registry.get(study_name), study_name)
+        default = plan(registry.get(study_name))
+        for row in (r.row.id for r in default.rows[:3]):
+            config = plan(study).config(row)
+            assert config.to_dict()[key] == value != default.config(row).to_dict()[key]
+            assert config.override({key: default.config(row).to_dict()[key]}) \
+                == default.config(row)

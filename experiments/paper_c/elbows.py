@@ -19,7 +19,7 @@ import json
 
 import numpy as np
 from skinny_mj.experiments.paper_c import study as paper_c
-from skinny_mj.experiments.paper_c.report import lag_steps
+from skinny_mj.experiments.paper_c.study import lag_steps
 
 from skinny_mj.plant import body
 from skinny_mj.training.loop import build_run, evaluate, train_run

@@ -18,6 +18,7 @@ from skinny_mj.experiments.paper_c.study import (
     STILL_ELBOW_RATIO,
     SYMMETRIC_FACTOR,
     elbow_range,
+    lag_steps,
     load,
 )
 
@@ -184,23 +185,6 @@ def claims(runs: list[dict], dof: int = 4) -> list[str]:
 
 #: "Timing is not a problem": the output's best-aligned lag within this many control steps.
 TIMING_LAG_STEPS = 2
-_MAX_LAG = 25
-
-
-def lag_steps(produced: np.ndarray, desired: np.ndarray) -> float:
-    """The shift (control steps, > 0: the output lags) that best aligns ``produced`` with
-    ``desired`` (T, n_dof) rad: the argmax of the mean cross-product over the joints
-    that move, within ±25 steps."""
-    n = min(len(produced), len(desired))
-    p, d = produced[:n] - produced[:n].mean(0), desired[:n] - desired[:n].mean(0)
-    moving = d.std(axis=0) > 1e-6
-    p, d = p[:, moving], d[:, moving]
-    shifts = range(-_MAX_LAG, _MAX_LAG + 1)
-    score = [np.mean(p[k:] * d[:n - k]) if k >= 0 else np.mean(p[:n + k] * d[-k:])
-             for k in shifts]  # mean, not sum: the overlap shrinks with the shift
-    return float(shifts[int(np.argmax(score))])
-
-
 def timing_lags(runs: list[dict], dof: int) -> dict[str, float]:
     """Mean lag over runs of every kept train -> test pair (``angles__<col>``)."""
     out: dict[str, list[float]] = {}

@@ -158,6 +158,24 @@ def elbow_range(angles: np.ndarray, dof: int) -> float:
     return float(np.mean(e.max(axis=0) - e.min(axis=0)))
 
 
+#: The widest shift :func:`lag_steps` tries, control steps.
+MAX_LAG_STEPS = 25
+
+
+def lag_steps(produced: np.ndarray, desired: np.ndarray) -> float:
+    """The shift (control steps, > 0: the output lags) that best aligns ``produced`` with
+    ``desired`` (T, n_dof) rad: the argmax of the mean cross-product over the joints
+    that move, within ±25 steps."""
+    n = min(len(produced), len(desired))
+    p, d = produced[:n] - produced[:n].mean(0), desired[:n] - desired[:n].mean(0)
+    moving = d.std(axis=0) > 1e-6
+    p, d = p[:, moving], d[:, moving]
+    shifts = range(-MAX_LAG_STEPS, MAX_LAG_STEPS + 1)
+    score = [np.mean(p[k:] * d[:n - k]) if k >= 0 else np.mean(p[:n + k] * d[-k:])
+             for k in shifts]  # mean, not sum: the overlap shrinks with the shift
+    return float(shifts[int(np.argmax(score))])
+
+
 def test_movement(movement: str, asf: str | None, config: TrainConfig):
     """Test column ``movement`` on ``config``'s body (:func:`load`)."""
     return load(movement, config.plant.dof, asf)
@@ -204,6 +222,7 @@ def _test_metrics(dof: int, col: str, outcome) -> dict:
         f"{col}__elbow_range_rad": elbow_range(angles, dof),
         f"{col}__elbow_rom_ratio": (elbow_range(angles, dof) / desired_rng
                                     if desired_rng > 1e-6 else None),
+        f"{col}__lag_steps": lag_steps(angles, test.angles),
     }
     if col == "ymca":
         out.update({f"ymca__{k}": v for k, v in arm_metrics(angles, test.angles, dof).items()})

@@ -276,7 +276,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "rows, runs); flags given as well override them")
     p.add_argument("--protocol", help="run the study under a named set of readings of the "
                    "thesis's unstated settings (`thesis`: the recorded-like YMCA, u_error gain "
-                   "2, ...; each with what it rests on: docs/results/claims.md)")
+                   "2, ...; `gain-0.5`, `gain-2`: the u_error scale's band; `b-noise-free`: "
+                   "paper B's reservoir without noise; a study's --help lists those that read "
+                   "its settings)")
 
     p = sub.add_parser("sweep", help="a grid over any config keys on the experiment engine: "
                        "skinny sweep esn.spectral_radius=0.5,0.9 --runs 20")
@@ -305,12 +307,24 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Score the thesis's claims (experiments/claims_catalogue.py) "
                        "by the declared rules (experiments/claims_rules.py) over the run files "
                        "of the sweeps given, under each reading column they cover; a band "
-                       "reading (gain-band) takes one --from per point.")
-    p.add_argument("--from", dest="sources", action="append", required=True,
-                   metavar="STUDY[:READINGS]=FOLDER", help="a sweep's folder and the study "
-                   "(and reading column, e.g. paper-e:recorded) its runs are; repeat it")
+                       "reading (gain-band) takes one --from per point. `skinny claims --plan` "
+                       "prints the command of every sweep the claims read.")
+    p.add_argument("--plan", action="store_true", help="print the `skinny experiment` command "
+                   "of every sweep the claims read (the thesis's run counts), then the "
+                   "`skinny claims` line that scores them all, and stop")
+    p.add_argument("--from", dest="sources", action="append",
+                   metavar="STUDY[:READINGS]=FOLDER", help="a sweep's folder (or its extract's "
+                   ".json) and the study (and reading column, e.g. paper-e:recorded) its runs "
+                   "are; repeat it")
+    p.add_argument("--extracts", type=Path, metavar="DIR", help="score the extracts in DIR "
+                   "(written by --extract) instead of sweeps' folders")
+    p.add_argument("--extract", type=Path, metavar="DIR", help="write each sweep's extract "
+                   "into DIR (per row and run: seed, status, the metrics the claims read; "
+                   "small enough to commit)")
+    p.add_argument("--page", type=Path, metavar="FILE", help="replace the computed section "
+                   "of the results page FILE (between its claims-computed markers)")
     p.add_argument("--out", type=Path, help="folder for claims.md and claims.json "
-                   "(default: results/claims/<time>)")
+                   "(default: results/claims/<time>, unless --page)")
     p.add_argument("--overwrite", action="store_true", help="replace claims.md and "
                    "claims.json in --out")
 

@@ -26,7 +26,8 @@ from typing import Any
 from skinny_mj.engine.study import Study
 from skinny_mj.errors import SkinnyInputError
 
-__all__ = ["Reading", "Protocol", "PROTOCOLS", "THESIS", "get", "apply"]
+__all__ = ["Reading", "Protocol", "PROTOCOLS", "THESIS", "GAIN_LOW", "GAIN_HIGH",
+           "B_NOISE_FREE", "get", "apply"]
 
 
 @dataclass(frozen=True)
@@ -112,8 +113,37 @@ THESIS = Protocol(
             overrides={"esn.spectral_radius": 0.9, "esn.noise_level": 0.02}),
     ),
 )
+_GAIN_BAND = ("a point of a band of u_error scales declared in advance (0.5, 1, 2), not "
+              "chosen on any thesis number: the thesis states no scale, and its words point to "
+              "the plain one-step correction (gain 1): 'the transformation from position error "
+              "to motor error is simple enough to be done analytically' (L1489; also L934). A "
+              "claim read under the band holds only if it holds at every point")
+
+
+def _gain(gain: float) -> Protocol:
+    return Protocol(
+        name=f"gain-{gain:g}",
+        description=f"the feedback controller's u_error scaled by {gain:g} (a point of the "
+                    "declared band 0.5-2)",
+        readings=(Reading("the scale of the feedback controller's u_error", _YMCA_STUDIES,
+                          _GAIN_BAND, overrides={"method.u_error_gain": gain}),))
+
+
+GAIN_LOW, GAIN_HIGH = _gain(0.5), _gain(2.0)
+
+B_NOISE_FREE = Protocol(
+    name="b-noise-free",
+    description="paper B's reservoir state update without noise",
+    readings=(Reading(
+        "paper B's reservoir noise", ("paper-b",),
+        "the thesis's words, in part: paper B's state update is x(t+1) = f(W_in v(t+1) + "
+        "W x(t)) (equation 2, L1075), with no noise term where papers D and E write one "
+        "(L1328, L1507); paper B never says the noise was off",
+        overrides={"esn.noise_level": 0.0}),),
+)
+
 #: name -> protocol (``skinny experiment NAME --protocol NAME``).
-PROTOCOLS = {p.name: p for p in (THESIS,)}
+PROTOCOLS = {p.name: p for p in (THESIS, GAIN_LOW, GAIN_HIGH, B_NOISE_FREE)}
 
 
 def get(name: str) -> Protocol:

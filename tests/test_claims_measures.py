@@ -1,54 +1,11 @@
-"""The claims table's count (skinny_mj.experiments.claims.tally), the page that states it,
-and the measures behind two of its reasons (error_split, range_excursion)."""
+"""The measures behind two of paper C's claims (skinny_mj.experiments.claims: error_split,
+range_excursion, and the command line that prints them)."""
 
 from __future__ import annotations
 
-import re
-from pathlib import Path
-
 import numpy as np
 import pytest
-from skinny_mj.experiments.claims import error_split, main, range_excursion, tally, tally_lines
-
-PAGE = Path(__file__).resolve().parents[1] / "docs" / "results" / "claims.md"
-
-TWO = """| # | claim | ours | verdict (default; thesis reading) |
-|---|---|---|---|
-| E1 | a \\| b | 1 | holds; holds |
-| E2 | c | 2 | does not hold; weak |
-| E3 | d | 3 | weak; not run |
-
-Extensions (not a claim row):
-
-| # | claim | verdict |
-|---|---|---|
-| A1 | e | does not hold |
-| x | not a claim id | holds |
-"""
-
-
-def test_tally_counts_each_reading_and_a_single_verdict_under_both():
-    counts = tally(TWO)
-    assert dict(counts["default"]) == {"holds": 1, "does not hold": 2, "weak": 1}
-    assert dict(counts["thesis reading"]) == {"holds": 1, "weak": 1, "not run": 1,
-                                              "does not hold": 1}
-    assert tally_lines(counts)[1] == ("thesis reading: 2 of 4 hold (1 of them weak), 1 do not "
-                                      "hold, 1 not run")
-
-
-@pytest.mark.parametrize("row, message", [("| E1 | a | 1 | holds; maybe |", "unknown verdict"),
-                                          ("| E1 | a | 1 | holds |", "1 verdicts for 2")])
-def test_tally_refuses_a_verdict_it_cannot_count(row, message):
-    table = TWO.splitlines()[:2] + [row]
-    with pytest.raises(ValueError, match=message):
-        tally("\n".join(table))
-
-
-def test_the_page_states_the_tables_own_count():
-    text = PAGE.read_text(encoding="utf-8")
-    stated = dict(re.findall(r"^- \*\*([a-z ]+)\*\*: (.+)$", text, flags=re.M))
-    counted = dict(line.split(": ", 1) for line in tally_lines(tally(text)))
-    assert stated == counted
+from skinny_mj.experiments.claims import error_split, main, range_excursion
 
 
 def test_error_split_shares_the_squared_error_and_splits_the_steps():
@@ -68,7 +25,8 @@ def test_range_excursion_measures_only_what_leaves_the_reference_range():
     np.testing.assert_allclose(frac, [0.25, 0.0])
 
 
-@pytest.mark.parametrize("args", [[], ["a", "b"], ["c7", "results", "5"], ["no-such.md"]])
+@pytest.mark.parametrize("args", [[], ["a", "b"], ["c7", "results", "5"], ["c7", "no-such", "4"],
+                                  ["claims.md"]])
 def test_the_command_line_refuses_bad_input_in_one_line(args):
     with pytest.raises(SystemExit) as e:
         main(args)
