@@ -6,7 +6,8 @@ columns (:data:`TESTS`) runs :func:`run_batch`: it trains the row's seeds in loc
 the row's K on every column. A ``floor`` row (:func:`floor_batch`) computes the least error
 the torque limits allow on each column (iLQR knowing the true model and the whole
 movement): what no controller can beat, the bound a learned one is measured against.
-The shipped CMU clips need more torque than the motors have at full speed `skinny_mj.training.torque.feasibility`), so each is a column twice: as shipped
+The shipped CMU clips need more torque than the motors have at full speed
+(:func:`skinny_mj.training.torque.feasibility`), so each is a column twice: as shipped
 (``md_02``, ``md_03``) and slowed to the fastest speed at which no step of its inverse
 dynamics exceeds a limit (``md_02-feasible``; :data:`FEASIBLE_SPEED`, per body).
 
