@@ -248,6 +248,6 @@ STUDY = Study(
     name=NAME, description=__doc__, base=MODEL, runs=10,  # runs: not stated in the paper
     rows=tuple(Row(name, {"movement.trajectory": PREFIX + name}, params=asdict(p))
                for name, p in PATTERNS.items()),
-    run_batch=run_batch, columns=COLUMNS, takes=("dof", "signals"),
+    run_batch=run_batch, columns=COLUMNS, takes=("body", "signals"),
     quick=Quick({"rule.epochs": 2}, runs=1), report=report,
 )

@@ -113,8 +113,8 @@ def make_env(tc: TrainConfig, seed: int, velocity_inputs: bool):
     from skinny_mj.training.parts import full_scale_speeds, load_trajectory
 
     trajectory, _ = load_trajectory(tc)
-    env = SkinnyEnv(dof=tc.plant.dof, signals=tc.plant.signals, trajectory=trajectory,
-                    actuation=tc.actuation.kind, sensor_noise=tc.plant.sensor_noise, seed=seed,
+    env = SkinnyEnv(body=tc.plant.body, signals=tc.plant.signals, trajectory=trajectory,
+                    sensor_noise=tc.plant.sensor_noise, seed=seed,
                     max_speed_rad_s=full_scale_speeds(tc, trajectory))
     return tracking_wrapper(env, velocity_inputs)
 

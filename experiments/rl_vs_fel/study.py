@@ -119,7 +119,7 @@ def estimate_bytes(config: TrainConfig, row: Row, runs: int):
     learner = p["learner"]
     if learner == "fel":
         return None
-    n_obs = 3 * body.n_signals(dof, config.plant.signals) \
+    n_obs = 3 * body.body_of(config.plant.body).n_signals(config.plant.signals) \
         + (2 * dof if config.actuation.kind == "torque" else 0)
     if learner == "ppo":
         steps = 128 if p["quick"] else PPO_N_STEPS
