@@ -18,8 +18,9 @@ desired position is left out of the ESN's input: [s_in(t)] (+ p(t)).
 
 The parts: the method (:class:`~skinny_mj.controllers.methods.Original` or
 :class:`~skinny_mj.controllers.methods.New`: epochs, K per epoch, learning cycles, β), the
-:class:`~skinny_mj.controllers.loop.Loop` (inputs, feedback or hook, forward model, delay),
-the :class:`Task` (desired signals, true commands, scored signals) and the :class:`Test`.
+:class:`~skinny_mj.controllers.loop.Loop` (inputs, feedback or hook, forward model, delay,
+learning rule), the :class:`Task` (desired signals, true commands, scored signals) and the
+:class:`Test`.
 
 One health check (:func:`health`) decides for training and testing alike whether a
 run diverged; a diverged run is silenced (state and readout zero) and excluded from
@@ -36,7 +37,7 @@ from typing import ClassVar
 
 import numpy as np
 from skinny_mj.controllers.esn import ESN
-from skinny_mj.controllers.learning import Cycle, CycleFit, LearningRule, beta_target
+from skinny_mj.controllers.learning import Cycle, CycleFit, beta_target
 from skinny_mj.controllers.loop import INPUTS, Loop
 from skinny_mj.controllers.methods import FELMethod, New, Original
 from skinny_mj.controllers.metrics import motor_nrmse, position_nrmse
@@ -154,7 +155,6 @@ def train(
     method: FELMethod,
     loop: Loop = DEFAULT_LOOP,
     *,
-    rule: LearningRule | None = None,
     observe: Observer | None = None,
 ) -> TrainResult:
     """Train the inverse model ``esn`` (R runs) by FEL on ``plant``.
@@ -164,21 +164,21 @@ def train(
     task : the :class:`Task` (or its desired signals alone, (T, n_sig)).
     method : :class:`~skinny_mj.controllers.methods.Original` or
         :class:`~skinny_mj.controllers.methods.New`: epochs, gains, learning cycles, β.
-    loop : the :class:`~skinny_mj.controllers.loop.Loop` (its ``online`` learner is the
-        rule's, on the learning cycles); a forward model is trained on every learning
-        cycle unless its ``mode`` is "serial".
-    rule : the learning rule (:class:`skinny_mj.controllers.learning.LearningRule`; default
+    loop : the :class:`~skinny_mj.controllers.loop.Loop`; a forward model in it is trained
+        on every learning cycle unless its ``mode`` is "serial". Its ``rule`` is the
+        learning rule (:class:`skinny_mj.controllers.learning.LearningRule`; None:
         :class:`~skinny_mj.controllers.learning.CycleFit`, each learning cycle's fit alone by
-        ``esn.fit``, the thesis's). It gets a :class:`~skinny_mj.controllers.learning.Cycle`
-        (states, y_used, y_est, y_ESN, the runs alive, the epoch) through
-        ``rule.washout(esn, cycle)`` after each washout cycle and ``rule.fit(esn,
-        cycle)`` after each learning cycle; an online rule (``rule.online``) is also the
-        learning cycles' per-step ``online`` learner (its per-step target is blended with
-        its own beta). Others:
-        :class:`skinny_mj.controllers.ridge_select.RidgeSelector` (lambda per run on a validation
-        cycle), :class:`skinny_mj.controllers.torque_readout.ForgettingReadout` and
-        :class:`~skinny_mj.controllers.torque_readout.RLSReadout` (fits that remember earlier
-        cycles), :class:`skinny_mj.controllers.online.OnlineRLS` (RLS at every step).
+        ``esn.fit``, the thesis's). The rule gets a
+        :class:`~skinny_mj.controllers.learning.Cycle` (states, y_used, y_est, y_ESN, the
+        runs alive, the epoch) through ``rule.washout(esn, cycle)`` after each washout
+        cycle and ``rule.fit(esn, cycle)`` after each learning cycle; an online rule
+        (``rule.online``) is also the learning cycles' per-step ``online`` learner (its
+        per-step target is blended with its own beta; the loop's own ``online`` is not
+        used). Others: :class:`skinny_mj.controllers.ridge_select.RidgeSelector` (lambda per
+        run on a validation cycle), :class:`skinny_mj.controllers.torque_readout.
+        ForgettingReadout` and :class:`~skinny_mj.controllers.torque_readout.RLSReadout`
+        (fits that remember earlier cycles), :class:`skinny_mj.controllers.online.OnlineRLS`
+        (RLS at every step).
     observe : optional callback (progress, diagnostics: paper E §5.1), called after every
         cycle as ``observe(epoch, cycle, ro, y_used)`` (cycle 0 = washout, 1..C learning,
         C+1 evaluation); ``y_used`` (R, T-1, n_dof) is the target the readout was fitted
@@ -196,7 +196,7 @@ def train(
         gains=gains, failed=np.zeros(n_runs, bool),
         fail_reason=[None] * n_runs, fail_epoch=[None] * n_runs,
     )
-    beta, rule = method.beta, CycleFit() if rule is None else rule
+    beta, rule = method.beta, CycleFit() if loop.rule is None else loop.rule
     # one set of rollout arrays for the whole training: each rollout is used (fit,
     # metrics) before the next overwrites it, and the last one is the last evaluation
     loop = dataclasses.replace(loop, online=None, buffers={})

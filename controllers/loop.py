@@ -1,6 +1,7 @@
 """The closed loop's parts, typed: what the inverse model sees (``inputs``), where its
 error signal comes from (a :class:`FeedbackController` or an actuation's :class:`Hook`),
-an optional forward model, an optional per-step online learner and the sensory delay.
+an optional forward model, an optional per-step online learner, the sensory delay and the
+learning rule a training refits the readout with.
 
 A :class:`Loop` is built once from these parts; :func:`skinny_mj.controllers.rollout.rollout`,
 :func:`skinny_mj.controllers.fel.train` and :func:`~skinny_mj.controllers.fel.evaluate` take it.
@@ -15,6 +16,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from skinny_mj.controllers.esn import ESN
 from skinny_mj.controllers.feedback import FeedbackController
+from skinny_mj.controllers.learning import LearningRule
 
 #: What the inverse model sees besides the forward model's prediction: the desired next
 #: position and the sensed one (papers A, C, D, E), or the sensed one only (paper B).
@@ -81,6 +83,10 @@ class Loop:
     online : an :class:`Online` learner updated inside the loop, or None.
     delay_steps : steps by which the ESN's sensed input s_in lags s(t) (paper A); the
         feedback controller always sees the undelayed s(t).
+    rule : the learning rule (:class:`skinny_mj.controllers.learning.LearningRule`) with
+        which :func:`skinny_mj.controllers.fel.train` refits the readout; None: the
+        thesis's fit of each learning cycle alone. One rule object serves one training (it
+        may keep statistics between cycles). A rollout and a test do not use it.
     buffers : a dict the rollout keeps its arrays in and reuses on the next call with the
         same dict (fresh pages of a few MB per rollout cost about as much as the control
         step); the returned Rollout's arrays are then views that the next such call
@@ -94,6 +100,7 @@ class Loop:
     forward: Forward | None = None
     online: Online | None = None
     delay_steps: int = 0
+    rule: LearningRule | None = None
     buffers: dict | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:

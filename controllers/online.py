@@ -1,7 +1,7 @@
 """Online learning inside the closed loop: an RLS (FORCE-style) readout update per
 control step, an online learning rule (:class:`skinny_mj.controllers.learning.LearningRule`) for
-:func:`skinny_mj.controllers.fel.train`'s ``rule`` or a :class:`skinny_mj.controllers.loop.Loop`'s
-``online``.
+a :class:`skinny_mj.controllers.loop.Loop`'s ``rule`` (:func:`skinny_mj.controllers.fel.train`)
+or its ``online`` learner.
 
 At step t the rollout knows u_error(t), so FEL's estimated target of the step before,
 y_est(t-1) = command(t-1) + u_error(t), is available one step late; :class:`OnlineRLS`

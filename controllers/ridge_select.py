@@ -1,7 +1,7 @@
 """Ridge readout with lambda chosen per run and per fit on a validation cycle.
 
 A learning rule (:class:`skinny_mj.controllers.learning.LearningRule`) for FEL
-(:func:`skinny_mj.controllers.fel.train`'s ``rule``): every learning cycle's fit
+(a :class:`skinny_mj.controllers.loop.Loop`'s ``rule``): every learning cycle's fit
 takes, per run, the lambda of a log grid whose readout, fitted on this cycle's
 (states, targets), best predicts the targets of the cycle before it (the epoch's
 washout cycle, or the previous learning cycle): the same controller, another draw of

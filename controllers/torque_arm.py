@@ -13,7 +13,8 @@ and the sensed joint angles and velocities.
 - ID feed-forward + low-gain PD (``"id-pd"``): a_ff = 0, tau_ff = the inverse dynamics
   of the desired motion over the step (``mj_inverse``; a table computed before the run)
 - PD + gravity compensation (``"pd-g"``): a_ff = 0, tau_ff = g(q)
-- FEL's teacher (``"fel"``): a_ff = 0, tau_ff = 0: the feedback torque of the
+- FEL's teacher (``"fel"``; ``"fel-const"`` the same with one constant M, handed in as
+  the state's ``mass``): a_ff = 0, tau_ff = 0: the feedback torque of the
   inertia-scaled PD alone, the inverse-reference-model form of feedback-error learning
   (Gomi & Kawato 1993): it is the torque that would give the joint the error
   dynamics e_dd + 2 zeta omega e_dot + omega^2 e = 0 in the feedback-linearized
@@ -41,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 #: The laws (see the module docstring).
-LAWS = ("ct", "id-pd", "pd-g", "fel")
+LAWS = ("ct", "id-pd", "pd-g", "fel", "fel-const")
 
 
 @dataclass(frozen=True)
@@ -51,6 +52,8 @@ class ArmState:
     q, qd : (R, n) sensed joint angles (rad, with sensor noise) and velocities (rad/s).
     mass : (R, n, n) M(q), kg m^2. bias : (R, n) c(q, qd), N m. gravity : (R, n) g(q),
     N m, or None when the law does not need it. damping : (n,) joint damping, N m s/rad.
+    friction : (n,) Coulomb friction the model knows, N m (None: none); computed torque
+    adds friction x sign(qd_d).
     """
 
     q: np.ndarray
@@ -59,6 +62,7 @@ class ArmState:
     bias: np.ndarray
     gravity: np.ndarray | None
     damping: np.ndarray
+    friction: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -150,6 +154,8 @@ def arm_torque(law: str, state: ArmState, motion: DesiredMotion, t: int, dt: flo
     if law == "ct":
         ff = mass_times(state.mass, motion.qdd_step[t]) + state.bias \
             + state.damping * state.qd
+        if state.friction is not None:
+            ff = ff + state.friction * np.sign(motion.qd_mid[t])
     elif law == "id-pd":
         if motion.tau_id is None:
             raise ValueError("the ID feed-forward law needs the motion's tau_id")

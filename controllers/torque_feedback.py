@@ -169,6 +169,7 @@ class TorqueFeedbackController:
         *,
         desired_velocity_rad_s: np.ndarray | None = None,
         bias_nm: np.ndarray | None = None,
+        velocity_rad_s: np.ndarray | None = None,
     ) -> np.ndarray:
         """Motor error (R, n_dof) in normalized torque (torque / limit), not clipped
         (as the velocity controller's; the learner clips the command it sends).
@@ -179,9 +180,12 @@ class TorqueFeedbackController:
         bias_nm : (R, n_dof) N m; given, the result is the computed-torque command
             (for running the controller alone); FEL's motor error is the PD part
             (None): the inverse model is to learn the rest.
+        velocity_rad_s : (R, n_dof) the sensed joint velocities; None: the plant's
+            ``joint_velocities()``.
         """
         q_err = self.joint_error_rad(desired, sensed, plant)
-        qd = np.asarray(plant.joint_velocities(), float)
+        qd = np.asarray(plant.joint_velocities() if velocity_rad_s is None
+                        else velocity_rad_s, float)
         qd_err = -qd if desired_velocity_rad_s is None else desired_velocity_rad_s - qd
         if bias_nm is None:
             return pd_torque(q_err, qd_err, self.gains, clip=False)

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from skinny_mj.controllers.loop import Hook
 from skinny_mj.controllers.metrics import torque_use
+from skinny_mj.controllers.sensing import JointSensing
 from skinny_mj.controllers.torque_feedback import TorqueFeedbackController
 
 #: the rollout hook's protocol, :class:`skinny_mj.controllers.loop.Hook`
@@ -48,6 +49,9 @@ class TorqueLoop:
     gravity_feedforward : add bias torque / limit to the command.
     inverse_dynamics : (T-1, n_dof) normalized torques of the desired motion; given,
         u_error is the computed-torque command (PD + these), for the controller alone.
+    sensing : the joints' sensing (:class:`skinny_mj.controllers.sensing.JointSensing`),
+        kept up to date each step; given, the ESN's velocity inputs and the teacher's
+        velocity are its sensed velocities (None: the plant's true ones).
     """
 
     controller: TorqueFeedbackController
@@ -56,6 +60,7 @@ class TorqueLoop:
     velocity_inputs: bool = True
     gravity_feedforward: bool = False
     inverse_dynamics: np.ndarray | None = None
+    sensing: JointSensing | None = None
     #: (T-1, R, n_dof) applied torque (N m) and (T, R, n_dof) joint velocity (rad/s) and
     #: bias torque (N m) of the last cycle, time-major
     applied_nm: np.ndarray = field(default=None, repr=False)  # type: ignore[assignment]
@@ -86,6 +91,8 @@ class TorqueLoop:
             self._inputs = np.zeros((plant.n_runs, 2 * plant.n_dof))
             self._no_feedforward = np.zeros(shape[1:])
         self._record(0, plant)
+        if self.sensing is not None:
+            self.sensing.reset(plant.joint_angles(), self.velocity_rad_s[0])
 
     def _record(self, t: int, plant) -> None:
         self.velocity_rad_s[t] = plant.joint_velocities()
@@ -95,7 +102,8 @@ class TorqueLoop:
         """(R, 2 n_dof) [qd_d(t+1); qd(t)] / v_max, in a buffer the next call overwrites."""
         out, n = self._inputs, self._desired_in.shape[1]
         out[:, :n] = self._desired_in[t]
-        np.divide(self.velocity_rad_s[t], self.velocity_scale_rad_s, out=out[:, n:])
+        qd = self.velocity_rad_s[t] if self.sensing is None else self.sensing.qd
+        np.divide(qd, self.velocity_scale_rad_s, out=out[:, n:])
         return out
 
     def u_error(self, t: int, desired: np.ndarray, sensed: np.ndarray, plant) -> np.ndarray:
@@ -105,7 +113,8 @@ class TorqueLoop:
             bias = np.broadcast_to(ff * self._limit, (plant.n_runs, len(ff)))
         return self.controller.u_error(desired, sensed, plant,
                                        desired_velocity_rad_s=self.desired_velocity_rad_s[t],
-                                       bias_nm=bias)
+                                       bias_nm=bias, velocity_rad_s=None if self.sensing
+                                       is None else self.sensing.qd)
 
     def feedforward(self, t: int, plant) -> np.ndarray:
         if not self.gravity_feedforward:
@@ -115,6 +124,8 @@ class TorqueLoop:
     def after_step(self, t: int, plant) -> None:
         self.applied_nm[t] = plant.actuator_force_nm()
         self._record(t + 1, plant)
+        if self.sensing is not None:
+            self.sensing.update(plant.joint_angles(), self.velocity_rad_s[t + 1])
 
     def metrics(self, commands: np.ndarray, dt: float) -> dict[str, np.ndarray]:
         """Per-run torque figures (each (R,)) of the last cycle, for commands (R, T-1, n_dof)

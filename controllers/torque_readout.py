@@ -1,6 +1,6 @@
 """Readout fits that remember earlier cycles: learning rules
 (:class:`skinny_mj.controllers.learning.LearningRule`) for
-:func:`skinny_mj.controllers.fel.train`'s ``rule``.
+a :class:`skinny_mj.controllers.loop.Loop`'s ``rule`` (:func:`skinny_mj.controllers.fel.train`).
 
 - :class:`ForgettingReadout`: the normal equations accumulated over the learning
   cycles, each cycle's old statistics weighted by a forgetting factor g per cycle,

@@ -144,7 +144,7 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
         angles = body.body_of(config.plant.body).normalize_angles(ro.angles)
         angle_curve[alive, c] = position_nrmse(angles, desired_angles)[alive]
         if learner in ("fel", "fel-noise") and alive.any():  # as in training: the new method
-            esn.fit(ro.states, fel.beta_target(ro.y_est, ro.y_esn, config.rule.beta),
+            esn.fit(ro.states, fel.beta_target(ro.y_est, ro.y_esn, config.method.beta),
                     runs=alive)
     warnings = run.actuation.train_warnings(run) or 0  # the torque twin's, training and performance
     if warnings and len(seeds) > 1:  # one shared MjData: run the seeds alone
@@ -260,7 +260,7 @@ def report(results, plan, out_dir: Path) -> str:
 STUDY = Study(
     name=NAME, description=__doc__, run_batch=run_batch, runs=10, params=PARAMS,
     # paper E exp. 5 (TrainConfig's defaults): new method, β = 0.1, N = 200, 10 epochs
-    base=TrainConfig().override({"rule.epochs": 10}),
+    base=TrainConfig().override({"method.epochs": 10}),
     rows=tuple(_row(c, lr) for c, lr in [(c, lr) for c in CHANGES for lr in LEARNERS]
                + list(NOISE_ROWS) + list(CONTROL_ROWS)),
     groups={"velocity": [f"{c}-{lr}" for c in ("gain", "offset", "forearm")
@@ -269,7 +269,7 @@ STUDY = Study(
             "noise": ["gain-fel", *(f"{c}-{lr}" for c, lr in NOISE_ROWS)]},
     columns=COLUMNS,
     # a smoke test: 2 runs of 2 training epochs, short phases
-    quick=Quick({"rule.epochs": 2}, runs=2,
+    quick=Quick({"method.epochs": 2}, runs=2,
                 params={"pre_cycles": 1, "change_cycles": 2, "post_cycles": 1}),
     takes=(), report=report,  # the 2D YMCA of paper E: the changes are defined on it
 )

@@ -6,7 +6,7 @@ models (the feedback controller is not delayed), 10 runs each. 2D, joint angles,
 inverse ESN N = 1000, forward ESN N = 100, spectral radius 0.1, reservoir noise 0.2,
 no output feedback, K = 0.65 fixed, sensor noise 0.01 (paper A §3.3, §3.5).
 Each row is a config of the one training path (:data:`MODEL` says the schedule chosen
-where the paper is silent; :func:`run_batch` where each metric is measured).
+where the paper is silent; :func:`metrics` where each metric is measured).
 
 "%" in the paper is read as our NRMSE x 100: NRMSE = sqrt(MSE) / 2 is the RMS error
 as a fraction of the signal range (-1, 1). The paper's "mean difference" may be a mean
@@ -21,19 +21,20 @@ against each other, so it cannot test "almost half").
 
 from __future__ import annotations
 
-import time
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-from skinny_mj.controllers.fel import run_mean
-from skinny_mj.controllers.forward_model import rollout_prediction_error
 from skinny_mj.experiments.claims import values
 
-from skinny_mj.engine.experiment import RunFailed
-from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.engine.study import Quick, Row, Study, Test
 from skinny_mj.plots import line_sweep_png
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.result import feedback_share, mean_abs_error  # noqa: F401 (API)
+
+if TYPE_CHECKING:
+    from skinny_mj.training.result import RunResult
 
 NAME = "paper-a"
 ARCHITECTURES = ("inverse", "parallel", "serial", "hybrid")
@@ -57,8 +58,8 @@ MODEL = TrainConfig().override({
     "plant.dof": 4, "plant.signals": "joint", "plant.sensor_noise": 0.01,
     "esn.n_reservoir": 1000, "esn.spectral_radius": 0.1, "esn.noise_level": 0.2,
     "forward": "parallel", "forward.reservoir": 100,
-    "rule": "original", "rule.cycles": 5, "rule.epochs": 10, "rule.gain_schedule": "fixed",
-    "rule.gain_value": 0.65})
+    "method": "original", "method.cycles": 5, "method.epochs": 10, "method.gain_schedule": "fixed",
+    "method.gain_value": 0.65})
 
 
 def row_id(architecture: str, delay: int) -> str:
@@ -77,60 +78,30 @@ def _row(arch: str, delay: int) -> Row:
                paper, group=arch, quick={} if arch == "inverse" else {"forward.reservoir": 50})
 
 
-def mean_abs_error(true_signals: np.ndarray, desired: np.ndarray) -> np.ndarray:
-    """Mean |desired - actual| as a fraction of the signal range 2, (R,) for (R, T, n)."""
-    return run_mean(np.abs(true_signals - desired)) / 2.0
+#: The closed-loop test with K = 0, an extra: on the training plant, its noise continuing.
+TESTS = (Test("k0", plant="training"),)
 
 
-def feedback_share(ro) -> np.ndarray:
-    """The feedback controller's share of the command, in [0, 1], (R,):
-    mean |u_feedback| / (mean |u_feedback| + mean |y_ESN|), with u_feedback = command -
-    y_ESN (the clipped K u_error). Unlike ``Rollout.correction_ratio`` (|u_feedback| /
-    |u|, which exceeds 1 when the inverse model and the feedback controller push against
-    each other) it reads directly as "the feedback controller's contribution in percent"."""
-    fb, ff = run_mean(np.abs(ro.commands - ro.y_esn)), run_mean(np.abs(ro.y_esn))
-    return fb / np.maximum(fb + ff, 1e-12)
-
-
-def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """Train and measure one (architecture, delay) row for several seeds in lockstep.
-
-    Metrics from the evaluation cycle of the LAST training epoch (feedback ON, K = 0.65,
-    reservoir noise off): the thesis measures the performance error as "the difference
-    between the desired and actual state averaged over all time steps in the last epoch"
-    (thesis §3.3.1; Fig. 5 "the performance error in the last epoch"), the online
-    correction ratio over the same cycle and the prediction error "done by the forward
-    model during the last epoch". A closed-loop test with K = 0 (on the training plant,
-    its noise stream continuing) is recorded as an extra (``test_*``).
-    """
-    from skinny_mj.training.loop import build_run, evaluate, train_run
-
-    start = time.perf_counter()
-    run = build_run(config, seeds)
-    trained = train_run(run)
-    result, ro = trained.fel, trained.fel.last_rollout
-    tests = evaluate(run, plant=run.plant)
-    wall = (time.perf_counter() - start) / len(seeds)
-    mae, share = mean_abs_error(ro.true_signals, run.desired), feedback_share(ro)
-    prediction = None if run.forward is None else rollout_prediction_error(ro)
-    outs: list = []
-    for r, test in enumerate(tests):
-        if result.failed[r]:
-            outs.append(RunFailed(result.fail_reason[r] or "diverged"))
-            continue
-        out = {"performance_nrmse": float(result.position_nrmse[r, -1]),
-               "performance_mae": float(mae[r]),
-               "correction_ratio": float(ro.correction_ratio[r]),
-               "feedback_share": float(share[r]), "motor_nrmse": float(result.motor_nrmse[r, -1])}
-        if prediction is not None:
-            out["prediction_nrmse"] = float(prediction[r])
-        if trained.pretrain_prediction_nrmse is not None:
-            out["pretrain_prediction_nrmse"] = float(trained.pretrain_prediction_nrmse[r])
-        out.update(test_position_nrmse=test.position_nrmse, test_motor_nrmse=test.motor_nrmse,
-                   wall_s=wall, curve_performance_nrmse=[
-                       None if not np.isfinite(v) else float(v) for v in result.position_nrmse[r]])
-        outs.append(out)
-    return outs
+def metrics(result: RunResult) -> dict:
+    """One (architecture, delay) run's metrics from the evaluation cycle of the LAST
+    training epoch (feedback ON, K = 0.65, reservoir noise off): the thesis measures the
+    performance error as "the difference between the desired and actual state averaged
+    over all time steps in the last epoch" (thesis §3.3.1; Fig. 5 "the performance error
+    in the last epoch"), the online correction ratio over the same cycle and the
+    prediction error "done by the forward model during the last epoch"; the K = 0 test
+    (:data:`TESTS`) is recorded as an extra (``test_*``)."""
+    train, ro = result.train, result.last_rollout
+    out = {"performance_nrmse": train.last_position_nrmse,
+           "performance_mae": ro.mean_abs_error, "correction_ratio": ro.correction_ratio,
+           "feedback_share": ro.feedback_share, "motor_nrmse": train.last_motor_nrmse}
+    if ro.prediction_nrmse is not None:
+        out["prediction_nrmse"] = ro.prediction_nrmse
+    if result.pretrain_prediction_nrmse is not None:
+        out["pretrain_prediction_nrmse"] = result.pretrain_prediction_nrmse
+    test = result.tests["k0"]
+    out.update(test_position_nrmse=test.position_nrmse, test_motor_nrmse=test.motor_nrmse,
+               wall_s=result.wall_s, curve_performance_nrmse=train.position_nrmse)
+    return out
 
 
 # -- report -------------------------------------------------------------------------
@@ -271,12 +242,12 @@ def report(results, plan, out_dir: Path) -> str:
 
 
 STUDY = Study(
-    name=NAME, description=__doc__, base=MODEL, runs=10, run_batch=run_batch,
+    name=NAME, description=__doc__, base=MODEL, runs=10, tests=TESTS, metrics=metrics,
     rows=tuple(_row(a, d) for a in ARCHITECTURES for d in DELAYS),
     columns=("performance_nrmse", "feedback_share", "prediction_nrmse",
              "pretrain_prediction_nrmse", "test_position_nrmse", "wall_s"),
     # a smoke test (N = 100 / 50, 2 epochs of 2 learning cycles, 2 delays, 2 runs)
-    quick=Quick({"esn.n_reservoir": 100, "rule.epochs": 2, "rule.cycles": 2}, runs=2,
+    quick=Quick({"esn.n_reservoir": 100, "method.epochs": 2, "method.cycles": 2}, runs=2,
                 rows=tuple(row_id(a, d) for a in ARCHITECTURES for d in QUICK_DELAYS)),
     report=report,
 )

@@ -22,21 +22,25 @@ held: :mod:`skinny_mj.trajectories.patterns`), ``--signals`` the position signal
 
 from __future__ import annotations
 
+import functools
 from dataclasses import asdict
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from skinny_mj.experiments.claims import values
 
-from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.stats import load_runs
-from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.engine.study import Quick, Row, Study, Test
 from skinny_mj.io import atomic_path
 from skinny_mj.plant.body import CONTROL_DT_S
 from skinny_mj.plots import boxplot_png, pyplot
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.trajectories import get
 from skinny_mj.trajectories.patterns import PATTERNS, PREFIX, Movement
+
+if TYPE_CHECKING:
+    from skinny_mj.training.result import RunResult
 
 NAME = "paper-b"
 #: The leader's test speeds (paper B §3, Fig. 3); 1.0 = the trained speed.
@@ -64,8 +68,8 @@ GOOD_REL, FAIL_REL, GOOD_LAG_DEG = 0.3, 0.6, 20.0
 MODEL = TrainConfig().override({
     "plant.dof": 4, "plant.signals": "joint", "plant.leading_arm": "right",
     "plant.sensor_noise": 0.01, "inputs": "sensed", "esn.n_reservoir": 100,
-    "rule": "new", "rule.beta": 0.01, "rule.cycles": 5, "test.washout_cycles": 1,
-    "rule.epochs": 50,  # not stated; 10 (papers D/E) leaves 1:2 unlearned at β = 0.01
+    "method": "new", "method.beta": 0.01, "method.cycles": 5, "test.washout_cycles": 1,
+    "method.epochs": 50,  # not stated; 10 (papers D/E) leaves 1:2 unlearned at β = 0.01
     "esn.spectral_radius": 0.5,  # not stated; SPEC §5 default
     "esn.noise_level": 0.2,  # not stated; reservoir noise of the new method (papers D/E)
 })
@@ -75,54 +79,58 @@ def _tag(speed: float) -> str:
     return f"x{speed:g}"
 
 
-def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """Train lagging-arm ESNs on ``row``'s pattern (``config``: the row's training
-    configuration, its movement the pattern) for several seeds in lockstep, then test
-    each at every leader speed in SPEEDS (a fresh plant whose sensor noise comes from the
-    run's plant seed + 1)."""
-    import time
-
-    from skinny_mj.plant.bimanual import arm_dofs, phase_lag_deg
-    from skinny_mj.training.loop import build_run, evaluate, train_run
-
-    start = time.perf_counter()
-    run = build_run(config, seeds)
-    result = train_run(run).fel
-    lead_side, dof = config.plant.leading_arm, config.plant.dof
+def speed_movement(speed: float, config: TrainConfig):
+    """``config``'s pattern with the leader at ``speed`` x the trained speed."""
     movement = config.movement.trajectory
+    return get(f"{movement}@{speed:g}" if speed != 1.0 else movement, config.plant.dof)
+
+
+#: The trained lagging arm is tested at every leader speed in SPEEDS, each on a fresh
+#: plant whose sensor noise comes from the run's plant seed + 1.
+TESTS = tuple(Test(_tag(speed), functools.partial(speed_movement, speed), plant_seed_offset=1)
+              for speed in SPEEDS)
+
+
+def failure(result: RunResult) -> str | None:
+    """A run fails when the lagging arm's ESN diverged in training or in any test."""
+    if result.train.failed:
+        return "the lagging arm's ESN diverged during training"
+    for speed in SPEEDS:
+        if result.tests[_tag(speed)].failed:
+            return f"the lagging arm's ESN diverged in the test at {speed:g}x"
+    return None
+
+
+def metrics(result: RunResult) -> dict:
+    """One run's training error and, at every leader speed, the lagging arm's errors,
+    its timing (phase lag) and its traces (degrees)."""
+    from skinny_mj.plant.bimanual import arm_dofs, phase_lag_deg
+
+    config = result.config
+    lead_side, dof = config.plant.leading_arm, config.plant.dof
     lag_side = "left" if lead_side == "right" else "right"
     lead, lag = arm_dofs(dof, lead_side)[0], arm_dofs(dof, lag_side)[0]
-    outs: list = [{"train_position_nrmse": float(result.position_nrmse[r, -1]),
-                   "train_curve_position_nrmse": [float(v) for v in result.position_nrmse[r]],
-                   "max_speed_rad_s": [float(v) for v in run.max_speed_rad_s], "traces": {}}
-                  for r in range(len(seeds))]
-    failed = {r: "the lagging arm's ESN diverged during training"
-              for r in range(len(seeds)) if result.failed[r]}
-    period_s, pattern = Movement().period_s, PATTERNS[row.id]
+    pattern = PATTERNS[config.movement.trajectory.removeprefix(PREFIX)]
+    out: dict = {"train_position_nrmse": result.train.last_position_nrmse,
+                 "train_curve_position_nrmse": result.train.position_nrmse,
+                 "max_speed_rad_s": [float(v) for v in result.max_speed_rad_s], "traces": {}}
+    period_s = Movement().period_s
     for speed in SPEEDS:
-        trajectory = get(f"{movement}@{speed:g}" if speed != 1.0 else movement, dof)
-        tests = evaluate(run, trajectory, plant_seeds=[s + 1 for s in run.plant_seeds])
-        desired = trajectory.angles[:, lag]
-        period_steps = period_s / (speed * trajectory.dt) / pattern.frequency_ratio
         t = _tag(speed)
-        for r, (out, test) in enumerate(zip(outs, tests, strict=True)):
-            if test.failed:
-                failed.setdefault(r, f"the lagging arm's ESN diverged in the test at {speed:g}x")
-            if r in failed:
-                continue
-            actual = test.rollout.angles[0, :, lag]
-            out[f"position_nrmse_{t}"] = test.position_nrmse
-            out[f"motor_nrmse_{t}"] = test.motor_nrmse
-            out[f"relative_error_{t}"] = float(np.sqrt(np.mean((actual - desired) ** 2))
-                                               / np.std(desired))
-            out[f"phase_lag_deg_{t}"] = phase_lag_deg(actual, desired, period_steps)
-            out["traces"][t] = {k: np.round(np.degrees(v), 2).tolist() for k, v in
-                                (("leader", test.rollout.angles[0, :, lead]),
-                                 ("desired", desired), ("actual", actual))}
-    wall = (time.perf_counter() - start) / len(seeds)
-    for out in outs:
-        out["wall_s_run"] = wall
-    return [RunFailed(failed[r]) if r in failed else out for r, out in enumerate(outs)]
+        test = result.tests[t]
+        desired = test.trajectory.angles[:, lag]
+        period_steps = period_s / (speed * test.trajectory.dt) / pattern.frequency_ratio
+        actual = test.rollout.angles[0, :, lag]
+        out[f"position_nrmse_{t}"] = test.position_nrmse
+        out[f"motor_nrmse_{t}"] = test.motor_nrmse
+        out[f"relative_error_{t}"] = float(np.sqrt(np.mean((actual - desired) ** 2))
+                                           / np.std(desired))
+        out[f"phase_lag_deg_{t}"] = phase_lag_deg(actual, desired, period_steps)
+        out["traces"][t] = {k: np.round(np.degrees(v), 2).tolist() for k, v in
+                            (("leader", test.rollout.angles[0, :, lead]),
+                             ("desired", desired), ("actual", actual))}
+    out["wall_s_run"] = result.wall_s
+    return out
 
 
 # -- report: figures and claims -------------------------------------------------------
@@ -248,6 +256,6 @@ STUDY = Study(
     name=NAME, description=__doc__, base=MODEL, runs=10,  # runs: not stated in the paper
     rows=tuple(Row(name, {"movement.trajectory": PREFIX + name}, params=asdict(p))
                for name, p in PATTERNS.items()),
-    run_batch=run_batch, columns=COLUMNS, takes=("body", "signals"),
-    quick=Quick({"rule.epochs": 2}, runs=1), report=report,
+    tests=TESTS, failure=failure, metrics=metrics, columns=COLUMNS, takes=("body", "signals"),
+    quick=Quick({"method.epochs": 2}, runs=1), report=report,
 )

@@ -29,12 +29,19 @@ are never used in place of ours.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from skinny_mj.experiments.claims import claim_lines, values
 
+from skinny_mj.engine.results import (
+    no_failure,
+    test_figures,
+    test_motor_nrmse,
+    test_position_nrmse,
+)
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plant import body
@@ -43,7 +50,7 @@ from skinny_mj.recording import record_test
 from skinny_mj.training.config import TrainConfig
 
 if TYPE_CHECKING:  # the training loop is imported where it runs: `--help` needs no MuJoCo
-    from skinny_mj.training.loop import TrainOutcome
+    from skinny_mj.training.result import RunResult
 
 NAME = "paper-d"
 
@@ -92,46 +99,33 @@ def trainings(config: TrainConfig, row: Row) -> dict[str, TrainConfig]:
     FEL's; TT fits the same network to the analytic commands, ``tt_cycles`` rounds, with
     the study parameter ``tt_input_noise`` on its teacher-forced inputs: unstated in the
     thesis, 0 unless a protocol reads it, see :mod:`skinny_mj.engine.protocols`)."""
-    return {"tt": config.override({"rule": "true-target", "rule.beta": config.rule.beta,
-                                   "rule.cycles": row.params["tt_cycles"],
-                                   "rule.input_noise": row.params.get("tt_input_noise", 0.0)}),
+    return {"tt": config.override({"method": "true-target", "method.beta": config.method.beta,
+                                   "method.cycles": row.params["tt_cycles"],
+                                   "method.input_noise": row.params.get("tt_input_noise", 0.0)}),
             "fel": config}
 
 
-def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list[dict[str, Any]]:
-    """Train and test both architectures of one experiment from each seed, in lockstep.
-
-    Per seed the five Table 1 metrics (NRMSE; ``None`` where that architecture's run
-    diverged), ``fel_motor_test`` (which the paper could not compute; our plant has
-    the analytic commands), ``tt_failed`` / ``fel_failed`` (0 or 1, so their mean is
-    the failure rate), each architecture's wall time in s, and failure reasons.
-    """
-    from skinny_mj.training.loop import train_batch
-
-    both = trainings(config, row)
-    tts, fels = train_batch(both["tt"], seeds), train_batch(both["fel"], seeds)
-    return [_metrics(tt, fel) for tt, fel in zip(tts, fels, strict=True)]
-
-
-def _test_value(outcome: TrainOutcome, key: str) -> float | None:
-    return None if outcome.failed else outcome.metrics["test"][key]
-
-
-def _metrics(tt, fel) -> dict[str, Any]:
+def metrics(results: Mapping[str, RunResult]) -> dict[str, Any]:
+    """One run's metrics from both architectures' results (``{"tt": ..., "fel": ...}``):
+    the five Table 1 metrics (NRMSE; ``None`` where that architecture's run diverged),
+    ``fel_motor_test`` (which the paper could not compute; our plant has the analytic
+    commands), ``tt_failed`` / ``fel_failed`` (0 or 1, so their mean is the failure rate),
+    each architecture's wall time in s, and failure reasons."""
+    tt, fel = results["tt"], results["fel"]
     return {
-        "tt_position_train": None if tt.failed else tt.metrics["train"]["position_nrmse"],
-        "tt_motor_train": None if tt.failed else tt.metrics["train"]["motor_nrmse"],
-        "tt_position_test": _test_value(tt, "position_nrmse"),
-        "tt_motor_test": _test_value(tt, "motor_nrmse"),
-        "fel_position_test": _test_value(fel, "position_nrmse"),
-        "fel_motor_test": _test_value(fel, "motor_nrmse"),
+        "tt_position_train": None if tt.failed else tt.train.position_nrmse,
+        "tt_motor_train": None if tt.failed else tt.train.motor_nrmse,
+        "tt_position_test": test_position_nrmse(tt),
+        "tt_motor_test": test_motor_nrmse(tt),
+        "fel_position_test": test_position_nrmse(fel),
+        "fel_motor_test": test_motor_nrmse(fel),
         "tt_failed": int(tt.failed),
         "fel_failed": int(fel.failed),
-        "tt_wall_s": tt.metrics["wall_s"],
-        "fel_wall_s": fel.metrics["wall_s"],
-        "tt_fail_reason": tt.metrics.get("fail_reason"),
-        "fel_fail_reason": fel.metrics.get("fail_reason"),
-        "fel_train_curve_position_nrmse": fel.metrics["train"].get("position_nrmse"),
+        "tt_wall_s": tt.wall_s,
+        "fel_wall_s": fel.wall_s,
+        "tt_fail_reason": tt.fail_reason,
+        "fel_fail_reason": fel.fail_reason,
+        "fel_train_curve_position_nrmse": fel.train.position_nrmse,
     }
 
 
@@ -140,8 +134,8 @@ def _row(row_id: str, method: str, noise: bool, reps: int) -> Row:
     paper: dict[str, float] = {}
     for metric, (mean, var) in zip(COLUMNS, PAPER_TABLE_1[row_id], strict=True):
         paper[metric], paper[f"{metric}_var"] = mean, var
-    return Row(row_id, {"rule": method, **({"rule.beta": BETA} if new else {}),
-                        "rule.cycles": FEL_CYCLES if new else 1, "movement.reps": reps,
+    return Row(row_id, {"method": method, **({"method.beta": BETA} if new else {}),
+                        "method.cycles": FEL_CYCLES if new else 1, "movement.reps": reps,
                         "esn.noise_level": NOISE if noise else 0.0}, paper,
                params={"tt_cycles": TT_CYCLES}, quick={"tt_cycles": 3})
 
@@ -158,11 +152,12 @@ def _average_run(out_dir: Path, row_id: str) -> dict | None:
     return min(runs, key=lambda r: abs(r["metrics"]["tt_position_test"] - mean))
 
 
-def _record(path: Path, outcome: TrainOutcome, row_id: str) -> None:
+def _record(path: Path, outcome: RunResult, row_id: str) -> None:
     """The TT test of one run as an ``.rrd`` (rerun) recording."""
     record_test(path, outcome,
                 f"paper D exp {row_id}, true-target test, average run (seed {outcome.seed})",
-                {"row": row_id, "config": outcome.config.to_dict()})
+                {"row": row_id, "config": outcome.config.to_dict()},
+                figures=test_figures(outcome))
 
 
 def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
@@ -183,7 +178,7 @@ def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
             if not outcome.failed:
                 picked.append((row_id, outcome))
                 _record(out_dir / f"exp{row_id}_tt_average_run.rrd", outcome, row_id)
-                reproduced.append(outcome.metrics["test"]["position_nrmse"]
+                reproduced.append(test_position_nrmse(outcome)
                                   == run["metrics"]["tt_position_test"])
     if not picked:
         return None
@@ -202,7 +197,7 @@ def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
                 ax.plot(t[:len(actual)], actual[:, k], color=colour, lw=1.2,
                         label=f"{axis} actual")
             ax.set(title=f"exp {row_id}: right {joint} (TT test; NRMSE both arms "
-                         f"{outcome.metrics['test']['position_nrmse']:.3f})",
+                         f"{test_position_nrmse(outcome):.3f})",
                    ylabel="normalized position", ylim=(-1.05, 1.05))
             ax.grid(alpha=0.3)
     axes[0, 1].legend(fontsize=7, ncol=3, loc="lower right")
@@ -280,12 +275,12 @@ STUDY = Study(
     rows=tuple(_row(i, *e) for i, e in EXPERIMENTS.items()),
     # paper D §5-6: 3D, Cartesian, N = 200 (see above), spectral radius 0.5, sensor noise
     # 0.01, K 1 -> 0 over 10 gain values (epochs), TT new method: 50 rounds
-    base=TrainConfig().override({"plant.dof": 8, "rule.epochs": 10}),
-    run_batch=run_batch, trainings=trainings,
+    base=TrainConfig().override({"plant.dof": 8, "method.epochs": 10}),
+    trainings=trainings, metrics=metrics, failure=no_failure,  # a diverged run is data
     columns={**COLUMNS, "fel_motor_test": "FEL motor test (extra)", "tt_failed": "TT failed",
              "fel_failed": "FEL failed"},
     # a smoke test, not a reproduction: 2 runs, 2 gain values, 3 TT rounds
-    quick=Quick({"rule.epochs": 2}, runs=2),
+    quick=Quick({"method.epochs": 2}, runs=2),
     report=report,
 )
 

@@ -10,7 +10,7 @@ modern dance md_02, seconds 3 to 9.26, the length of one YMCA):
   10
   repetitions, new method with β = 0.3, 0.1, 0.05;
 - ``<mv>-ridge1``, ``-ridge5``, ``-ridge10``: rows 1–3 (original method, reservoir noise
-  0.03) with ``esn.readout=ridge`` and ``rule.fit=ridge-select``: each fit's lambda from the
+  0.03) with ``esn.readout=ridge`` and ``method.fit=ridge-select``: each fit's lambda from the
   grid 1e-8 ... 10 (:data:`skinny_mj.controllers.ridge_select.RIDGE_GRID`) that best predicts the
   targets of the cycle before it (:class:`skinny_mj.controllers.ridge_select.RidgeSelector`);
 - ``<mv>-ridge-new``: row 5 (new method, β = 0.1) with the same ridge selection.
@@ -29,6 +29,7 @@ import numpy as np
 from skinny_mj.experiments.claims import claim_lines
 from skinny_mj.experiments.paper_e import study as paper_e
 
+from skinny_mj.engine.results import STANDARD_METRICS, test_figures
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plots import boxplot_png
 from skinny_mj.recording import record_test
@@ -41,7 +42,7 @@ TABLE_COLUMNS = {"position_nrmse": "test position NRMSE", "motor_nrmse": "test m
                  "train_wall_s": "train wall (s)", "log10_lambda": "log10 λ (last epoch)"}
 #: Ridge rows: id suffix -> the paper E row whose schedule they take.
 RIDGE_ROWS = {"ridge1": "1", "ridge5": "2", "ridge10": "3", "ridge-new": "5"}
-RIDGE = {"esn.readout": "ridge", "rule.fit": "ridge-select"}
+RIDGE = {"esn.readout": "ridge", "method.fit": "ridge-select"}
 
 
 def md02_movement() -> str:
@@ -49,12 +50,13 @@ def md02_movement() -> str:
     return f"{sample_clip('md_02')}{MD02_EXCERPT}"
 
 
-def _ridge_lambda(metrics: dict) -> list | None:
-    return metrics["train"].get("ridge_lambda")
+def _ridge_lambda(result) -> list | None:
+    """The ridge λ the readout fit chose, per epoch (None: no ridge selection)."""
+    return result.train.extra.get("ridge_lambda")
 
 
-def _log10_lambda(metrics: dict) -> float | None:
-    lam = _ridge_lambda(metrics)
+def _log10_lambda(result) -> float | None:
+    lam = _ridge_lambda(result)
     return None if not lam or lam[-1] is None else float(np.log10(lam[-1]))
 
 
@@ -127,7 +129,8 @@ def _recordings(out_dir: Path, results, plan, mv: str) -> list[str]:
         path = out_dir / f"{row_id}_median_seed{run['seed']}.rrd"
         if not path.is_file():
             outcome = train(plan.config(row_id), int(run["seed"]))
-            record_test(path, outcome, f"{NAME} {row_id}, median run", {"row": row_id})
+            record_test(path, outcome, f"{NAME} {row_id}, median run", {"row": row_id},
+                        figures=test_figures(outcome))
         lines.append(f"recording: {path.name} (test position NRMSE "
                      f"{run['metrics']['position_nrmse']:.4f})")
     return lines
@@ -137,8 +140,7 @@ STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, runs=20,
     groups={"paper": tuple(f"{mv}-{i}" for mv in ("ymca", "md02") for i in paper_e.TABLE_1),
             "ridge": tuple(f"{mv}-{s}" for mv in ("ymca", "md02") for s in RIDGE_ROWS)},
-    metrics={"position_nrmse": "test.position_nrmse", "motor_nrmse": "test.motor_nrmse",
-             "train_wall_s": "wall_s", "log10_lambda": _log10_lambda,
+    metrics={**STANDARD_METRICS, "log10_lambda": _log10_lambda,
              "ridge_lambda": _ridge_lambda},
-    columns=TABLE_COLUMNS, quick=Quick({"rule.epochs": 2}, runs=2), report=report,
+    columns=TABLE_COLUMNS, quick=Quick({"method.epochs": 2}, runs=2), report=report,
 )

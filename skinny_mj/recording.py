@@ -342,17 +342,20 @@ def _log_torques(rec, torques: Mapping[str, np.ndarray], dof_names: list[str],
 
 
 def record_test(path: str | Path, outcome: Any, title: str,
-                metadata: Mapping[str, Any] | None = None) -> Path:
+                metadata: Mapping[str, Any] | None = None, *,
+                figures: Mapping[str, Any] | None = None) -> Path:
     """Write the closed-loop test of a trained run (a
-    :class:`skinny_mj.training.loop.TrainOutcome`) as one ``.rrd``: desired vs actual angles
-    and signals, commands, the arms in 3D, and the training curve."""
+    :class:`skinny_mj.training.result.RunResult`) as one ``.rrd``: desired vs actual angles
+    and signals, commands, the arms in 3D, and the training curve; ``figures``: the
+    test's figures for the recording's metadata
+    (:func:`skinny_mj.engine.results.test_figures`)."""
     test, cfg, ro = outcome.test, outcome.config, outcome.test.rollout
-    curve = outcome.metrics["train"].get("position_nrmse")
+    curve = outcome.train.position_nrmse
     curves = None
     if isinstance(curve, list) and curve:
         curves = {"train_position_nrmse": np.array([np.nan if v is None else v for v in curve],
                                                    dtype=float)}
-    meta = {"seed": outcome.seed, "test": outcome.metrics["test"],
+    meta = {"seed": outcome.seed, "test": dict(figures or {}),
             "movement": cfg.movement.trajectory, **(metadata or {})}
     skinny = body.body_of(cfg.plant.body)
     return write_recording(

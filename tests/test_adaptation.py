@@ -97,11 +97,11 @@ def test_defaults_pass_through_bit_for_bit_and_the_old_rows_keep_their_seeds():
     p = exp.config.params
     assert (p["gain"], p["pre_cycles"], p["change_cycles"], p["post_cycles"],
             p["actuator_gain"], p["offset"], study.runs) == (0.5, 2, 8, 4, 0.7, 0.1, 10)
-    assert study.config("gain-fel") == adaptation.TrainConfig().override({"rule.epochs": 10})
+    assert study.config("gain-fel") == adaptation.TrainConfig().override({"method.epochs": 10})
     assert study.config("payload-fel").actuation.kind == "torque"
     assert 0 < adaptation.forearm_floor(study.base, p["forearm"]) < 0.1
     quick = study.build(quick=True).config
-    assert (quick.params["change_cycles"], quick.config("mass-rls").rule.epochs) == (2, 2)
+    assert (quick.params["change_cycles"], quick.config("mass-rls").method.epochs) == (2, 2)
     # the batch model without an edit is the one it always was
     from skinny_mj.plant.model import load_batch_model
     a, b = load_batch_model(4, 2), load_batch_model(4, 2, edit=None)

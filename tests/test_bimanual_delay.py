@@ -66,7 +66,7 @@ def test_each_arms_forward_model_learns_its_own_next_position():
     from skinny_mj.training.loop import build_run, train_run
 
     cfg = bd.STUDY.build(quick=True).config.config("phase0-share-predictions-d4").override(
-        {"rule.epochs": 1, "rule.cycles": 1, "movement.speed": 2.0})
+        {"method.epochs": 1, "method.cycles": 1, "movement.speed": 2.0})
     run = build_run(cfg, [7])
     assert isinstance(run.forward, ArmForwardModels) and run.esn.cfg.n_inputs == 8
     ro = train_run(run).fel.last_rollout
@@ -92,7 +92,7 @@ def test_lockstep_batch_equals_each_seed_alone():
     from skinny_mj.training.loop import build_run, evaluate, train_run
 
     cfg = bd.MODEL.override({  # short cycles (100 steps): a fast test
-        "movement.trajectory": "bimanual-phase180", "rule.epochs": 1, "rule.cycles": 1,
+        "movement.trajectory": "bimanual-phase180", "method.epochs": 1, "method.cycles": 1,
         "plant.delay": 3, "forward": "parallel", "forward.sharing": "predictions",
         "movement.speed": 3.0, "test.washout_cycles": 0})
 

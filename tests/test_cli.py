@@ -143,7 +143,7 @@ def test_demo_prints_the_table_and_where_the_recording_is(tmp_path):
     assert "test position NRMSE" in result.stdout and "paper" in result.stdout
     assert f"skinny view {out}" in result.stdout
     metrics = json.loads((out / "metrics.json").read_text())
-    assert metrics["config"]["rule"] == "new" and metrics["config"]["learning_cycles"] == 3
+    assert metrics["config"]["method"] == "new" and metrics["config"]["learning_cycles"] == 3
     assert metrics["test"]["position_nrmse"] < 0.1
 
 
@@ -173,7 +173,7 @@ def test_train_true_target_architecture_3d(tmp_path):
     metrics = json.loads((out / "metrics.json").read_text())
     # Teacher-forced training fits its targets far better than the closed loop tests.
     assert metrics["train"]["motor_nrmse"] < metrics["test"]["motor_nrmse"]
-    assert metrics["config"]["rule"] == "true-target"
+    assert metrics["config"]["method"] == "true-target"
     assert (out / "run.rrd").is_file() and (out / "model.npz").is_file()
     assert not (out / "learning_curve.png").exists()  # no epochs, no curve
 
@@ -194,7 +194,7 @@ def test_train_takes_the_torque_teacher_and_readout_fit_flags(tmp_path):
                  "forgetting", "--readout-forgetting", "0.7", "--beta", "1", "--cycles", "1",
                  "--epochs", "1", "--reservoir", "30", "--out", str(out)]) == 0
     cfg = json.loads((out / "metrics.json").read_text())["config"]
-    assert (cfg["actuation.feedback"], cfg["rule.fit"], cfg["rule.fit.forgetting"]) == \
+    assert (cfg["actuation.feedback"], cfg["method.fit"], cfg["method.fit.forgetting"]) == \
         ("inertia-pd", "forgetting", 0.7)
 
 

@@ -37,22 +37,22 @@ def test_train_repeats_from_its_metrics_json(trained, tmp_path):
                  "--out", str(tmp_path / "b")]) == 0
     again = _metrics(tmp_path / "b")
     assert again == _metrics(trained)  # config, seed, every metric: bit for bit
-    assert again["seed"] == 5 and again["config"]["rule.beta"] == 0.3
+    assert again["seed"] == 5 and again["config"]["method.beta"] == 0.3
 
 
 def test_train_flags_override_only_what_they_name(trained, tmp_path):
     assert main(["train", "--config", str(trained / "metrics.json"), "--epochs", "2",
                  "--seed", "6", "--quiet", "--out", str(tmp_path / "c")]) == 0
     m, first = _metrics(tmp_path / "c"), _metrics(trained)
-    assert m["seed"] == 6 and m["config"]["rule.epochs"] == 2
+    assert m["seed"] == 6 and m["config"]["method.epochs"] == 2
     # every other setting is the file's, not a default (reservoir 30, not 200)
-    changed = ("rule.epochs", "learning_cycles")
+    changed = ("method.epochs", "learning_cycles")
     assert {k: v for k, v in m["config"].items() if k not in changed} \
         == {k: v for k, v in first["config"].items() if k not in changed}
 
 
 @pytest.mark.parametrize("bare", [
-    {"esn.n_reservoir": 30, "rule.epochs": 1, "rule": "original"},
+    {"esn.n_reservoir": 30, "method.epochs": 1, "method": "original"},
     {"reservoir": 30, "epochs": 1, "method": "original"},  # an earlier version's flat fields
 ])
 def test_train_takes_a_bare_config(tmp_path, bare):
@@ -60,27 +60,27 @@ def test_train_takes_a_bare_config(tmp_path, bare):
     assert main(["train", "--config", str(tmp_path / "cfg.json"), "--quiet", "--seed", "2",
                  "--out", str(tmp_path / "o")]) == 0
     m = _metrics(tmp_path / "o")
-    assert m["config"]["rule"] == "original" and m["config"]["esn.n_reservoir"] == 30
+    assert m["config"]["method"] == "original" and m["config"]["esn.n_reservoir"] == 30
     assert m["seed"] == 2
 
 
 def test_train_takes_key_value_overrides_after_the_file(trained, tmp_path):
     assert main(["train", "--config", str(trained / "metrics.json"), "--cycles", "2",
-                 "rule.epochs=2", "esn.spectral_radius=0.4", "rule=original", "--quiet",
+                 "method.epochs=2", "esn.spectral_radius=0.4", "method=original", "--quiet",
                  "--out", str(tmp_path / "kv")]) == 0
     cfg = _metrics(tmp_path / "kv")["config"]
-    assert (cfg["rule"], cfg["rule.epochs"], cfg["esn.spectral_radius"]) == ("original", 2, 0.4)
+    assert (cfg["method"], cfg["method.epochs"], cfg["esn.spectral_radius"]) == ("original", 2, 0.4)
     assert cfg["esn.n_reservoir"] == 30  # the file's
 
 
 @pytest.mark.parametrize("argv, words", [
     (["esn.spectral_radus=0.9"], "did you mean 'esn.spectral_radius'"),
-    (["rule.fit=forgetting"], "rule.fit=forgetting"),
-    (["rule=original", "rule.beta=0.5"], "not a setting of rule=original"),
-    (["rule.epochs=two"], "rule.epochs must be a whole number"),
+    (["method.fit=forgetting"], "method.fit=forgetting"),
+    (["method=original", "method.beta=0.5"], "not a setting of method=original"),
+    (["method.epochs=two"], "method.epochs must be a whole number"),
     (["spectral_radius"], "KEY=VALUE"),
     (["--epochs", "0"], "epochs must be >= 1"),
-    (["--epochs", "3", "rule.epochs=2"], "--epochs 3 and rule.epochs=2 set the same key"),
+    (["--epochs", "3", "method.epochs=2"], "--epochs 3 and method.epochs=2 set the same key"),
 ])
 def test_train_refuses_a_bad_key_or_value_in_one_line(tmp_path, capsys, argv, words):
     assert main(["train", *argv, "--quiet", "--out", str(tmp_path / "no")]) == 2
@@ -97,14 +97,14 @@ def test_key_values_and_flags_apply_together_before_the_config_checks():
     def config(*argv):
         return train_config(build_parser().parse_args(["train", *argv]))[0]
 
-    # rule=none needs test.gain > 0: either alone is refused, together they are one config
-    cfg = config("rule=none", "test.gain=1", "--actuation", "torque", "--feedback", "ct")
-    assert isinstance(cfg.rule, NoLearning) and cfg.test.gain == 1.0
+    # method=none needs test.gain > 0: either alone is refused, together they are one config
+    cfg = config("method=none", "test.gain=1", "--actuation", "torque", "--feedback", "ct")
+    assert isinstance(cfg.method, NoLearning) and cfg.test.gain == 1.0
     assert cfg.torque.feedback == "ct"
     assert config("--reservoir", "50", "esn.n_reservoir=50").esn.n_reservoir == 50  # agree
     with pytest.raises(SkinnyInputError, match="--reservoir 40 and esn.n_reservoir=50"):
         config("--reservoir", "40", "esn.n_reservoir=50")  # contradict: refused
-    assert config("--method", "original", "--epochs", "4").rule.epochs == 4
+    assert config("--method", "original", "--epochs", "4").method.epochs == 4
 
 
 _LEGACY = Path(__file__).parent / "data" / "legacy_n5"  # `skinny train --reservoir 5
@@ -115,7 +115,7 @@ def test_train_repeats_an_earlier_versions_metrics_json(tmp_path):
     assert main(["train", "--config", str(_LEGACY / "metrics.json"), "--quiet",
                  "--out", str(tmp_path / "r")]) == 0
     old, new = json.loads((_LEGACY / "metrics.json").read_text()), _metrics(tmp_path / "r")
-    assert new["config"]["esn.n_reservoir"] == 5 and new["config"]["rule.epochs"] == 1
+    assert new["config"]["esn.n_reservoir"] == 5 and new["config"]["method.epochs"] == 1
     for part in ("train", "test"):  # the same run (float-exact on one machine)
         for key, value in old[part].items():
             assert new[part][key] == pytest.approx(value, rel=1e-9)
@@ -139,17 +139,17 @@ def test_an_earlier_versions_setting_it_ignored_is_dropped():
 
     cfg = TrainConfig.from_dict({"method": "true-target", "epochs": 2, "tt_cycles": 7,
                                  "forward_reservoir": 50, "u_error_gain": 2.0})
-    assert cfg.method == "true-target" and cfg.rule.cycles == 7
-    assert cfg.forward.kind == "none" and not hasattr(cfg.rule, "epochs")
+    assert cfg.method.kind == "true-target" and cfg.method.cycles == 7
+    assert cfg.forward.kind == "none" and not hasattr(cfg.method, "epochs")
     fel = TrainConfig.from_dict({"method": "original", "cycles": 5, "tt_input_noise": 0.1})
-    assert fel.learning_cycles == 5 and not hasattr(fel.rule, "input_noise")
+    assert fel.learning_cycles == 5 and not hasattr(fel.method, "input_noise")
 
 
 @pytest.mark.parametrize("content, needle", [
     ("{not json", "not a JSON config"),
     ("[1, 2]", "JSON object"),
-    ('{"epochs": "three"}', "rule.epochs must be a whole number"),
-    ('{"rule.epochs": "three"}', "rule.epochs must be a whole number"),
+    ('{"epochs": "three"}', "method.epochs must be a whole number"),
+    ('{"method.epochs": "three"}', "method.epochs must be a whole number"),
     ('{"no_such_field": 1}', "unknown training config field"),
     ('{"experiment": "paper_e", "options": {}, "selection": {}}', "sweep's config.json"),
     ('{"config": {"reservoir": 30}, "seed": "x"}', "seed"),

@@ -115,7 +115,7 @@ def test_fake_sweep_killed_twice_resumes_to_the_same_results(tmp_path):
 
 @pytest.mark.slow
 def test_paper_e_sweep_killed_at_random_points_resumes_to_the_same_results(tmp_path):
-    """Measured for docs/results/reliability.md: 3 kills, then --resume (~2.5 min)."""
+    """3 kills of a real sweep, then --resume (~2.5 min)."""
     base = ["skinny", "experiment", "paper-e", "--quick", "--rows", "table",
             "--workers", "2", "--quiet"]
     ref, out = tmp_path / "ref", tmp_path / "out"

@@ -75,9 +75,9 @@ from dataclasses import replace
 from threadpoolctl import threadpool_info
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.loop import train
-out = train(TrainConfig().override(rule__epochs=3), 3)
+out = train(TrainConfig().override(method__epochs=3), 3)
 blas = max(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
-print(blas, out.metrics["test"]["position_nrmse"].hex(),
+print(blas, out.test.position_nrmse.hex(),
       hashlib.sha256(out.esn.W_out.tobytes()).hexdigest())
 """
 

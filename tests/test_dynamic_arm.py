@@ -112,11 +112,11 @@ def test_mass_times_is_each_runs_own_sum_whatever_the_batch(n):
 
 
 @pytest.mark.parametrize("changes", [
-    {"actuation": "torque", "actuation.feedback": "ct"},  # a controller alone: rule=none
-    {"actuation": "torque", "actuation.feedback": "inertia-pd", "rule": "true-target"},
-    {"rule.fit": "forgetting"},  # remembering fits are for FEL on the torque body
-    {"actuation": "torque", "rule.fit": "sometimes"},
-    {"actuation": "torque", "rule.forgetting": 1.5},
+    {"actuation": "torque", "actuation.feedback": "ct"},  # a controller alone: method=none
+    {"actuation": "torque", "actuation.feedback": "inertia-pd", "method": "true-target"},
+    {"method.fit": "forgetting"},  # remembering fits are for FEL on the torque body
+    {"actuation": "torque", "method.fit": "sometimes"},
+    {"actuation": "torque", "method.forgetting": 1.5},
     {"actuation": "torque", "actuation.feedback": "inertia-pd", "actuation.omega": -1.0},
     {"actuation.omega": 5.0},  # a torque setting
 ])
@@ -127,15 +127,15 @@ def test_arm_settings_are_validated(changes):
 
 def test_feedback_share_is_the_gain_times_the_error_signal():
     cfg = TrainConfig().override({
-        "actuation": "torque", "movement.trajectory": "y", "rule": "new", "rule.beta": 1.0,
-        "rule.cycles": 1, "rule.epochs": 2, "actuation.feedback": "inertia-pd",
-        "rule.fit": "forgetting"})
+        "actuation": "torque", "movement.trajectory": "y", "method": "new", "method.beta": 1.0,
+        "method.cycles": 1, "method.epochs": 2, "actuation.feedback": "inertia-pd",
+        "method.fit": "forgetting"})
     from skinny_mj.training.loop import train
 
-    m = train(cfg, 0).metrics["train"]
-    np.testing.assert_allclose(m["feedback_share"],
-                               np.asarray(m["gains"]) * m["error_signal_share"])
-    assert m["error_signal_share"][0] > 0 and m["feedback_share"][-1] == 0.0
+    t = train(cfg, 0).train
+    np.testing.assert_allclose(t.extra["feedback_share"],
+                               np.asarray(t.gains) * t.extra["error_signal_share"])
+    assert t.extra["error_signal_share"][0] > 0 and t.extra["feedback_share"][-1] == 0.0
 
 
 @pytest.mark.parametrize("dof", [4, 8])

@@ -62,11 +62,11 @@ def test_computed_torque_tracks_ymca_within_its_need():
     # the movement needs, and never at the limit
     from skinny_mj.training.loop import TrainConfig, train
 
-    o = train(TrainConfig().override(actuation="torque", rule="none", test__gain=1.0,
+    o = train(TrainConfig().override(actuation="torque", method="none", test__gain=1.0,
                                         actuation__feedback="ct"))
-    tq = o.metrics["test"]["torque"]
+    tq = o.test.torque_figures
     need = torque_training.feasibility(4, o.test.trajectory)["mean_abs_nm"].mean()
-    assert o.metrics["test"]["position_nrmse"] < 0.02
+    assert o.test.position_nrmse < 0.02
     assert tq["mean_abs_torque_nm"] < 1.5 * need and tq["max_commanded_ratio"] < 1.0
 
 

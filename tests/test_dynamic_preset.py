@@ -22,10 +22,10 @@ def test_torque_general_sets_its_fields_and_the_velocity_preset_is_untouched():
                          "--epochs", "2", "--seed", "3"])
     want = preset_fields("general", "torque")
     got = cfg.to_dict()
-    assert seed == 3 and cfg.rule.epochs == 2  # a flag given overrides the preset
-    assert {k: got[k] for k in want if k != "rule.epochs"} == \
-        {k: v for k, v in want.items() if k != "rule.epochs"}
-    assert (cfg.actuation.kind, cfg.actuation.feedback, cfg.rule.fit.kind) == (
+    assert seed == 3 and cfg.method.epochs == 2  # a flag given overrides the preset
+    assert {k: got[k] for k in want if k != "method.epochs"} == \
+        {k: v for k, v in want.items() if k != "method.epochs"}
+    assert (cfg.actuation.kind, cfg.actuation.feedback, cfg.method.fit.kind) == (
         "torque", "inertia-pd", "forgetting")
     velocity, _ = _config(["train", "--preset", "general"])
     assert velocity == TrainConfig().override(preset_fields("general"))  # as before
@@ -63,4 +63,4 @@ def test_train_torque_general_records_the_preset(tmp_path):
     assert meta["training"]["preset"] == "general"
     assert meta["config"]["actuation"] == "torque"
     assert meta["config"]["actuation.feedback"] == "inertia-pd"
-    assert meta["config"]["rule.fit"] == "forgetting"
+    assert meta["config"]["method.fit"] == "forgetting"

@@ -104,7 +104,7 @@ def _untrained_torque_model(path) -> None:
     the ESN commands no torque), so ``skinny test`` runs one cheap test cycle."""
     from skinny_mj.training.loop import TrainConfig, build_run
 
-    cfg = TrainConfig().override(actuation="torque", rule__epochs=1)
+    cfg = TrainConfig().override(actuation="torque", method__epochs=1)
     run = build_run(cfg, [1])
     run.esn.save(path, metadata={"dof": cfg.plant.dof, "signals": cfg.plant.signals,
                                  "sensor_noise": cfg.plant.sensor_noise, "actuation": "torque",

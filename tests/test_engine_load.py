@@ -2,8 +2,8 @@
 
 A fresh process runs 800 trivial runs, each with a 400-float trace in its run file
 (~9 KB a run); the parent's peak RSS over its baseline must stay far below what holding
-every record takes (measured 14.4 MB for these 800). The 10 000-run figures are
-in benchmarks/bench_engine_load.py and docs/results/reliability.md.
+every record takes (measured 14.4 MB for these 800; 10 000 trivial runs took 62 MB of
+parent peak RSS on 2 workers).
 """
 
 from __future__ import annotations

@@ -25,15 +25,15 @@ from skinny_mj.plant.task import load
 from skinny_mj.training.loop import TrainConfig, train, train_batch
 
 # new method, 2 epochs of 4 cycles, 313 steps
-TINY = TrainConfig().override(rule__epochs=2, rule__cycles=1)
+TINY = TrainConfig().override(method__epochs=2, method__cycles=1)
 
 
 def _same_outcome(a, b, atol: float = 0.0) -> None:
     for key in ("position_nrmse", "motor_nrmse"):
-        np.testing.assert_allclose(a.metrics["test"][key], b.metrics["test"][key],
+        np.testing.assert_allclose(getattr(a.test, key), getattr(b.test, key),
                                    rtol=0, atol=atol)
-        np.testing.assert_allclose(a.metrics["train"][key], b.metrics["train"][key],
-                                   rtol=0, atol=atol)
+        np.testing.assert_allclose(np.asarray(getattr(a.train, key), float),
+                                   np.asarray(getattr(b.train, key), float), rtol=0, atol=atol)
     np.testing.assert_allclose(a.esn.W_out, b.esn.W_out, rtol=0, atol=atol)
     np.testing.assert_allclose(a.test.rollout.commands, b.test.rollout.commands, rtol=0,
                                atol=atol)
@@ -47,14 +47,14 @@ def test_fast_path_equals_dm_control_path_per_seed():
         slow = train(TINY.override(plant__backend="env"), seed)
         # Same operations on the same numbers: bitwise in practice; 1e-9 is the contract.
         _same_outcome(outcome, slow, atol=1e-9)
-        assert outcome.metrics["lockstep_runs"] == len(seeds)
+        assert outcome.lockstep_runs == len(seeds)
 
 
 @pytest.mark.parametrize("cfg", [
     TINY,
-    TrainConfig().override(rule="original", rule__epochs=2, movement__reps=2),
-    TrainConfig().override(rule="true-target", rule__cycles=3),
-    TrainConfig().override(plant__signals="joint", rule__epochs=1),
+    TrainConfig().override(method="original", method__epochs=2, movement__reps=2),
+    TrainConfig().override(method="true-target", method__cycles=3),
+    TrainConfig().override(plant__signals="joint", method__epochs=1),
 ])
 def test_lockstep_equals_one_at_a_time_bitwise(cfg):
     seeds = [1, 2, 3]
@@ -62,7 +62,7 @@ def test_lockstep_equals_one_at_a_time_bitwise(cfg):
         single = train(cfg, seed)
         _same_outcome(outcome, single)
         assert outcome.seed == seed
-        assert outcome.metrics["config"] == single.metrics["config"]
+        assert outcome.config.to_dict() == single.config.to_dict()
 
 
 def test_batch_esn_slice_continues_like_the_single_network():

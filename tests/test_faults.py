@@ -156,20 +156,20 @@ def _train_row(row: Row, seed: int) -> dict:
     from skinny_mj.training.config import TrainConfig
     from skinny_mj.training.loop import train
 
-    fel = row.params.get("rule", "new") in ("original", "new")
+    fel = row.params.get("method", "new") in ("original", "new")
     outcome = train(TrainConfig().override({"esn.n_reservoir": 20, "movement.trajectory": "y",
-                                            **({"rule.epochs": 1} if fel else {}),
+                                            **({"method.epochs": 1} if fel else {}),
                                             **row.params}), seed)
     if outcome.failed:
-        raise RunFailed(outcome.metrics["fail_reason"])
-    return {"position_nrmse": outcome.metrics["test"]["position_nrmse"]}
+        raise RunFailed(outcome.fail_reason)
+    return {"position_nrmse": outcome.test.position_nrmse}
 
 
 def test_diverging_runs_are_failed_with_reasons_and_the_sweep_goes_on(tmp_path):
     rows = (Row("ok", {"esn.readout": "ridge", "esn.ridge_lambda": 1e-4, "esn.noise_level": 0.0}),
             Row("huge-radius", {"esn.spectral_radius": 1e6}),
             Row("huge-noise", {"esn.noise_level": 1e308}),  # inf states
-            Row("singular-fit", {"rule": "true-target", "esn.noise_level": 1e308}))  # NaN solve
+            Row("singular-fit", {"method": "true-target", "esn.noise_level": 1e308}))  # NaN solve
     results = run_sweep(Experiment("numfaults", rows, _train_row, runs=1), tmp_path,
                         workers=1, progress=False)
     by_row = {r["row"]: r for r in results["rows"]}

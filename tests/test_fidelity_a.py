@@ -15,7 +15,7 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
 
 #: Small networks on the short movement Y (the rows' runs in a fraction of a second).
-TINY = {"esn.n_reservoir": 30, "forward.reservoir": 20, "rule.cycles": 1,
+TINY = {"esn.n_reservoir": 30, "forward.reservoir": 20, "method.cycles": 1,
         "movement.trajectory": "y"}
 SEEDS = [11, 12]
 
@@ -47,8 +47,8 @@ def test_a_short_run_equals_the_long_runs_checkpoint(arch, forward_input):
     if forward_input == "chained":
         return
     pa_row = paper_a.STUDY.row(f"{arch}-d3")
-    theirs = paper_a.run_batch(paper_a.STUDY.config(pa_row.id).override(
-        {**TINY, "rule.epochs": 2}), pa_row, SEEDS)
+    theirs = paper_a.STUDY.run(paper_a.STUDY.config(pa_row.id).override(
+        {**TINY, "method.epochs": 2}), pa_row, SEEDS)
     for o, t in zip(long, theirs, strict=True):
         assert o["curve_train_nrmse"] == t["curve_performance_nrmse"]
         assert o["train_nrmse_e2"] == t["performance_nrmse"]
@@ -61,7 +61,7 @@ def test_a_short_run_equals_the_long_runs_checkpoint(arch, forward_input):
 def test_chained_forward_model_is_fed_its_own_prediction():
     from skinny_mj.training.loop import build_run, train_run
 
-    cfg = paper_a.MODEL.override({**TINY, "rule.epochs": 1, "plant.delay": 3,
+    cfg = paper_a.MODEL.override({**TINY, "method.epochs": 1, "plant.delay": 3,
                                   "forward": "parallel"})
     for forward_input in ("sensed", "chained"):
         run = build_run(cfg.override({"forward.input": forward_input}), SEEDS[:1])

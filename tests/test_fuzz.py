@@ -197,8 +197,8 @@ def test_fuzz_bvh(data, dof):
     _loads_or_input_error(_write(data, ".bvh"), dof)
 
 
-_FIELDS = sorted({k for choice in ({}, {"rule": "true-target"}, {"actuation": "torque"},
-                                    {"forward": "parallel"}, {"rule": "original"})
+_FIELDS = sorted({k for choice in ({}, {"method": "true-target"}, {"actuation": "torque"},
+                                    {"forward": "parallel"}, {"method": "original"})
                    for k in TrainConfig().override(choice).to_dict()} | set(LEGACY_KEYS))
 _VALUES = (st.none() | st.booleans() | st.integers(-10**12, 10**12)
            | st.floats(allow_nan=True, allow_infinity=True) | st.text(max_size=12)

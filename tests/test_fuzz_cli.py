@@ -35,7 +35,7 @@ NAMES = ["ymca", "ymca@0.5", "ymca@abc", "ymca@0", "y-pure", "nope", "../../x", 
          "md_02", "x.amc@start=-1", "file.csv@start=1,duration=0", "", "list", "paper-e",
          "paper-zz", "1,2", "table", "fig3,nope", "ymca@", " , ", "babble:", "babble:seed=-1",
          "babble:duration=1e12", "set:", "set:ymca++y", "set:ymca+nope", "md_02.amc@start",
-         "rule.epochs=2", "plant.dof=8", "local", "tcp://", "bogus"]
+         "method.epochs=2", "plant.dof=8", "local", "tcp://", "bogus"]
 
 
 class _Reached(Exception):
@@ -95,8 +95,8 @@ def argvs(draw, files: dict[str, str], out: str) -> list[str]:
     if command in ("trajectory export", "experiment", "sweep"):
         argv.append(draw(st.sampled_from(NAMES + list(files.values()))))
     if command == "train" and draw(st.booleans()):  # KEY=VALUE overrides beside the flags
-        argv.append(draw(st.sampled_from(["rule.epochs=2", "plant.dof=8", "esn=1", "=1",
-                                          "movement.trajectory=", "rule.epochs=x"])))
+        argv.append(draw(st.sampled_from(["method.epochs=2", "plant.dof=8", "esn=1", "=1",
+                                          "movement.trajectory=", "method.epochs=x"])))
     values = st.sampled_from(NUMBERS) | st.sampled_from(NAMES) \
         | st.sampled_from(sorted(files.values())) | st.text(max_size=6)
     for flag in draw(st.lists(st.sampled_from(COMMANDS[command]), max_size=4)):

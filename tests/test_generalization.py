@@ -121,7 +121,7 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
     # a Cartesian candidate is its base row with one change, on the base row's seeds
     base, elbow = (full.config.config(r) for r in ("c3-babble15+ymca", "c3-babble15+ymca+elbow"))
     assert elbow == base.override({"plant.signals": "cartesian-elbow"})
-    assert full.config.config("c2-general+damp0.3").rule.u_error_damping == 0.3
+    assert full.config.config("c2-general+damp0.3").method.u_error_damping == 0.3
     seeds = {r.row_id: r.seeds_of for r in full.rows}
     assert seeds["c2-general+forward"] == "c2-general" and seeds["c2-general"] is None
     c3 = full.config.config("c3-md_03")
@@ -131,10 +131,10 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
     with pytest.raises(SkinnyInputError):
         g.STUDY.build(movement="ymca")
     config = full.config.config("j2-md_02-head").override(
-        {"esn.n_reservoir": 20, "rule.epochs": 1})
+        {"esn.n_reservoir": 20, "method.epochs": 1})
     row = dataclasses.replace(g.STUDY.row("j2-md_02-head"),
                               params={"tests": ("y-pure", "md_03-tail")})
-    outs = g.run_batch(config, row, [1, 2])
+    outs = g.STUDY.run(config, row, [1, 2])
     assert len(outs) == 2
     for out in outs:
         assert out["train_steps"] == 250 and 0 < out["train_coverage"] <= 1
@@ -143,7 +143,7 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
             assert 0 <= out[f"{col}__clipped_ideal_nrmse"] <= out[f"{col}__position_nrmse"]
             assert 0 <= out[f"{col}__within5"] <= 1 and len(out[f"{col}__rmse_deg_per_joint"]) == 4
             assert out[f"{col}__dtw_nrmse"] > 0
-    single = g.run_batch(config, row, [2])
+    single = g.STUDY.run(config, row, [2])
     key = "md_03-tail__position_nrmse"
     assert single[0][key] == outs[1][key]  # lockstep == alone, bit for bit
 
@@ -168,7 +168,7 @@ def test_preset_general_sets_its_fields_and_flags_given_override_them():
     argv = ["train", "--preset", "general", "--epochs", "2", "--seed", "5"]
     cfg, seed = train_config(build_parser().parse_args(argv))
     want = preset_fields("general")
-    assert seed == 5 and cfg.rule.epochs == 2
+    assert seed == 5 and cfg.method.epochs == 2
     got = cfg.to_dict()
     assert {k: got[k] for k in want} == want  # untouched flags keep the preset's
     with pytest.raises(SkinnyInputError):

@@ -125,8 +125,8 @@ LONG = "x" * 300
     # numbers and names the file system or the plant cannot take
     (["track", "--sensor-noise", "1e308"], "sensor noise must be in [0, 10]"),
     (["train", "plant.sensor_noise=1e308"], "sensor noise must be in [0, 10]"),
-    (["sweep", "rule.epochs=1,,2"], "rule.epochs: an empty value in '1,,2'"),
-    (["sweep", "rule.epochs=1", "rule.epochs=2"], "rule.epochs is given twice"),
+    (["sweep", "method.epochs=1,,2"], "method.epochs: an empty value in '1,,2'"),
+    (["sweep", "method.epochs=1", "method.epochs=2"], "method.epochs is given twice"),
     (["sweep", "esn.spectral_radius=0.5", "--runs", "nan"], "--runs: must be a whole number "
                                                              ">= 1, got 'nan'"),
     (["experiment", "paper-e", "--workers", "x"], "--workers: must be a whole number >= 1, "
@@ -139,7 +139,7 @@ LONG = "x" * 300
                                                        "metrics.json, which holds no training"),
     (["train", "--config", "{bad}/track_metrics.json"], "a `skinny track` run's metrics.json"),
     (["train", "--config", "{bad}/bench.json"], "this is `skinny bench`'s results"),
-    (["sweep", "rule.epochs=1,2", "--config", "{bad}/results.json"], "a sweep's results.json"),
+    (["sweep", "method.epochs=1,2", "--config", "{bad}/results.json"], "a sweep's results.json"),
     # already refused in one line when probed: kept as guards
     (["track", "--trajectory", "{bad}/chan9.bvh"], "chan9.bvh:9: CHANNELS says 9 but names 3"),
     (["track", "--trajectory", "{bad}/ghost.amc", "--asf", "{bad}/tiny.asf"],
@@ -148,11 +148,11 @@ LONG = "x" * 300
     (["track", "--trajectory", "babble:duration=-1"], "babble duration must be > 0 s"),
     (["track", "--trajectory", "babble:bogus=1"], "bad babble name 'babble:bogus=1'"),
     (["trajectory", "export", "ymca"], "o: export writes .npz or .csv"),  # --out o: no suffix
-    (["sweep", "rule.epochs="], "a sweep axis is KEY=VALUE[,VALUE...], got 'rule.epochs='"),
+    (["sweep", "method.epochs="], "a sweep axis is KEY=VALUE[,VALUE...], got 'method.epochs='"),
     (["train", "--config", "{bad}/list.json"], "list.json: a config file holds a JSON object"),
     (["train", "--config", "{bad}/trunc.json"], "trunc.json: not a JSON config file"),
     (["train", "esn.n_reservoir=abc"], "esn.n_reservoir must be a whole number, got 'abc'"),
-    (["train", "rule.beta=[1]"], "rule.beta must be a number, got '[1]'"),
+    (["train", "method.beta=[1]"], "method.beta must be a number, got '[1]'"),
     (["train", "esn.a.b=1"], "unknown config key 'esn.a.b'"),
     (["train", "x="], "unknown config key 'x'"),
     (["train", "--beta", "-0"], "beta must be in (0, 1], got -0.0"),

@@ -96,7 +96,7 @@ def test_an_online_rule_learns_at_every_step_of_the_learning_cycles():
     plant, desired, commands, esn = _setup(noise=0.0)
     untrained = fel.evaluate(esn, plant, fel.Task(desired, commands)).position_nrmse
     rule = OnlineRLS(esn, forgetting=1.0, ridge_lambda=1e-2)
-    result = fel.train(esn, plant, desired, cfg, rule=rule)
+    result = fel.train(esn, plant, desired, cfg, fel.Loop(rule=rule))
     trained = fel.evaluate(esn, plant, fel.Task(desired, commands)).position_nrmse
     assert not result.failed.any()
     assert rule.updates == cfg.epochs * cfg.learning_cycles * (len(desired) - 1)

@@ -17,12 +17,12 @@ def _tiny(arch: str, delay: int):
     """The row's run at --quick's network sizes, 1 epoch of 1 learning cycle."""
     forward = {} if arch == "inverse" else {"forward.reservoir": 50}
     return paper_a.STUDY.config(paper_a.row_id(arch, delay)).override(
-        {"esn.n_reservoir": 100, "rule.epochs": 1, "rule.cycles": 1, **forward})
+        {"esn.n_reservoir": 100, "method.epochs": 1, "method.cycles": 1, **forward})
 
 
 def _run(arch: str, delay: int, seeds: list[int], config=None) -> list:
     row = paper_a.STUDY.row(paper_a.row_id(arch, delay))
-    return paper_a.run_batch(config or _tiny(arch, delay), row, seeds)
+    return paper_a.STUDY.run(config or _tiny(arch, delay), row, seeds)
 
 
 def _rows(delays: tuple[int, ...]) -> tuple[Row, ...]:
@@ -167,9 +167,9 @@ def test_full_config_matches_the_paper():
     study = paper_a.STUDY
     m = study.base
     assert (m.esn.n_reservoir, m.forward.reservoir) == (1000, 100)
-    assert (m.esn.spectral_radius, m.esn.noise_level, m.rule.gain_value) == (0.1, 0.2, 0.65)
-    assert (m.plant.dof, m.plant.signals, m.rule.gain_schedule) == (4, "joint", "fixed")
-    assert (m.method, m.learning_cycles, m.rule.epochs) == ("original", 5, 10)
+    assert (m.esn.spectral_radius, m.esn.noise_level, m.method.gain_value) == (0.1, 0.2, 0.65)
+    assert (m.plant.dof, m.plant.signals, m.method.gain_schedule) == (4, "joint", "fixed")
+    assert (m.method.kind, m.learning_cycles, m.method.epochs) == ("original", 5, 10)
     assert study.runs == 10 and len(study.rows) == 44
     assert [r.id for r in study.rows[:11]] == [f"inverse-d{d}" for d in range(11)]
     tcfg = study.config("hybrid-d3")
@@ -177,7 +177,7 @@ def test_full_config_matches_the_paper():
     assert study.config("inverse-d3").forward.kind == "none"
     quick = study.build(quick=True).config
     assert quick.config("serial-d4").forward.reservoir == 50
-    assert (quick.config("inverse-d4").esn.n_reservoir, quick.config("inverse-d4").rule.epochs) \
+    assert (quick.config("inverse-d4").esn.n_reservoir, quick.config("inverse-d4").method.epochs) \
         == (100, 2)
 
 

@@ -105,7 +105,7 @@ def test_esn_sees_only_the_current_state_of_both_arms():
 def test_feedback_tracks_and_fel_learns_in_phase():
     from skinny_mj.training.loop import build_run, evaluate, train_run
 
-    cfg = paper_b.MODEL.override({"movement.trajectory": "bimanual-phase0", "rule.epochs": 4})
+    cfg = paper_b.MODEL.override({"movement.trajectory": "bimanual-phase0", "method.epochs": 4})
     untrained = evaluate(build_run(cfg, [3]))[0].position_nrmse
     run = build_run(cfg, [3])
     result = train_run(run).fel
@@ -116,11 +116,11 @@ def test_feedback_tracks_and_fel_learns_in_phase():
 
 def test_lockstep_batch_equals_each_seed_alone():
     config = paper_b.MODEL.override({"movement.trajectory": "bimanual-freq1-2",
-                                     "rule.epochs": 2})
+                                     "method.epochs": 2})
     row = paper_b.STUDY.row("freq1-2")
-    batch = paper_b.run_batch(config, row, [4, 5])
+    batch = paper_b.STUDY.run(config, row, [4, 5])
     for seed, out in zip([4, 5], batch, strict=True):
-        alone = paper_b.run_batch(config, row, [seed])[0]
+        alone = paper_b.STUDY.run(config, row, [seed])[0]
         assert {k: v for k, v in out.items() if k != "wall_s_run"} == \
             {k: v for k, v in alone.items() if k != "wall_s_run"}
 

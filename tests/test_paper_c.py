@@ -22,17 +22,17 @@ def test_config_is_paper_c_section_3_5():
     cfg = paper_c.STUDY.config("ymca")
     assert (cfg.plant.dof, cfg.plant.signals, cfg.esn.n_reservoir, cfg.esn.spectral_radius,
             cfg.esn.noise_level) == (4, "joint", 1000, 0.1, 0.2)
-    assert (cfg.plant.sensor_noise, cfg.rule.epochs, cfg.learning_cycles) == (0.01, 150, 5)
+    assert (cfg.plant.sensor_noise, cfg.method.epochs, cfg.learning_cycles) == (0.01, 150, 5)
     from skinny_mj.training.loop import build_run
 
-    fcfg = build_run(cfg, [0]).cfg.rule
+    fcfg = build_run(cfg, [0]).cfg.method
     assert fcfg.beta == 1.0  # u_target = u + u_error(t+1): the original target
     gains = fcfg.gains()
     assert gains.shape == (150,) and gains[0] == 1.0
     np.testing.assert_allclose(gains[1:] / gains[:-1], 0.9)  # -10 % per epoch
     assert gains[-1] < 1e-6  # "decreased to ~0"
     tcfg = paper_c.STUDY.config("y-pure")
-    assert (tcfg.movement.trajectory, tcfg.method, tcfg.learning_cycles, tcfg.noise_level) == \
+    assert (tcfg.movement.trajectory, tcfg.method.kind, tcfg.learning_cycles, tcfg.noise_level) == \
         ("y-pure", "original", 5, 0.2)
     assert tcfg.test.washout_cycles == 1  # "the initialization cycle and the evaluation cycle"
 
@@ -117,7 +117,7 @@ def test_quick_sweep_end_to_end(tmp_path):
         for col in cols:
             assert np.isfinite(m[f"{col}__position_nrmse"]) and 0 <= m[f"{col}__position_nrmse"]
         assert np.asarray(m["angles__ymca"]).shape == (len(get("ymca")), 4)
-        assert len(m["train_curve_position_nrmse"]) == exp.config.config(run["row"]).rule.epochs
+        assert len(m["train_curve_position_nrmse"]) == exp.config.config(run["row"]).method.epochs
         assert 0 < m["peak_rss_mb"] < 2048
     text = exp.report(results, tmp_path)
     for name in ("matrix_position_nrmse.png", "matrix.md", "train_curves.png", "fig3_ymca.png",
@@ -139,13 +139,13 @@ def test_lockstep_batch_equals_runs_one_at_a_time():
     """The engine's fast path: seeds in lockstep give each seed's metrics alone, bit for
     bit (wall times and memory aside)."""
     quick = plan(paper_c.STUDY, quick=True)
-    cfg = quick.config("ymca").override({"rule.epochs": 2})
+    cfg = quick.config("ymca").override({"method.epochs": 2})
     row = quick.run_row("ymca")
     row = dataclasses.replace(row, params={**row.params, "tests": ("ymca", "y")})
     seeds = [3, 8]
-    batch = paper_c.run_batch(cfg, row, seeds)
+    batch = paper_c.STUDY.run(cfg, row, seeds)
     for seed, got in zip(seeds, batch, strict=True):
-        (want,) = paper_c.run_batch(cfg, row, [seed])
+        (want,) = paper_c.STUDY.run(cfg, row, [seed])
         assert set(got) == set(want)
         for key, value in want.items():
             if key not in ("wall_s", "train_wall_s", "peak_rss_mb"):

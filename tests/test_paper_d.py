@@ -29,11 +29,11 @@ def test_rows_follow_the_papers_design():
     for row in study.rows:
         c = plan.trainings(row.id)
         tt, fel = c["tt"], c["fel"]
-        assert tt.method == "true-target" and fel.method == row.overrides["rule"]
+        assert tt.method.kind == "true-target" and fel.method.kind == row.overrides["method"]
         assert tt.noise_level == fel.noise_level and tt.movement.reps == fel.movement.reps
         assert set(row.paper) == {m for k in paper_d.COLUMNS for m in (k, f"{k}_var")}
-        got[row.id] = (fel.method, fel.noise_level, fel.movement.reps, fel.learning_cycles,
-                       tt.rule.beta, fel.rule.beta)
+        got[row.id] = (fel.method.kind, fel.noise_level, fel.movement.reps, fel.learning_cycles,
+                       tt.method.beta, fel.method.beta)
     assert got == {
         "1": ("original", 0.0, 1, 1, 1.0, 1.0),
         "2": ("original", 0.2, 1, 1, 1.0, 1.0),
@@ -42,8 +42,8 @@ def test_rows_follow_the_papers_design():
         "4": ("new", 0.2, 1, 5, 0.1, 0.1),
     }
     # 50 rounds for the new method in both architectures: 5 cycles x 10 gains, 50 TT rounds.
-    assert paper_d.FEL_CYCLES * cfg.rule.epochs == paper_d.TT_CYCLES == 50
-    assert all(plan.trainings(r.id)["tt"].rule.cycles == 50 for r in study.rows)
+    assert paper_d.FEL_CYCLES * cfg.method.epochs == paper_d.TT_CYCLES == 50
+    assert all(plan.trainings(r.id)["tt"].method.cycles == 50 for r in study.rows)
     assert [r.id for r in study.rows] == ["1", "2", "3a", "3b", "4"]
 
 
@@ -51,7 +51,7 @@ def test_build_options():
     exp = paper_d.STUDY.build(quick=True, movement="y")
     tt = exp.config.trainings("2")["tt"]
     fel = exp.config.trainings("2")["fel"]
-    assert exp.runs == 2 and fel.rule.epochs == 2 and tt.rule.cycles == 3
+    assert exp.runs == 2 and fel.method.epochs == 2 and tt.method.cycles == 3
     assert tt.movement.trajectory == "y" and len(exp.rows) == 5
     assert exp.name == paper_d.STUDY.build().name == "paper-d"  # the movement is in the config
     two_d = paper_d.STUDY.build(body=4, signals="joint").config.config("1")
@@ -120,8 +120,8 @@ def test_report_writes_figures_and_claims(quick_sweep):
 def test_run_one_is_reproducible_from_its_seed():
     exp = paper_d.STUDY.build(quick=True)
     cfg = exp.config.config("2").override({"esn.n_reservoir": 30})
-    a, b = (paper_d.run_batch(cfg, paper_d.STUDY.row("2"), [7])[0] for _ in range(2))
-    c = paper_d.run_batch(cfg, paper_d.STUDY.row("2"), [8])[0]
+    a, b = (paper_d.STUDY.run(cfg, paper_d.STUDY.row("2"), [7])[0] for _ in range(2))
+    c = paper_d.STUDY.run(cfg, paper_d.STUDY.row("2"), [8])[0]
     keys = [*paper_d.COLUMNS]
     assert [a[k] for k in keys] == [b[k] for k in keys]
     assert not np.allclose([a[k] for k in keys], [c[k] for k in keys])

@@ -14,7 +14,7 @@ from skinny_mj.engine.experiment import Experiment, run_seed, run_sweep
 from skinny_mj.engine.study import Quick
 from skinny_mj.training.loop import build_run, evaluate, train_batch, train_run
 
-TINY = {"rule.epochs": 1, "esn.n_reservoir": 20}
+TINY = {"method.epochs": 1, "esn.n_reservoir": 20}
 
 
 def _config(exp: str, changes: dict):
@@ -73,13 +73,13 @@ def test_the_hook_changes_no_result_and_measures_the_blend(short):
     plain = train_batch(cfg, [seed])[0]
     run = build_run(cfg, [seed])
     diag = pee.EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory), 1,
-                                cfg.rule.epochs, cfg.learning_cycles)
+                                cfg.method.epochs, cfg.learning_cycles)
     trained = train_run(run, observe=diag).fel
     test = evaluate(run)[0]
     np.testing.assert_array_equal(run.esn.W_out, plain.esn.W_out)
-    assert trained.to_dict()["position_nrmse"][0] == plain.metrics["train"]["position_nrmse"]
+    assert trained.to_dict()["position_nrmse"][0] == plain.train.position_nrmse
     assert (test.position_nrmse, test.motor_nrmse) == (
-        plain.metrics["test"]["position_nrmse"], plain.metrics["test"]["motor_nrmse"])
+        plain.test.position_nrmse, plain.test.motor_nrmse)
     m = diag.metrics(0, None)
     assert np.shape(m["est_rough_per_cycle"]) == (1, 3)  # (epochs, learning cycles)
     # β = 0.1 with a smooth previous output: the fitted target is smoother than y_est

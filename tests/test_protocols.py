@@ -28,8 +28,8 @@ def test_thesis_reading_on_paper_e_keeps_each_rows_own_settings():
     for row in ("1", "2", "5", "fig5a-nu0.1"):
         config, default = plan(study).config(row), plan(paper_e.STUDY).config(row)
         assert config.movement.trajectory == "ymca-recorded"
-        assert config.rule.u_error_gain == 2.0 != default.rule.u_error_gain
-        assert config.override({"movement.trajectory": "ymca", "rule.u_error_gain": 1.0}) \
+        assert config.method.u_error_gain == 2.0 != default.method.u_error_gain
+        assert config.override({"movement.trajectory": "ymca", "method.u_error_gain": 1.0}) \
             == default  # nothing else changed: the row's method, noise, repetitions
     # --movement is the user's: it still wins over the reading
     assert plan(study, movement="ymca").config("5").movement.trajectory == "ymca"
@@ -38,10 +38,10 @@ def test_thesis_reading_on_paper_e_keeps_each_rows_own_settings():
 def test_thesis_reading_reaches_paper_d_true_target_half():
     study = protocols.apply("thesis", paper_d.STUDY, "paper-d")
     both = plan(study).trainings("2")
-    assert both["tt"].rule.input_noise == 0.01
-    assert both["fel"].rule.u_error_gain == 2.0
+    assert both["tt"].method.input_noise == 0.01
+    assert both["fel"].method.u_error_gain == 2.0
     assert both["tt"].movement.trajectory == both["fel"].movement.trajectory == "ymca-recorded"
-    assert plan(paper_d.STUDY).trainings("2")["tt"].rule.input_noise == 0.0
+    assert plan(paper_d.STUDY).trainings("2")["tt"].method.input_noise == 0.0
 
 
 def test_refusals_name_what_is_wrong_in_one_line(capsys):

@@ -103,14 +103,14 @@ def test_ridge_selector_picks_a_large_lambda_for_pure_noise_targets():
 
 
 def test_ridge_select_config_is_validated():
-    assert TrainConfig().rule.fit.kind == "cycle"
-    TrainConfig().override({"esn.readout": "ridge", "rule.fit": "ridge-select",
-                            "rule": "original"})
+    assert TrainConfig().method.fit.kind == "cycle"
+    TrainConfig().override({"esn.readout": "ridge", "method.fit": "ridge-select",
+                            "method": "original"})
     with pytest.raises(SkinnyInputError):
-        TrainConfig().override({"rule.fit": "ridge-select"})  # pinv readout
+        TrainConfig().override({"method.fit": "ridge-select"})  # pinv readout
     with pytest.raises(SkinnyInputError):  # the torque body
         TrainConfig().override({"esn.readout": "ridge", "actuation": "torque",
-                                "rule.fit": "ridge-select"})
+                                "method.fit": "ridge-select"})
 
 
 def _toy(n_runs=2):

@@ -394,9 +394,9 @@ def test_an_amc_without_its_subjects_skeleton_is_refused_and_the_one_used_is_sai
     (["experiment", "paper-e", "--quick", "--rows", ""], "--rows: '' names no row"),
     (["experiment", "paper-e", "--quick", "--rows", " , "], "--rows: ' , ' names no row"),
     (["sweep", "esn.spectral_radius=0.5,0.9", "--rows", ""], "--rows: '' names no row"),
-    (["train", "--epochs", "1", "rule.epochs=2"], "--epochs 1 and rule.epochs=2"),
+    (["train", "--epochs", "1", "method.epochs=2"], "--epochs 1 and method.epochs=2"),
     (["train", "--dof", "8", "plant.dof=4"], "--dof 8 and plant.dof=4"),
-    (["train", "rule.epochs=1", "rule.epochs=2"], "rule.epochs=1 and rule.epochs=2"),
+    (["train", "method.epochs=1", "method.epochs=2"], "method.epochs=1 and method.epochs=2"),
 ])
 def test_cli_refuses_a_bad_value_in_one_line_naming_it(argv, culprit, capsys, tmp_path,
                                                        monkeypatch):

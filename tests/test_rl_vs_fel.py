@@ -1,9 +1,11 @@
-"""``skinny experiment rl-vs-fel``: the two learners are scored alike, FEL's curve is the
-one training path's, the RL runs are reproducible, and without the ``rl`` extra the RL
-rows are left out (refused by name in one line) while the FEL rows run."""
+"""``skinny experiment rl-vs-fel``: every learner is tested alike and the RL env is the
+training path's loop (its teacher the config's), the curves are segments of one chain,
+the data files and the report are made from run files alone, and without the ``rl``
+extra the RL rows are left out (refused by name in one line) while the FEL rows run."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import sys
 
@@ -12,126 +14,176 @@ import pytest
 
 pytest.importorskip("gymnasium")
 
-from skinny_mj.experiments.rl_vs_fel import runs  # noqa: E402
-from skinny_mj.experiments.rl_vs_fel import study as rl_vs_fel  # noqa: E402
+from skinny_mj.experiments.rl_vs_fel import data, report, runs, study  # noqa: E402
+from skinny_mj.experiments.rl_vs_fel.tracking import (  # noqa: E402
+    WORST_REWARD,
+    TrackingEnv,
+    score,
+)
 
 from skinny_mj.engine.experiment import run_sweep  # noqa: E402
 from skinny_mj.errors import SkinnyInputError  # noqa: E402
+from skinny_mj.training import loop as training  # noqa: E402
 from skinny_mj.training.config import TrainConfig  # noqa: E402
-from skinny_mj.training.parts import run_streams  # noqa: E402
+
+YMCA = TrainConfig().override({**study.REGIMES["ymca"][0], "method.epochs": 1})
+
+
+def _env(tc: TrainConfig, seed: int, gain: float) -> TrackingEnv:
+    run = training.build_run(tc, [seed])
+    return TrackingEnv(tc, run.trajectory, run.max_speed_rad_s, run.plant_seeds[0], gain,
+                       test=True)
+
+
+@pytest.mark.parametrize("gain, omega", [(0.0, None), (1.0, None), (1.0, 20.0)])
+def test_the_zero_policy_scores_as_the_untrained_esn_with_the_configs_teacher(gain, omega):
+    """An untrained ESN commands 0: FEL's test at K = gain and the env's score of the
+    zero policy with the teacher's gain are the same numbers, bit for bit, whatever
+    teacher the config names (here its poles)."""
+    tc = YMCA if omega is None else YMCA.override({"actuation.omega": omega})
+    run = training.build_run(tc, [7])
+    ours = score(lambda obs: np.zeros(4), _env(tc, 7, gain), tc.test.washout_cycles)
+    fel = runs._fel_tests(run, {"ymca": None}, gain)["ymca"]
+    assert ours == fel
+    untaught = runs._fel_tests(run, {"ymca": None}, 0.0)["ymca"]["position_nrmse"]
+    assert 0.1 < untaught < 1.0  # no torque: far from tracking
+    if gain == 1:
+        assert ours["position_nrmse"] < 0.5 * untaught  # the teacher alone tracks, roughly
+
+
+def test_the_observation_is_the_esns_input():
+    env = _env(YMCA, 3, 0.0)
+    obs, _ = env.reset()
+    n_sig = env.desired.shape[1]
+    assert env.observation_space.shape == (2 * n_sig + 2 * 4,)
+    np.testing.assert_array_equal(obs[:n_sig], env.desired[1])
+    assert np.all(obs[-4:] == 0)  # at rest
+    obs, reward, terminated, truncated, _ = env.step(np.full(4, 0.3))
+    assert reward == -np.mean(np.abs(env.desired[1] - env.plant.true_signals()[0]))
+    assert not (terminated or truncated) and np.any(obs[-4:] != 0)
+
+
+def test_a_diverged_simulation_ends_the_episode_with_the_worst_reward(monkeypatch):
+    env = _env(YMCA, 0, 1.0)
+    env.reset()
+    for _ in range(3):
+        env.step(np.zeros(4))
+    warnings = itertools.count(1)  # a new MuJoCo warning after every step from here on
+    monkeypatch.setattr(env.plant, "warning_count", lambda: next(warnings))
+    _, reward, terminated, truncated, info = env.step(np.zeros(4))
+    assert info == {"diverged": True} and terminated and not truncated
+    assert reward == WORST_REWARD * (env.n_steps - 3) and env.diverged == 1
+    assert score(lambda obs: np.zeros(4), env) is None
+
+
+def test_fel_curve_ends_at_the_test_of_train():
+    tc = YMCA.override({"method.epochs": 2})
+    points, facts = runs.fel_curve(tc, 3, {"ymca": None})
+    per_epoch = facts["steps_per_epoch"]
+    assert per_epoch == (3 + 2) * 312 and [p["steps"] for p in points] == [0, per_epoch,
+                                                                           2 * per_epoch]
+    final = training.train(tc, 3)
+    assert points[-1]["tests"]["ymca"]["position_nrmse"] == final.test.position_nrmse
+    assert points[-1]["tests"]["ymca"]["rms_error_deg"] == final.robot_figures()["rms_error_deg"]
+    assert 0 < points[1]["cpu_s"] < points[2]["cpu_s"]
+    assert set(points[-1]["tests_k1"]) == {"ymca"}
+
+
+def test_curves_are_chains_of_segments_tested_on_a_log_grid():
+    exp = study.STUDY.build()
+    rows = {r.row_id: r for r in exp.rows}
+    chain = [r for r in exp.rows if r.params.get("curve") == "ppo-ymca"]
+    spans = [tuple(r.params["span"]) for r in chain]
+    assert spans[0][0] == 0 and all(a[1] == b[0] for a, b in zip(spans, spans[1:], strict=False))
+    assert spans[-1][1] == study.EXTENDED["ppo"] >= 2 * study.BUDGET["ppo"]
+    assert {r.seeds_of for r in chain[1:]} == {chain[0].row_id}
+    costs = [exp.cost(r) for r in chain]
+    assert costs == sorted(costs, reverse=True) and len(set(costs)) == len(costs)
+    assert max(study.cost(exp.config.config(r.row_id), rows[r.row_id]) for r in exp.rows
+               if r.params["learner"] != "fel") < 3600  # every RL run within an hour
+    budget = set(exp.groups["budget"])
+    assert "ppo-general-1000000" in budget and "sac-ymca-100000" in budget
+    assert "ppo-ymca-1250000" in exp.groups["extend"] and not budget & set(
+        exp.groups["search"])
+    assert exp.config.config("fel-general").movement.trajectory.startswith("set:babble")
+    assert exp.config.config("ppo-res-ymca-250000").actuation.feedback == "inertia-pd"
+    assert runs.test_steps(10_000) == [0, 1000, 1500, 2000, 3000, 5000, 7000, 10_000]
 
 
 def test_without_the_rl_extra_the_rl_rows_are_refused_in_one_line(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "stable_baselines3", None)  # import raises ImportError
-    exp = rl_vs_fel.STUDY.build(quick=True)
+    exp = study.STUDY.build(quick=True)
     assert sorted(exp.unavailable) == sorted(r.row_id for r in exp.rows
                                              if not r.row_id.startswith("fel-"))
     with pytest.raises(SkinnyInputError) as err:
-        run_sweep(exp, tmp_path, rows=["ppo-velocity-ymca"], workers=1, progress=False)
-    assert str(err.value) == ("experiment 'rl-vs-fel': row 'ppo-velocity-ymca' needs the rl "
+        run_sweep(exp, tmp_path, rows=["ppo-ymca-250000"], workers=1, progress=False)
+    assert str(err.value) == ("experiment 'rl-vs-fel': row 'ppo-ymca-250000' needs the rl "
                               "extra: pip install -e '.[rl]'")
 
 
-def test_rows_cover_learner_x_body_x_movement():
-    exp = rl_vs_fel.STUDY.build()
-    assert {r.row_id for r in exp.rows} == {f"{a}-{b}-{m}" for a in rl_vs_fel.LEARNERS
-                                           for b in rl_vs_fel.BODIES
-                                           for m in rl_vs_fel.MOVEMENTS}
-    g = exp.groups
-    assert len(g["sac"]) == 4 and len(g["torque"]) == 6 and len(g["md02"]) == 6
-    plan = exp.config
-    assert plan.config("fel-torque-md02").movement.trajectory == rl_vs_fel.CLIP
-    assert plan.config("fel-torque-md02").actuation.kind == "torque"
-    assert plan.config("sac-velocity-ymca").movement.trajectory == "ymca"
-    moved = rl_vs_fel.STUDY.build(movement="y").config  # --movement replaces the YMCA only
-    assert moved.config("ppo-velocity-ymca").movement.trajectory == "y"
-    assert moved.config("ppo-velocity-md02").movement.trajectory == rl_vs_fel.CLIP
-
-
-@pytest.mark.parametrize("actuation", ["velocity", "torque"])
-def test_env_scorer_equals_the_training_paths_test(actuation):
-    """An untrained ESN commands 0: its K = 0 test and the env's score of the zero
-    policy on the same test seed are the same number, bit for bit."""
-    from skinny_mj.training import loop as training
-
-    tc = TrainConfig().override({"actuation": actuation, "rule.epochs": 1})
-    run = training.build_run(tc, [7])
-    env = runs.make_env(tc, 7, velocity_inputs=actuation == "torque")
-    zero = np.zeros(tc.plant.dof)
-    ours = runs.score_policy(lambda obs: zero, env, run_streams(7).plant_seed)
-    assert ours == runs._fel_test(run)
-    assert 0.1 < ours < 1.0  # standing still is far from tracking
-    n_obs = 3 * 8 + (2 * tc.plant.dof if actuation == "torque" else 0)
-    assert env.observation_space.shape == (n_obs,)
-
-
-def test_fel_curve_ends_at_the_test_of_train():
-    from skinny_mj.training.loop import train
-
-    tc = TrainConfig().override({"rule.epochs": 2})
-    points, facts = runs.fel_curve(tc, 3)
-    assert [p["steps"] for p in points] == [0, facts["steps_per_epoch"],
-                                           2 * facts["steps_per_epoch"]]
-    assert facts["steps_per_epoch"] == (3 + 2) * 312  # 3 learning cycles + washout + test
-    assert points[-1]["position_nrmse"] == train(tc, 3).metrics["test"]["position_nrmse"]
-    assert points[-1]["position_nrmse"] < points[0]["position_nrmse"]
-    assert 0 < points[1]["wall_s"] < points[2]["wall_s"]
-    assert 0 < points[1]["cpu_s"] < points[2]["cpu_s"]
+def _curve(errors, step=1000, learner_tests="tests"):
+    return [runs.point(k * step, (k * 2.0, k * 1.0),
+                       {"ymca": None if e is None else {"position_nrmse": e,
+                                                        "rms_error_deg": 10 * e}})
+            for k, e in enumerate(errors)]
 
 
 def test_curve_metrics_first_test_at_or_below_each_threshold():
-    pts = [runs.point(k * 10, (k * 1.0, k * 0.5), e)
-           for k, e in enumerate([0.5, None, 0.04, 0.06, 0.02])]
-    m = runs.curve_metrics(pts, (0.05, 0.02, 0.01))
-    assert (m["steps_to_0.05"], m["wall_to_0.05"], m["reached_0.05"]) == (20, 2.0, 1)
-    assert (m["steps_to_0.02"], m["wall_to_0.02"], m["cpu_to_0.02"]) == (40, 4.0, 2.0)
-    assert (m["steps_to_0.01"], m["reached_0.01"]) == (None, 0)
-    assert (m["position_nrmse"], m["best_nrmse"], m["env_steps"]) == (0.02, 0.02, 40)
+    m = runs.curve_metrics(_curve([0.5, None, 0.04, 0.06, 0.02]), {"ymca": ("ymca",)},
+                           (0.05, 0.02, 0.01))
+    assert (m["ymca__steps_to_0.05"], m["ymca__cpu_to_0.05"]) == (2000, 2.0)
+    assert (m["ymca__steps_to_0.02"], m["ymca__wall_to_0.02"]) == (4000, 8.0)
+    assert m["ymca__steps_to_0.01"] is None
+    assert (m["ymca__nrmse"], m["ymca__best_nrmse"], m["env_steps"]) == (0.02, 0.02, 4000)
+    assert m["ymca__rms_error_deg"] == 0.2
 
 
-def test_a_diverged_simulation_ends_the_episode_with_the_worst_reward(monkeypatch):
-    from dm_control.rl.control import PhysicsError
-
-    env = runs.make_env(TrainConfig().override({"actuation": "torque"}), 0,
-                        velocity_inputs=True)
-    obs, _ = env.reset(seed=0)
-    for _ in range(3):
-        obs, *_ = env.step(np.zeros(4))
-
-    def boom(action):
-        raise PhysicsError("diverged")
-
-    monkeypatch.setattr(env.env, "step", boom)
-    out, reward, terminated, truncated, info = env.step(np.zeros(4))
-    assert info == {"diverged": True} and terminated and not truncated
-    assert reward == runs.WORST_REWARD * (312 - 3)
-    np.testing.assert_array_equal(out, obs)
-    assert env.diverged == 1
+def _run_file(folder, row, seed, learner, points, curve=None):
+    rec = {"experiment": "rl-vs-fel", "row": row, "row_index": 0, "run_index": 0,
+           "seed": seed, "params": {"learner": learner, "regime": "ymca",
+                                    "curve": curve or row, "scores": {"ymca": ["ymca"]}},
+           "paper": {}, "status": "ok", "metrics": {"curve": points},
+           "nonfinite_metrics": [], "fail_reason": None, "error": None, "wall_s": 1.0,
+           "finished_at": "now"}
+    (folder / "runs").mkdir(parents=True, exist_ok=True)
+    (folder / "runs" / f"{row}-{seed}.json").write_text(json.dumps(rec))
 
 
-def test_quick_sweep_writes_curves_table_and_figures(tmp_path):
+def test_data_files_and_the_report_come_from_run_files_alone(tmp_path):
+    sweep = tmp_path / "sweep"
+    fel = _curve([0.3, 0.04, 0.015, 0.008], step=1560)
+    for p in fel:
+        p["tests_k1"] = p["tests"]
+    for seed in (1, 2):
+        _run_file(sweep, "fel-ymca", seed, "fel", fel)
+        _run_file(sweep, "ppo-ymca-2000", seed, "ppo", _curve([0.4, 0.3]), "ppo-ymca")
+        _run_file(sweep, "ppo-ymca-4000", seed, "ppo", _curve([0.4, 0.3, 0.1, 0.045, 0.03]),
+                  "ppo-ymca")
+    paths = data.export([sweep], tmp_path / "data")
+    assert sorted(p.name for p in paths) == ["fel-ymca-1.json", "fel-ymca-2.json",
+                                             "ppo-ymca-1.json", "ppo-ymca-2.json"]
+    rec = json.loads((tmp_path / "data" / "ppo-ymca-1.json").read_text())
+    assert rec["rows"] == ["ppo-ymca-4000-1.json"] and rec["points"][-1]["steps"] == 4000
+    text = report.write(data.load(tmp_path / "data"), tmp_path / "out")
+    assert (tmp_path / "out" / "rl-vs-fel_steps.png").stat().st_size > 0
+    assert "| ymca | PPO | 2 | 4,000 |" in text and "not reached by 4,000" in text
+    assert "| ymca | 0.05 | 1,560, 1.0 | PPO, 3,000, 3.0 | 1.9, 3.0 |" in text
+    assert "| ymca | 0.02 | 3,120, 2.0 | none reached | > 1.3 (no RL by 4,000) |" in text
+
+
+@pytest.mark.parametrize("learner", ["ppo", "sac"])
+def test_an_rl_curve_continues_from_its_checkpoint(learner, tmp_path):
+    """The smoke test of the rl extra: a residual learner trains two segments of a few
+    hundred env steps; the second continues the first's checkpoint (steps, CPU, curve)."""
     pytest.importorskip("stable_baselines3")
-    exp = rl_vs_fel.STUDY.build(quick=True)
-    res = run_sweep(exp, tmp_path, rows=["ppo-velocity-ymca", "sac-torque-ymca"], workers=1,
-                    progress=False)
-    assert res["n_ok"] == 2 and res["n_error"] == 0
-    for row, budget in (("ppo-velocity-ymca", 256), ("sac-torque-ymca", 100)):
-        (path,) = (tmp_path / "runs").glob(f"{row}-*.json")
-        m = json.loads(path.read_text())["metrics"]
-        steps = [p["steps"] for p in m["curve"]]
-        assert steps[0] == 0 and steps == sorted(steps) and steps[-1] >= budget
-        assert all(0 < p["position_nrmse"] < 2 for p in m["curve"])
-        assert m["position_nrmse"] == m["curve"][-1]["position_nrmse"]
-    text = exp.report(res, tmp_path)
-    assert (tmp_path / "curves_steps.png").stat().st_size > 0
-    assert "| PPO | velocity | ymca | 256 |" in text
-    assert (tmp_path / "comparison.md").read_text().strip() in text
-
-
-def test_rl_runs_are_reproducible():
-    pytest.importorskip("stable_baselines3")
-    tc = TrainConfig()
-    a, _ = runs.rl_curve("ppo", tc, 5, 256, 1, quick=True)
-    b, _ = runs.rl_curve("ppo", tc, 5, 256, 1, quick=True)
-    assert [p["position_nrmse"] for p in a] == [p["position_nrmse"] for p in b]
-    assert a[0]["position_nrmse"] != a[-1]["position_nrmse"]  # the policy did change
+    folder, cols = tmp_path / "ckpt", {"ymca": None}
+    a, facts = runs.rl_segment(learner, 1.0, YMCA, 5, cols, (0, 150), folder, quick=True)
+    assert [p["steps"] for p in a] == [0, 150] and facts["segment"] == [0, 150]
+    assert (folder / "150" / "model.zip").is_file()
+    b, _ = runs.rl_segment(learner, 1.0, YMCA, 5, cols, (150, 300), folder, quick=True)
+    assert b[:2] == a and [p["steps"] for p in b][-1] >= 300
+    assert b[-1]["cpu_s"] > a[-1]["cpu_s"] > 0
+    assert all(0 < p["tests"]["ymca"]["position_nrmse"] < 1 for p in b)
+    with pytest.raises(SkinnyInputError, match="earlier segment"):
+        runs.rl_segment(learner, 1.0, YMCA, 5, cols, (300, 450), tmp_path / "none",
+                        quick=True)

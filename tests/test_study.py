@@ -22,7 +22,7 @@ from skinny_mj.training.overrides import parse_value
 
 def toy_run(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """A run without training: the config and params it was given, per seed."""
-    return [{"reservoir": config.esn.n_reservoir, "epochs": config.rule.epochs,
+    return [{"reservoir": config.esn.n_reservoir, "epochs": config.method.epochs,
              "k": row.params["k"],
              "seed": s} for s in seeds]
 
@@ -31,24 +31,24 @@ def toy(**changes) -> Study:
     rows = (Row("a", {"esn.n_reservoir": 30}, group="g", params={"k": 1}),
             Row("b", {"esn.n_reservoir": 40}, {"x": 0.5}, runs=1, group="g", params={"k": 2},
                 quick={"k": 3, "esn.n_reservoir": 35}),
-            Row("c", {"rule.epochs": 3}, seeds_of="a", params={"k": 4}),
+            Row("c", {"method.epochs": 3}, seeds_of="a", params={"k": 4}),
             Row("q", {"esn.n_reservoir": 25}, params={"k": 5}, quick_only=True))
     return Study(**{"name": "toy", "rows": rows, "run_batch": toy_run, "runs": 3,
                     "params": {"k": 0, "tol": 0.1}, "groups": {"all": ("g", "c")},
-                    "quick": Quick({"rule.epochs": 2}, runs=2, rows=("g", "c", "q")),
+                    "quick": Quick({"method.epochs": 2}, runs=2, rows=("g", "c", "q")),
                     **changes})
 
 
 def test_rows_configs_params_groups_and_quick_are_derived():
     full = plan(toy())
     assert [p.row.id for p in full.rows] == ["a", "b", "c"]  # q only in quick sweeps
-    assert full.config("a").esn.n_reservoir == 30 and full.config("c").rule.epochs == 3
+    assert full.config("a").esn.n_reservoir == 30 and full.config("c").method.epochs == 3
     assert full.row("b").params == {"k": 2, "tol": 0.1}
     assert full.groups() == {"g": ("a", "b"), "all": ("a", "b", "c")}
     quick = plan(toy(), quick=True)
     assert [p.row.id for p in quick.rows] == ["a", "b", "c", "q"]
     assert quick.config("b").esn.n_reservoir == 35 and quick.row("b").params["k"] == 3
-    assert quick.config("c").rule.epochs == 2  # Quick.overrides come after the row's
+    assert quick.config("c").method.epochs == 2  # Quick.overrides come after the row's
     exp = toy().build(quick=True)
     assert exp.runs == 2 and [r.runs for r in exp.rows] == [None, 1, None, None]
     assert exp.rows[1].params == {"esn.n_reservoir": 35, "k": 3}  # what run files record
@@ -69,7 +69,7 @@ def test_options_are_overrides_of_the_base_and_refused_when_not_taken():
 
 def _with_movement(study: Study, movement: str, asf: str | None) -> Study:
     """A study that takes ``--movement`` its own way: one more row, a param."""
-    return dataclasses.replace(study, rows=(*study.rows, Row("own", {"rule.epochs": 5},
+    return dataclasses.replace(study, rows=(*study.rows, Row("own", {"method.epochs": 5},
                                                               params={"k": 9})),
                                params={**study.params, "moved": (movement, asf)})
 
@@ -94,7 +94,7 @@ def test_sweep_runs_the_custom_run_with_the_sweeps_seeds(tmp_path):
     assert runs[("c", 1)]["seed"] == run_seed(0, "a", 1) == runs[("c", 1)]["metrics"]["seed"]
     assert runs[("q", 0)]["seed"] == run_seed(0, "q", 0)  # by the row's id
     config = json.loads((tmp_path / "config.json").read_text())["config"]
-    assert config["after_rows"] == {"rule.epochs": 2} and config["base"]["esn.n_reservoir"] == 200
+    assert config["after_rows"] == {"method.epochs": 2} and config["base"]["esn.n_reservoir"] == 200
     assert Results(results, tmp_path).values("c", "k") == [4, 4]
 
 
@@ -115,7 +115,7 @@ def test_quick_params_columns_and_the_studys_cost_memory_and_unavailable_hooks(t
     from skinny_mj import preflight
     from skinny_mj.engine.memory import row_estimate
 
-    study = toy(quick=Quick({"rule.epochs": 2}, runs=2, rows=("g", "c"), params={"tol": 0.5},
+    study = toy(quick=Quick({"method.epochs": 2}, runs=2, rows=("g", "c"), params={"tol": 0.5},
                             columns=("k",)),
                 columns=("reservoir", "k"),
                 cost=lambda config, row: float(config.esn.n_reservoir + row.params["k"]),
@@ -137,11 +137,15 @@ def test_quick_params_columns_and_the_studys_cost_memory_and_unavailable_hooks(t
         run_sweep(full, tmp_path, rows=["c"], workers=1, progress=False)
 
 
-def test_read_metric_follows_dotted_paths_or_calls():
-    m = {"test": {"position_nrmse": 0.1}, "wall_s": 2.0}
-    assert read_metric(m, "test.position_nrmse") == 0.1
-    assert read_metric(m, "test.nope") is None
-    assert read_metric(m, lambda d: d["wall_s"] * 2) == 4.0
+def test_read_metric_follows_dotted_paths_of_the_run_file_or_calls():
+    from skinny_mj.training.loop import train_batch
+
+    (result,) = train_batch(TrainConfig().override(
+        {"method.epochs": 1, "method.cycles": 1, "esn.n_reservoir": 20}), [0])
+    assert read_metric(result, "test.position_nrmse") == result.test.position_nrmse > 0
+    assert read_metric(result, "test.nope") is None
+    assert read_metric(result, "train.gains") == result.train.gains and len(result.train.gains) == 1
+    assert read_metric(result, lambda r: r.wall_s * 2) == result.wall_s * 2
 
 
 def test_a_study_checks_its_rows():
@@ -179,26 +183,26 @@ def test_a_grid_parses_a_types_settings_after_the_type_is_chosen():
 
 def test_grid_rows_are_the_product_of_the_swept_keys():
     study = grid_study(["esn.spectral_radius=0.5,0.9", "esn.n_reservoir=100,200",
-                        "rule.epochs=2"])
+                        "method.epochs=2"])
     assert [r.id for r in study.rows] == [
         "esn.spectral_radius=0.5+esn.n_reservoir=100",
         "esn.spectral_radius=0.5+esn.n_reservoir=200",
         "esn.spectral_radius=0.9+esn.n_reservoir=100",
         "esn.spectral_radius=0.9+esn.n_reservoir=200"]
-    assert study.base.rule.epochs == 2 and study.rows[3].overrides == {
+    assert study.base.method.epochs == 2 and study.rows[3].overrides == {
         "esn.spectral_radius": 0.9, "esn.n_reservoir": 200}
     quoted = grid_study(["movement.trajectory='md_02.amc@start=3,duration=6.26',ymca"])
     assert [r.overrides["movement.trajectory"] for r in quoted.rows] == [
         "md_02.amc@start=3,duration=6.26", "ymca"]
     assert all(Row(r.id) for r in quoted.rows)  # plain file-name words
-    for bad in (["reservoir"], ["esn.n_reservoir=1,1"], ["no_such=1"], ["rule.epochs=0,1"], []):
+    for bad in (["reservoir"], ["esn.n_reservoir=1,1"], ["no_such=1"], ["method.epochs=0,1"], []):
         with pytest.raises(SkinnyInputError):
             grid_study(bad)
 
 
 def test_skinny_sweep_runs_resumes_and_refuses_in_one_line(tmp_path, capsys):
     out = tmp_path / "sr"
-    args = ["sweep", "esn.spectral_radius=0.5,0.9", "rule.epochs=1", "esn.n_reservoir=20",
+    args = ["sweep", "esn.spectral_radius=0.5,0.9", "method.epochs=1", "esn.n_reservoir=20",
             "--runs", "1",
             "--workers", "1", "--out", str(out), "-q"]
     assert main(args) == 0
@@ -218,17 +222,17 @@ def test_skinny_sweep_runs_resumes_and_refuses_in_one_line(tmp_path, capsys):
 
 def test_a_quick_grid_is_a_smoke_test_of_its_base_and_the_axes_keep_their_values():
     quick = grid_study(["esn.spectral_radius=0.5,0.9"], quick=True)
-    assert (quick.base.rule.epochs, quick.runs) == (2, 2)
+    assert (quick.base.method.epochs, quick.runs) == (2, 2)
     assert grid_study(["esn.spectral_radius=0.5,0.9"], quick=True, runs=3).runs == 3
-    swept = grid_study(["rule.epochs=5,6"], quick=True)  # the axis after --quick's keys
-    assert [swept.base.override(dict(r.overrides)).rule.epochs for r in swept.rows] == [5, 6]
-    tt = grid_study(["rule.cycles=2,3"], quick=True,  # a rule without epochs: left as it is
-                    base=TrainConfig().override({"rule": "true-target"}))
-    assert tt.base.rule.kind == "true-target"
+    swept = grid_study(["method.epochs=5,6"], quick=True)  # the axis after --quick's keys
+    assert [swept.base.override(dict(r.overrides)).method.epochs for r in swept.rows] == [5, 6]
+    tt = grid_study(["method.cycles=2,3"], quick=True,  # a method without epochs: left as it is
+                    base=TrainConfig().override({"method": "true-target"}))
+    assert tt.base.method.kind == "true-target"
     full = grid_study(["esn.spectral_radius=0.5,0.9"], study=toy(), row="b")
     assert (full.base.esn.n_reservoir, full.rows[0].params["k"], full.runs) == (40, 2, 10)
     small = grid_study(["esn.spectral_radius=0.5,0.9"], study=toy(), row="b", quick=True)
-    assert (small.base.esn.n_reservoir, small.base.rule.epochs) == (35, 2)  # the study's quick
+    assert (small.base.esn.n_reservoir, small.base.method.epochs) == (35, 2)  # the study's quick
     assert (small.rows[0].params["k"], small.runs) == (3, 2)
     with pytest.raises(SkinnyInputError, match="two bases"):
         grid_study(["esn.spectral_radius=0.5,0.9"], study=toy(), row="b", base=TrainConfig())
@@ -236,14 +240,14 @@ def test_a_quick_grid_is_a_smoke_test_of_its_base_and_the_axes_keep_their_values
 
 def test_skinny_sweep_starts_from_a_config_file_and_quick_shrinks_it(tmp_path, capsys):
     run_file = tmp_path / "metrics.json"  # what `skinny train` writes: config and seed
-    run_file.write_text(json.dumps({"config": {"movement.trajectory": "y", "rule.epochs": 7,
+    run_file.write_text(json.dumps({"config": {"movement.trajectory": "y", "method.epochs": 7,
                                                "esn.n_reservoir": 20}, "seed": 3}))
     out = tmp_path / "sw"
     assert main(["sweep", "esn.spectral_radius=0.5,0.9", "--config", str(run_file),
                  "--quick", "--workers", "1", "--out", str(out), "-q"]) == 0
     recorded = json.loads((out / "config.json").read_text())
     base = recorded["config"]["base"]
-    assert (base["movement.trajectory"], base["esn.n_reservoir"], base["rule.epochs"]) == \
+    assert (base["movement.trajectory"], base["esn.n_reservoir"], base["method.epochs"]) == \
         ("y", 20, 2)  # the file's, then --quick's 2 epochs
     assert recorded["options"]["quick"] is True
     assert recorded["options"]["config"] == str(run_file)
@@ -290,3 +294,42 @@ def test_compare_leaves_out_measurements_inside_a_metrics_records(tmp_path):
     path.write_text(json.dumps(record))
     assert compare.compare(tmp_path / "a", tmp_path / "b")[0] == [
         f"{path.name}: metrics differ in ['curve']"]
+
+
+def _y_movement(config):
+    from skinny_mj.trajectories import get
+
+    return get("y", config.plant.dof)
+
+
+def test_a_study_s_shapes_are_data_train_once_then_test_on_each():
+    """``tests=``: the networks are trained once and take every test in order (the
+    standard one, another movement, a changed test setting), each as ``evaluate`` gives it;
+    ``failure=`` says which results are failed runs; ``trainings=`` trains several
+    configurations from the same seeds."""
+    from dataclasses import replace
+
+    from skinny_mj.engine.experiment import RunFailed
+    from skinny_mj.engine.study import Test
+    from skinny_mj.training.loop import build_run, evaluate, train_run
+
+    cfg = TrainConfig().override({"method.epochs": 1, "method.cycles": 1, "esn.n_reservoir": 20})
+    study = Study("shapes", (Row("a"),), base=cfg, tests=(
+        Test(), Test("y", _y_movement), Test("noisy", overrides={"test.noise": True})),
+        metrics=lambda r: {name: t.position_nrmse for name, t in r.tests.items()})
+    (got,) = study.run(cfg, study.row("a"), [3])
+    run = build_run(cfg, [3])
+    train_run(run)
+    want = {"": evaluate(run)[0].position_nrmse,
+            "y": evaluate(run, _y_movement(cfg))[0].position_nrmse,
+            "noisy": evaluate(replace(run, cfg=cfg.override({"test.noise": True})))[0]
+            .position_nrmse}
+    assert got == want and got["noisy"] != got[""]
+    failing = replace(study, failure=lambda r: f"seed {r.seed}")
+    (failed,) = failing.run(cfg, study.row("a"), [3])
+    assert isinstance(failed, RunFailed) and str(failed) == "seed 3"
+    both = replace(study, tests=(Test(),), metrics=lambda rs: {
+        k: r.test.position_nrmse for k, r in rs.items()},
+        trainings=lambda c, row: {"one": c, "two": c.override({"esn.n_reservoir": 30})})
+    (pair,) = both.run(cfg, study.row("a"), [3])
+    assert pair["one"] == want[""] and pair["two"] != pair["one"]

@@ -77,8 +77,8 @@ def tiny_paper_a(monkeypatch):
     from skinny_mj.engine.study import Quick
 
     quick = paper_a.STUDY.quick
-    tiny = replace(paper_a.STUDY, quick=Quick({**quick.overrides, "rule.epochs": 1,
-                                               "rule.cycles": 1}, quick.runs, quick.rows))
+    tiny = replace(paper_a.STUDY, quick=Quick({**quick.overrides, "method.epochs": 1,
+                                               "method.cycles": 1}, quick.runs, quick.rows))
     real = registry.get
     monkeypatch.setattr(registry, "get", lambda name: tiny if name == "paper-a" else real(name))
     three_d.paper_experiment.cache_clear()

@@ -29,12 +29,12 @@ def _toy(noise=0.2):
 
 def test_protocol_fields_default_to_todays_behaviour_and_validate():
     cfg = TrainConfig()
-    tt = cfg.override({"rule": "true-target"})
-    assert (cfg.test.noise, cfg.rule.u_error_gain, tt.rule.input_noise,
+    tt = cfg.override({"method": "true-target"})
+    assert (cfg.test.noise, cfg.method.u_error_gain, tt.method.input_noise,
             cfg.movement.retarget) == (False, 1.0, 0.0, "angles")
-    assert {"test.noise", "rule.u_error_gain", "movement.retarget"} <= set(cfg.to_dict())
-    assert "rule.input_noise" in tt.to_dict()
-    for bad in ({"rule.u_error_gain": 0.0}, {"rule": "true-target", "rule.input_noise": -1.0},
+    assert {"test.noise", "method.u_error_gain", "movement.retarget"} <= set(cfg.to_dict())
+    assert "method.input_noise" in tt.to_dict()
+    for bad in ({"method.u_error_gain": 0.0}, {"method": "true-target", "method.input_noise": -1.0},
                 {"movement.retarget": "bones"}, {"test.noise": 1}):
         with pytest.raises(SkinnyInputError):
             cfg.override(bad)
@@ -58,14 +58,14 @@ def test_u_error_gain_scales_u_error_and_training_follows():
     assert not np.allclose(runs[0].position_nrmse, runs[2].position_nrmse)
 
 
-def test_u_error_damping_is_a_rule_key_whose_default_keeps_fels_own_controller():
-    assert TrainConfig().rule.u_error_damping == protocol.DAMPING == FeedbackController.damping
+def test_u_error_damping_is_a_method_key_whose_default_keeps_fels_own_controller():
+    assert TrainConfig().method.u_error_damping == protocol.DAMPING == FeedbackController.damping
     assert protocol.feedback_of(1.0) is None and protocol.feedback_of(1.0, protocol.DAMPING) is None
     fb = protocol.feedback_of(1.0, 0.3)
     assert (fb.damping, fb.gain) == (0.3, 1.0)
-    assert TrainConfig().override({"rule.u_error_damping": 0.3}).rule.u_error_damping == 0.3
+    assert TrainConfig().override({"method.u_error_damping": 0.3}).method.u_error_damping == 0.3
     with pytest.raises(SkinnyInputError):
-        TrainConfig().override({"rule.u_error_damping": -0.1})
+        TrainConfig().override({"method.u_error_damping": -0.1})
     plant, desired, _, _ = _toy()
     sensed = plant.reset()
     plain = FeedbackController().u_error(desired[5], sensed, plant)
@@ -149,7 +149,7 @@ def test_build_run_picks_up_explicit_signals():
     from skinny_mj.training.loop import build_run
 
     run = build_run(TrainConfig().override({"movement.trajectory": "ymca-recorded",
-                                            "esn.n_reservoir": 20, "rule.epochs": 1}), [0])
+                                            "esn.n_reservoir": 20, "method.epochs": 1}), [0])
     np.testing.assert_array_equal(run.desired, ymca_recorded(4).position_signals("cartesian"))
     assert not np.allclose(run.desired, body.body_of(4).cartesian_signals(run.trajectory.angles))
 

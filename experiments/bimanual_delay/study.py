@@ -8,9 +8,10 @@ one arm could have access to the prediction made by the other arm's forward mode
 
 Rows ``<pattern>-<architecture>-d<delay>``: paper B's plant and run (a forced leading
 arm, the lagging arm's ESN inverse model seeing both arms' sensed joint angles, FEL with
-K 1 -> 0, tests with the leader at 1x, 0.5x, 1.5x and K = 0: :func:`skinny_mj.experiments.paper_b.
-run_batch`) with paper A's delay (``plant.delay``: the internal models' sensed
-input lags by 0-10 steps, the feedback controller's does not) and, per architecture,
+K 1 -> 0, tests with the leader at 1x, 0.5x, 1.5x and K = 0:
+:data:`skinny_mj.experiments.paper_b.TESTS`) with paper A's delay (``plant.delay``: the
+internal models' sensed input lags by 0-10 steps, the feedback controller's does not)
+and, per architecture,
 the lagging arm's inverse model gets besides the delayed sensed state of both arms:
 
 - ``inverse``: nothing more (paper B's network, delayed);
@@ -32,9 +33,7 @@ from __future__ import annotations
 
 from skinny_mj.experiments import paper_b
 
-from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
-from skinny_mj.training.config import TrainConfig
 
 NAME = "bimanual-delay"
 #: architecture -> the forward models' ``forward.sharing`` (None: no forward model)
@@ -48,7 +47,7 @@ SPEEDS = paper_b.SPEEDS
 #: β = 0.1 with 3 learning cycles per epoch and 10 epochs (paper E's experiment 5) in
 #: place of paper B's β = 0.01, 5 cycles, 50 epochs; forward networks N = 100 (paper A;
 #: ``forward`` holds their settings, each row chooses whether it has them).
-MODEL = paper_b.MODEL.override({"rule.beta": 0.1, "rule.cycles": 3, "rule.epochs": 10,
+MODEL = paper_b.MODEL.override({"method.beta": 0.1, "method.cycles": 3, "method.epochs": 10,
                                 "forward": "parallel", "forward.reservoir": 100})
 
 
@@ -72,20 +71,16 @@ def _tag(speed: float) -> str:
     return f"x{speed:g}"
 
 
-def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """Paper B's training and tests (:func:`skinny_mj.experiments.paper_b.run_batch`) of the row's
-    config, for several seeds in lockstep; adds |timing error| per speed and the worst
-    over the three speeds."""
-    outs = paper_b.run_batch(config, paper_b.STUDY.row(row.params["pattern"]), seeds)
-    for out in outs:
-        if isinstance(out, RunFailed):
-            continue
-        lags = [abs(out[f"phase_lag_deg_{_tag(s)}"]) for s in SPEEDS]
-        for s, v in zip(SPEEDS, lags, strict=True):
-            out[f"abs_phase_lag_deg_{_tag(s)}"] = v
-        out["worst_abs_phase_lag_deg"] = max(lags)
-        out["worst_relative_error"] = max(out[f"relative_error_{_tag(s)}"] for s in SPEEDS)
-    return outs
+def metrics(result) -> dict:
+    """Paper B's metrics (:func:`skinny_mj.experiments.paper_b.metrics`) of the row's run,
+    with |timing error| per speed and the worst over the three speeds."""
+    out = paper_b.metrics(result)
+    lags = [abs(out[f"phase_lag_deg_{_tag(s)}"]) for s in SPEEDS]
+    for s, v in zip(SPEEDS, lags, strict=True):
+        out[f"abs_phase_lag_deg_{_tag(s)}"] = v
+    out["worst_abs_phase_lag_deg"] = max(lags)
+    out["worst_relative_error"] = max(out[f"relative_error_{_tag(s)}"] for s in SPEEDS)
+    return out
 
 
 TABLE_COLUMNS = ("position_nrmse_x1", "relative_error_x1", "worst_relative_error",
@@ -93,13 +88,15 @@ TABLE_COLUMNS = ("position_nrmse_x1", "relative_error_x1", "worst_relative_error
 
 
 STUDY = Study(
-    name=NAME, description=__doc__, base=MODEL, runs=10, run_batch=run_batch,
+    name=NAME, description=__doc__, base=MODEL, runs=10,
+    # paper B's run: its tests at three leader speeds, its failures, its metrics and ours
+    tests=paper_b.TESTS, failure=paper_b.failure, metrics=metrics,
     rows=tuple(_row(p, a, d) for p in PATTERNS for a in ARCHITECTURES for d in DELAYS),
     groups={**{a: [row_id(p, a, d) for p in PATTERNS for d in DELAYS] for a in ARCHITECTURES},
             **{p: [row_id(p, a, d) for a in ARCHITECTURES for d in DELAYS] for p in PATTERNS}},
     columns=TABLE_COLUMNS,
     # a smoke test (2 epochs, one pattern, delays 0 and 4, one run), not a result
-    quick=Quick({"rule.epochs": 2, "rule.cycles": 1}, runs=1,
+    quick=Quick({"method.epochs": 2, "method.cycles": 1}, runs=1,
                 rows=tuple(row_id("phase0", a, d) for a in ARCHITECTURES for d in (0, 4))),
     # --dof 8 runs the patterns on the 3D body; the movements are paper B's patterns and
     # the signals its joint angles (the per-arm forward models need joint signals)

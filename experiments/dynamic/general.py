@@ -2,9 +2,10 @@
 
 A row of :mod:`skinny_mj.experiments.dynamic.study` whose ``params["tests"]`` names test
 columns (:data:`TESTS`) runs :func:`run_batch`: it trains the row's seeds in lockstep
-(nothing, for a controller alone such as computed torque, ``arm-ct``: its columns are the
-floor a learned controller is measured against), then tests them at the row's K on every
-column. The shipped CMU clips need more torque than the motors have at full speed
+(nothing, for a controller alone such as computed torque, ``arm-ct``), then tests them at
+the row's K on every column. A ``floor`` row (:func:`floor_batch`) computes the least error
+the torque limits allow on each column (iLQR knowing the true model and the whole
+movement): what no controller can beat, the bound a learned one is measured against. The shipped CMU clips need more torque than the motors have at full speed
 (:func:`skinny_mj.training.torque.feasibility`), so each is a column twice: as shipped
 (``md_02``, ``md_03``) and slowed to the fastest speed at which no step of its inverse
 dynamics exceeds a limit (``md_02-feasible``; :data:`FEASIBLE_SPEED`, per body).
@@ -26,6 +27,7 @@ from skinny_mj.experiments.claims import values
 
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.imitation import TORQUE_METRICS
 from skinny_mj.trajectories import load_movement
 
 #: Fastest speed (a factor of the clip's own, on a 0.01 grid from 0.6 down) at and below
@@ -59,7 +61,6 @@ def load_test(column: str, dof: int):
 def run_batch(config: TrainConfig, row, seeds: list[int]) -> list:
     """Train the row's R networks once in lockstep (nothing for a controller alone), then
     test them on every column of ``row.params["tests"]``."""
-    from skinny_mj.training.imitation import TORQUE_METRICS
     from skinny_mj.training.loop import build_run, evaluate, test_robot_metrics, train_run
 
     start = time.perf_counter()
@@ -92,6 +93,26 @@ def run_batch(config: TrainConfig, row, seeds: list[int]) -> list:
     return outs
 
 
+def floor_batch(config: TrainConfig, row, seeds: list[int]) -> list:
+    """The torque-limited floor (:func:`skinny_mj.training.floor.torque_floor`: iLQR with
+    the true model, the whole movement known, commands within the limits) on every column
+    of ``row.params["tests"]``. Deterministic: every seed gets the same figures."""
+    from skinny_mj.training.floor import torque_floor
+
+    dof, out = config.plant.dof, {}
+    start = time.perf_counter()
+    for col in row.params["tests"]:
+        movement = load_test(col, dof)
+        floor = torque_floor(movement, dof, iterations=row.params.get("iterations", 150),
+                             tolerance=1e-5)
+        figures = floor.metrics(movement.angles, dof, movement.dt)
+        out[f"{col}__position_nrmse"] = floor.joint_nrmse
+        out[f"{col}__max_torque_ratio"] = figures.pop("max_command")
+        out.update({f"{col}__{k}": v for k, v in figures.items() if k != "joint_nrmse"})
+    out.update(train_wall_s=0.0, n_test_failed=0, wall_s=time.perf_counter() - start)
+    return [dict(out) for _ in seeds]
+
+
 #: The goal for the ESN alone (K = 0) on the unseen clips, position NRMSE: a target to
 #: measure against, not a number tuned to
 GOAL = 0.02
@@ -110,12 +131,15 @@ def report_lines(out_dir, rows: tuple[str, ...], bodies: dict[str, int]) -> list
     lines = []
     for bd, dof in bodies.items():
         mine = [r for r in rows if r.startswith(f"{bd}-general")]
-        mine.sort(key=lambda r: not r.endswith("-arm-ct"))  # the floor first
+        # the floor, then computed torque, then the learned rows
+        mine.sort(key=lambda r: (not r.endswith("-floor"), not r.endswith("-arm-ct")))
         if not any(values(out_dir, r, "train_wall_s") for r in mine):
             continue
         head = " | ".join(f"{c} @ {speed_of(c, dof):g}" for c in TESTS)
         lines += [f"torque general, {bd}: position NRMSE per test column (the ESN alone, "
-                  "K = 0; the arm-ct row: computed torque alone, the floor)",
+                  "K = 0; the arm-ct row: computed torque alone; the floor row: iLQR with "
+                  "the true model and the whole movement known, the least error the torque "
+                  "limits allow)",
                   f"| row | n | {head} |", "|---|---|" + "---|" * len(TESTS)]
         for r in mine:
             n = len(values(out_dir, r, "train_wall_s"))
@@ -126,10 +150,11 @@ def report_lines(out_dir, rows: tuple[str, ...], bodies: dict[str, int]) -> list
         preset = f"{bd}-general"
         for c in CLIP_COLUMNS:
             v = values(out_dir, preset, f"{c}__position_nrmse")
-            floor = values(out_dir, f"{bd}-general-arm-ct", f"{c}__position_nrmse")
+            ct = values(out_dir, f"{bd}-general-arm-ct", f"{c}__position_nrmse")
+            floor = values(out_dir, f"{bd}-general-floor", f"{c}__position_nrmse")
             if v:
                 lines.append(f"goal {bd} torque general preset on unseen {c} (@ "
                              f"{speed_of(c, dof):g}) <= {GOAL}: {_cell(v)}, "
                              f"{sum(x <= GOAL for x in v)} / {len(v)} runs; computed "
-                             f"torque {_cell(floor)}")
+                             f"torque {_cell(ct)}; floor {_cell(floor)}")
     return lines

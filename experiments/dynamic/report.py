@@ -149,8 +149,8 @@ def report(results, plan, out_dir: Path) -> str:
                      "(goal <= 3x)")
     if (ratio := _ratio(out_dir, "2d-ymca-fel-arm", kin)) is not None:
         arm, ref = plan.config("2d-ymca-fel-arm"), plan.config("2d-ymca-kinematic")
-        per_cycle = ratio * ref.rule.epochs / arm.rule.epochs
-        lines.append(f"wall per run, torque FEL inertia-scaled teacher ({arm.rule.epochs} "
-                     f"epochs) / kinematic ({ref.rule.epochs} epochs), 2D YMCA: {ratio:.2f}x "
+        per_cycle = ratio * ref.method.epochs / arm.method.epochs
+        lines.append(f"wall per run, torque FEL inertia-scaled teacher ({arm.method.epochs} "
+                     f"epochs) / kinematic ({ref.method.epochs} epochs), 2D YMCA: {ratio:.2f}x "
                      f"(goal <= 2x); per epoch {per_cycle:.2f}x")
     return "\n".join(lines)

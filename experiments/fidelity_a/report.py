@@ -28,7 +28,7 @@ def labels(params: dict) -> dict:
     forward = params.get("forward", "none")
     return {"architecture": "inverse" if forward == "none" else forward,
             "forward_input": params.get("forward.input", "sensed"),
-            "delay": params["plant.delay"], "epochs": params["rule.epochs"]}
+            "delay": params["plant.delay"], "epochs": params["method.epochs"]}
 
 
 class Runs:

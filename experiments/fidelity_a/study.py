@@ -40,6 +40,7 @@ from skinny_mj.experiments import paper_a
 
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.result import feedback_share
 
 NAME = "fidelity-a"
 #: Epochs at which a run's metrics are recorded (those <= the row's epochs, and its last).
@@ -77,9 +78,9 @@ def plan_row(arch: str, forward_input: str, delay: int, epochs: int) -> Row:
     forward = {} if arch == "inverse" else {"forward": arch, "forward.input": forward_input}
     quick = QUICK_EPOCHS.get((arch, forward_input, delay))
     return Row(row_id(arch, forward_input, delay),
-               {"plant.delay": delay, "forward": "none", **forward, "rule.epochs": epochs},
+               {"plant.delay": delay, "forward": "none", **forward, "method.epochs": epochs},
                group="chained" if forward_input == "chained" else arch,
-               quick={"rule.epochs": quick, **({"forward.reservoir": 50} if forward else {})}
+               quick={"method.epochs": quick, **({"forward.reservoir": 50} if forward else {})}
                if quick else {})
 
 
@@ -97,7 +98,7 @@ def _cycle_metrics(ro, desired: np.ndarray, prefix: str) -> dict[str, np.ndarray
     correction ratio only with the feedback on: in training)."""
     out = {f"{prefix}_mad": _mad(ro.true_signals, desired)}
     if prefix == "train":
-        out.update({"train_share": paper_a.feedback_share(ro),
+        out.update({"train_share": feedback_share(ro),
                     "train_ratio": np.array(ro.correction_ratio)})
     if ro.predictions is not None:
         out[f"{prefix}_pred_nrmse"] = rollout_prediction_error(ro)
@@ -132,7 +133,7 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     from skinny_mj.training.loop import build_run, train_run
 
     run = build_run(config, seeds)
-    checks = checkpoints_of(row.params["checkpoints"], run.cfg.rule.epochs)
+    checks = checkpoints_of(row.params["checkpoints"], run.cfg.method.epochs)
     last_cycle = run.cfg.learning_cycles + 1
     recorded: dict[int, dict[str, np.ndarray]] = {}
 
@@ -146,7 +147,7 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     result = trained.fel
     outs: list = []
     for r in range(len(seeds)):
-        ok_epochs = run.cfg.rule.epochs if not result.failed[r] else int(result.fail_epoch[r])
+        ok_epochs = run.cfg.method.epochs if not result.failed[r] else int(result.fail_epoch[r])
         out: dict = {"epochs_ok": float(ok_epochs)}
         for c in checks:
             alive = c <= ok_epochs  # the run had not diverged by the end of epoch c
@@ -174,7 +175,7 @@ STUDY = Study(
     rows=tuple(plan_row(*p) for p in PLAN), params={"checkpoints": CHECKPOINTS},
     columns=_columns(TABLE_EPOCHS[0]),
     # a smoke test (N = 100 / 50, 2 cycles, 2–3 epochs, 2 runs), not a result
-    quick=Quick({"esn.n_reservoir": 100, "rule.cycles": 2}, runs=2,
+    quick=Quick({"esn.n_reservoir": 100, "method.cycles": 2}, runs=2,
                 rows=tuple(row_id(*k) for k in QUICK_EPOCHS),
                 params={"checkpoints": (1, 2, 3)}, columns=_columns(2)),
     report="skinny_mj.experiments.fidelity_a.report:report",

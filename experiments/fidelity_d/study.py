@@ -1,7 +1,7 @@
 """Paper D's fidelity: which true-target cell trains in the thesis's range, and tests how?
 
 Paper D's true-target (TT) half (``skinny_mj.experiments.paper_d.STUDY``'s rows and ``trainings``,
-imported) × Gaussian input noise on the teacher-forced inputs (``rule.input_noise``, SD in
+imported) × Gaussian input noise on the teacher-forced inputs (``method.input_noise``, SD in
 normalized units, its own seed stream) {0, 0.01, 0.03, 0.05} × reservoir size N {100, 200,
 400} × movement {recorded-like YMCA (``ymca-recorded``: never still, marker noise),
 ``ymca-smooth`` (today's ``ymca``)}. Row ids ``<movement>-n<N>-i<noise>-e<exp>``.
@@ -27,7 +27,6 @@ from typing import Any
 
 from skinny_mj.experiments import paper_d
 
-from skinny_mj.engine.plan import train_metrics
 from skinny_mj.engine.study import Quick, Row, Study
 
 NAME = "fidelity-d"
@@ -46,9 +45,6 @@ STAGE_2_CELLS: tuple[str, ...] = (
     "smooth-n100-i0.05", "smooth-n200-i0.05", "smooth-n400-i0.05")
 #: The four TT columns of paper D Table 1 (our metric names = paper_d's).
 COLUMNS = {k: v for k, v in paper_d.COLUMNS.items() if k.startswith("tt_")}
-#: Where each column is read in the TT training's metrics.
-METRICS = {f"tt_{q}_{part}": f"{part}.{q}_nrmse" for part in ("train", "test")
-           for q in ("position", "motor")}
 
 
 @dataclass(frozen=True)
@@ -78,13 +74,18 @@ def trainings(config, row: Row) -> dict[str, Any]:
     """Paper D's TT training of the row's exp (``config``: its FEL config on the row's
     movement and N) with the row's input noise."""
     tt = paper_d.trainings(config, row)["tt"]
-    return {"tt": tt.override({"rule.input_noise": row.params["input_noise"]})}
+    return {"tt": tt.override({"method.input_noise": row.params["input_noise"]})}
 
 
-def run_batch(config, row: Row, seeds: list[int]) -> list:
-    """TT train (teacher forced, noise off) and closed-loop test (K = 0) errors per seed;
-    a run whose closed-loop test diverged is a failed run."""
-    return train_metrics(trainings(config, row)["tt"], seeds, METRICS)
+def metrics(results) -> dict[str, Any]:
+    """The TT training's train (teacher forced, noise off) and closed-loop test (K = 0)
+    errors, and its test's figures in a roboticist's units; a run whose closed-loop test
+    diverged is a failed run."""
+    tt = results["tt"]
+    return {"tt_position_train": tt.train.position_nrmse,
+            "tt_motor_train": tt.train.motor_nrmse,
+            "tt_position_test": tt.test.position_nrmse, "tt_motor_test": tt.test.motor_nrmse,
+            **tt.robot_figures()}
 
 
 def _rows(grid: Grid, tt_cycles: int, quick_only: bool = False) -> list[Row]:
@@ -125,7 +126,7 @@ def in_thesis_range(results: dict, cell: str) -> bool:
 _ROWS = (*_rows(Grid(), paper_d.TT_CYCLES), *_rows(QUICK_GRID, 3, quick_only=True))
 STUDY = Study(
     name=NAME, description=__doc__, runs=10, rows=_ROWS,
-    base=paper_d.STUDY.base, run_batch=run_batch, trainings=trainings, columns=COLUMNS,
+    base=paper_d.STUDY.base, trainings=trainings, metrics=metrics, columns=COLUMNS,
     # stage 2's cells are groups, not part of config.json's config: picking them after
     # stage 1 keeps --resume into stage 1's folder possible (quick: every cell)
     groups={"stage1": [r.id for r in _ROWS if r.params["exp"] in STAGE_1_EXPS],

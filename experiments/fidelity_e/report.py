@@ -24,7 +24,7 @@ def _stat(results: dict, row_id: str, metric: str) -> tuple[float, float, int, i
 def _grid(plan) -> tuple[list[str], list[float]]:
     """The movements (in the study's order) and u_error gains the sweep planned."""
     movements = list(dict.fromkeys(p.row.group for p in plan.rows))
-    return movements, sorted({p.config.rule.u_error_gain for p in plan.rows})
+    return movements, sorted({p.config.method.u_error_gain for p in plan.rows})
 
 
 def ratios(results: dict, plan) -> list[dict]:

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from skinny_mj.cli import parser as cli
 from skinny_mj.io import atomic_path
 from skinny_mj.training.presets import SHIPPED
 
@@ -38,12 +39,10 @@ def train_shipped(name: str, work: Path, seed: int = 0) -> dict:
     """Train shipped model ``name`` with ``skinny train`` into ``work/name``: the wall and
     CPU seconds of the command, its metrics.json's test NRMSE and wall time, and the
     compressed file's size."""
-    from skinny_mj.cli.parser import main
-
     dof, signals = SHIPPED[name]
     out = work / name
     start, cpu = time.perf_counter(), time.process_time()
-    code = main(["train", "--preset", "general", "--dof", str(dof), "--signals", signals,
+    code = cli.main(["train", "--preset", "general", "--dof", str(dof), "--signals", signals,
                  "--seed", str(seed), "--out", str(out), "--quiet"])
     wall, cpu = time.perf_counter() - start, time.process_time() - cpu
     if code != 0:

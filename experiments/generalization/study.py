@@ -15,10 +15,10 @@ The rows of ``--rows general`` (:data:`GENERAL_ROWS`) measure the ``general`` pr
 each body and signal (2D and 3D, joint angles and Cartesian; ``j3`` is 3D joint angles)
 against the best row before it, and its ingredients: babbling that also moves to the
 joint limits and rests (``limits``, ``holds``), a longer babble, the feedback
-controller's correction weighted 3x in the learning targets (``rule.u_error_gain``).
+controller's correction weighted 3x in the learning targets (``method.u_error_gain``).
 The rows of ``--rows cartesian`` (:data:`CARTESIAN_ROWS`) change one thing in the
 Cartesian preset rows of before, on their seeds: the feedback controller's Jacobian
-damping (``rule.u_error_damping``), a forward model's prediction as an input, each
+damping (``method.u_error_damping``), a forward model's prediction as an input, each
 elbow's angle as an extra signal (``cartesian-elbow``, the presets since) and, in 3D,
 a longer babble before YMCA.
 
@@ -46,18 +46,21 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 from skinny_mj.controllers.metrics import position_nrmse
 
-from skinny_mj.engine.experiment import RunFailed
-from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.engine.results import train_failure
+from skinny_mj.engine.study import Quick, Row, Study, Test
 from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import imitation_metrics, saturation  # noqa: F401 (API)
 from skinny_mj.training.presets import preset_fields
 from skinny_mj.trajectories import load_movement
+
+if TYPE_CHECKING:
+    from skinny_mj.training.result import RunResult
 
 NAME = "generalization"
 #: Representation id -> (dof, signals); the matrix runs the first three.
@@ -108,9 +111,9 @@ GENERAL_OF = {"j2": "j2-limits30-scale4", "j3": "j3-general", "c2": "c2-general+
 #: the elbow angles as extra signals (``cartesian-elbow``), and what the screen of those
 #: pointed to.
 CARTESIAN_VARIANTS: dict[str, dict] = {
-    "damp0.1": {"rule.u_error_damping": 0.1},
-    "damp0.3": {"rule.u_error_damping": 0.3},
-    "damp1": {"rule.u_error_damping": 1.0},
+    "damp0.1": {"method.u_error_damping": 0.1},
+    "damp0.3": {"method.u_error_damping": 0.3},
+    "damp1": {"method.u_error_damping": 1.0},
     "forward": {"forward": "parallel"},
     "elbow": {"plant.signals": "cartesian-elbow"},
     "elbow-babble30": {"plant.signals": "cartesian-elbow",
@@ -172,43 +175,40 @@ def clipped_ideal_nrmse(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarr
                                 skinny.position_signals(angles, signals))[0])
 
 
-def run_batch(tcfg: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """Train the row's R networks once in lockstep, then test them on every column of
-    ``row.params["tests"]``."""
-    from skinny_mj.training.loop import build_run, evaluate, train_run
+def test_movement(column: str, config: TrainConfig):
+    """Test column ``column``'s movement on ``config``'s body (:func:`load_test`)."""
+    return load_test(TESTS[column], config.plant.dof)
 
-    start = time.perf_counter()
-    dof = tcfg.plant.dof
-    run = build_run(tcfg, seeds)
-    result = train_run(run).fel
-    train_wall = (time.perf_counter() - start) / len(seeds)
-    traj = run.trajectory
-    outs: list = [{
-        "train_position_nrmse": float(result.position_nrmse[r, -1]),
-        "train_steps": len(traj), "train_wall_s": train_wall, "n_test_failed": 0,
+
+def tests(config: TrainConfig, row: Row) -> tuple[Test, ...]:
+    """Train the row's networks once, then test them on every column of
+    ``row.params["tests"]``."""
+    return tuple(Test(col, functools.partial(test_movement, col)) for col in row.params["tests"])
+
+
+def metrics(result: RunResult) -> dict:
+    """One run's training figures and its imitation metrics on every test column (a
+    diverged test counts in ``n_test_failed``)."""
+    config, traj = result.config, result.trajectory
+    dof, max_speed = config.plant.dof, result.max_speed_rad_s
+    out = {
+        "train_position_nrmse": result.train.last_position_nrmse,
+        "train_steps": len(traj), "train_wall_s": result.train_wall_s, "n_test_failed": 0,
         "train_coverage": coverage(traj.angles, dof),
         "train_speed_p99_rad_s": float(np.percentile(np.abs(traj.velocities()), 99)),
-        "max_speed_rad_s": [float(v) for v in run.max_speed_rad_s],
-    } for r in range(len(seeds))]
-    for col in row.params["tests"]:
-        test = load_test(TESTS[col], dof)
-        sat = saturation(test.angles, test.dt, run.max_speed_rad_s)
-        bound = clipped_ideal_nrmse(test.angles, test.dt, run.max_speed_rad_s,
-                                     tcfg.plant.signals)
-        for out, outcome in zip(outs, evaluate(run, test), strict=True):
-            out[f"{col}__saturated"] = sat
-            out[f"{col}__clipped_ideal_nrmse"] = bound
-            if outcome.failed:
-                out["n_test_failed"] += 1
-                continue
-            out.update({f"{col}__{k}": v
-                        for k, v in imitation_metrics(outcome, dof).items()})
-    wall = (time.perf_counter() - start) / len(seeds)
-    for r, out in enumerate(outs):
-        out["wall_s"] = wall
-        if result.failed[r]:
-            outs[r] = RunFailed(f"epoch {result.fail_epoch[r]}: {result.fail_reason[r]}")
-    return outs
+        "max_speed_rad_s": [float(v) for v in max_speed],
+    }
+    for col, outcome in result.tests.items():
+        test = outcome.trajectory
+        out[f"{col}__saturated"] = saturation(test.angles, test.dt, max_speed)
+        out[f"{col}__clipped_ideal_nrmse"] = clipped_ideal_nrmse(
+            test.angles, test.dt, max_speed, config.plant.signals)
+        if outcome.failed:
+            out["n_test_failed"] += 1
+            continue
+        out.update({f"{col}__{k}": v for k, v in imitation_metrics(outcome, dof).items()})
+    out["wall_s"] = result.wall_s
+    return out
 
 
 def coverage(angles: np.ndarray, dof: int, bins: int = 6) -> float:
@@ -265,10 +265,11 @@ ROWS = (*_ROWS, *(cartesian_row(_BY_ID[CARTESIAN_BASE[rep]], v) for rep, v in CA
 
 
 STUDY = Study(
-    name=NAME, description=__doc__, rows=ROWS, run_batch=run_batch, runs=10,
+    name=NAME, description=__doc__, rows=ROWS, runs=10,
+    tests=tests, metrics=metrics, failure=train_failure,  # train once, test on each
     # paper E exp. 5's schedule (TrainConfig's defaults), 10 epochs, N = 200, one
     # unscored washout cycle before each test
-    base=TrainConfig().override({"rule.epochs": 10, "test.washout_cycles": 1,
+    base=TrainConfig().override({"method.epochs": 10, "test.washout_cycles": 1,
                                  "esn.n_reservoir": 200}),
     columns={"train_position_nrmse": "train pos", "ymca__position_nrmse": "YMCA pos",
              "md_02__position_nrmse": "md_02 pos", "md_03__position_nrmse": "md_03 pos",
@@ -277,7 +278,7 @@ STUDY = Study(
             "general": [f"{rep}-{ts}" for rep, ts in GENERAL_ROWS],
             "cartesian": [f"{CARTESIAN_BASE[rep]}+{v}" for rep, v in CARTESIAN_ROWS]},
     # a smoke test: N = 50, 2 epochs, 2 runs, 3 sets x 3 tests on j2
-    quick=Quick({"esn.n_reservoir": 50, "rule.epochs": 2}, runs=2,
+    quick=Quick({"esn.n_reservoir": 50, "method.epochs": 2}, runs=2,
                 rows=tuple(f"j2-{ts}" for ts in QUICK_SETS)),
     # the rows are the training sets and their bodies (select one with --rows j2|c2|c3|j3,
     # or --rows general)

@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--epochs", type=int, default=150)
     p.add_argument("--quiet", action="store_true", help="sensor and reservoir noise 0")
     a = p.parse_args(argv)
-    tc = paper_c.STUDY.config("y-pure").override({"rule.epochs": a.epochs})
+    tc = paper_c.STUDY.config("y-pure").override({"method.epochs": a.epochs})
     if a.quiet:
         tc = tc.override({"esn.noise_level": 0.0, "plant.sensor_noise": 0.0})
     run = build_run(tc, a.seeds)

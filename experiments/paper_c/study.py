@@ -53,17 +53,21 @@ move 6-13 degrees; with one arm's held, both still move 31-44 degrees (cross-arm
 from __future__ import annotations
 
 import dataclasses
+import functools
 import resource
-import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 from skinny_mj.controllers.metrics import nrmse
 
-from skinny_mj.engine.experiment import RunFailed
-from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.engine.results import train_failure
+from skinny_mj.engine.study import Quick, Row, Study, Test
 from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.trajectories import load_movement, sample_clip
+
+if TYPE_CHECKING:
+    from skinny_mj.training.result import RunResult
 
 NAME = "paper-c"
 #: Row/column id -> movement name (paper C §3.4; speeds: §4.1).
@@ -93,8 +97,8 @@ QUICK_TESTS = ("ymca", "y", "ym", "mirror-left")
 BASE = TrainConfig().override({
     "plant.dof": 4, "plant.signals": "joint", "plant.sensor_noise": 0.01,
     "movement.max_speed_from": "ymca", "movement.full_scale": "per-joint",
-    "rule": "original", "rule.cycles": 5, "rule.epochs": 150,
-    "rule.gain_schedule": "multiplicative", "rule.gain_factor": 0.9,
+    "method": "original", "method.cycles": 5, "method.epochs": 150,
+    "method.gain_schedule": "multiplicative", "method.gain_factor": 0.9,
     "esn.n_reservoir": 1000, "esn.spectral_radius": 0.1, "esn.noise_level": 0.2,
     "test.washout_cycles": 1})
 
@@ -154,42 +158,40 @@ def elbow_range(angles: np.ndarray, dof: int) -> float:
     return float(np.mean(e.max(axis=0) - e.min(axis=0)))
 
 
-def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """Train the row's networks once in lockstep on its movement (paper C §3.5), then
-    test each on every column (§3.6): per seed its metrics, or its :class:`RunFailed`;
-    the wall times are the batch's, shared out per run."""
-    from skinny_mj.training.loop import build_run, evaluate, train_run
+def test_movement(movement: str, asf: str | None, config: TrainConfig):
+    """Test column ``movement`` on ``config``'s body (:func:`load`)."""
+    return load(movement, config.plant.dof, asf)
 
-    start = time.perf_counter()
-    dof = config.plant.dof
-    run = build_run(config, seeds)
-    result = train_run(run).fel
-    max_speed = run.max_speed_rad_s
-    outs: list = [{
-        "train_position_nrmse": float(result.position_nrmse[r, -1]),
-        "train_motor_nrmse": float(result.motor_nrmse[r, -1]),
-        "train_curve_position_nrmse": result.position_nrmse[r],
-        "train_elbow_range_rad": elbow_range(run.trajectory.angles, dof),
-        "train_wall_s": (time.perf_counter() - start) / len(seeds),
+
+def tests(config: TrainConfig, row: Row) -> tuple[Test, ...]:
+    """Paper C §3.6: every network is tested on every column (and the real movement)."""
+    return tuple(Test(col, functools.partial(test_movement, movement, row.params["asf"]))
+                 for col, movement in columns(row.params).items())
+
+
+def metrics(result: RunResult) -> dict:
+    """One run's training figures and its metrics on every test column (a diverged test
+    counts in ``n_test_failed``); the wall times are the batch's, shared out per run."""
+    dof, train = result.config.plant.dof, result.train
+    out = {
+        "train_position_nrmse": train.last_position_nrmse,
+        "train_motor_nrmse": train.last_motor_nrmse,
+        "train_curve_position_nrmse": train.position_nrmse,
+        "train_elbow_range_rad": elbow_range(result.trajectory.angles, dof),
+        "train_wall_s": result.train_wall_s,
         "n_test_failed": 0,
-    } for r in range(len(seeds))]
-    for col, movement in columns(row.params).items():
-        test = load(movement, dof, row.params["asf"])
-        outcomes = evaluate(run, test)
-        raw = np.diff(test.angles, axis=0) / (max_speed * test.dt)  # unclipped commands
-        for out, outcome in zip(outs, outcomes, strict=True):
-            out[f"{col}__true_command_saturated"] = float(np.mean(np.abs(raw) > 1.0 + 1e-9))
-            if outcome.failed:
-                out["n_test_failed"] += 1
-                continue
-            out.update(_test_metrics(dof, col, outcome))
-    wall = (time.perf_counter() - start) / len(seeds)
+    }
+    for col, outcome in result.tests.items():
+        test = outcome.trajectory
+        raw = np.diff(test.angles, axis=0) / (result.max_speed_rad_s * test.dt)  # unclipped
+        out[f"{col}__true_command_saturated"] = float(np.mean(np.abs(raw) > 1.0 + 1e-9))
+        if outcome.failed:
+            out["n_test_failed"] += 1
+            continue
+        out.update(_test_metrics(dof, col, outcome))
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    for r, out in enumerate(outs):
-        out.update(wall_s=wall, peak_rss_mb=peak)
-        if result.failed[r]:
-            outs[r] = RunFailed(f"epoch {result.fail_epoch[r]}: {result.fail_reason[r]}")
-    return outs
+    out.update(wall_s=result.wall_s, peak_rss_mb=peak)
+    return out
 
 
 def _test_metrics(dof: int, col: str, outcome) -> dict:
@@ -233,12 +235,13 @@ STUDY = Study(
     rows=tuple(Row(rid, {"movement.trajectory": m}) for rid, m in MOVEMENTS.items()),
     # every network is tested on every column (and on the real movement)
     params={"tests": tuple(MOVEMENTS), "real": str(REAL_MOVEMENT), "asf": None},
-    run_batch=run_batch, cost=cost, own_options={"movement": with_movement},
+    tests=tests, metrics=metrics, failure=train_failure,  # train once, test on each
+    cost=cost, own_options={"movement": with_movement},
     columns={"train_position_nrmse": "train pos", "ymca__position_nrmse": "test YMCA pos",
              f"{REAL_ID}__position_nrmse": "test real pos", "wall_s": "wall s",
              "peak_rss_mb": "peak RSS MB"},
     # a smoke test: N = 100, 3 epochs, 2 runs, 3 training x 4 test movements
-    quick=Quick({"esn.n_reservoir": 100, "rule.epochs": 3}, runs=2, rows=QUICK_TRAIN,
+    quick=Quick({"esn.n_reservoir": 100, "method.epochs": 3}, runs=2, rows=QUICK_TRAIN,
                 params={"tests": QUICK_TESTS}),
     report="skinny_mj.experiments.paper_c.report:report",
 )

@@ -92,7 +92,7 @@ def analyse(row: str, overrides: dict, seeds: list[int], epochs: int | None = No
     ``overrides`` on ``seeds`` and measure it."""
     cfg = study.config(row).override(overrides)
     if epochs is not None:
-        cfg = cfg.override({"rule.epochs": epochs})
+        cfg = cfg.override({"method.epochs": epochs})
     run = build_run(cfg, seeds)
     curve: list[np.ndarray] = []
     last = cfg.learning_cycles + 1

@@ -20,6 +20,7 @@ from skinny_mj.experiments.paper_e.study import (
 )
 
 from skinny_mj.engine.plan import Plan
+from skinny_mj.engine.results import test_figures, test_motor_nrmse, test_position_nrmse
 from skinny_mj.engine.stats import load_runs, markdown_table
 from skinny_mj.io import atomic_write_text
 from skinny_mj.plots import boxplot_png, line_sweep_png, pyplot, save_figure
@@ -83,9 +84,9 @@ def fig3(out_dir: Path) -> Path | None:
         return None
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    for beta in sorted({float(r["params"]["rule.beta"]) for r in runs}, reverse=True):
+    for beta in sorted({float(r["params"]["method.beta"]) for r in runs}, reverse=True):
         curves = np.array([r["metrics"]["convergence_curve"] for r in runs
-                           if float(r["params"]["rule.beta"]) == beta], dtype=float)
+                           if float(r["params"]["method.beta"]) == beta], dtype=float)
         mean, sd = curves.mean(axis=0), curves.std(axis=0)
         x = np.arange(1, curves.shape[1] + 1)
         if not np.any(mean > 0):  # β = 1: y_used = y_true from the first cycle
@@ -113,8 +114,8 @@ def fig3_summary(out_dir: Path, plan: Plan) -> str:
     lines = [f"Fig. 3 — training cycles until y_used is within {plan.params['tolerance']:g} "
              "of its "
              "initial distance from the final value (perfect targets, teacher forcing):"]
-    for beta in sorted({float(r["params"]["rule.beta"]) for r in runs}, reverse=True):
-        sel = [r["metrics"] for r in runs if float(r["params"]["rule.beta"]) == beta]
+    for beta in sorted({float(r["params"]["method.beta"]) for r in runs}, reverse=True):
+        sel = [r["metrics"] for r in runs if float(r["params"]["method.beta"]) == beta]
         c = np.array([m["cycles_to_converge"] for m in sel])
         final = np.array([m["final_nrmse"] for m in sel])
         paper = PAPER_FIG3_CYCLES.get(beta)
@@ -139,7 +140,7 @@ def fig3_proportion(runs: Sequence[dict]) -> str:
     β = 0.3 / 0.1 / 0.05 — whatever the tolerance: no tolerance gives all three counts."""
     means = {}
     for r in runs:
-        b = float(r["params"]["rule.beta"])
+        b = float(r["params"]["method.beta"])
         if b < 1 and b in PAPER_FIG3_CYCLES:
             means.setdefault(b, []).append(r["metrics"]["cycles_to_converge"])
     betas = sorted(means, reverse=True)
@@ -184,7 +185,7 @@ def fig5(out_dir: Path, plan: Plan) -> Path | None:
     if a is None or b is None:
         return None
     series = {"fig5a": f"(a) original, {a.movement.reps} reps (paper chose 0.03)",
-              "fig5b": f"(b) new β = {b.rule.beta:g}, {b.movement.reps} rep (paper chose 0.2)"}
+              "fig5b": f"(b) new β = {b.method.beta:g}, {b.movement.reps} rep (paper chose 0.2)"}
     levels = sorted({float(r["params"]["esn.noise_level"]) for g in series
                      for r in _ok_runs(out_dir, g)})
     if not levels:
@@ -330,9 +331,9 @@ def _record_run(path: Path, cfg: TrainConfig, row_id: str, seed: int, metrics: d
     """Re-train one run, write its test as an .rrd; True when it reproduces ``metrics``."""
     outcome = train(cfg, seed)
     record_test(path, outcome, f"paper E exp {row_id}, median run (seed {seed})",
-                {"row": row_id, "config": cfg.to_dict()})
-    return (outcome.metrics["test"]["position_nrmse"] == metrics.get("position_nrmse")
-            and outcome.metrics["test"]["motor_nrmse"] == metrics.get("motor_nrmse"))
+                {"row": row_id, "config": cfg.to_dict()}, figures=test_figures(outcome))
+    return (test_position_nrmse(outcome) == metrics.get("position_nrmse")
+            and test_motor_nrmse(outcome) == metrics.get("motor_nrmse"))
 
 def report(results, plan, out_dir: Path) -> str:
     """Figures 3–6, one ``.rrd`` of the median run per Table row, the movement line in

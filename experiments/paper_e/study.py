@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 from skinny_mj.controllers.true_target import convergence_curve
 
+from skinny_mj.engine.results import STANDARD_METRICS, train_position_nrmse
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
 
@@ -72,7 +73,7 @@ def run_convergence(config: TrainConfig, row: Row, seeds: list[int]) -> list[dic
     from skinny_mj.training.loop import build_run
 
     run = build_run(config, seeds)
-    curves = convergence_curve(run.esn, run.desired, run.true_commands, config.rule.beta,
+    curves = convergence_curve(run.esn, run.desired, run.true_commands, config.method.beta,
                                int(row.params["cycles"]))
     return [{"cycles_to_converge": cycles_to_converge(curve, row.params["tolerance"]),
              "initial_nrmse": float(curve[0]), "final_nrmse": float(curve[-1]),
@@ -94,16 +95,16 @@ def _paper(row_id: str) -> dict[str, float]:
 
 
 def _fel(method: str, beta: float, cycles: int | None) -> dict:
-    """A FEL rule as overrides: the original method has no β."""
-    return {"rule": method, "rule.cycles": cycles,
-            **({"rule.beta": beta} if method == "new" else {})}
+    """A FEL method as overrides: the original method has no β."""
+    return {"method": method, "method.cycles": cycles,
+            **({"method.beta": beta} if method == "new" else {})}
 
 
 ROWS = (
     *(Row(i, {**_fel(m, b, c), "movement.reps": r, "esn.noise_level": NOISE[m]}, _paper(i),
           group="table") for i, (m, b, c, r) in TABLE_1.items()),
     # Fig. 3: the Table's network without reservoir noise, its own run
-    *(Row(f"fig3-b{b:g}", {"rule": "new", "rule.beta": b, "esn.noise_level": 0.0},
+    *(Row(f"fig3-b{b:g}", {"method": "new", "method.beta": b, "esn.noise_level": 0.0},
           {"cycles_to_converge": PAPER_FIG3_CYCLES[b]}, runs=FIGURE_RUNS, group="fig3",
           params={"cycles": 400}, quick={"cycles": 20}, run_batch=run_convergence)
       for b in (0.3, 0.1, 0.05, 1.0)),
@@ -124,13 +125,12 @@ STUDY = Study(
     # the thesis's defaults are TrainConfig's: N = 200, spectral radius 0.5, sensor noise
     # 0.01, 10 epochs, K 1 -> 0
     base=TrainConfig(),
-    metrics={"position_nrmse": "test.position_nrmse", "motor_nrmse": "test.motor_nrmse",
-             "train_wall_s": "wall_s", "train_curve_position_nrmse": "train.position_nrmse"},
+    metrics={**STANDARD_METRICS, "train_curve_position_nrmse": train_position_nrmse},
     columns=TABLE_COLUMNS,
     # Fig. 3 "converged": the excess over the final value is below this share of the
     # initial excess (so the count does not depend on the ESN's fit floor)
     params={"tolerance": 0.05},
-    quick=Quick({"rule.epochs": 2}, runs=2, rows=("table", "fig3", "fig4-n50", "fig4-n100",
+    quick=Quick({"method.epochs": 2}, runs=2, rows=("table", "fig3", "fig4-n50", "fig4-n100",
                                              *(f"fig5{ab}-nu{nu}" for ab in "ab"
                                                for nu in ("0.03", "0.2")))),
     report="skinny_mj.experiments.paper_e.figures:report",

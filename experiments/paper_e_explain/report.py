@@ -131,7 +131,7 @@ def write_report(out_dir: Path, plan) -> str:
     """explain.md and Figs. 7–10 of the sweep ``plan`` in ``out_dir``."""
     by_row = _runs(out_dir)
     cfg = plan.config(EXPS[0])
-    epochs = cfg.rule.epochs
+    epochs = cfg.method.epochs
     true_rough = [r["metrics"]["true_rough"] for runs in by_row.values() for r in runs]
     n = {e: len(by_row[e]) for e in EXPS}
     diverged = {e: sum(r["metrics"]["diverged"] for r in by_row[e]) for e in EXPS}
@@ -207,7 +207,7 @@ def _movement(plan) -> str:
 
 
 def _epochs(plan) -> int:
-    return plan.config(EXPS[0]).rule.epochs
+    return plan.config(EXPS[0]).method.epochs
 
 
 def _true_commands(plan, exp: str) -> np.ndarray:

@@ -145,7 +145,7 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     keep = {run_seed(BASE_SEED, EXPS[0], k) for k in range(SERIES_RUNS)}  # the kept signals
     run = build_run(config, shared)
     diag = EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory),
-                            len(shared), run.cfg.rule.epochs, run.cfg.learning_cycles)
+                            len(shared), run.cfg.method.epochs, run.cfg.learning_cycles)
     trained = train_run(run, observe=diag).fel
     tests = evaluate(run)
     out = []
@@ -167,6 +167,6 @@ STUDY = Study(
                    seeds_of=None if e == EXPS[0] else EXPS[0]) for e in EXPS),
     columns=("est_rough_e1", "used_rough_e5", "esn_rough_e5", "tf_position_nrmse_e5",
              "position_nrmse", "motor_nrmse"),
-    quick=Quick({"rule.epochs": 2}, runs=2),
+    quick=Quick({"method.epochs": 2}, runs=2),
     report="skinny_mj.experiments.paper_e_explain.report:report",
 )

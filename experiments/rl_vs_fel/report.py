@@ -1,150 +1,215 @@
-"""Figures and the comparison table of :mod:`skinny_mj.experiments.rl_vs_fel.study`, from its run
-files.
+"""Figures and tables of :mod:`skinny_mj.experiments.rl_vs_fel.study`, made from its
+curves' data files (:mod:`skinny_mj.experiments.rl_vs_fel.data`), never by training.
 
-``curves_steps.png`` / ``curves_cpu.png``: one panel per body x movement, the test
-position NRMSE (log) against env steps / training CPU time (log; without the test before
-training), one line per run
-(thin) and the mean over runs per learner (thick; a learner's runs share their test
-points), the thresholds dashed. ``comparison.md``: per row the budget, the final error
-(mean ± sd over runs), and per threshold how many runs reached it and, over those, the
-mean env steps, CPU and wall time of the first test at or below it.
+- ``rl-vs-fel_steps.png`` / ``rl-vs-fel_cpu.png``: one column per score (``ymca``,
+  ``clips@0.18``, ``clips@1``), the test position NRMSE (above) and RMS joint error in
+  degrees (below), log, against env steps / training CPU seconds (log), one thin line
+  per curve and seed, a thick line per learner (the mean over its seeds at their shared
+  test points), the thresholds dotted.
+- the reach table: per learner and score, the curves' final NRMSE and RMS joint error,
+  and per threshold how many seeds reached it, the mean env steps and CPU seconds of the
+  first test at or below it (or "not reached by N");
+- the ratio table: per score and threshold, ESN + FEL against the best RL learner
+  (the fewest mean env steps among those whose every seed reached it).
+
+After a sweep, :func:`report` exports its curves into ``<out>/data`` and writes these
+there. The results page regenerates from the committed data files::
+
+    python -m skinny_mj.experiments.rl_vs_fel.report docs/results/rl-vs-fel-data \\
+        --out docs/results
 """
 
 from __future__ import annotations
 
+import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from skinny_mj.experiments.rl_vs_fel import data as data_mod
+from skinny_mj.experiments.rl_vs_fel.runs import mean_error
 
-from skinny_mj.engine.stats import load_runs
 from skinny_mj.io import atomic_write_text
 from skinny_mj.plots import pyplot, save_figure
 
-COLOURS = {"fel": "tab:blue", "ppo": "tab:orange", "sac": "tab:green"}
-LABELS = {"fel": "ESN + FEL", "ppo": "PPO", "sac": "SAC"}
+LEARNERS = {"fel": ("ESN + FEL", "tab:blue", "-"), "fel-k1": ("ESN + FEL, K = 1", "tab:blue",
+                                                               "--"),
+            "ppo": ("PPO", "tab:orange", "-"), "ppo-res": ("residual PPO", "tab:orange", "--"),
+            "sac": ("SAC", "tab:green", "-"), "sac-res": ("residual SAC", "tab:green", "--")}
+THRESHOLDS = (0.05, 0.02, 0.01)
 
 
-def _curves(runs: list[dict]) -> dict[str, list[list[dict]]]:
-    out: dict[str, list[list[dict]]] = {}
-    for r in runs:
-        if r["status"] == "ok" and r["metrics"].get("curve"):
-            out.setdefault(r["row"], []).append(r["metrics"]["curve"])
+def series(records: list[dict]) -> dict[tuple[str, str], list[list[dict]]]:
+    """(learner, score) -> each seed's curve as [{"steps", "cpu_s", "nrmse", "deg"}];
+    ESN + FEL's test with the teacher on is the learner ``fel-k1``. Search rows are
+    left out."""
+    out: dict[tuple[str, str], list[list[dict]]] = {}
+    for rec in records:
+        if rec["curve"].startswith("search-"):
+            continue
+        kinds = [(rec["learner"], "tests")]
+        if rec["learner"] == "fel":
+            kinds.append(("fel-k1", "tests_k1"))
+        for learner, tests in kinds:
+            for score, cols in rec["scores"].items():
+                out.setdefault((learner, score), []).append([
+                    {"steps": p["steps"], "cpu_s": p["cpu_s"],
+                     "nrmse": mean_error(p, cols, tests=tests),
+                     "deg": mean_error(p, cols, "rms_error_deg", tests)}
+                    for p in rec["points"] if tests in p])
     return out
 
 
-def _xy(curve: list[dict], x: str) -> tuple[np.ndarray, np.ndarray]:
-    if x == "cpu_s":  # log axis: the test before training (0 s) is left out
-        curve = curve[1:]
-    xs = np.array([p[x] for p in curve], float)
-    ys = np.array([np.nan if p["position_nrmse"] is None else p["position_nrmse"]
-                   for p in curve], float)
-    return xs, ys
+def _mean_curve(curves: list[list[dict]], x: str, y: str) -> tuple[np.ndarray, np.ndarray]:
+    """Mean x and y over seeds at their shared test points (the shortest curve's)."""
+    n = min(len(c) for c in curves)
+    xs = np.mean([[p[x] for p in c[:n]] for c in curves], axis=0)
+    ys = np.array([[np.nan if p[y] is None else p[y] for p in c[:n]] for c in curves])
+    return xs, np.nanmean(ys, axis=0) if np.isfinite(ys).any() else ys[0]
 
 
-def curves_png(path: Path, thresholds, rows, curves: dict, x: str) -> Path:
+#: The figures' rows: the curve's key, the axis label, the thresholds drawn
+ROWS = (("nrmse", "test position NRMSE", THRESHOLDS), ("deg", "RMS joint error (°)", ()))
+
+
+def curves_png(path: Path, found: dict, x: str) -> Path | None:
+    """The figure of every score's curves (NRMSE above, RMS joint error in degrees below)
+    against ``x`` ("steps" or "cpu_s")."""
+    scores = list(dict.fromkeys(s for _, s in found))
+    if not scores:
+        return None
     plt = pyplot()
-    bodies = sorted({r.params["actuation"] for r in rows}, reverse=True)
-    moves = list(dict.fromkeys(r.params["movement"] for r in rows))
-    fig, axes = plt.subplots(len(bodies), len(moves), figsize=(5.2 * len(moves),
-                             3.6 * len(bodies)), squeeze=False, sharey=True)
-    for i, body in enumerate(bodies):
-        for j, mv in enumerate(moves):
-            ax = axes[i][j]
-            for row in rows:
-                p = row.params
-                if (p["actuation"], p["movement"]) != (body, mv) or row.row_id not in curves:
+    fig, axes = plt.subplots(len(ROWS), len(scores), figsize=(5.0 * len(scores), 7.2),
+                             squeeze=False, sharey="row", sharex="col")
+    for (y, ylabel, lines), ax_row in zip(ROWS, axes, strict=True):
+        for ax, score in zip(ax_row, scores, strict=True):
+            for learner, (label, colour, style) in LEARNERS.items():
+                curves = found.get((learner, score))
+                if not curves:
                     continue
-                colour, runs = COLOURS[p["learner"]], curves[row.row_id]
-                for c in runs:
-                    ax.plot(*_xy(c, x), color=colour, lw=0.6, alpha=0.45)
-                n = min(len(c) for c in runs)
-                xs = np.mean([_xy(c[:n], x)[0] for c in runs], axis=0)
-                ys = np.nanmean([_xy(c[:n], x)[1] for c in runs], axis=0)
-                ax.plot(xs, ys, color=colour, lw=2, marker="o", ms=3,
-                        label=f"{LABELS[p['learner']]} ({len(runs)} run{'s' * (len(runs) > 1)})")
-            for th in thresholds:
-                ax.axhline(th, color="grey", ls="--", lw=0.8)
-            ax.set(xscale="linear" if x == "steps" else "log", yscale="log",
-                   title=f"{body} body, {mv}",
-                   xlabel="env steps" if x == "steps" else "training CPU time (s)")
-            if j == 0:
-                ax.set_ylabel("test position NRMSE (K = 0)")
+                for c in curves:
+                    pts = [p for p in c if p[x] > 0]  # a log axis: the test before training
+                    ax.plot([p[x] for p in pts], [np.nan if p[y] is None else p[y]
+                                                  for p in pts], color=colour, ls=style,
+                            lw=0.5, alpha=0.4)
+                xs, ys = _mean_curve(curves, x, y)
+                keep = xs > 0
+                ax.plot(xs[keep], ys[keep], color=colour, ls=style, lw=2, marker="o", ms=2.5,
+                        label=f"{label} ({len(curves)} seed{'s' * (len(curves) > 1)})")
+            for th in lines:
+                ax.axhline(th, color="grey", ls=":", lw=0.8)
+            ax.set(xscale="log", yscale="log", title=score if y == "nrmse" else "")
             ax.grid(alpha=0.3, which="both")
-            if ax.get_legend_handles_labels()[0]:
-                ax.legend(fontsize=8, loc="lower left")
+        ax_row[0].set_ylabel(ylabel)
+    for ax in axes[-1]:
+        ax.set_xlabel("env steps" if x == "steps" else "training CPU time (s)")
+    for ax in axes[0]:
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7, loc="lower left")
     return save_figure(fig, path)
 
 
-def overlay_png(path: Path, thresholds, rows, sources: list[tuple[Path, str]],
-                x: str = "steps") -> Path:
-    """:func:`curves_png` of ``rows`` with each row's runs taken from its own sweep
-    folder, ``sources`` = [(folder, row id)] (e.g. a longer PPO budget run apart)."""
-    curves = {row_id: _curves(load_runs(d)).get(row_id, []) for d, row_id in sources}
-    shown = [r for r in rows if curves.get(r.row_id)]
-    return curves_png(path, thresholds, shown, {k: v for k, v in curves.items() if v}, x)
+def _first(curve: list[dict], th: float) -> dict | None:
+    return next((p for p in curve if p["nrmse"] is not None and p["nrmse"] <= th), None)
 
 
-def _cell(values: list[float]) -> str:
-    if not values:
+def reach(curves: list[list[dict]], th: float) -> tuple[int, float | None, float | None]:
+    """(seeds that reached ``th``, their mean env steps and CPU s to the first test
+    at or below it)."""
+    hits = [h for h in (_first(c, th) for c in curves) if h is not None]
+    if not hits:
+        return 0, None, None
+    return len(hits), float(np.mean([h["steps"] for h in hits])), \
+        float(np.mean([h["cpu_s"] for h in hits]))
+
+
+def _cell(values: Sequence[float | None], fmt: str = ".4f") -> str:
+    v = np.array([x for x in values if x is not None], float)
+    if not v.size:
         return "—"
-    a = np.asarray(values, float)
-    return f"{a.mean():.4f} ± {a.std(ddof=1):.4f}" if a.size > 1 else f"{a[0]:.4f}"
+    return f"{v.mean():{fmt}} ± {v.std(ddof=1):{fmt}}" if v.size > 1 else f"{v[0]:{fmt}}"
 
 
-def _reach(ms: list[dict], th: float) -> str:
-    hit = [m for m in ms if m.get(f"steps_to_{th:g}") is not None]
-    if not hit:
-        return f"0/{len(ms)}"
-    steps = np.mean([m[f"steps_to_{th:g}"] for m in hit])
-    cpu = np.mean([m[f"cpu_to_{th:g}"] for m in hit])
-    wall = np.mean([m[f"wall_to_{th:g}"] for m in hit])
-    return f"{len(hit)}/{len(ms)}: {steps:,.0f} steps, {cpu:.1f} CPU s, {wall:.1f} s"
-
-
-def comparison_table(thresholds, rows, runs: list[dict]) -> str:
-    head = ["learner", "body", "movement", "env steps (budget)", "final test NRMSE",
-            "best test NRMSE"]
-    head += [f"reach {th:g}: runs, mean steps, CPU, wall" for th in thresholds]
-    head += ["train CPU (s) per run", "train wall (s) per run", "failed / n"]
+def reach_table(found: dict) -> str:
+    head = ["score", "learner", "seeds", "env steps", "final NRMSE", "final RMS error (°)"]
+    head += [f"to {th:g}: seeds, env steps, CPU s" for th in THRESHOLDS]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for row in rows:
-        recs = [r for r in runs if r["row"] == row.row_id]
-        if not recs:
-            continue
-        ms = [r["metrics"] for r in recs if r["status"] == "ok"]
-        final = [m["position_nrmse"] for m in ms if m["position_nrmse"] is not None]
-        best = [m["best_nrmse"] for m in ms if m["best_nrmse"] is not None]
-        p = row.params
-        steps = ms[0]["env_steps"] if ms else "—"
-        n_failed = sum(r["status"] == "failed" for r in recs)
-        cells = [LABELS[p["learner"]], p["actuation"], p["movement"],
-                 f"{steps:,}" if ms else "—", _cell(final), _cell(best)]
-        cells += [_reach(ms, th) for th in thresholds]
-        cells += [_cell([m["train_cpu_s"] for m in ms]), _cell([m["train_wall_s"] for m in ms]),
-                  f"{n_failed} / {sum(r['status'] != 'error' for r in recs)}"]
+    for (learner, score), curves in sorted(found.items(), key=lambda kv: (
+            kv[0][1], list(LEARNERS).index(kv[0][0]))):
+        budget = max(c[-1]["steps"] for c in curves)
+        cells = [score, LEARNERS[learner][0], str(len(curves)), f"{budget:,}",
+                 _cell([c[-1]["nrmse"] for c in curves]),
+                 _cell([c[-1]["deg"] for c in curves], ".2f")]
+        for th in THRESHOLDS:
+            n, steps, cpu = reach(curves, th)
+            cells.append(f"not reached by {budget:,}" if n == 0 else
+                         f"{n}/{len(curves)}, {steps:,.0f}, {cpu:,.1f}")
         lines.append("| " + " | ".join(cells) + " |")
-    lines += ["", "Final: the test after the last env step of the budget; reach: the first "
-              "test at or below the threshold (mean over the runs that reached it). CPU "
-              "(the run's process) and wall times exclude the tests."]
     return "\n".join(lines)
 
 
-def report(results, plan, out_dir: Path) -> str:
-    """The study's report: learning curves (test NRMSE against env steps and against
-    CPU time) and the comparison table (``comparison.md``)."""
-    return write_report(Path(out_dir), plan.params["thresholds"], plan.experiment().rows)
+def ratio_table(found: dict) -> str:
+    """ESN + FEL (K = 0) against the best RL learner per score and threshold."""
+    lines = ["| score | threshold | ESN + FEL: env steps, CPU s | best RL: learner, env "
+             "steps, CPU s | RL / FEL: env steps, CPU |", "|---|---|---|---|---|"]
+    for score in dict.fromkeys(s for _, s in found):
+        fel = found.get(("fel", score))
+        rl = {lr: c for (lr, s), c in found.items() if s == score and not lr.startswith("fel")}
+        for th in THRESHOLDS:
+            f = reach(fel, th) if fel else (0, None, None)
+            best = min(((lr, *reach(c, th)) for lr, c in rl.items()
+                        if reach(c, th)[0] == len(c)), key=lambda t: t[2], default=None)
+            fel_cell = "—" if not fel else (
+                f"{f[1]:,.0f}, {f[2]:,.1f}" if f[0] == len(fel) else
+                f"{f[0]}/{len(fel)} seeds")
+            rl_cell = "none reached" if best is None else \
+                f"{LEARNERS[best[0]][0]}, {best[2]:,.0f}, {best[3]:,.1f}"
+            fel_all = bool(fel) and f[0] == len(fel)
+            if best is not None and fel_all:
+                ratio = f"{best[2] / f[1]:,.1f}, {best[3] / f[2]:,.1f}"
+            elif fel_all and rl:  # a bound: no RL curve got there within its budget
+                most = max(max(c[-1]["steps"] for c in curves) for curves in rl.values())
+                ratio = f"> {most / f[1]:,.1f} (no RL by {most:,})"
+            else:
+                ratio = "—"
+            lines.append(f"| {score} | {th:g} | {fel_cell} | {rl_cell} | {ratio} |")
+    return "\n".join(lines)
 
 
-def write_report(out_dir: Path, thresholds, rows) -> str:
-    """The figures and ``comparison.md`` of the sweep in ``out_dir``: ``rows`` (row_id,
-    params with ``learner``, ``actuation``, ``movement``), ``thresholds`` (NRMSE)."""
-    runs = load_runs(out_dir)
-    curves = _curves(runs)
+def write(records: list[dict], out: Path, prefix: str = "rl-vs-fel") -> str:
+    """The figures (``<prefix>_steps.png``, ``<prefix>_cpu.png``) and tables
+    (``<prefix>_tables.md``) of ``records`` in ``out``; returns the tables' text."""
+    out.mkdir(parents=True, exist_ok=True)
+    found = series(records)
+    if not found:
+        return "no curves yet"
     lines = []
-    if curves:
-        for x, name in (("steps", "curves_steps.png"), ("cpu_s", "curves_cpu.png")):
-            png = curves_png(out_dir / name, thresholds, rows, curves, x)
+    for x, name in (("steps", "steps"), ("cpu_s", "cpu")):
+        png = curves_png(out / f"{prefix}_{name}.png", found, x)
+        if png is not None:
             lines.append(f"figure: {png.name}")
-    table = comparison_table(thresholds, rows, runs)
-    atomic_write_text(out_dir / "comparison.md", table + "\n")
-    return "\n".join([*lines, "", table])
+    text = "\n\n".join([reach_table(found), ratio_table(found)])
+    atomic_write_text(out / f"{prefix}_tables.md", text + "\n")
+    return "\n".join([*lines, "", text])
+
+
+def report(results, plan, out_dir: Path) -> str:
+    """After a sweep: its curves exported to ``<out_dir>/data``, the figures and tables
+    beside them."""
+    out_dir = Path(out_dir)
+    data_mod.export([out_dir], out_dir / "data")
+    return write(data_mod.load(out_dir / "data"), out_dir)
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(
+        prog="python -m skinny_mj.experiments.rl_vs_fel.report",
+        description="The rl-vs-fel figures and tables from its curves' data files.")
+    parser.add_argument("data", type=Path, nargs="?", default=data_mod.DEFAULT_DATA)
+    parser.add_argument("--out", type=Path, default=Path("docs/results"))
+    args = parser.parse_args(argv)
+    print(write(data_mod.load(args.data), args.out))
+
+
+if __name__ == "__main__":
+    main()

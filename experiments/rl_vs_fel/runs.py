@@ -1,41 +1,40 @@
-"""The runs of :mod:`skinny_mj.experiments.rl_vs_fel.study`: one learner, one seed, one curve of the
-test position NRMSE against the env steps it has used.
+"""The runs of :mod:`skinny_mj.experiments.rl_vs_fel.study`: one learner, one seed, one
+learning curve: the test errors against the env steps and CPU seconds used so far.
 
-A curve is a list of points ``{"steps", "wall_s", "cpu_s", "position_nrmse"}``: env
-steps taken so far, training wall time and CPU time of the run's process so far (the
-tests themselves excluded; on a shared machine the CPU time is the fairer clock) and
-the K = 0 test error then (None when the test diverged). Both kinds of learner are tested alike: a
-fresh plant whose sensor noise starts from the run's plant seed
-(:func:`skinny_mj.training.parts.run_streams`), one pass of the movement from its first
-pose, the controller alone, no learning and no exploration, scored by
-:func:`skinny_mj.controllers.metrics.position_nrmse` on the noise-free signals (what
-:func:`skinny_mj.training.loop.evaluate` scores).
+A curve is a list of points ``{"steps", "cpu_s", "wall_s", "tests"}``: env steps taken
+so far (every step the plant ran in training), the training CPU time of the run's
+process and its wall time so far (the tests left out; CPU is the fair clock on a shared
+machine), and per test column ``{"position_nrmse", "rms_error_deg"}`` (None for a test
+that diverged). ESN + FEL points also carry ``tests_k1``: the same test with the teacher
+left on (K = 1), the controller the residual policies are tested as.
 
 - ESN + FEL (:func:`fel_curve`): the one training path (:func:`skinny_mj.training.loop.
-  train_run`) with a test after every epoch through FEL's ``observe`` hook (the test
-  only resets the reservoir state, which the next epoch resets anyway, and draws no
-  reservoir noise, so the training is the one :func:`skinny_mj.training.loop.train` runs).
-  Env steps per epoch: every cycle the plant ran, (learning cycles + 2) x (T - 1).
-- PPO and SAC (:func:`rl_curve`): stable-baselines3 on :class:`skinny_mj.gym.env.
-  SkinnyEnv` (imported lazily: the ``rl`` extra), tested every ``budget / evals`` env
-  steps with the deterministic policy (the mean action).
+  train_run`) tested after every epoch through FEL's ``observe`` hook (the test resets
+  the reservoir state only, which the next epoch resets anyway, and draws no reservoir
+  noise, so the training is the one :func:`skinny_mj.training.loop.train` runs). Env
+  steps per epoch: (learning cycles + 2) x (T - 1).
+- PPO and SAC (:func:`rl_segment`): stable-baselines3 on :class:`skinny_mj.experiments.
+  rl_vs_fel.tracking.TrackingEnv` (plain, gain 0, or residual, gain 1), tested at the
+  env steps of :func:`test_steps` with the deterministic policy on a fresh test env. A
+  curve is trained in segments: segment [start, end) continues the checkpoint that the
+  segment ending at ``start`` saved (:mod:`skinny_mj.experiments.rl_vs_fel.agents`),
+  reseeded from (seed, start), with a new episode; its run file holds the whole curve
+  so far.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
-from skinny_mj.controllers.metrics import position_nrmse
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
 
 RL_EXTRA = "rl-vs-fel needs the rl extra: pip install -e '.[rl]'"
-#: The reward's worst value per step: -mean |desired - true| with signals in [-1, 1].
-WORST_REWARD = -2.0
 
 
 def require_rl() -> None:
@@ -48,11 +47,12 @@ def require_rl() -> None:
 
 
 class Clock:
-    """Training wall time and this process's CPU time, the tests left out (:meth:`paused`)."""
+    """Training wall time and this process's CPU time, the tests left out (:meth:`paused`),
+    continuing from ``offset`` (wall s, CPU s) of earlier segments."""
 
-    def __init__(self) -> None:
+    def __init__(self, offset: tuple[float, float] = (0.0, 0.0)) -> None:
         self.start = (time.perf_counter(), time.process_time())
-        self.excluded = [0.0, 0.0]
+        self.excluded = [-offset[0], -offset[1]]
 
     def elapsed(self) -> tuple[float, float]:
         """(wall s, CPU s) of training so far."""
@@ -68,37 +68,58 @@ class Clock:
             self.excluded[1] += time.process_time() - t0[1]
 
 
-def point(steps: int, elapsed: tuple[float, float], nrmse: float | None) -> dict:
-    """A test point: env steps, training (wall, CPU) seconds so far, the test error."""
+def point(steps: int, elapsed: tuple[float, float], tests: Mapping[str, Any],
+          **more: Mapping[str, Any]) -> dict:
+    """A curve's point: env steps, training (wall, CPU) seconds so far, test errors."""
     return {"steps": int(steps), "wall_s": float(elapsed[0]), "cpu_s": float(elapsed[1]),
-            "position_nrmse": None if nrmse is None or not np.isfinite(nrmse) else float(nrmse)}
+            "tests": dict(tests), **{k: dict(v) for k, v in more.items()}}
+
+
+def test_steps(budget: int, first: int = 1000) -> list[int]:
+    """The env steps a curve is tested at: 0, then 1, 1.5, 2, 3, 5 and 7 x 10^k from
+    ``first`` (log-spaced, for a log axis), and the budget."""
+    grid = {int(m * 10 ** k) for k in range(3, 9) for m in (1, 1.5, 2, 3, 5, 7)}
+    return [0, *sorted(s for s in grid if first <= s < budget), int(budget)]
 
 
 # -- ESN + FEL ----------------------------------------------------------------------------
-def _fel_test(run) -> float | None:
+def _fel_tests(run, columns: Mapping[str, Any], gain: float | None = None) -> dict:
     from skinny_mj.training import loop as training
 
-    test = training.evaluate(run)[0]
-    if test.failed or (test.torque is not None and test.torque["metrics"]["warnings"]):
-        return None
-    return test.position_nrmse
+    if gain is not None:  # the same networks tested with another K
+        import dataclasses
+
+        run = dataclasses.replace(run, cfg=run.cfg.override({"test.gain": gain}))
+    out = {}
+    for col, trajectory in columns.items():
+        test = training.evaluate(run, trajectory)[0]
+        bad = test.failed or (test.torque is not None and test.torque["metrics"]["warnings"])
+        out[col] = None if bad else {
+            "position_nrmse": float(test.position_nrmse),
+            "rms_error_deg": training.test_robot_metrics(run, test)["rms_error_deg"]}
+    return out
 
 
-def fel_curve(tc: TrainConfig, seed: int) -> tuple[list[dict], dict]:
-    """ESN + FEL's curve (a test before training and after every epoch) and facts of the
-    run: ``failed`` (diverged in training), ``steps_per_epoch``."""
+def fel_curve(tc: TrainConfig, seed: int, columns: Mapping[str, Any]) -> tuple[list, dict]:
+    """ESN + FEL's curve (tested before training and after every epoch on ``columns``:
+    id -> trajectory, None for the training movement's one repetition) and facts:
+    ``failed`` (diverged in training), ``steps_per_epoch``."""
     from skinny_mj.training import loop as training
 
     run = training.build_run(tc, [seed])
     steps_per_epoch = (tc.learning_cycles + 2) * (len(run.desired) - 1)
     last_cycle = tc.learning_cycles + 1
     clock = Clock()
-    points = [point(0, (0.0, 0.0), clock.paused(lambda: _fel_test(run)))]
+
+    def tests() -> dict:
+        return {"tests": _fel_tests(run, columns), "tests_k1": _fel_tests(run, columns, 1.0)}
+
+    points = [point(0, (0.0, 0.0), **clock.paused(tests))]
 
     def observe(epoch: int, cycle: int, ro, y_used) -> None:
         if cycle == last_cycle:
-            err = clock.paused(lambda: _fel_test(run))
-            points.append(point((epoch + 1) * steps_per_epoch, clock.elapsed(), err))
+            found = clock.paused(tests)
+            points.append(point((epoch + 1) * steps_per_epoch, clock.elapsed(), **found))
 
     trained = training.train_run(run, observe=observe)
     failed = bool(trained.fel is not None and trained.fel.failed[0])
@@ -106,168 +127,110 @@ def fel_curve(tc: TrainConfig, seed: int) -> tuple[list[dict], dict]:
 
 
 # -- PPO / SAC ----------------------------------------------------------------------------
-def make_env(tc: TrainConfig, seed: int, velocity_inputs: bool):
-    """The tracking env of ``tc`` (its movement, full scale, sensor noise, body) as the
-    learner sees it (:func:`tracking_wrapper`)."""
-    from skinny_mj.gym.env import SkinnyEnv
-    from skinny_mj.training.parts import full_scale_speeds, load_trajectory
-
-    trajectory, _ = load_trajectory(tc)
-    env = SkinnyEnv(body=tc.plant.body, signals=tc.plant.signals, trajectory=trajectory,
-                    sensor_noise=tc.plant.sensor_noise, seed=seed,
-                    max_speed_rad_s=full_scale_speeds(tc, trajectory))
-    return tracking_wrapper(env, velocity_inputs)
-
-
-def tracking_wrapper(env, velocity_inputs: bool):
-    """``env`` with, for ``velocity_inputs``, the torque ESN's extra inputs appended to
-    the observation, [qd_d(t+1) / v_max; qd(t) / v_max] (desired and noise-free actual
-    joint velocities, :mod:`skinny_mj.controllers.torque_fel`), and a diverged simulation turned
-    into the episode's end with the worst reward for every step left
-    (``info["diverged"]``), so that diverging never pays."""
-    import gymnasium
-    from dm_control.rl.control import PhysicsError
-    from gymnasium import spaces
-
-    from skinny_mj.training.torque import desired_velocities_rad_s
-
-    class Tracking(gymnasium.Wrapper):
-        def __init__(self, inner):
-            super().__init__(inner)
-            self.core = inner.unwrapped
-            setup = self.core.setup
-            self.v_max = np.asarray(setup.max_speed_rad_s, float)
-            self.qd_desired = None
-            if velocity_inputs:
-                self.qd_desired = desired_velocities_rad_s(setup.angles, setup.dt) / self.v_max
-                box = inner.observation_space
-                extra = np.full(2 * setup.dof, np.inf)
-                self.observation_space = spaces.Box(np.concatenate([box.low, -extra]),
-                                                    np.concatenate([box.high, extra]),
-                                                    dtype=np.float64)
-            self.diverged = 0
-            self._last = None
-
-        def _obs(self, obs: np.ndarray) -> np.ndarray:
-            if self.qd_desired is not None:
-                t = self.core.dm_control_env.task.step_index
-                qd = self.core.dm_control_env.physics.joint_velocities() / self.v_max
-                obs = np.concatenate([obs, self.qd_desired[min(t + 1, len(self.qd_desired) - 1)],
-                                      qd])
-            self._last = obs
-            return obs
-
-        def reset(self, **kwargs):
-            obs, info = self.env.reset(**kwargs)
-            return self._obs(obs), info
-
-        def step(self, action):
-            left = self.core.n_steps - self.core.dm_control_env.task.step_index
-            try:
-                obs, reward, terminated, truncated, info = self.env.step(action)
-            except PhysicsError:
-                self.diverged += 1
-                return self._last, WORST_REWARD * left, True, False, {"diverged": True}
-            return self._obs(obs), reward, terminated, truncated, info
-
-    return Tracking(env)
-
-
-def score_policy(predict: Callable[[np.ndarray], np.ndarray], env, seed: int) -> float | None:
-    """One pass of the movement with ``predict(obs) -> action`` on ``env`` reset with
-    ``seed``: the position NRMSE of the noise-free signals, None if it diverged."""
-    obs, _ = env.reset(seed=int(seed))
-    physics, setup = env.core.dm_control_env.physics, env.core.setup
-    true = [physics.position_signals(setup.signals).copy()]
-    done = False
-    while not done:
-        obs, _, terminated, truncated, info = env.step(predict(obs))
-        if info.get("diverged"):
-            return None
-        true.append(physics.position_signals(setup.signals).copy())
-        done = terminated or truncated
-    return float(position_nrmse(np.asarray(true)[None], setup.desired)[0])
-
-
-def _algorithm(name: str, env, seed: int, quick: bool):
-    """SB3's PPO or SAC with its default hyper-parameters (``quick``: smaller batches
-    and an earlier start, so a few hundred steps already update the policy)."""
-    from stable_baselines3 import PPO, SAC
-
-    if name == "ppo":
-        kw = {"n_steps": 128, "batch_size": 64} if quick else {}
-        return PPO("MlpPolicy", env, seed=seed, device="cpu", verbose=0, **kw)
-    if name == "sac":
-        kw = {"learning_starts": 50, "batch_size": 64} if quick else {}
-        return SAC("MlpPolicy", env, seed=seed, device="cpu", verbose=0, **kw)
-    raise ValueError(f"unknown learner {name!r}")
-
-
-def rl_curve(name: str, tc: TrainConfig, seed: int, budget: int, evals: int,
-             quick: bool = False) -> tuple[list[dict], dict]:
-    """PPO or SAC trained for ``budget`` env steps on the movement of ``tc``, tested
-    before training and every ``budget // evals`` steps. The training env is reset with
-    the run's seed (SB3 seeds it, torch and NumPy from ``seed``); the test env's sensor
-    noise starts from the run's plant seed, as ESN + FEL's test plant's."""
+def rl_segment(learner: str, gain: float, tc: TrainConfig, seed: int,
+               columns: Mapping[str, Any], span: tuple[int, int], folder: Path | None,
+               changes: Mapping[str, Any] | None = None, quick: bool = False,
+               ) -> tuple[list, dict]:
+    """Train ``learner`` ("ppo" or "sac") with the teacher's ``gain`` (0 plain, 1
+    residual) on the movement of ``tc`` from env step ``span[0]`` to ``span[1]``, tested
+    at :func:`test_steps` on ``columns`` (id -> trajectory, None: the training movement).
+    ``folder``: the curve's checkpoints (``<folder>/<steps>``; None: none are read or
+    written, a curve of one segment from 0). Returns the whole curve so far and facts."""
     import torch
+    from skinny_mj.experiments.rl_vs_fel import agents
+    from skinny_mj.experiments.rl_vs_fel.tracking import TrackingEnv, score
     from stable_baselines3.common.callbacks import BaseCallback
 
-    from skinny_mj.training.parts import run_streams
+    from skinny_mj.training.parts import full_scale_speeds, load_trajectory, run_streams
 
     torch.set_num_threads(1)
-    velocity_inputs = tc.torque is not None
-    train_env = make_env(tc, seed, velocity_inputs)
-    test_env = make_env(tc, seed, velocity_inputs)
-    test_seed = run_streams(seed).plant_seed
-    every = max(1, budget // evals)
+    start, end = span
+    trajectory, _ = load_trajectory(tc)
+    training = trajectory.repeat(tc.movement.reps) if tc.movement.reps > 1 else trajectory
+    v_max = full_scale_speeds(tc, trajectory)
+    plant_seed = run_streams(seed).plant_seed  # FEL's training and test plants' seed
+    env = TrackingEnv(tc, training, v_max, plant_seed, gain)
+    kwargs, norm = agents.settings(learner, dict(changes or {}), quick)
+    venv = agents.vec_env(env, learner, norm, kwargs.get("gamma", 0.99))
+    segment_seed = int(np.random.SeedSequence([seed, start]).generate_state(1)[0] >> 1)
+    if start == 0:
+        model, state = agents.make_model(learner, venv, segment_seed, kwargs), {
+            "points": [], "offset": [0.0, 0.0], "diverged": 0}
+    else:
+        if folder is None or not (folder / str(start) / "state.json").is_file():
+            raise SkinnyInputError(f"no checkpoint at {start} env steps in {folder}: run the "
+                                   "curve's earlier segment first (the same checkpoints folder)")
+        model, state = agents.load(folder / str(start), learner, venv, segment_seed)
+    def test_env(t) -> TrackingEnv:  # a fresh plant each test: its noise restarts
+        return TrackingEnv(tc, trajectory if t is None else t, v_max, plant_seed, gain,
+                           test=True)
+
+    washout = tc.test.washout_cycles
+    due = [s for s in test_steps(end) if s > start or s == start == 0]
 
     class Curve(BaseCallback):
         def __init__(self) -> None:
             super().__init__()
-            self.points: list[dict] = []
-            self.next = 0
-            self.clock: Clock | None = None
+            self.points: list[dict] = list(state["points"])
+            self.clock = Clock(tuple(state["offset"]))
 
         def test(self) -> None:
-            predict = lambda obs: self.model.predict(obs, deterministic=True)[0]  # noqa: E731
-            err = self.clock.paused(lambda: score_policy(predict, test_env, test_seed))
-            self.points.append(point(self.num_timesteps, self.clock.elapsed(), err))
-            self.next += every
+            def predict(obs: np.ndarray) -> np.ndarray:
+                return self.model.predict(venv.normalize_obs(obs), deterministic=True)[0]
+
+            found = self.clock.paused(lambda: {c: score(predict, test_env(t), washout)
+                                               for c, t in columns.items()})
+            self.points.append(point(self.num_timesteps, self.clock.elapsed(), found))
+            due.pop(0)
 
         def _on_training_start(self) -> None:
-            self.clock = Clock()
-            self.test()
+            self.clock = Clock(tuple(state["offset"]))
+            if due and due[0] == self.num_timesteps:
+                self.test()
 
         def _on_step(self) -> bool:
-            if self.num_timesteps >= self.next:
+            if due and self.num_timesteps >= due[0]:
                 self.test()
             return True
 
-    model = _algorithm(name, train_env, seed, quick)
     curve = Curve()
-    model.learn(budget, callback=curve)
-    if curve.points[-1]["steps"] == model.num_timesteps:  # tested before the last update
-        curve.points.pop()
-    curve.test()
-    return curve.points, {"failed": False, "diverged_episodes": train_env.diverged}
+    model.learn(end - start, callback=curve, reset_num_timesteps=start == 0)
+    if due:  # the budget's own test, after the last update
+        curve.test()
+    diverged = state["diverged"] + env.diverged
+    if folder is not None:
+        agents.save(folder / str(end), learner, model, venv,
+                    {"points": curve.points, "offset": list(curve.clock.elapsed()),
+                     "diverged": diverged})
+    return curve.points, {"failed": False, "diverged_episodes": diverged,
+                          "segment": [start, end]}
 
 
 # -- metrics of a curve ---------------------------------------------------------------------
-def curve_metrics(points: list[dict], thresholds: tuple[float, ...]) -> dict:
-    """Final and best test error, and per threshold the env steps, training wall time
-    and CPU time of the first test at or below it (None if none; ``reached_<th>`` 1 or 0)."""
-    errs = [p["position_nrmse"] for p in points]
-    finite = [e for e in errs if e is not None]
-    out: dict[str, Any] = {"position_nrmse": errs[-1],
-                           "best_nrmse": min(finite) if finite else None,
-                           "env_steps": points[-1]["steps"],
+def mean_error(p: dict, columns: Sequence[str], key: str = "position_nrmse",
+               tests: str = "tests") -> float | None:
+    """The mean of ``key`` over ``columns`` of point ``p`` (None if any test diverged)."""
+    values = [(p[tests].get(c) or {}).get(key) for c in columns]
+    return None if any(v is None for v in values) else float(np.mean(values))
+
+
+def curve_metrics(points: list[dict], scores: Mapping[str, Sequence[str]],
+                  thresholds: Sequence[float], tests: str = "tests") -> dict:
+    """Per score (name -> the columns it averages): the final and best NRMSE, the final
+    RMS joint error (deg) and, per threshold, the env steps and training CPU / wall time
+    of the first test at or below it (None if none); the budget and training time."""
+    out: dict[str, Any] = {"env_steps": points[-1]["steps"],
                            "train_wall_s": points[-1]["wall_s"],
                            "train_cpu_s": points[-1]["cpu_s"]}
-    for th in thresholds:
-        first = next((p for p in points if p["position_nrmse"] is not None
-                      and p["position_nrmse"] <= th), None)
-        out[f"reached_{th:g}"] = int(first is not None)
-        out[f"steps_to_{th:g}"] = None if first is None else first["steps"]
-        out[f"wall_to_{th:g}"] = None if first is None else first["wall_s"]
-        out[f"cpu_to_{th:g}"] = None if first is None else first["cpu_s"]
+    for name, cols in scores.items():
+        errs = [mean_error(p, cols, tests=tests) for p in points]
+        finite = [e for e in errs if e is not None]
+        out[f"{name}__nrmse"] = errs[-1]
+        out[f"{name}__best_nrmse"] = min(finite) if finite else None
+        out[f"{name}__rms_error_deg"] = mean_error(points[-1], cols, "rms_error_deg", tests)
+        for th in thresholds:
+            first = next((p for p, e in zip(points, errs, strict=True)
+                          if e is not None and e <= th), None)
+            for what, key in (("steps", "steps"), ("cpu", "cpu_s"), ("wall", "wall_s")):
+                out[f"{name}__{what}_to_{th:g}"] = None if first is None else first[key]
     return out

@@ -1,42 +1,69 @@
-"""ESN + FEL against deep RL (PPO, SAC) on the same tracking task: test error against env
-steps and wall time (needs the ``rl`` extra: ``pip install -e '.[rl]'``).
+"""ESN + FEL against deep RL (PPO, SAC) on the torque body, each at its best, with the
+same information: learning curves of the test error against env steps and CPU seconds
+(PPO and SAC need the ``rl`` extra: ``pip install -e '.[rl]'``).
 
-Rows ``<learner>-<body>-<movement>``: learner ``fel`` (ESN + FEL, paper E's experiment 5:
-N = 200, new method β = 0.1 with 3 learning cycles per epoch, 10 epochs, K 1 -> 0),
-``ppo`` or ``sac`` (stable-baselines3's defaults, CPU); body ``velocity`` (the velocity
-servo) or ``torque`` (the torque twin); movement ``ymca`` or ``md02`` (CMU modern dance
-md_02, seconds 3 to 9.26, as long as one YMCA). 2D with Cartesian signals by default
-(``--dof 8``: 3D).
+Learners, each seeing the ESN's input at every step, [d(t+1); s(t); qd_d(t+1) / v_max;
+qd(t) / v_max] (desired next and sensed position signals, desired next and sensed joint
+velocities):
 
-The task is the gymnasium env :class:`skinny_mj.gym.env.SkinnyEnv` of the same movement,
-full scale and sensor noise (0.01) as the ESN's plant. Observation [sensed(t) |
-desired(t) | desired(t+1)] (the ESN's inputs are desired(t+1) and sensed(t)); on the
-torque body both learners also get [qd_d(t+1) / v_max; qd(t) / v_max], the torque ESN's
-velocity inputs. Action: the normalized joint velocity or torque, in [-1, 1]. Reward
-(RL only; FEL learns from the feedback controller's motor error): the env's, minus the
-mean absolute tracking error of the noise-free signals after each step,
-``-mean |desired(t) - true(t)|``; a diverged simulation ends the episode with the worst
-reward (-2) for every step left. An episode is one pass of the movement (T - 1 = 312
-steps for both movements).
+- ``fel``: ESN + FEL with the project's best torque recipe, the dynamic study's
+  ``fel-arm`` rows (:data:`skinny_mj.experiments.dynamic.study.ARM_FEL`): the teacher is
+  the inertia-scaled PD (``actuation.feedback=inertia-pd``, poles at 5 rad/s, zeta 1),
+  beta = 1, 3 learning cycles per epoch, the readout on the normal equations with
+  forgetting 0.8 (``method.fit=forgetting``), K 1 -> 0 over 15 epochs; on the unseen
+  clips the torque ``general`` preset (the same teacher and readout, 30 epochs, joint
+  signals; :data:`skinny_mj.training.presets.TORQUE_GENERAL`). Tested at K = 0 (the ESN
+  alone); its points also hold the test at K = 1 (with the teacher, ``fel-k1`` in the
+  report), the controller a residual policy is tested as.
+- ``ppo`` / ``sac``: plain RL, the policy's action is the normalized torque, learned
+  from the reward ``-mean |d(t+1) - true(t+1)|`` alone.
+- ``ppo-res`` / ``sac-res``: residual RL, the action is added to the same feedback
+  teacher FEL learns from (the hook the row's config names, so it follows
+  ``actuation.feedback`` and its settings), tested with it.
 
-Every run is tested before training and during it (FEL: after every epoch; RL: every
-``budget / evals`` env steps, deterministic policy) on a fresh plant, K = 0, by the
-position NRMSE :func:`skinny_mj.training.loop.evaluate` computes
-(:mod:`skinny_mj.experiments.rl_vs_fel.runs`). Metrics per run: final and best test error, env
-steps used, training wall and CPU time (tests excluded), and for 0.05 and 0.02 the env
-steps, wall and CPU time of the first test at or below it. Budgets per run (the
-study's parameters, :data:`PARAMS`): FEL 10 epochs = 15 600 env steps, PPO the same
-15 600, SAC 1 560, chosen for two shared cores; each run's curve stays in its run file.
-Groups: ``fel``, ``ppo``, ``sac``, ``velocity``, ``torque``, ``ymca``, ``md02``. Without
-the ``rl`` extra the PPO and SAC rows are left out (named, refused in one line) and the
-FEL rows run.
+The env is :class:`skinny_mj.experiments.rl_vs_fel.tracking.TrackingEnv`: the training
+path's plant and rollout hook, stepped as FEL's rollout steps them. PPO and SAC run with
+rl-baselines3-zoo's MuJoCo hyper-parameters and VecNormalize
+(:data:`skinny_mj.experiments.rl_vs_fel.agents.HYPERPARAMS`: PPO the zoo's tuned Reacher
+entry, the zoo's MuJoCo arm tracking a target by joint torques and the nearest in size;
+SAC the zoo's MuJoCo setting), one CPU thread.
+
+Regimes (row ids ``<learner>-<regime>[-<env steps>]``):
+
+- ``ymca``: train and test on YMCA (2D, Cartesian signals), as the dynamic study's
+  ``2d-ymca-fel-arm`` row;
+- ``general``: train on the torque ``general`` preset's movement (240 s of slow motor
+  babbling, then YMCA; joint-angle signals), test on the shipped CMU clips md_02 and
+  md_03, never trained on, at one speed every clip is feasible at (0.18, the slower of
+  their fastest feasible speeds on the 2D body,
+  :data:`skinny_mj.experiments.dynamic.general.FEASIBLE_SPEED`) and at full speed.
+  Scores ``clips@0.18`` and ``clips@1`` are the means over the two clips.
+
+Each RL curve is trained in segments of :data:`SEGMENT` env steps, a row each
+(``ppo-ymca-500000`` continues the checkpoint ``ppo-ymca-250000`` saved, on its seeds),
+so that every run ends within an hour on one core; checkpoints go to the study's
+``checkpoints`` folder under ``results/`` (:mod:`skinny_mj.experiments.rl_vs_fel.agents`).
+Group ``budget`` (``budget-ymca``, ``budget-general``: one regime's) holds every row up
+to the declared budgets (:data:`BUDGET`: PPO 10^6, SAC 10^5 env steps), ``extend`` the
+segments past them (PPO to 2 x 10^6, SAC to 2 x 10^5), ``search`` a short
+hyper-parameter search on YMCA only (:data:`SEARCH`, each one seed of a one-segment
+curve of :data:`SEARCH_STEPS`; a choice made there is a fit on YMCA, the training clip, never on
+the unseen clips). Tests: RL at :func:`runs.test_steps`
+(log-spaced), FEL after every epoch. Per run: per score the final and best NRMSE, the
+final RMS joint error (deg) and for each threshold of :data:`THRESHOLDS` the env steps,
+CPU and wall time of the first test at or below it; the whole curve stays in the run
+file (``python -m skinny_mj.experiments.rl_vs_fel.data`` exports it to a small JSON
+file per curve; the report and page are made from those files).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
+from skinny_mj.experiments.dynamic.general import FEASIBLE_SPEED
+from skinny_mj.experiments.dynamic.study import ARM_FEL
 from skinny_mj.experiments.rl_vs_fel import runs as runs_mod
 
 from skinny_mj.engine.experiment import RunFailed
@@ -45,100 +72,173 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.preflight import Estimate
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.presets import preset_fields
 
 NAME = "rl-vs-fel"
-LEARNERS = ("fel", "ppo", "sac")
-BODIES = ("velocity", "torque")
-MOVEMENTS = ("ymca", "md02")
-#: The ``md02`` rows' movement: CMU modern dance, seconds 3 to 9.26 (as long as one YMCA).
-CLIP = "md_02.amc@start=3,duration=6.26"
-#: CPU seconds per env step of each learner, measured on the 2D body (the schedule only).
-STEP_COST = {"fel": 1e-3, "ppo": 2e-3, "sac": 2.7e-2}
-#: Budgets in env steps per run (FEL's: its epochs, ``rule.epochs``), the RL runs' tests
-#: after the one before training, the thresholds of the reach columns, and ``quick``
-#: (smaller PPO/SAC batches, a smoke test).
-PARAMS = {"ppo_steps": 15_600,  # FEL's env steps: 10 epochs x (3 + 2) cycles x 312 steps
-          "sac_steps": 1_560,  # a tenth of that (SAC costs ~15x PPO's CPU per env step)
-          "evals": 10, "thresholds": (0.05, 0.02), "quick": False}
+THRESHOLDS = (0.05, 0.02, 0.01)
+#: The unseen clips' one feasible speed (the slower clip's fastest, 2D body) and full speed
+FIXED_SPEED = min(FEASIBLE_SPEED[4, clip] for clip in ("md_02.amc", "md_03.amc"))
+CLIPS = ("md_02", "md_03")
+#: regime -> (config overrides, test columns: id -> (movement, speed); None: the
+#: training movement's one repetition), scores: name -> the columns it averages)
+REGIMES: dict[str, tuple[dict, dict, dict]] = {
+    "ymca": ({"actuation": "torque", "plant.signals": "cartesian",
+              "movement.trajectory": "ymca", **ARM_FEL},
+             {"ymca": None}, {"ymca": ("ymca",)}),
+    "general": (preset_fields("general", "torque", dof=4),
+                {f"{c}@{s:g}": (f"{c}.amc", s) for s in (FIXED_SPEED, 1.0) for c in CLIPS},
+                {f"clips@{s:g}": tuple(f"{c}@{s:g}" for c in CLIPS)
+                 for s in (FIXED_SPEED, 1.0)}),
+}
+#: RL learner -> (stable-baselines3 algorithm, the teacher's gain in the command)
+RL = {"ppo": ("ppo", 0.0), "ppo-res": ("ppo", 1.0), "sac": ("sac", 0.0),
+      "sac-res": ("sac", 1.0)}
+#: The learners of each regime (SAC on YMCA only: an env step of SAC costs 7-10 of PPO's)
+LEARNERS = {"ymca": ("fel", *RL), "general": ("fel", "ppo", "ppo-res")}
+#: env steps per segment row, the declared budget, the extended one (group ``extend``)
+SEGMENT = {"ppo": 250_000, "sac": 25_000}
+BUDGET = {"ppo": 1_000_000, "sac": 100_000}
+EXTENDED = {"ppo": 2_000_000, "sac": 200_000}
+#: The short search on YMCA (group ``search``): name -> (learner, changes to HYPERPARAMS)
+SEARCH: dict[str, tuple[str, dict[str, Any]]] = {
+    "ppo-std-2": ("ppo", {"log_std_init": -2.0}),
+    "ppo-res-std-2": ("ppo-res", {"log_std_init": -2.0}),
+    "ppo-lr3e-4": ("ppo", {"learning_rate": 3e-4}),
+    "ppo-gamma0.99": ("ppo", {"gamma": 0.99}),
+    "sac-gamma0.9": ("sac", {"gamma": 0.9}),
+    "sac-res-gamma0.9": ("sac-res", {"gamma": 0.9}),
+    "sac-start1000": ("sac", {"learning_starts": 1000}),
+}
+SEARCH_STEPS = {"ppo": 250_000, "sac": 25_000}
+#: CPU seconds per env step on the torque body, one core, training only (measured on YMCA
+#: on a shared 2-core machine, docs/results/rl-vs-fel.md): the schedule only
+STEP_COST = {"fel": 2.9e-4, "ppo": 2.5e-3, "sac": 2.4e-2}
+#: env steps of one pass of each regime's training movement, roughly (the schedule only)
+CYCLE_STEPS = {"ymca": 312, "general": 12_400}
+#: --quick: env steps of an RL row, FEL's epochs, the general regime's movement and test
+QUICK_STEPS = {"ppo": 256, "sac": 100}
+QUICK_GENERAL = {"movement.trajectory": "babble:seed=0,duration=4,vmin=0.5,vmax=4"}
+QUICK_TESTS = {"md_02@1": ("md_02.amc@start=3,duration=2", 1.0)}
 
 
-def _row(learner: str, body: str, movement: str) -> Row:
-    """The row's plant and movement (ESN + FEL trains on them; PPO and SAC take them)."""
-    clip = {"movement.trajectory": CLIP, "movement.asf": None} if movement == "md02" else {}
-    return Row(f"{learner}-{body}-{movement}", {"actuation": body, **clip},
-               params={"learner": learner, "movement": movement})
+def _label(steps: int) -> str:
+    return str(steps)
 
 
-ROWS = tuple(_row(learner, body, mv) for mv in MOVEMENTS for body in BODIES
-             for learner in LEARNERS)
+def _rl_rows(learner: str, regime: str) -> list[Row]:
+    algo, _ = RL[learner]
+    over, tests, scores = REGIMES[regime]
+    step, rows, first = SEGMENT[algo], [], f"{learner}-{regime}-{SEGMENT[algo]}"
+    quick: dict[str, Any] = {"span": (0, QUICK_STEPS[algo])}
+    if regime == "general":
+        quick.update(QUICK_GENERAL, tests=QUICK_TESTS, scores={"quick": tuple(QUICK_TESTS)})
+    for k, end in enumerate(range(step, EXTENDED[algo] + 1, step)):
+        rows.append(Row(
+            f"{learner}-{regime}-{_label(end)}", over, seeds_of=None if k == 0 else first,
+            group="budget" if end <= BUDGET[algo] else "extend",
+            params={"learner": learner, "regime": regime, "span": (end - step, end),
+                    "curve": f"{learner}-{regime}", "segment": k, "changes": {},
+                    "tests": tests, "scores": scores}, quick=quick))
+    return rows
 
 
-def budget(p: Mapping[str, Any], learner: str) -> int:
-    return {"ppo": p["ppo_steps"], "sac": p["sac_steps"]}[learner]
+def _fel_row(regime: str) -> Row:
+    over, tests, scores = REGIMES[regime]
+    quick: dict[str, Any] = {"method.epochs": 2}
+    if regime == "general":
+        quick.update(QUICK_GENERAL, tests=QUICK_TESTS, scores={"quick": tuple(QUICK_TESTS)})
+    return Row(f"fel-{regime}", over, group="budget",
+               params={"learner": "fel", "regime": regime, "curve": f"fel-{regime}",
+                       "tests": tests, "scores": scores}, quick=quick)
 
 
-def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """One curve per seed (one after the other: each learner runs its seed alone)."""
-    p = row.params
-    out: list = []
-    for seed in seeds:
-        if p["learner"] == "fel":
-            points, facts = runs_mod.fel_curve(config, seed)
-        else:
-            points, facts = runs_mod.rl_curve(p["learner"], config, seed,
-                                              budget(p, p["learner"]), p["evals"],
-                                              quick=p["quick"])
-        if facts.pop("failed"):
-            out.append(RunFailed("the ESN diverged in training"))
-            continue
-        out.append({**runs_mod.curve_metrics(points, p["thresholds"]), **facts,
-                    "curve": points})
+def _search_rows() -> list[Row]:
+    over, tests, scores = REGIMES["ymca"]
+    out = []
+    for name, (learner, changes) in SEARCH.items():
+        algo = RL[learner][0]
+        out.append(Row(f"search-{name}", over, group="search", runs=1, params={
+            "learner": learner, "regime": "ymca", "span": (0, SEARCH_STEPS[algo]),
+            "curve": f"search-{name}", "segment": 0, "changes": changes, "tests": tests,
+            "scores": scores}, quick={"span": (0, QUICK_STEPS[algo])}))
     return out
 
 
-#: stable-baselines3's defaults: PPO's rollout steps (``quick``: 128), SAC's replay buffer,
-#: the hidden layers of their MlpPolicy (PPO: policy and value net; SAC: the actor, two
-#: critics and their target copies).
-PPO_N_STEPS, SAC_BUFFER, PPO_HIDDEN, SAC_HIDDEN = 2048, 1_000_000, (64, 64), (256, 256)
+ROWS = (*(r for regime, learners in LEARNERS.items() for learner in learners
+          for r in ([_fel_row(regime)] if learner == "fel" else _rl_rows(learner, regime))),
+        *_search_rows())
+#: the rows --quick sweeps: FEL's and the first segment of each RL curve (no search)
+QUICK_ROWS = tuple(r.id for r in ROWS if r.group == "budget"
+                   and r.params.get("segment", 0) == 0)
+#: Study parameters: the checkpoints folder (relative to where the sweep runs), the
+#: thresholds, and ``quick`` (small batches, no checkpoints: a smoke test)
+PARAMS = {"checkpoints": "results/rl-vs-fel/checkpoints", "thresholds": THRESHOLDS,
+          "quick": False}
 
 
-def _mlp(n_in: int, n_out: int, hidden: tuple[int, ...]) -> int:
-    """Parameters of a fully connected net."""
-    sizes = (n_in, *hidden, n_out)
-    return sum((a + 1) * b for a, b in zip(sizes[:-1], sizes[1:], strict=True))
+def _columns_of(tc: TrainConfig, tests: Mapping[str, Any]) -> dict[str, Any]:
+    from skinny_mj.trajectories import load_movement
+
+    return {col: None if spec is None else load_movement(spec[0], tc.plant.dof,
+                                                         speed=spec[1])[0]
+            for col, spec in tests.items()}
 
 
-def estimate_bytes(config: TrainConfig, row: Row, runs: int):
-    """The memory a PPO or SAC run of ``row`` needs beyond the process's own (torch and
-    stable-baselines3 are imported when the sweep is built): the rollout buffer (PPO) or
-    the part of the replay buffer the budget fills (SAC: its zeros are not touched
-    before), float64 observations, actions and five scalars per step; the networks'
-    float32 weights, gradients and Adam's two moments (a target copy: weights only).
-    ESN + FEL rows: None (their training configuration says)."""
-    p, dof = row.params, config.plant.dof
-    learner = p["learner"]
-    if learner == "fel":
-        return None
-    n_obs = 3 * body.body_of(config.plant.body).n_signals(config.plant.signals) \
-        + (2 * dof if config.actuation.kind == "torque" else 0)
-    if learner == "ppo":
-        steps = 128 if p["quick"] else PPO_N_STEPS
-        trained, targets = _mlp(n_obs, dof, PPO_HIDDEN) + _mlp(n_obs, 1, PPO_HIDDEN), 0
-    else:
-        steps = min(budget(p, learner), SAC_BUFFER)
-        critic = _mlp(n_obs + dof, 1, SAC_HIDDEN)
-        trained, targets = _mlp(n_obs, 2 * dof, SAC_HIDDEN) + 2 * critic, 2 * critic
-    return Estimate({"buffer": steps * (2 * n_obs + dof + 5) * 8,
-                     "networks": (4 * trained + targets) * 4},
-                    {"buffer": f"{learner} buffer of {steps} steps",
-                     "networks": f"{learner}'s networks"})
+def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
+    """One curve (or one segment of one) per seed, one seed after the other."""
+    p = row.params
+    columns = _columns_of(config, p["tests"])
+    out: list = []
+    for seed in seeds:
+        if p["learner"] == "fel":
+            points, facts = runs_mod.fel_curve(config, seed, columns)
+            if facts.pop("failed"):
+                out.append(RunFailed("the ESN diverged in training"))
+                continue
+            extra = {f"k1_{k}": v for k, v in runs_mod.curve_metrics(
+                points, p["scores"], p["thresholds"], "tests_k1").items() if "__" in k}
+        else:
+            algo, gain = RL[p["learner"]]
+            folder = None if p["quick"] else \
+                Path(p["checkpoints"]) / f"{p['curve']}-{seed}"
+            points, facts = runs_mod.rl_segment(algo, gain, config, seed, columns,
+                                                tuple(p["span"]), folder, p["changes"],
+                                                quick=p["quick"])
+            facts.pop("failed")
+            extra = {}
+        out.append({**runs_mod.curve_metrics(points, p["scores"], p["thresholds"]),
+                    **extra, **facts, "curve": points})
+    return out
 
 
 def cost(config: TrainConfig, row: Row) -> float:
-    """One run's CPU seconds, roughly (the schedule only)."""
-    learner = row.params["learner"]
-    steps = config.rule.epochs * 5 * 312 if learner == "fel" else budget(row.params, learner)
-    return steps * STEP_COST[learner] * (2.0 if config.actuation.kind == "torque" else 1.0)
+    """One run's CPU seconds, roughly (the schedule only). A curve's later segments cost
+    a hair less, so that the schedule (costliest first, stable) runs them in order."""
+    p = row.params
+    if p["learner"] == "fel":
+        steps = config.method.epochs * (config.learning_cycles + 2) * CYCLE_STEPS[p["regime"]]
+        return steps * STEP_COST["fel"]
+    algo = RL[p["learner"]][0]
+    start, end = p["span"]
+    return (end - start) * STEP_COST[algo] * (1.0 - 1e-6 * p["segment"])
+
+
+def estimate_bytes(config: TrainConfig, row: Row, runs: int):
+    """The memory a PPO or SAC run needs beyond the process's own: PPO's rollout buffer
+    or the part of SAC's replay buffer the curve fills (float64 observations, actions
+    and a few scalars per step). ESN + FEL rows: None (their training configuration
+    says)."""
+    p = row.params
+    if p["learner"] == "fel":
+        return None
+    from skinny_mj.experiments.rl_vs_fel.agents import HYPERPARAMS
+
+    dof = config.plant.dof
+    n_obs = 2 * body.body_of(dof).n_signals(config.plant.signals) + 2 * dof
+    algo = RL[p["learner"]][0]
+    steps = HYPERPARAMS["ppo"][1]["n_steps"] if algo == "ppo" else p["span"][1]
+    return Estimate({"buffer": steps * (2 * n_obs + dof + 5) * 8},
+                    {"buffer": f"{algo} buffer of {steps} steps"})
 
 
 def unavailable_rows() -> dict[str, str]:
@@ -151,31 +251,27 @@ def unavailable_rows() -> dict[str, str]:
     return {}
 
 
-def _columns(thresholds: tuple[float, ...]) -> dict[str, str]:
-    cols = {"position_nrmse": "final test NRMSE", "train_cpu_s": "train CPU (s)"}
-    for th in thresholds:
-        cols.update({f"steps_to_{th:g}": f"env steps to {th:g}",
-                     f"cpu_to_{th:g}": f"CPU (s) to {th:g}"})
-    return cols
-
-
 def _groups() -> dict[str, list[str]]:
     out: dict[str, list[str]] = {}
     for r in ROWS:
-        for group in (r.params["learner"], r.overrides["actuation"], r.params["movement"]):
-            out.setdefault(group, []).append(r.id)
+        for group in (r.params["learner"], r.params["regime"], r.params["curve"],
+                      f"{r.group}-{r.params['regime']}"):
+            if group != r.id:
+                out.setdefault(group, []).append(r.id)
     return out
 
 
+COLUMNS = {"env_steps": "env steps", "train_cpu_s": "train CPU (s)",
+           "ymca__nrmse": "YMCA NRMSE", f"clips@{FIXED_SPEED:g}__nrmse":
+           f"clips @ {FIXED_SPEED:g} NRMSE", "clips@1__nrmse": "clips @ 1 NRMSE"}
+
 STUDY = Study(
     name=NAME, description=__doc__, rows=ROWS, run_batch=run_batch, runs=3, params=PARAMS,
-    # paper E's experiment 5 (TrainConfig's defaults): N = 200, new method, β = 0.1,
-    # 3 learning cycles per epoch, 10 epochs, K 1 -> 0; 2D, Cartesian signals
-    base=TrainConfig().override({"rule.epochs": 10}),
-    groups=_groups(), columns=_columns(PARAMS["thresholds"]),
-    # a smoke test: 1 run per row, FEL 2 epochs, PPO 256 and SAC 100 env steps
-    quick=Quick({"rule.epochs": 2}, runs=1,
-                params={"ppo_steps": 256, "sac_steps": 100, "evals": 2, "quick": True}),
+    base=TrainConfig(), groups=_groups(), columns=COLUMNS, takes=(),
+    # a smoke test: 1 run of FEL's rows (2 epochs) and of each RL curve's first segment
+    # (a few hundred env steps, small batches, no checkpoints); the general regime on 4 s
+    # of babbling, tested on 2 s of md_02
+    quick=Quick(runs=1, rows=QUICK_ROWS, params={"quick": True}),
     cost=cost, memory=estimate_bytes, unavailable=unavailable_rows,
     report="skinny_mj.experiments.rl_vs_fel.report:report",
 )

@@ -30,7 +30,7 @@ BODIES = ((4, "joint"), (4, "cartesian"), (8, "joint"), (8, "cartesian"))
 def target_noise(dof: int, signals: str, sensor_noise: float, seed: int = 0) -> dict:
     """One feedback-only cycle of YMCA: y_est's error per DOF against the true commands."""
     tc = paper_c.STUDY.config("ymca", body=dof, signals=signals).override({
-        "esn.n_reservoir": 50, "rule": "original", "plant.sensor_noise": sensor_noise})
+        "esn.n_reservoir": 50, "method": "original", "plant.sensor_noise": sensor_noise})
     run = build_run(tc, [seed])
     run.esn.W_out[:] = 0.0  # the feedback controller alone
     ro = rollout(run.esn, run.plant, run.desired, 1.0, noise=False)

@@ -40,7 +40,12 @@ from skinny_mj.controllers import fel
 from skinny_mj.controllers.esn import ESN, ESNConfig
 from skinny_mj.engine import registry
 from skinny_mj.engine.experiment import default_workers, run_sweep
+from skinny_mj.engine.results import test_figures
+from skinny_mj.plant import task
+from skinny_mj.plant.adapters import BatchPlant, EnvPlant
 from skinny_mj.plant.ideal import max_speeds
+from skinny_mj.training import loop
+from skinny_mj.training.config import TrainConfig
 from skinny_mj.trajectories import excerpt, get
 
 __all__ = ["GOALS", "RUN_STEPS", "control_step_over_physics", "esn_run_vs_reservoirpy",
@@ -104,9 +109,6 @@ def esn_run_vs_reservoirpy(n_reservoir: int, n_steps: int, repeats: int) -> dict
 
 
 def _lockstep_parts(n_runs: int, n_steps: int, seed: int = 0):
-    from skinny_mj.plant.adapters import BatchPlant
-    from skinny_mj.training.loop import TrainConfig
-
     traj = _movement(n_steps)
     speed = max_speeds(traj.angles, traj.dt)
     desired = traj.position_signals("cartesian")
@@ -160,17 +162,14 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
 def lockstep_speedup(epochs: int, repeats: int) -> dict:
     """R = 20 paper-E exp-5 trainings (``epochs`` epochs) + tests in lockstep
     (``train_batch``) vs the same 20 one at a time (``train``); checks identical results."""
-    from skinny_mj.training.loop import TrainConfig, train, train_batch
-
-    cfg = TrainConfig().override({"rule.epochs": epochs})
+    cfg = TrainConfig().override({"method.epochs": epochs})
     seeds = list(range(N_RUNS))
     out: dict[str, list] = {}
     best = interleaved({
-        "lockstep": lambda: out.__setitem__("batch", train_batch(cfg, seeds)),
-        "one_at_a_time": lambda: out.__setitem__("single", [train(cfg, s) for s in seeds]),
+        "lockstep": lambda: out.__setitem__("batch", loop.train_batch(cfg, seeds)),
+        "one_at_a_time": lambda: out.__setitem__("single", [loop.train(cfg, s) for s in seeds]),
     }, repeats)
-    identical = all(a.metrics["test"] == b.metrics["test"]
-                    and a.metrics["train"] == b.metrics["train"]
+    identical = all(test_figures(a) == test_figures(b) and a.train == b.train
                     for a, b in zip(out["batch"], out["single"], strict=True))
     return {"R": N_RUNS, "epochs": epochs, "lockstep_s": best["lockstep"],
             "one_at_a_time_s": best["one_at_a_time"],
@@ -180,11 +179,8 @@ def lockstep_speedup(epochs: int, repeats: int) -> dict:
 def fast_vs_naive(n_steps: int, repeats: int) -> dict:
     """Per run-step cost: the naive path (dm_control ``env.step`` through ``EnvPlant``
     and a one-run Python ESN, ``fel.rollout``) vs the fast path (R = 20 lockstep)."""
-    from skinny_mj.plant.adapters import EnvPlant
-    from skinny_mj.plant.task import load
-
     traj, speed, desired, esn, plant = _lockstep_parts(N_RUNS, n_steps)
-    env_plant = EnvPlant(load(4, "cartesian", traj, max_speed_rad_s=speed, seed=0))
+    env_plant = EnvPlant(task.load(4, "cartesian", traj, max_speed_rad_s=speed, seed=0))
     one = ESN(esn.cfg, n_runs=1, seed=0)
     loops = (fel.Loop().with_buffers(), fel.Loop().with_buffers())  # as fel.train does
     best = interleaved({
@@ -203,17 +199,15 @@ def torque_over_kinematic(n_runs: int, repeats: int, epochs: int | None = None) 
     cycles) over ``2d-ymca-kinematic`` (the velocity servo, paper E's 10 epochs of 5
     cycles), ``n_runs`` seeds in lockstep each, timed interleaved (best of ``repeats``);
     ``epochs`` shortens both to that many (a smoke test of this figure)."""
-    from skinny_mj.training.loop import train_batch
-
     study = registry.get("dynamic")
     configs = {"torque": study.config("2d-ymca-fel-arm"),
                "kinematic": study.config("2d-ymca-kinematic")}
     if epochs is not None:
-        configs = {k: c.override({"rule.epochs": epochs}) for k, c in configs.items()}
+        configs = {k: c.override({"method.epochs": epochs}) for k, c in configs.items()}
     seeds = list(range(n_runs))
-    best = interleaved({k: functools.partial(train_batch, c, seeds)
+    best = interleaved({k: functools.partial(loop.train_batch, c, seeds)
                         for k, c in configs.items()}, repeats)
-    return {"R": n_runs, **{f"{k}_epochs": c.rule.epochs for k, c in configs.items()},
+    return {"R": n_runs, **{f"{k}_epochs": c.method.epochs for k, c in configs.items()},
             "torque_s": best["torque"], "kinematic_s": best["kinematic"],
             "ratio": best["torque"] / best["kinematic"]}
 

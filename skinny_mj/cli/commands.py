@@ -29,15 +29,22 @@ from skinny_mj.cli.config_flags import (
     given,
 )
 from skinny_mj.cli.memory import check_bench, check_export, check_sweep, check_train
+from skinny_mj.cli.movement_list import list_text
 from skinny_mj.cli.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
 from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.engine import folder, protocols, registry
 from skinny_mj.engine.experiment import default_out_dir, run_sweep
 from skinny_mj.engine.grid import grid_study
+from skinny_mj.engine.results import (
+    run_metrics,
+    test_figures,
+    test_motor_nrmse,
+    test_position_nrmse,
+)
 from skinny_mj.engine.stats import SMOKE_NOTE
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json, atomic_write_text
-from skinny_mj.plant import body
+from skinny_mj.plant import body, task
 from skinny_mj.plant.ideal import IdealController
 from skinny_mj.plant.render import render_png
 from skinny_mj.plots import learning_curve_png
@@ -50,12 +57,13 @@ from skinny_mj.preflight import (
 from skinny_mj.progress import Progress as _Progress
 from skinny_mj.progress import progress_on as _progress_on
 from skinny_mj.recording import record_test, write_recording
+from skinny_mj.training import loop
+from skinny_mj.training import torque as torque_training
 from skinny_mj.training.config import Movement, TrainConfig
 from skinny_mj.training.feasible import load_movement  # NAME@feasible too, else trajectories'
 from skinny_mj.training.imitation import (
     imitation_metrics,
     movement_stats,
-    robot_figures,
     saturation,
 )
 from skinny_mj.training.memory import steps_cause
@@ -122,8 +130,6 @@ def _recording(path: Path, *, which, signals: str, desired_angles, actual_angles
 
 # -- track ------------------------------------------------------------------------------
 def cmd_track(args: argparse.Namespace) -> int:
-    from skinny_mj.plant.task import load
-
     cfg = _flag_config(args, TRACK_FLAGS)
     skinny, signals, mv = body.body_of(cfg.plant.body), cfg.plant.signals, cfg.movement
     if skinny.actuation != "velocity":  # the ideal controller commands joint velocities
@@ -135,7 +141,7 @@ def cmd_track(args: argparse.Namespace) -> int:
     out = _out_dir(args, "track")
     traj, report = _load_movement(
         mv, skinny, memory.check_track(dof, skinny.n_signals(signals)))
-    env = load(skinny, signals, traj, sensor_noise=cfg.plant.sensor_noise, seed=args.seed)
+    env = task.load(skinny, signals, traj, sensor_noise=cfg.plant.sensor_noise, seed=args.seed)
     ctrl = IdealController(traj.angles, env.task.max_speed_rad_s, traj.dt)
     ts = env.reset()
     angles, true_sig = [env.physics.joint_angles()], [env.physics.position_signals(signals)]
@@ -176,31 +182,32 @@ def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> Non
     """metrics.json, model.npz, run.rrd (the test run) and learning_curve.png; for a
     failed (diverged) run only metrics.json, which says why. The model's metadata says
     what it was trained on (``training``: movement, its pieces, steps, seconds, preset)."""
+    metrics = run_metrics(outcome)
     if outcome.failed:
-        atomic_write_json(out / "metrics.json", outcome.metrics)
+        atomic_write_json(out / "metrics.json", metrics)
         return
     cfg = outcome.config
-    train_curve = outcome.metrics["train"].get("position_nrmse")
+    train_curve = outcome.train.position_nrmse
     if isinstance(train_curve, list) and train_curve:  # FEL: one value per epoch
         curve = np.array([np.nan if v is None else v for v in train_curve], dtype=float)
         learning_curve_png(out / "learning_curve.png", {"position NRMSE (evaluation cycle)": curve},
                            "position NRMSE", title=title, log_y=True,
                            xlabel="epoch (feedback gain K falls linearly from 1 to 0 in the last)")
-    record_test(out / "run.rrd", outcome, title)
+    record_test(out / "run.rrd", outcome, title, figures=test_figures(outcome))
     outcome.esn.save(out / "model.npz", metadata={
         "body": cfg.plant.body, "dof": cfg.plant.dof, "signals": cfg.plant.signals,
         "sensor_noise": cfg.plant.sensor_noise, "actuation": cfg.actuation.kind,
         "max_speed_rad_s": [float(v) for v in outcome.max_speed_rad_s],
-        "trained_on": cfg.movement.trajectory, "config": outcome.metrics["config"],
+        "trained_on": cfg.movement.trajectory, "config": cfg.to_dict(),
         "training": _training_metadata(outcome, preset),
     })
-    atomic_write_json(out / "metrics.json", outcome.metrics)
+    atomic_write_json(out / "metrics.json", metrics)
 
 
 def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
     """What a model was trained on: the movement, its pieces (a ``set:``),
     steps and seconds per cycle, repetitions, the seed and the preset."""
-    mv, steps = outcome.config.movement, int(outcome.metrics["steps_per_cycle"])
+    mv, steps = outcome.config.movement, outcome.steps_per_cycle
     name = str(mv.trajectory)
     pieces = set_pieces(name) if name.lower().startswith(SET_PREFIX) else [name]
     return {"movement": name, "pieces": pieces, "asf": mv.asf, "speed": mv.speed,
@@ -212,11 +219,9 @@ def _training_metadata(outcome, preset: str | None) -> dict[str, Any]:
 def _train_and_write(cfg, seed: int, args: argparse.Namespace, out: Path, title: str,
                      preset: str | None = None):
     """Train, then write the run (:func:`_write_run`); the outcome and the folder."""
-    from skinny_mj.training.loop import train
-
     bar = _Progress(title, args.quiet)
     try:
-        outcome = train(cfg, seed, progress=bar)
+        outcome = loop.train(cfg, seed, progress=bar)
     finally:
         bar.close()
     with _writing(args, out) as out:
@@ -228,10 +233,10 @@ def _fmt(v: float | None) -> str:
     return "failed" if v is None else f"{v:.4f}"
 
 
-def _robot_line(metrics: dict) -> str:
-    """The test's figures in a roboticist's units (:func:`robot_figures`) as one line
-    ('' when the test has none, e.g. a diverged network)."""
-    f = robot_figures(metrics)
+def _robot_line(f: dict) -> str:
+    """The test's figures in a roboticist's units (``RunResult.robot_figures``: joint
+    error, hand error, lag; torque body: RMS torque, |work|) as one line ('' when the test
+    has none, e.g. a diverged network)."""
     if f.get("rms_error_deg") is None:
         return ""
     line = (f"  joint error RMS {f['rms_error_deg']:.2f}°, peak {f['peak_error_deg']:.2f}°; "
@@ -247,23 +252,20 @@ def cmd_train(args: argparse.Namespace) -> int:
     out = _out_dir(args, "train")
     check_train(cfg)
     outcome, out = _train_and_write(cfg, seed, args, out,
-                                    f"{cfg.method} on {cfg.movement.trajectory}",
+                                    f"{cfg.method.kind} on {cfg.movement.trajectory}",
                                     preset=getattr(args, "preset", None))
-    m = outcome.metrics
     if outcome.failed:
-        print(f"skinny train: run failed: {m.get('fail_reason')} (details in {out}/metrics.json)",
-              file=sys.stderr)
+        print(f"skinny train: run failed: {outcome.fail_reason} (details in "
+              f"{out}/metrics.json)", file=sys.stderr)
         return 1
-    print(f"test position NRMSE {_fmt(m['test']['position_nrmse'])}, motor NRMSE "
-          f"{_fmt(m['test']['motor_nrmse'])}, {m['wall_s']:.1f} s -> {out}")
-    if line := _robot_line(m):
+    print(f"test position NRMSE {_fmt(test_position_nrmse(outcome))}, motor NRMSE "
+          f"{_fmt(test_motor_nrmse(outcome))}, {outcome.wall_s:.1f} s -> {out}")
+    if line := _robot_line(outcome.robot_figures()):
         print(line)
     return 0
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from skinny_mj.training.loop import TrainConfig
-
     cfg = TrainConfig()  # paper E, experiment 5
     out = _out_dir(args, "demo")
     check_train(cfg, "the demo")
@@ -273,12 +275,11 @@ def cmd_demo(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     outcome, out = _train_and_write(cfg, args.seed, args, out, "demo: paper E exp. 5")
     wall = time.perf_counter() - start
-    m = outcome.metrics
     paper = registry.get("paper-e").row("5").paper
     rows = [
-        ("test position NRMSE", _fmt(m["test"]["position_nrmse"]),
+        ("test position NRMSE", _fmt(test_position_nrmse(outcome)),
          f"{paper['position_nrmse']:.4f}"),
-        ("test motor NRMSE", _fmt(m["test"]["motor_nrmse"]), f"{paper['motor_nrmse']:.4f}"),
+        ("test motor NRMSE", _fmt(test_motor_nrmse(outcome)), f"{paper['motor_nrmse']:.4f}"),
         ("wall time (s)", f"{wall:.1f}", "-"),
     ]
     ours_head = f"ours (seed {args.seed})"
@@ -289,20 +290,12 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(f"\nRecording: {out / 'run.rrd'}  (open it with: skinny view {out})")
     print(f"Also: {out / 'metrics.json'}, {out / 'learning_curve.png'}, {out / 'model.npz'}")
     if outcome.failed:
-        print(f"the run failed: {m.get('fail_reason')}", file=sys.stderr)
+        print(f"the run failed: {outcome.fail_reason}", file=sys.stderr)
         return 1
     return 0
 
 
 def cmd_test(args: argparse.Namespace) -> int:
-    from skinny_mj.training.loop import (
-        TrainConfig,
-        evaluate,
-        run_of,
-        run_streams,
-        test_robot_metrics,
-    )
-
     path, esn, meta = read_model(args.model)  # a shipped model's name, or a file
     which, dof, signals = meta["body"], meta["dof"], meta["signals"]
 
@@ -321,8 +314,9 @@ def cmd_test(args: argparse.Namespace) -> int:
     except SkinnyInputError as err:
         raise SkinnyInputError(f"model metadata holds a bad config ({err})", path=path) from None
     check_model(esn, cfg, path)  # a model of another body, an edited file
-    run = run_of(cfg, esn, meta["max_speed_rad_s"], traj, [run_streams(args.seed).plant_seed])
-    (test,) = evaluate(run)
+    run = loop.run_of(cfg, esn, meta["max_speed_rad_s"], traj,
+                      [loop.run_streams(args.seed).plant_seed])
+    (test,) = loop.evaluate(run)
     metrics: dict[str, Any] = {
         "model": str(path), "trained_on": meta.get("trained_on"),
         "trajectory": str(asked.movement.trajectory),
@@ -333,7 +327,7 @@ def cmd_test(args: argparse.Namespace) -> int:
     }
     # joint error (deg), hand error (cm), lag (s), as the train command's test dict has them
     if not test.failed:
-        metrics["test"].update(test_robot_metrics(run, test))
+        metrics["test"].update(loop.test_robot_metrics(run, test))
     if test.torque is not None:  # torque body: limits, |torque|, work, MuJoCo warnings
         metrics["test"]["torque"] = test.torque["metrics"]
     if not test.failed and cfg.torque is None:  # DTW, within 5°, lag
@@ -355,7 +349,7 @@ def cmd_test(args: argparse.Namespace) -> int:
         return 1
     print(f"test on {traj.name}: position NRMSE {_fmt(test.position_nrmse)}, motor NRMSE "
           f"{_fmt(test.motor_nrmse)} -> {out}")
-    if line := _robot_line(metrics):
+    if line := _robot_line({**test.robot_metrics(dof), **(test.torque_figures or {})}):
         print(line)
     extra = metrics.get("imitation", {})
     if extra:
@@ -369,8 +363,6 @@ def cmd_test(args: argparse.Namespace) -> int:
 # -- trajectory / render ----------------------------------------------------------------
 def cmd_trajectory(args: argparse.Namespace) -> int:
     if args.action == "list":
-        from skinny_mj.cli.movement_list import list_text
-
         print(list_text())
         return 0
     which = body.body_name(chosen_body(args))
@@ -382,8 +374,6 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
         for key, value in movement_stats(traj).items():
             print(f"  {key:32} {value:.4g}")
         if getattr(args, "actuation", "velocity") == "torque":
-            from skinny_mj.training import torque as torque_training
-
             print("torque twin: inverse-dynamics torques of the movement against the limits")
             for line in torque_training.feasibility_report(which, traj):
                 print(line)

@@ -32,6 +32,7 @@ from skinny_mj.cli.config_flags import (
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import DERIVED, TrainConfig
 from skinny_mj.training.legacy import is_legacy
+from skinny_mj.training.overrides import renamed
 from skinny_mj.training.presets import preset_fields
 from skinny_mj.trajectories.library import check_asf
 
@@ -128,7 +129,8 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     """The run ``skinny train`` was asked for, and its seed: ``TrainConfig()``, then
     ``--preset``'s keys, then ``--config FILE``'s (and its seed), then the flags and
     ``KEY=VALUE`` overrides given (:mod:`skinny_mj.cli.config_flags`)."""
-    flags, keyed = given(args, TRAIN_FLAGS), pairs(getattr(args, "overrides", None) or [])
+    flags = given(args, TRAIN_FLAGS)
+    keyed = renamed(TrainConfig(), pairs(getattr(args, "overrides", None) or []))
     check_no_conflict(flags, keyed, flag_names(TRAIN_FLAGS))
     texts = {**flags, **keyed}
     names = {k: f for k, f in flag_names(TRAIN_FLAGS).items() if k in flags and k not in keyed}

@@ -7,7 +7,7 @@ of its config field (:func:`skinny_mj.training.overrides.parse_value`), its help
 default of ``TrainConfig()``, and a flag not given is not in the parsed namespace
 (``argparse.SUPPRESS``), so a default never overrides a preset or a config file.
 ``skinny train`` also takes any key as ``KEY=VALUE`` (``esn.spectral_radius=0.9
-rule=original``); :func:`changes` turns both into one dict of overrides.
+method=original``); :func:`changes` turns both into one dict of overrides.
 """
 
 from __future__ import annotations
@@ -107,23 +107,24 @@ TRAIN_FLAGS: dict[str, list[Flag]] = {
         Flag("--readout", "esn.readout", "readout fit", ("pinv", "ridge")),
         Flag("--ridge", "esn.ridge_lambda", "λ for --readout ridge"),
     ],
-    "learning rule": [
-        Flag("--method", "rule", "the learning rule: feedback-error learning (original or "
+    "learning method": [
+        Flag("--method", "method", "the learning method: feedback-error learning (original or "
              "new β), the true-target architecture, or none (the feedback controller alone, "
              "test.gain > 0)", METHODS),
-        Flag("--epochs", "rule.epochs", "FEL epochs"),
-        Flag("--beta", "rule.beta", "β of the new method and of the true target, in (0, 1]"),
-        Flag("--cycles", "rule.cycles", "learning cycles per epoch (FEL; none: from β), or "
+        Flag("--epochs", "method.epochs", "FEL epochs"),
+        Flag("--beta", "method.beta", "β of the new method and of the true target, in (0, 1]"),
+        Flag("--cycles", "method.cycles", "learning cycles per epoch (FEL; none: from β), or "
              "the true target's cycles"),
-        Flag("--u-error-gain", "rule.u_error_gain", "FEL: scalar on u_error"),
-        Flag("--readout-fit", "rule.fit", "FEL: fit the readout on each cycle alone, with "
-             "λ chosen on a validation cycle (ridge-select, velocity body), or remembering "
+        Flag("--u-error-gain", "method.u_error_gain", "FEL: scalar on u_error"),
+        Flag("--readout-fit", "method.fit", "FEL's learning rule: the readout fitted on each "
+             "cycle alone, with λ chosen on a validation cycle (ridge-select, velocity "
+             "body), or remembering "
              "earlier cycles: the normal equations with forgetting, or RLS (torque body); "
              f"one of {', '.join(FITS)} or a fit another package registered",
              valid=fits.check),
-        Flag("--readout-forgetting", "rule.forgetting", "weight of earlier cycles per "
+        Flag("--readout-forgetting", "method.forgetting", "weight of earlier cycles per "
              "learning cycle, in [0, 1] (--readout-fit forgetting or rls)"),
-        Flag("--tt-input-noise", "rule.input_noise", "SD of noise on the true target's "
+        Flag("--tt-input-noise", "method.input_noise", "SD of noise on the true target's "
              "teacher-forced inputs"),
     ],
     "test": [
@@ -139,7 +140,7 @@ TRACK_FLAGS: dict[str, list[Flag]] = {"plant": [*_BODY, _SENSOR_NOISE],
 
 def _owner(key: str, cfg: TrainConfig) -> Any:
     """The config object holding ``key``'s leaf in ``cfg``, or a default one of the type
-    that has it (``rule.input_noise``: a default :class:`TrueTarget`)."""
+    that has it (``method.input_noise``: a default :class:`TrueTarget`)."""
     owner, _, name = key.rpartition(".")
     node = getattr(cfg, owner) if owner else cfg
     if hasattr(node, name):
@@ -153,7 +154,7 @@ def _owner(key: str, cfg: TrainConfig) -> Any:
 
 def default_of(key: str, cfg: TrainConfig | None = None) -> Any:
     """The default of ``key`` in ``cfg`` (default ``TrainConfig()``); a key of a type
-    not chosen there (``rule.input_noise``) gives that type's default."""
+    not chosen there (``method.input_noise``) gives that type's default."""
     cfg = TrainConfig() if cfg is None else cfg
     if _is_choice(cfg, key):
         return getattr(overrides.node(cfg, key), overrides.KIND)  # a type's name
@@ -275,7 +276,7 @@ def flag_names(groups: Mapping[str, list[Flag]]) -> dict[str, str]:
 
 
 def _is_choice(cfg: TrainConfig, key: str) -> bool:
-    """Does ``key`` choose a type (``rule``, ``actuation``, ``forward``, ``rule.fit``)?"""
+    """Does ``key`` choose a type (``method``, ``actuation``, ``forward``, ``method.fit``)?"""
     return dataclasses.is_dataclass(overrides.node(cfg, key))
 
 

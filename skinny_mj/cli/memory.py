@@ -13,6 +13,7 @@ from skinny_mj.engine.memory import sweep_estimate
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.preflight import Estimate, check, check_writable_file
 from skinny_mj.training.memory import steps_cause, test_estimate, track_estimate, train_estimate
+from skinny_mj.training.parts import load_trajectory
 
 _F8 = 8  # bytes per float64
 
@@ -20,8 +21,6 @@ _F8 = 8  # bytes per float64
 def check_train(cfg: Any, what: str = "the training") -> None:
     """Refuse a training of ``cfg`` the machine cannot hold (loads one repetition of its
     movement to count the steps)."""
-    from skinny_mj.training.parts import load_trajectory
-
     traj, _ = load_trajectory(cfg)
     one, reps = len(traj), cfg.movement.reps
     check(train_estimate(cfg, one * reps, one, 1, steps_cause(traj.name, one, reps)), what)

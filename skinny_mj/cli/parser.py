@@ -1,6 +1,7 @@
 """The ``skinny`` command line.
 
-Every sub-command imports what it needs when it runs, so ``skinny --help`` is quick.
+Every sub-command imports NumPy, MuJoCo and the study it needs when it runs, so ``skinny
+--help`` is quick.
 User errors (bad files, names, parameters, an ``--out`` that holds results or cannot be a
 folder) end with one line on stderr and exit code 2; the machine's (a read-only or full
 disk, no rendering backend) with one line and exit code 1.
@@ -16,7 +17,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from skinny_mj.cli.logs import LEVELS, to_stderr
+from skinny_mj.cli.study_help import list_text, study_help
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.preflight import check_gl  # imports no mujoco
+from skinny_mj.threads import one_blas_thread
 
 
 class _Parser(argparse.ArgumentParser):
@@ -77,8 +81,6 @@ class _ExperimentHelp(argparse.Action):
             parser.print_help()
             parser.exit()
         os.environ.setdefault("MUJOCO_GL", "disabled")  # before a study imports mujoco
-        from skinny_mj.cli.study_help import study_help
-
         try:
             text = study_help(name)
         except SkinnyInputError as err:
@@ -187,7 +189,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Train an ESN inverse model. Settings: TrainConfig's "
                        "defaults (paper E exp. 5), then --preset, then --config FILE, then the "
                        "flags and KEY=VALUE overrides given (any dotted config key, e.g. "
-                       "esn.spectral_radius=0.9 rule=original rule.epochs=2; a metrics.json's "
+                       "esn.spectral_radius=0.9 method=original method.epochs=2; a metrics.json's "
                        "\"config\" lists them all).")
     p.add_argument("overrides", nargs="*", metavar="KEY=VALUE",
                    help="set any config key (dotted), e.g. esn.leak_rate=0.5")
@@ -397,18 +399,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     previous = _on_sigterm(_terminate)
     restore_logs = to_stderr(args.log_level)  # diagnostics: plain lines on stderr
     try:
-        if args.command == "experiment" and args.name == "list":  # reads the studies' source
-            from skinny_mj.cli.study_help import list_text  # only: no NumPy, no study
-
+        if args.command == "experiment" and args.name == "list":  # reads the studies' source:
+            # no NumPy, no study
             print(list_text())
             sys.stdout.flush()
             return 0
-        from skinny_mj.preflight import check_gl  # imports no mujoco
-
         check_gl()  # a MUJOCO_GL mujoco refuses would fail at its import, as a traceback
         from skinny_mj.cli import commands  # imports mujoco
         from skinny_mj.cli.flags import check_args
-        from skinny_mj.threads import one_blas_thread
 
         check_args(args)  # every numeric flag in its range (seed >= 0, ...), before any work
         with one_blas_thread():  # same bits whatever the machine's BLAS threads

@@ -32,6 +32,7 @@ from pathlib import Path
 
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.io import atomic_write_bytes
+from skinny_mj.preflight import check_writable_file
 
 __all__ = ["find_recordings", "has_display", "viewer_command", "view", "cmd_view",
            "screenshot", "vulkan_drivers"]
@@ -365,8 +366,6 @@ def cmd_view(args) -> int:
 
 def _cmd_screenshot(args) -> int:
     """``skinny view --screenshot OUT.png RUN``: the viewer's picture of one recording."""
-    from skinny_mj.preflight import check_writable_file
-
     out = Path(args.screenshot)
     if not math.isfinite(args.at) or args.at < 0:
         raise SkinnyInputError(f"--at must be a time >= 0 s, got {args.at:g}")

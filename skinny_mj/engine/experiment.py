@@ -95,8 +95,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from skinny_mj.engine.folder import prepare_out_dir, sweep_lock
 from skinny_mj.engine.stats import aggregate, load_run, markdown_table
 from skinny_mj.engine.sweep import (

@@ -27,20 +27,20 @@ from collections.abc import Sequence
 from typing import Any
 
 from skinny_mj.engine.plan import plan
+from skinny_mj.engine.results import STANDARD_METRICS
 from skinny_mj.engine.study import Row, Study
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.overrides import canonical, parse_value
 from skinny_mj.training.overrides import keys as config_keys
-from skinny_mj.training.overrides import parse_value
 
 __all__ = ["NAME", "METRICS", "QUICK", "parse_assignment", "grid_study"]
 
 NAME = "sweep"
 #: What a grid reports without a ``--study``: the test of every run, and its wall time.
-METRICS = {"position_nrmse": "test.position_nrmse", "motor_nrmse": "test.motor_nrmse",
-           "train_wall_s": "wall_s"}
+METRICS = STANDARD_METRICS
 #: ``--quick`` without a study: these keys of the base (those it has), 2 runs per row.
-QUICK = {"rule.epochs": 2}
+QUICK = {"method.epochs": 2}
 QUICK_RUNS = 2
 _UNSAFE = re.compile(r"[^A-Za-z0-9_.+=-]")
 
@@ -51,6 +51,7 @@ def parse_assignment(item: str, base: Any) -> tuple[str, list[Any], list[str]]:
     key = key.strip()
     if not sep or not key or not values.strip():
         raise SkinnyInputError(f"a sweep axis is KEY=VALUE[,VALUE...], got {item!r}")
+    key = canonical(base, key)  # an old key's current name (its row ids say that one)
     texts = [t.strip() for t in next(csv.reader([values], quotechar="'",
                                                 skipinitialspace=True))]
     if any(not t for t in texts):
@@ -132,5 +133,6 @@ def grid_study(items: Sequence[str], *, study: Study | None = None, row: str | N
                  rows=tuple(Row(r.id, r.overrides, params=base_row.params,
                                 run_batch=base_row.run_batch) for r in rows),
                  metrics=study.metrics, columns=study.columns, runs=runs, takes=(),
+                 tests=study.tests, failure=study.failure,
                  params=params, run_batch=study.run_batch, trainings=study.trainings,
                  cost=study.cost, memory=study.memory)

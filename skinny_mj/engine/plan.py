@@ -19,58 +19,32 @@ from __future__ import annotations
 import dataclasses
 import functools
 import importlib
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from skinny_mj.engine.experiment import Experiment, RunFailed
+from skinny_mj.engine.experiment import Experiment
 from skinny_mj.engine.experiment import Row as EngineRow
 from skinny_mj.engine.options import movement_changes
+from skinny_mj.engine.results import STANDARD, Metrics, default_run, read_metric
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.engine.sweep import one_of_batch
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training import overrides
 from skinny_mj.training.config import TrainConfig, relative_cost
 
-# The study's types (skinny_mj.engine.study's Study, Row, Metric, RunBatch), named for the
+# The study's types (skinny_mj.engine.study's Study, Row, RunBatch), named for the
 # reader only: the study module imports this one to build its sweep, not the other way round.
-Study = Row = Metric = RunBatch = Any
+Study = Row = RunBatch = Any
 
 __all__ = ["Plan", "Results", "plan", "train_metrics", "read_metric"]
 
 
-def read_metric(metrics: Mapping[str, Any], where: Metric) -> Any:
-    """One metric of a training's metrics: a dotted path (``"test.position_nrmse"``; a
-    missing key is None) or a function of the metrics."""
-    if callable(where):
-        return where(metrics)
-    value: Any = metrics
-    for part in where.split("."):
-        value = value.get(part) if isinstance(value, Mapping) else None
-    return value
-
-
-def train_metrics(config: TrainConfig, seeds: list[int],
-                  metrics: Mapping[str, Metric]) -> list[Any]:
-    """The default run of a row: ``train_batch(config, seeds)``, per seed ``metrics`` read
-    off its outcome, or a :class:`RunFailed` where the network diverged."""
-    from skinny_mj.training.loop import train_batch
-
-    return [RunFailed(o.metrics.get("fail_reason") or "diverged") if o.metrics["failed"]
-            else _with_robot_figures({name: read_metric(o.metrics, where)
-                                      for name, where in metrics.items()}, o.metrics)
-            for o in train_batch(config, seeds)]
-
-
-def _with_robot_figures(picked: dict[str, Any], metrics: Mapping[str, Any]) -> dict[str, Any]:
-    """``picked`` (a study's metrics) and, after them, every run file's figures in a
-    roboticist's units (:func:`skinny_mj.training.imitation.robot_figures`) the study does
-    not name itself."""
-    from skinny_mj.training.imitation import robot_figures
-
-    extra = robot_figures(dict(metrics))
-    return {**picked, **{k: v for k, v in extra.items() if k not in picked}}
+def train_metrics(config: TrainConfig, seeds: list[int], metrics: Metrics) -> list[Any]:
+    """The default run of a row on its config alone, the standard test, ``metrics``
+    read off each result (:func:`skinny_mj.engine.results.default_run`)."""
+    return default_run(config, None, seeds, metrics)
 
 
 @dataclass(frozen=True)
@@ -78,14 +52,18 @@ class _Runner:
     """The Experiment's ``run_batch`` (shipped to worker processes): per row id its
     config, its row (params with the study's) and its custom run, if any."""
 
-    metrics: Mapping[str, Metric]
+    metrics: Metrics
     rows: Mapping[str, tuple[TrainConfig, Row, RunBatch | None]]
+    tests: Any = STANDARD
+    failure: Callable[[Any], str | None] | None = None
+    trainings: Callable[[TrainConfig, Row], Mapping[str, TrainConfig]] | None = None
 
     def __call__(self, row: EngineRow, seeds: list[int]) -> list[Any]:
         config, study_row, custom = self.rows[row.row_id]
         if custom is not None:
             return list(custom(config, study_row, list(seeds)))
-        return train_metrics(config, list(seeds), self.metrics)
+        return default_run(config, study_row, list(seeds), self.metrics, tests=self.tests,
+                           failure=self.failure, trainings=self.trainings)
 
 
 def _cost(plan: Plan, costs: dict[str, float], row: EngineRow) -> float:
@@ -195,11 +173,12 @@ class Plan:
         engine_rows = tuple(
             EngineRow(p.row.id, {**p.row.overrides, **p.row.params}, p.row.paper,
                       row_runs(p.row), p.row.seeds_of) for p in self.rows)
-        runner = _Runner(dict(study.metrics), {
+        runner = _Runner(study.metrics if callable(study.metrics) else dict(study.metrics), {
             p.row.id: (p.config, self.run_row(p.row.id), p.row.run_batch or study.run_batch)
-            for p in self.rows})
+            for p in self.rows}, study.tests, study.failure, study.trainings)
         columns = quick.columns if self.quick and quick.columns is not None else \
-            study.columns if study.columns is not None else tuple(study.metrics)
+            study.columns if study.columns is not None else \
+            () if callable(study.metrics) else tuple(study.metrics)
         kept = {p.row.id for p in self.rows}
         unavailable = {} if study.unavailable is None else {
             k: v for k, v in study.unavailable().items() if k in kept}
@@ -270,6 +249,7 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
         config = base.override({**r.overrides, **after})
         if tiny:  # the contract test's shrink: of its keys, those this row's config has
             have = set(overrides.keys(config))
-            config = config.override({k: v for k, v in study.tiny.items() if k in have})
+            config = config.override({k: v for k, v in study.tiny.items()
+                                      if overrides.canonical(config, k) in have})
         planned.append(PlannedRow(r, {**_study_params(study, quick), **r.params}, config))
     return Plan(study, base, after, quick, tuple(planned))

@@ -91,7 +91,7 @@ THESIS = Protocol(
             "ratio is x0.2-1.3 at gains 0.5 and 1 and x5.3 (recorded-like) / x5.6 (smooth) "
             "at gain 2, against the thesis's x4.4; at gain 2 exp 1's motor error is 0.455, "
             "the thesis's 0.474. The thesis states no scale",
-            overrides={"rule.u_error_gain": 2.0}, reproduces=True),
+            overrides={"method.u_error_gain": 2.0}, reproduces=True),
         Reading(
             "the true target's teacher-forcing input noise", ("paper-d",),
             "measured (fidelity-d, 10 seeds per cell): on the recorded-like YMCA with "

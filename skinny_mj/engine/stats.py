@@ -126,8 +126,8 @@ def iter_runs(out_dir: str | Path) -> Iterator[tuple[Path, dict[str, Any]]]:
 def _records_in_order(out_dir: str | Path) -> Iterator[dict[str, Any]]:
     """The records of :func:`load_runs` in its (row, run) order, streamed: a first pass
     keeps only each file's place, a second reads them again one at a time, so the
-    parent's memory does not grow with the records of a 10 000-run sweep (measured:
-    benchmarks/bench_engine_load.py)."""
+    parent's memory does not grow with the records of a 10 000-run sweep
+    (tests/test_engine_load.py)."""
     order = sorted((_order(rec), i, path) for i, (path, rec) in enumerate(iter_runs(out_dir)))
     for _, _, path in order:
         yield load_run(path)

@@ -7,18 +7,26 @@ declares one :class:`Study`::
         name="sr-sweep", description="Spectral radius 0.5 vs 0.9 on paper E exp. 5.",
         rows=(Row("sr0.5", {"esn.spectral_radius": 0.5}),
               Row("sr0.9", {"esn.spectral_radius": 0.9})),
-        metrics={"position_nrmse": "test.position_nrmse"}, runs=20)
+        metrics={"position_nrmse": lambda r: r.test.position_nrmse}, runs=20)
 
 and the engine (:mod:`skinny_mj.engine.plan`) derives the rest: the sweep of (row, seed)
 runs, each run's training configuration (``base``, then ``--movement/--body/--signals``,
-then the row's overrides, then ``--quick``'s), the lockstep run (train the row's seeds
-with :func:`skinny_mj.training.loop.train_batch`, read ``metrics`` off each outcome; a diverged
-run is a failed run), its cost, its groups and its table.
+then the row's overrides, then ``--quick``'s), the lockstep run, its cost, its groups
+and its table.
 
-A row's run that is not "train, then read metrics" supplies ``run_batch(config, row,
-seeds) -> list`` (per seed a metrics dict, or a :class:`~skinny_mj.engine.experiment.RunFailed`),
-for the whole study or for one row (:attr:`Row.run_batch`); ``config`` is the row's
-training configuration and ``row.params`` its study-specific parameters.
+The lockstep run (:func:`skinny_mj.engine.results.default_run`) trains the row's seeds
+with :func:`skinny_mj.training.loop.train_batch` and reads ``metrics`` off each
+:class:`~skinny_mj.training.result.RunResult`; a diverged run is a failed run. A study
+shapes it as data: ``tests`` (train once, then test on each movement:
+:class:`~skinny_mj.training.result.Test`), ``trainings`` (several configurations trained
+from the same seeds, the metrics then read a mapping name -> RunResult), ``failure`` (a
+function of the result: why the run failed, None if it did not) and ``metrics`` (name ->
+function of the result, or one function giving every metric).
+
+A row's run that is none of these supplies ``run_batch(config, row, seeds) -> list``
+(per seed a metrics dict, or a :class:`~skinny_mj.engine.experiment.RunFailed`), for the
+whole study or for one row (:attr:`Row.run_batch`); ``config`` is the row's training
+configuration and ``row.params`` its study-specific parameters.
 
 An option of ``skinny experiment`` is a change of config keys (``--body 3d`` sets
 ``plant.body`` on the base). A study that takes one its own way instead, as a change of its
@@ -45,24 +53,23 @@ from typing import TYPE_CHECKING, Any
 
 from skinny_mj.engine.options import OPTION_KEYS
 from skinny_mj.engine.plan import Plan, Results, plan
+from skinny_mj.engine.results import Metrics, default_run
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.result import STANDARD, Test
 
 if TYPE_CHECKING:
     from pathlib import Path
 
-__all__ = ["Study", "Row", "Quick", "OPTIONS", "TINY"]
+__all__ = ["Study", "Row", "Quick", "Test", "OPTIONS", "TINY"]
 
 #: ``skinny experiment``'s options a study may take (the config keys each sets:
 #: :data:`skinny_mj.engine.options.OPTION_KEYS`).
 OPTIONS = tuple(OPTION_KEYS)
 #: The contract test's shrink (after ``--quick``'s): one epoch of a small reservoir (each
 #: row takes the keys its config has: a true-target row has no epochs).
-TINY = {"rule.epochs": 1, "esn.n_reservoir": 20}
+TINY = {"method.epochs": 1, "esn.n_reservoir": 20}
 
-#: A metric: a dotted path into :func:`skinny_mj.training.loop.train_batch`'s metrics
-#: (``"test.position_nrmse"``), or a function of those metrics.
-Metric = str | Callable[[Mapping[str, Any]], Any]
 RunBatch = Callable[[TrainConfig, "Row", list[int]], list[Any]]
 
 
@@ -124,12 +131,16 @@ class Quick:
 class Study:
     """A sweep as data (see the module docstring).
 
-    ``metrics``: name -> where in ``train_batch``'s metrics (or a function of them);
+    ``metrics``: name -> a function of a run's result (or a dotted path into its
+    :func:`~skinny_mj.engine.results.run_metrics`), or one function of the result giving
+    the run file's every metric; ``tests``: the tests a run takes (or a function
+    ``(config, row)`` giving them; default the standard test); ``failure(result) -> str |
+    None``: why a run failed (default: its training's or its standard test's divergence);
     ``columns``: the table's metric columns (names, or name -> header; default every
     metric); ``groups``: extra groups (name -> row ids or groups) beside the rows' own;
     ``params``: study-wide parameters of a custom run (a row's ``params`` add to them);
-    ``trainings(config, row) -> {name: TrainConfig}``: what one run of a custom
-    ``run_batch`` trains, where that is not the row's config alone (the memory check);
+    ``trainings(config, row) -> {name: TrainConfig}``: what one run trains, where that is
+    not the row's config alone (the default run trains each; the memory check);
     ``takes``: the options of ``OPTIONS`` it accepts (any other is refused in one line);
     ``report(results, plan, out_dir) -> str``: figures and claims after the sweep, or the
     ``"module:function"`` that has it (a study kept in one folder with its report names
@@ -146,7 +157,9 @@ class Study:
     rows: tuple[Row, ...]
     description: str = ""
     base: TrainConfig = field(default_factory=TrainConfig)
-    metrics: Mapping[str, Metric] = field(default_factory=dict)
+    metrics: Metrics = field(default_factory=dict)
+    tests: Sequence[Test] | Callable[[TrainConfig, Row], Sequence[Test]] = STANDARD
+    failure: Callable[[Any], str | None] | None = None
     columns: Sequence[str] | Mapping[str, str] | None = None
     runs: int = 10
     quick: Quick = field(default_factory=Quick)
@@ -192,6 +205,16 @@ class Study:
         """The training configuration of row ``row_id`` (full, not quick), with the
         options of ``skinny experiment`` (``movement``, ``asf``, ``body``, ``signals``)."""
         return plan(self, **options).config(row_id)
+
+    def run(self, config: TrainConfig, row: Row, seeds: list[int]) -> list[Any]:
+        """Row ``row``'s lockstep run of ``seeds`` on ``config``: its own ``run_batch``, or
+        the engine's default run of the study's shapes (``tests``, ``trainings``,
+        ``failure``, ``metrics``); per seed a metrics dict or a ``RunFailed``."""
+        custom = row.run_batch or self.run_batch
+        if custom is not None:
+            return list(custom(config, row, list(seeds)))
+        return default_run(config, row, list(seeds), self.metrics, tests=self.tests,
+                           failure=self.failure, trainings=self.trainings)
 
     # -- what `skinny experiment`, the memory check and the study help call --
     def build(self, quick: bool = False, movement: str | None = None, asf: Any = None,

@@ -27,8 +27,9 @@ from skinny_mj.engine.stats import to_jsonable
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.threads import single_threaded
 
-__all__ = ["THREAD_ENV", "SEEDING", "SAFE_NAME", "run_seed", "stable_hash", "Row", "RunSpec", "RunFailed", "one_of_batch",
-           "execute_run", "execute_batch", "iter_joblib", "iter_dask"]
+__all__ = ["THREAD_ENV", "SEEDING", "SAFE_NAME", "run_seed", "stable_hash", "Row", "RunSpec",
+           "RunFailed", "one_of_batch", "execute_run", "execute_batch", "iter_joblib",
+           "iter_dask"]
 
 #: The BLAS/OpenMP thread variables pinned to 1 in every worker process.
 THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")

@@ -138,6 +138,7 @@ class BatchPlant:
             widen_ctrlrange(self.model, r * one.nu + self.layout.actuator_ids, self.setup)
         self.data = mujoco.MjData(self.model)
         self.rngs = [np.random.default_rng(s) for s in seeds]
+        self.seeds = seeds
         self.n_runs = n_runs
         self.n_dof = self.body.dof
         self._torque = self.setup.actuation == "torque"

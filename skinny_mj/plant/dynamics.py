@@ -177,28 +177,43 @@ class BatchArmState:
     M(q) is each robot's diagonal block of the batch's own ``M`` (gathered: the numbers
     ``mj_fullM`` gives);
     the bias ``qfrc_bias``; the gravity torque (``gravity=True`` only) from a scratch
-    ``MjData`` at the same poses with zero velocity. Sensed angles: the true angles plus
+    ``MjData`` at the same poses with zero velocity.
+
+    Without ``sensing`` (the oracle's information): sensed angles are the true angles plus
     the position sensors' noise seen in joint space (joint signals: exactly the noise
     over the signals' scale; Cartesian signals: the damped pseudo-inverse of the signal
-    Jacobian applied to the noise). Velocities: the plant's noise-free joint velocities.
+    Jacobian applied to the noise); velocities the plant's noise-free joint velocities;
+    the model's quantities at the true state. With ``sensing`` (a
+    :class:`skinny_mj.controllers.sensing.JointSensing` the loop keeps up to date): angles
+    and velocities are its sensed ones, and M(q), the bias and the gravity are evaluated
+    at that sensed state (a controller knows no other).
 
-    ``nominal=True``: M(q), the bias and the gravity come from the nominal twin (a batch
-    model of its own, at the plant's state) instead of the plant's model: what a
-    controller knows of a plant whose masses were changed behind its back (a payload,
-    link masses x 1.2); on an unchanged plant the two are the same numbers.
+    ``nominal=True``: M(q), the bias, the gravity and the joint damping come from the
+    nominal twin (a batch model of its own) instead of the plant's model: what a
+    controller knows of a plant whose masses or joints were changed behind its back (a
+    payload, link masses x 1.2, friction); on an unchanged plant the two are the same
+    numbers. ``constant_mass`` (n, n) kg m^2: M is this one matrix at every state (a
+    teacher scaled by one constant inertia).
     """
 
-    def __init__(self, plant, gravity: bool = False, nominal: bool = False):
-        self.plant, self.n_runs = plant, plant.n_runs
+    def __init__(self, plant, gravity: bool = False, nominal: bool = False, sensing=None,
+                 constant_mass: np.ndarray | None = None):
+        self.plant, self.n_runs, self.sensing = plant, plant.n_runs, sensing
         self.model = load_batch_model(plant.body, plant.n_runs) if nominal \
             else plant.model
         m = self.model
-        self._own = mujoco.MjData(m) if nominal else None
+        self._own = mujoco.MjData(m) if nominal or sensing is not None else None
         self.nv1 = m.nv // plant.n_runs
+        self.nq1 = m.nq // plant.n_runs
         self.adr = np.asarray(plant.layout.dof_adr)
+        self.qadr = np.asarray(plant.layout.qpos_adr)
         self.damping = m.dof_damping[self.adr].copy()
+        friction = m.dof_frictionloss[self.adr].copy()
+        self.friction = friction if np.any(friction > 0) else None
         self._mass_at, self._qm = _mass_index(m, plant.n_runs, self.adr)
         self._scratch = mujoco.MjData(m) if gravity else None
+        self._constant = None if constant_mass is None else np.broadcast_to(
+            np.asarray(constant_mass, float), (plant.n_runs, len(self.adr), len(self.adr)))
         lo, hi = plant.body.joint_ranges().T
         self._per_rad = 2.0 / (hi - lo)
 
@@ -213,39 +228,52 @@ class BatchArmState:
             noise_rad = jacobian_error(noise, np.zeros_like(noise), jac)
         return plant.joint_angles() + noise_rad
 
+    def _state_into(self, d, zero_velocity: bool = False) -> None:
+        """The plant's state into ``d``, its arms' angles and velocities the sensed ones."""
+        d.qpos[:] = self.plant.data.qpos
+        d.qvel[:] = 0.0 if zero_velocity else self.plant.data.qvel
+        if self.sensing is not None:
+            d.qpos.reshape(self.n_runs, self.nq1)[:, self.qadr] = self.sensing.q
+            if not zero_velocity:
+                d.qvel.reshape(self.n_runs, self.nv1)[:, self.adr] = self.sensing.qd
+
     def _data(self):
-        """The plant's MjData, or the nominal model's at the plant's state."""
+        """The plant's MjData, or the chosen model's own at the (sensed) state."""
         if self._own is None:
             return self.plant.data
         d = self._own
-        d.qpos[:], d.qvel[:] = self.plant.data.qpos, self.plant.data.qvel
+        self._state_into(d)
         mujoco.mj_fwdPosition(self.model, d)
         mujoco.mj_fwdVelocity(self.model, d)
         return d
 
     def mass(self, d=None) -> np.ndarray:
         """(R, n, n) each robot's M(q) of the current state, kg m^2."""
+        if self._constant is not None:
+            return self._constant
         d = self._data() if d is None else d
         self._qm[:-1] = d.M  # the last entry stays 0: the structural zeros
         return self._qm[self._mass_at]
 
     def gravity(self) -> np.ndarray:
-        """(R, n) g(q) of the current poses, N m."""
+        """(R, n) g(q) of the current (sensed) poses, N m."""
         m, sd = self.model, self._scratch
-        sd.qpos[:] = self.plant.data.qpos
-        sd.qvel[:] = 0.0
+        self._state_into(sd, zero_velocity=True)
         mujoco.mj_fwdPosition(m, sd)
         mujoco.mj_fwdVelocity(m, sd)
         return sd.qfrc_bias.reshape(self.n_runs, -1)[:, self.adr].copy()
 
     def __call__(self, sensed: np.ndarray):
         plant, d = self.plant, self._data()
-        bias = plant.bias_torque_nm() if self._own is None else \
+        bias = plant.bias_torque_nm() if d is plant.data else \
             d.qfrc_bias.reshape(self.n_runs, -1)[:, self.adr].copy()
-        return ArmState(q=self.sensed_angles(sensed), qd=plant.joint_velocities(),
-                        mass=self.mass(d), bias=bias,
+        if self.sensing is None:
+            q, qd = self.sensed_angles(sensed), plant.joint_velocities()
+        else:
+            q, qd = self.sensing.q, self.sensing.qd
+        return ArmState(q=q, qd=qd, mass=self.mass(d), bias=bias,
                         gravity=None if self._scratch is None else self.gravity(),
-                        damping=self.damping)
+                        damping=self.damping, friction=self.friction)
 
 
 def _mass_index(model, n_runs: int, adr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -111,12 +111,15 @@ class ModelChange:
             setattr(self.live.stat, name, values[which])
 
 
-def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0) -> None:
-    """Change the test plant's model fields in place (every copy of a batch): each arm
+def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0,
+            friction_nm: float = 0.0, damping_nm_s_rad: float = 0.0) -> None:
+    """Change the plant's model fields in place (every copy of a batch): each arm
     link's ``body_mass`` and ``body_inertia`` x ``mass_scale`` (centres of mass kept),
-    then ``payload_kg`` added to the right hand's mass at its centre of mass; the derived
-    constants are recomputed (``mj_setConst``). The controllers are not told."""
-    if payload_kg == 0 and mass_scale == 1:
+    then ``payload_kg`` added to the right hand's mass at its centre of mass; every arm
+    joint's Coulomb friction (``dof_frictionloss``) + ``friction_nm`` and viscous damping
+    (``dof_damping``) + ``damping_nm_s_rad``; the derived constants are recomputed
+    (``mj_setConst``). The controllers are not told."""
+    if payload_kg == 0 and mass_scale == 1 and friction_nm == 0 and damping_nm_s_rad == 0:
         return
     model, data = (plant.model, plant.data) if hasattr(plant, "model") else \
         (plant.physics.model.ptr, plant.physics.data.ptr)
@@ -128,6 +131,14 @@ def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0) -> None:
             model.body_inertia[i] *= mass_scale
         if base == PAYLOAD_BODY:
             model.body_mass[i] += payload_kg
+    if friction_nm or damping_nm_s_rad:
+        for j in range(model.njnt):
+            base = (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])
+                    or "").rsplit("/", 1)[-1]
+            if base in ARM_BODIES:
+                adr = model.jnt_dofadr[j]
+                model.dof_frictionloss[adr] += friction_nm
+                model.dof_damping[adr] += damping_nm_s_rad
     mujoco.mj_setConst(model, data)
 
 

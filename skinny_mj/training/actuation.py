@@ -13,7 +13,9 @@ Each supplies the same parts, so :mod:`skinny_mj.training.loop` asks and never b
   teacher-forced inputs and its one-step position map (each None where the body has none);
 - ``recorder``: FEL's per-cycle recorder (None, or the torque body's
   :class:`~skinny_mj.training.torque.ShareRecorder`) and ``recorded``, its metrics of a run;
-- ``test_plant``: the robustness test's changes to a fresh test plant (payload, masses);
+- ``training_plant`` and ``test_plant``: the plant as it is (payload, masses, friction)
+  and the robustness test's changes on top, made to a fresh plant;
+- ``sensing_delay``: control steps by which the ESN's sensed input lags;
 - ``test_figures``: a run's figures of the test cycle (None, or the torque figures);
 - ``train_warnings``: MuJoCo warnings of the training plant (None for the servo).
 """
@@ -66,6 +68,13 @@ class VelocityActuation:
     def test_plant(self, plant) -> None:
         """The servo's test plant is the nominal one."""
 
+    def training_plant(self, plant) -> None:
+        """The servo's training plant is the nominal one."""
+
+    @property
+    def sensing_delay(self) -> int:
+        return 0
+
     def test_figures(self, hook: Any, rollout, plant, r: int) -> None:
         return None
 
@@ -115,8 +124,18 @@ class TorqueActuation:
         return recorder.metrics(r)
 
     def test_plant(self, plant) -> None:
-        """The robustness test's payload and link masses (:func:`torque.perturb`)."""
-        torque.perturb(plant, self.settings.test_payload_kg, self.settings.test_mass_scale)
+        """The plant as it is plus the robustness test's changes
+        (:func:`torque.change_plant`)."""
+        torque.change_plant(self.settings, plant, test=True)
+
+    def training_plant(self, plant) -> None:
+        """The plant as it is (:func:`torque.change_plant`)."""
+        torque.change_plant(self.settings, plant, test=False)
+
+    @property
+    def sensing_delay(self) -> int:
+        """Control steps by which the sensing lags (:func:`torque.sensing_delay`)."""
+        return torque.sensing_delay(self.settings)
 
     def test_figures(self, hook, rollout, plant, r: int) -> dict:
         """:func:`skinny_mj.training.torque.test_torques`."""

@@ -17,16 +17,16 @@ a composition of the parts' own configurations:
   ``plant.dof`` names Skinny's body of that many hinges;
 - ``movement`` (:class:`Movement`): trajectory, speed, repetitions, full scale;
 - ``esn``: :class:`skinny_mj.controllers.reservoir.ESNConfig` as it is (its sizes come from the
-  plant; ``noise_level`` None: the learning rule's default);
-- ``rule``, the learning rule: :class:`Original` or :class:`New` (feedback-error
+  plant; ``noise_level`` None: the method's default);
+- ``method``, the learning method: :class:`Original` or :class:`New` (feedback-error
   learning, with its schedule), :class:`TrueTarget`, or :class:`NoLearning` (the
   feedback controller alone);
 - ``forward``: :class:`NoForward` or a :class:`Forward` model (paper A);
 - ``test`` (:class:`TestSetup`): the feedback gain, washout and reservoir noise at test;
 - ``inputs``: what the inverse model sees (desired + sensed, or sensed only, paper B).
 
-Every setting has a dotted key (``esn.spectral_radius``, ``rule.beta``); a type is chosen
-by its name (``rule=original``, ``actuation=torque``). :meth:`TrainConfig.override` takes
+Every setting has a dotted key (``esn.spectral_radius``, ``method.beta``); a type is chosen
+by its name (``method=original``, ``actuation=torque``). :meth:`TrainConfig.override` takes
 such keys (from the command line, a config file or a study's row);
 :meth:`TrainConfig.to_dict` writes them flat, and :meth:`TrainConfig.from_dict` reads
 them back, and also reads the flat files of earlier versions (``"method": "new",
@@ -67,15 +67,23 @@ from skinny_mj.training import fits, overrides
 from skinny_mj.training.legacy import LEGACY_KEYS, from_legacy, is_legacy
 
 __all__ = ["TrainConfig", "Plant", "Velocity", "Torque", "Movement", "Original", "New",
-           "TrueTarget", "NoLearning", "NoForward", "Forward", "TestSetup", "relative_cost",
+           "TrueTarget", "NoLearning", "Encoders", "OracleSensing", "NoForward", "Forward",
+           "TestSetup", "relative_cost",
            "check_signals", "check_actuation", "METHODS", "SIGNALS",
            "ACTUATIONS", "DEFAULT_NOISE", "PAPER_CYCLES_FOR_BETA", "ARM_LAWS", "LEGACY_KEYS"]
 
 METHODS = ("original", "new", "true-target", "none")
 #: Laws of skinny_mj.controllers.torque_arm (inertia-scaled pole placement), by feedback name:
-#: three controllers alone, and FEL's teacher "inertia-pd"
-ARM_LAWS = {"ct": "ct", "id-pd": "id-pd", "pd-gravity": "pd-g", "inertia-pd": "fel"}
-FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS)
+#: three controllers alone, and FEL's teachers "inertia-pd" (M(q) of the controllers'
+#: model at the sensed pose) and "const-pd" (one constant M: the nominal body's at home)
+ARM_LAWS = {"ct": "ct", "id-pd": "id-pd", "pd-gravity": "pd-g", "inertia-pd": "fel",
+            "const-pd": "fel-const"}
+#: feedback names of loops of their own: adaptive computed torque
+FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS, "adaptive-ct")
+#: what the torque controllers' model is (``actuation.model``)
+MODELS = ("nominal", "true")
+#: how joint velocities are sensed (``actuation.sensing.velocity``)
+VELOCITY_SENSING = ("finite-difference", "finite-difference-2", "oracle")
 FORWARD_INPUTS = ("sensed", "chained")
 FORWARD_SHARING = ("none", "predictions", "commands")
 ARMS = ("right", "left")
@@ -136,8 +144,56 @@ class Velocity:
 
 
 @dataclass(frozen=True)
+class Encoders:
+    """What a robot senses of its joints (:class:`skinny_mj.controllers.sensing.JointSensing`):
+    encoder angles with Gaussian noise ``encoder_noise`` (rad; 5e-4 rad ~ 0.03 deg, the
+    quantization noise of a 12-bit absolute encoder), velocities by the second-order
+    backward difference of the encoder angles at the 50 Hz control rate
+    (``velocity="finite-difference-2"``; ``"finite-difference"``: the first-order one,
+    which lags by half a step; optionally low-passed at ``velocity_filter_hz``;
+    ``"oracle"``: the true velocities), and ``delay`` control steps of latency (also on
+    the ESN's position inputs)."""
+
+    kind: str = "encoders"
+    encoder_noise: float = 5e-4
+    velocity: str = "finite-difference-2"
+    velocity_filter_hz: float | None = None
+    delay: int = 0
+
+    def __post_init__(self) -> None:
+        _check([
+            (_at_least(self.encoder_noise, 0),
+             f"encoder noise must be >= 0 rad, got {self.encoder_noise}"),
+            (self.velocity in VELOCITY_SENSING,
+             f"velocity must be one of {VELOCITY_SENSING}, got {self.velocity!r}"),
+            (self.velocity_filter_hz is None or (_at_least(self.velocity_filter_hz, 0)
+                                                 and self.velocity_filter_hz > 0),
+             f"velocity filter must be none or > 0 Hz, got {self.velocity_filter_hz}"),
+            (isinstance(self.delay, int) and self.delay in (0, 1, 2),
+             f"sensing delay must be 0, 1 or 2 steps, got {self.delay}"),
+        ])
+
+
+@dataclass(frozen=True)
+class OracleSensing:
+    """The oracle's information: joint angles through the position sensors (their noise
+    mapped to the joints), noise-free joint velocities (a perfect tachometer), no delay."""
+
+    kind: str = "oracle"
+
+
+Sensing = Encoders | OracleSensing
+
+
+@dataclass(frozen=True)
 class Torque:
-    """The torque twin: mass, gravity, torque limits, and how it is taught and tested."""
+    """The torque twin: mass, gravity, torque limits, and how it is taught and tested.
+
+    The plant as it is may differ from the nominal body the controllers' model describes
+    (``payload_kg``, ``mass_scale``, ``friction_nm``, ``damping_nm_s_rad``: training and
+    test plant alike); ``test_*`` change the test plant alone. ``model``: what the
+    controllers' M(q) and bias come from, ``"nominal"`` (the nominal twin, payload 0,
+    masses x 1, no friction) or ``"true"`` (the plant's own model: an oracle)."""
 
     kind: str = "torque"
     feedback: str = "pd"  # FEL's teacher; "computed-torque", "ct", ...: a controller alone
@@ -145,11 +201,26 @@ class Torque:
     zeta: float = 1.0  # ARM_LAWS' damping ratio
     gravity_feedforward: bool = False  # add qfrc_bias / limit to the command (not learned)
     velocity_inputs: bool = True  # [qd_d(t+1); qd(t)] / v_max as extra inputs
+    sensing: Sensing = field(default_factory=Encoders)
+    model: str = "nominal"  # the controllers' model: "nominal" or "true" (oracle)
+    payload_kg: float = 0.0  # point mass at the right hand's CoM (training and test plant)
+    mass_scale: float = 1.0  # every arm link's mass and inertia x this (training and test)
+    friction_nm: float = 0.0  # unmodelled Coulomb friction of every arm joint, N m
+    damping_nm_s_rad: float = 0.0  # unmodelled viscous damping added to every arm joint
     test_payload_kg: float = 0.0  # point mass at the right hand's CoM in the test plant
     test_mass_scale: float = 1.0  # every arm link's mass and inertia x this at test
+    test_friction_nm: float = 0.0  # Coulomb friction added to every arm joint at test
 
     def __post_init__(self) -> None:
         _check([
+            (self.model in MODELS, f"model must be one of {MODELS}, got {self.model!r}"),
+            (_at_least(self.payload_kg, 0), f"payload must be >= 0 kg, got {self.payload_kg}"),
+            (_at_least(self.mass_scale, 0) and self.mass_scale > 0,
+             f"mass scale must be > 0, got {self.mass_scale}"),
+            (_at_least(self.friction_nm, 0) and _at_least(self.test_friction_nm, 0),
+             "friction must be >= 0 N m"),
+            (_at_least(self.damping_nm_s_rad, 0),
+             f"damping must be >= 0 N m s/rad, got {self.damping_nm_s_rad}"),
             (self.feedback in FEEDBACKS, f"feedback must be one of {FEEDBACKS}, "
                                          f"got {self.feedback!r}"),
             (self.omega is None or _at_least(self.omega, 0),
@@ -208,20 +279,20 @@ class _FEL(methods.FELMethod):
     u_error_gain: float = 1.0  # scalar on the feedback controller's u_error (unstated)
     #: the feedback controller's damped-least-squares lambda (signal per command units)
     u_error_damping: float = FeedbackController.damping
-    #: the readout fit and its settings (``rule.fit=NAME``, ``rule.fit.<param>=value``;
+    #: the readout fit and its settings (``method.fit=NAME``, ``method.fit.<param>=value``;
     #: :mod:`skinny_mj.training.fits`): each cycle alone ("cycle"), lambda chosen per fit
     #: on a validation cycle ("ridge-select"), or remembering earlier cycles
-    #: ("forgetting", "rls": ``rule.fit.forgetting``, old cycles' weight per cycle)
+    #: ("forgetting", "rls": ``method.fit.forgetting``, old cycles' weight per cycle)
     fit: fits.FitSettings = fits.FitSettings()
 
     #: old keys -> (the key they name now, the settings type checking a value the chosen
-    #: fit has no use for; old run files list ``rule.forgetting`` with every fit)
+    #: fit has no use for; old run files list ``method.forgetting`` with every fit)
     ALIASES: ClassVar[dict[str, tuple[str, type]]] = {
         "forgetting": ("fit.forgetting", fits.ForgettingSettings)}
 
     @property
     def forgetting(self) -> float:
-        """``rule.fit.forgetting`` under its old name (a fit without it: its default,
+        """``method.fit.forgetting`` under its old name (a fit without it: its default,
         what the old key held)."""
         return getattr(self.fit, "forgetting", fits.ForgettingSettings.forgetting)
 
@@ -324,12 +395,12 @@ def _unchecked() -> Iterator[None]:
         _CROSS_CHECKS_OFF.reset(token)
 
 
-#: The ESN of a training run: sizes from the plant, noise from the rule (paper E, exp. 5).
+#: The ESN of a training run: sizes from the plant, noise from the method (paper E, exp. 5).
 DEFAULT_ESN = ESNConfig(n_reservoir=200, spectral_radius=0.5, noise_level=None)
 Actuation = Velocity | Torque
-Rule = Original | New | TrueTarget | NoLearning
+Method = Original | New | TrueTarget | NoLearning
 ForwardModel = NoForward | Forward
-FEL_RULES = (Original, New)
+FEL_METHODS = (Original, New)
 
 
 @dataclass(frozen=True)
@@ -343,15 +414,19 @@ class TrainConfig:
     actuation: Actuation = field(default_factory=Velocity)
     movement: Movement = field(default_factory=Movement)
     esn: ESNConfig = DEFAULT_ESN
-    rule: Rule = field(default_factory=New)
+    method: Method = field(default_factory=New)
     forward: ForwardModel = field(default_factory=NoForward)
     test: TestSetup = field(default_factory=TestSetup)
     inputs: str = "desired+sensed"
 
+    #: old names of renamed fields: ``rule.*`` keys still set ``method.*``, with a warning
+    #: (:func:`skinny_mj.training.overrides.canonical`)
+    RENAMED: ClassVar[dict[str, str]] = {"rule": "method"}
+
     def __post_init__(self) -> None:
         if _CROSS_CHECKS_OFF.get():
             return
-        fel, torque, fwd = isinstance(self.rule, FEL_RULES), self.torque, self.forward
+        fel, torque, fwd = isinstance(self.method, FEL_METHODS), self.torque, self.forward
         sharing = getattr(fwd, "sharing", None)
         _check(
             [
@@ -361,14 +436,15 @@ class TrainConfig:
                 ),
                 (self.inputs in INPUTS, f"inputs must be one of {INPUTS}, got {self.inputs!r}"),
                 (
-                    not fel or self.rule.fit.kind != "ridge-select" or self.esn.readout == "ridge",
-                    "rule.fit=ridge-select chooses the ridge lambda of FEL fits on a validation "
+                    not fel or self.method.fit.kind != "ridge-select"
+                    or self.esn.readout == "ridge",
+                    "method.fit=ridge-select chooses the ridge lambda of FEL fits on a validation "
                     "cycle: it needs esn.readout=ridge",
                 ),  # (its body: the fit's own, skinny_mj.training.fits)
                 (
-                    not fel or self.actuation.kind in fits.FITS[self.rule.fit.kind].bodies,
-                    f"rule.fit={self.rule.fit.kind if fel else ''} runs on actuation="
-                    f"{' or '.join(fits.FITS[self.rule.fit.kind].bodies) if fel else ''}",
+                    not fel or self.actuation.kind in fits.FITS[self.method.fit.kind].bodies,
+                    f"method.fit={self.method.fit.kind if fel else ''} runs on actuation="
+                    f"{' or '.join(fits.FITS[self.method.fit.kind].bodies) if fel else ''}",
                 ),
                 (
                     sharing is None
@@ -380,7 +456,7 @@ class TrainConfig:
                     "forward.sharing needs a leading arm, forward=parallel and joint signals",
                 ),
                 (
-                    not isinstance(self.rule, TrueTarget)
+                    not isinstance(self.method, TrueTarget)
                     or (
                         isinstance(fwd, NoForward)
                         and self.plant.delay == 0
@@ -389,20 +465,20 @@ class TrainConfig:
                     "the true-target architecture takes no forward model, delay or leading arm",
                 ),
                 (
-                    not isinstance(self.rule, NoLearning) or self.test.gain > 0,
-                    "rule=none tests the feedback controller alone: it needs test.gain > 0",
+                    not isinstance(self.method, NoLearning) or self.test.gain > 0,
+                    "method=none tests the feedback controller alone: it needs test.gain > 0",
                 ),
                 (
                     torque is None
                     or torque.feedback in ("pd", "inertia-pd")
-                    or isinstance(self.rule, NoLearning),
-                    f"the {getattr(torque, 'feedback', '')} controller runs alone (rule=none); "
+                    or isinstance(self.method, NoLearning),
+                    f"the {getattr(torque, 'feedback', '')} controller runs alone (method=none); "
                     "FEL's teacher is 'pd' or 'inertia-pd'",
                 ),
                 (
                     torque is None
                     or torque.feedback != "inertia-pd"
-                    or not isinstance(self.rule, TrueTarget),
+                    or not isinstance(self.method, TrueTarget),
                     "the 'inertia-pd' teacher goes with feedback-error learning or runs alone",
                 ),
                 (
@@ -435,23 +511,18 @@ class TrainConfig:
 
     # -- derived settings ---------------------------------------------------------------
     @property
-    def method(self) -> str:
-        """The rule's name: original, new, true-target or none."""
-        return self.rule.kind
-
-    @property
     def torque(self) -> Torque | None:
         """The torque body's settings, None on the velocity servo."""
         return self.actuation if isinstance(self.actuation, Torque) else None
 
     @property
     def learns_by_fel(self) -> bool:
-        return isinstance(self.rule, FEL_RULES)
+        return isinstance(self.method, FEL_METHODS)
 
     @property
     def noise_level(self) -> float:
-        """Reservoir noise: ``esn.noise_level``, or by default the rule's (paper E Fig. 5)."""
-        return DEFAULT_NOISE[self.rule.kind] if self.esn.noise_level is None \
+        """Reservoir noise: ``esn.noise_level``, or by default the method's (paper E Fig. 5)."""
+        return DEFAULT_NOISE[self.method.kind] if self.esn.noise_level is None \
             else self.esn.noise_level
 
     @property
@@ -460,9 +531,9 @@ class TrainConfig:
 
     @property
     def learning_cycles(self) -> int:
-        """Learning cycles per epoch: the FEL rule's (:attr:`skinny_mj.controllers.methods.
-        FELMethod.learning_cycles`), 1 for the other rules."""
-        return self.rule.learning_cycles if isinstance(self.rule, FEL_RULES) else 1
+        """Learning cycles per epoch: the FEL method's (:attr:`skinny_mj.controllers.methods.
+        FELMethod.learning_cycles`), 1 for the other methods."""
+        return self.method.learning_cycles if isinstance(self.method, FEL_METHODS) else 1
 
     def esn_config(self, n_inputs: int, n_outputs: int, n_reservoir: int | None = None
                    ) -> ESNConfig:
@@ -543,8 +614,8 @@ def relative_cost(cfg: TrainConfig) -> float:
     """A training's size, for scheduling sweeps (longest first): its cycles through the
     movement (FEL: epochs x (learning cycles + washout + evaluation); true target: its
     cycles; x reps; + the test), x N / 200 for reservoirs above 200 units."""
-    rule = cfg.rule
-    cycles = rule.cycles if isinstance(rule, TrueTarget) else \
-        rule.epochs * (cfg.learning_cycles + 2) if isinstance(rule, FEL_RULES) else 0
+    method = cfg.method
+    cycles = method.cycles if isinstance(method, TrueTarget) else \
+        method.epochs * (cfg.learning_cycles + 2) if isinstance(method, FEL_METHODS) else 0
     return (cycles * cfg.movement.reps + 1 + cfg.test.washout_cycles) \
         * max(1.0, cfg.esn.n_reservoir / 200)

@@ -1,21 +1,23 @@
-"""FEL's readout fits by name: the value of the key ``rule.fit`` -> how a training builds
+"""FEL's readout fits by name: the value of the key ``method.fit`` -> how a training builds
 its learning rule (:class:`skinny_mj.controllers.learning.LearningRule`).
 
 The package's own: ``cycle`` (each learning cycle alone, the thesis's pinv or ridge fit),
 ``ridge-select`` (λ chosen per fit on a validation cycle; the velocity body),
 ``forgetting`` and ``rls`` (remembering earlier cycles; the torque body; their setting
-``rule.fit.forgetting``, :class:`ForgettingSettings`). A fit's hyper-parameters are its
+``method.fit.forgetting``, :class:`ForgettingSettings`). A fit's hyper-parameters are its
 own :class:`FitSettings` dataclass, registered with it: the chosen fit's settings are
-the configuration's ``rule.fit``, each field a key ``rule.fit.<param>``. A new rule is
-one class in controllers plus one :func:`register_fit` line (its builder, or the builder's
-name ``"module:function"``, imported when a training makes its rule: the torque fits'
-builder lives in :mod:`skinny_mj.training.torque`, which imports the configuration, which
-imports this registry); then
-``TrainConfig().override({"rule.fit": NAME})``, ``skinny train rule.fit=NAME`` and
-``skinny sweep rule.fit=cycle,NAME`` choose it (see the docs page "Adding a learning
+the configuration's ``method.fit``, each field a key ``method.fit.<param>``. A new rule is
+one file (its settings, its :class:`~skinny_mj.controllers.learning.LearningRule`) plus one
+:func:`register_fit` line (its builder, or the builder's name ``"module:function"``,
+imported when a training makes its rule: the torque fits' builder lives in
+:mod:`skinny_mj.training.torque`, which imports the configuration, which imports this
+registry); then
+``TrainConfig().override({"method.fit": NAME})``, ``skinny train method.fit=NAME`` and
+``skinny sweep method.fit=cycle,NAME`` choose it (see the docs page "Adding a learning
 rule"). :func:`register_fit` changes one Python process; for the command line and a
 sweep's worker processes, another package publishes its :class:`Fit` through the
-entry-point group :data:`FIT_GROUP`, read the first time a name is not known.
+entry-point group :data:`FIT_GROUP` (the :class:`Fit` :func:`register_fit` returns), read
+the first time a name is not known.
 """
 
 from __future__ import annotations
@@ -44,10 +46,10 @@ Make = Callable[[Any, Any, int], Any]
 
 @dataclass(frozen=True)
 class FitSettings:
-    """A fit's settings, the value of ``rule.fit``: ``kind`` is the fit's name (the key
-    ``rule.fit=NAME`` chooses it); a fit with hyper-parameters subclasses this frozen
+    """A fit's settings, the value of ``method.fit``: ``kind`` is the fit's name (the key
+    ``method.fit=NAME`` chooses it); a fit with hyper-parameters subclasses this frozen
     dataclass with one defaulted field per parameter, each then a key
-    ``rule.fit.<param>`` (``skinny sweep rule.fit.forgetting=0.8,0.9``). Its
+    ``method.fit.<param>`` (``skinny sweep method.fit.forgetting=0.8,0.9``). Its
     ``__post_init__`` checks them (a ``ValueError`` names the setting)."""
 
     kind: str = "cycle"
@@ -98,7 +100,7 @@ def _cycle(cfg: Any, esn: Any, steps: int) -> None:
 
 
 def _ridge_select(cfg: Any, esn: Any, steps: int) -> Any:
-    return RidgeSelector(esn, cfg.rule.epochs)
+    return RidgeSelector(esn, cfg.method.epochs)
 
 
 FITS: dict[str, Fit] = {
@@ -111,11 +113,13 @@ FITS: dict[str, Fit] = {
 
 
 def register_fit(name: str, make: Make | str, *, bodies: tuple[str, ...] = ("velocity", "torque"),
-                 settings: type[FitSettings] = FitSettings, replace: bool = False) -> None:
-    """Make ``name`` a value of ``rule.fit``: ``make(cfg, esn, steps)`` builds its rule
+                 settings: type[FitSettings] = FitSettings, replace: bool = False) -> Fit:
+    """Make ``name`` a value of ``method.fit``: ``make(cfg, esn, steps)`` builds its rule
     (``make`` may be its name, ``"module:function"``), reading its hyper-parameters from
-    ``cfg.rule.fit`` (a ``settings``: a :class:`FitSettings` subclass whose fields are
-    the keys ``rule.fit.<param>``). A name already taken is refused unless ``replace``."""
+    ``cfg.method.fit`` (a ``settings``: a :class:`FitSettings` subclass whose fields are
+    the keys ``method.fit.<param>``). A name already taken is refused unless ``replace``.
+    Returns the registered :class:`Fit`, which a package publishes under ``name`` in
+    :data:`FIT_GROUP` for other processes (the command line, a sweep's workers)."""
     if not name or not isinstance(name, str):
         raise SkinnyInputError(f"a fit's name is a non-empty string, got {name!r}")
     if name in FITS and not replace:
@@ -124,11 +128,12 @@ def register_fit(name: str, make: Make | str, *, bodies: tuple[str, ...] = ("vel
     if not (isinstance(settings, type) and issubclass(settings, FitSettings)):
         raise SkinnyInputError(f"a fit's settings are a FitSettings subclass, got {settings!r}")
     FITS[name] = Fit(make, tuple(bodies), settings)
+    return FITS[name]
 
 
 def make_rule(cfg: Any, esn: Any, steps: int) -> Any:
     """The learning rule of ``cfg``'s FEL training (None: the default per-cycle fit)."""
-    make = FITS[cfg.rule.fit.kind].make  # (the module's FITS, as registered)
+    make = FITS[cfg.method.fit.kind].make  # (the module's FITS, as registered)
     if isinstance(make, str):
         module, _, name = make.partition(":")
         make = getattr(importlib.import_module(module), name)
@@ -136,7 +141,7 @@ def make_rule(cfg: Any, esn: Any, steps: int) -> Any:
 
 
 def refusal(name: str) -> str:
-    """The one line that refuses ``name`` as a value of ``rule.fit``."""
+    """The one line that refuses ``name`` as a value of ``method.fit``."""
     return f"fit must be one of {tuple(FITS)}, got {name!r}"
 
 

@@ -25,7 +25,7 @@ from skinny_mj.training.dtw import available, dtw_nrmse
 from skinny_mj.trajectories import Trajectory, ik
 
 __all__ = ["ROBOT_METRICS", "TORQUE_METRICS", "WITHIN_DEG", "imitation_metrics", "lag_s",
-           "movement_stats", "robot_figures", "robot_metrics", "saturation"]
+           "movement_stats", "robot_metrics", "saturation"]
 
 #: The run files' figures a roboticist reads (:func:`robot_metrics`), beside the NRMSEs
 #: (the torque body's ``torque_rms_nm`` and ``abs_work_j`` are in the test's ``torque``
@@ -36,17 +36,6 @@ ROBOT_METRICS = ("rms_error_deg", "peak_error_deg", "hand_error_cm", "peak_hand_
 #: mechanical work magnitude sum |tau qd| dt (J).
 TORQUE_METRICS = ("torque_rms_nm", "abs_work_j")
 
-
-def robot_figures(metrics: dict[str, Any]) -> dict[str, Any]:
-    """The :data:`ROBOT_METRICS` and (torque body) :data:`TORQUE_METRICS` of a training's
-    metrics (:func:`skinny_mj.training.loop.train_batch`), flat, for a run file; None
-    where a figure is missing (a diverged network)."""
-    test = metrics.get("test") or {}
-    out = {k: test.get(k) for k in ROBOT_METRICS}
-    torque = test.get("torque")
-    if torque is not None:
-        out.update({k: torque.get(k) for k in TORQUE_METRICS})
-    return out
 
 #: Tolerance of the "within" fraction, degrees.
 WITHIN_DEG = 5.0

@@ -31,10 +31,10 @@ LEGACY_KEYS = {
     "inputs": "inputs",
     "forward_reservoir": "forward.reservoir", "forward_input": "forward.input",
     "forward_sharing": "forward.sharing",
-    "epochs": "rule.epochs", "gain_schedule": "rule.gain_schedule",
-    "gain_factor": "rule.gain_factor", "gain_value": "rule.gain_value",
-    "u_error_gain": "rule.u_error_gain", "readout_forgetting": "rule.forgetting",
-    "cycles": "rule.cycles", "tt_input_noise": "rule.input_noise",
+    "epochs": "method.epochs", "gain_schedule": "method.gain_schedule",
+    "gain_factor": "method.gain_factor", "gain_value": "method.gain_value",
+    "u_error_gain": "method.u_error_gain", "readout_forgetting": "method.forgetting",
+    "cycles": "method.cycles", "tt_input_noise": "method.input_noise",
     "test_gain": "test.gain", "test_washout_cycles": "test.washout_cycles",
     "test_noise": "test.noise",
     "feedback": "actuation.feedback", "gravity_feedforward": "actuation.gravity_feedforward",
@@ -47,8 +47,8 @@ _LEGACY_CHOICES = ("method", "beta", "tt_cycles", "readout_fit", "ridge_select",
 
 
 def is_legacy(d: Mapping[str, Any]) -> bool:
-    """A flat file of an earlier version (plain field names such as ``method``)."""
-    return any("." not in k and k not in ("actuation", "rule", "forward", "inputs")
+    """A flat file of an earlier version (plain field names such as ``reservoir``)."""
+    return any("." not in k and k not in ("actuation", "method", "rule", "forward", "inputs")
                for k in d)
 
 
@@ -61,14 +61,14 @@ def from_legacy(d: Mapping[str, Any], base: Any) -> Any:
     if unknown:
         raise SkinnyInputError(f"unknown training config field(s) {unknown}")
     method = d.get("method", "new")
-    changes: dict[str, Any] = {"rule": method}
+    changes: dict[str, Any] = {"method": method}
     if method in ("new", "true-target") and "beta" in d:
-        changes["rule.beta"] = d["beta"]
+        changes["method.beta"] = d["beta"]
     if method == "true-target" and "tt_cycles" in d:
-        changes["rule.cycles"] = d["tt_cycles"]
+        changes["method.cycles"] = d["tt_cycles"]
     if method in ("original", "new"):
         fit = "ridge-select" if d.get("ridge_select") else d.get("readout_fit", "cycle")
-        changes["rule.fit"] = fit
+        changes["method.fit"] = fit
     if d.get("actuation") is not None:
         changes["actuation"] = d["actuation"]
     if d.get("forward") is not None:

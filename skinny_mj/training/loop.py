@@ -11,8 +11,9 @@ Every experiment and command goes through these functions:
   feedback-error learning (:func:`skinny_mj.controllers.fel.train`, original or β) or the
   true-target architecture (:func:`skinny_mj.controllers.true_target.train_true_target`);
 - :func:`evaluate`: the test (:func:`skinny_mj.controllers.fel.evaluate`, K = 0) on any movement;
-- :func:`train_batch` / :func:`train`: the three together with the standard metrics
-  (papers D, E and the ``skinny train`` command).
+- :func:`train_batch` / :func:`train`: the three together, one
+  :class:`~skinny_mj.training.result.RunResult` per seed (papers D, E and the ``skinny
+  train`` command).
 
 Seeds: a run's seed s spawns three streams, ``SeedSequence(s).spawn(3)``: the inverse
 ESN's Generator (weights, then reservoir noise), the plant's sensor-noise seed, and the
@@ -22,10 +23,11 @@ run is reproduced from (config, seed) alone, whichever plant path and batch runs
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -33,7 +35,7 @@ import numpy as np
 from skinny_mj.controllers import fel
 from skinny_mj.controllers.esn import ESN
 from skinny_mj.controllers.feedback import FeedbackController
-from skinny_mj.controllers.forward_model import ForwardModel
+from skinny_mj.controllers.forward_model import ForwardModel, rollout_prediction_error
 from skinny_mj.controllers.loop import Loop
 from skinny_mj.controllers.true_target import train_true_target
 from skinny_mj.plant.bimanual import arm_signals
@@ -52,7 +54,6 @@ from skinny_mj.training.config import (  # noqa: F401  (re-exported: the trainin
     relative_cost,
 )
 from skinny_mj.training.fits import make_rule
-from skinny_mj.training.imitation import ROBOT_METRICS, robot_metrics
 from skinny_mj.training.parts import (  # noqa: F401  (re-exported)
     RunStreams,
     arm_forward_models,
@@ -64,6 +65,16 @@ from skinny_mj.training.parts import (  # noqa: F401  (re-exported)
     network_sizes,
     run_streams,
     true_commands_of,
+)
+from skinny_mj.training.result import (  # noqa: F401  (re-exported)
+    STANDARD,
+    RolloutFigures,
+    RunResult,
+    Test,
+    TestOutcome,
+    TrainFigures,
+    feedback_share,
+    mean_abs_error,
 )
 
 
@@ -92,7 +103,9 @@ class Run:
     @functools.cached_property
     def plant(self):
         """The training plant (built on first use: Fig. 3-style runs never need it)."""
-        return make_plant(self.cfg, self.training, self.plant_seeds, self.max_speed_rad_s)
+        plant = make_plant(self.cfg, self.training, self.plant_seeds, self.max_speed_rad_s)
+        self.actuation.training_plant(plant)
+        return plant
 
     @property
     def scored(self) -> np.ndarray | None:
@@ -108,11 +121,12 @@ class Run:
         """How the body is driven (:mod:`skinny_mj.training.actuation`)."""
         return actuation_of(self.cfg)
 
-    def loop(self, hook=None, feedback: FeedbackController | None = None) -> Loop:
+    def loop(self, hook=None, feedback: FeedbackController | None = None, rule=None) -> Loop:
         """The closed loop of the inverse model: ``cfg.inputs``, ``feedback`` (default the
-        plain controller), the actuation's ``hook``, the forward model, the delay."""
+        plain controller), the actuation's ``hook``, the forward model, the delay, and the
+        learning rule FEL refits the readout with (None: each cycle alone)."""
         return Loop(self.cfg.inputs, feedback or FeedbackController(), hook, self.forward,
-                    delay_steps=self.cfg.plant.delay)
+                    delay_steps=self.cfg.plant.delay + self.actuation.sensing_delay, rule=rule)
 
 
 @single_threaded
@@ -163,7 +177,7 @@ class Training:
     fel: fel.TrainResult | None = None
     true_target: Any = None
     pretrain_prediction_nrmse: np.ndarray | None = None
-    #: the FEL readout fit's rule (rule.fit; None: each cycle alone): its ``metrics(r)``,
+    #: the FEL readout fit's rule (method.fit; None: each cycle alone): its ``metrics(r)``,
     #: if it has them, join run r's train metrics
     rule: Any = None
     feedback_share: Any = None  # the actuation's recorder (torque: torque.ShareRecorder)
@@ -176,54 +190,37 @@ def train_run(run: Run, progress: Callable[[int, int], None] | None = None,
     ``observe``: FEL's optional per-cycle diagnostics callback
     (:func:`skinny_mj.controllers.fel.train`,
     e.g. paper E §5.1's y_est / y_used per epoch; ignored by the true-target architecture)."""
-    cfg, rule, out = run.cfg, run.cfg.rule, Training()
+    cfg, method, out = run.cfg, run.cfg.method, Training()
     fwd, body, act = cfg.forward, cfg.plant, run.actuation
     if run.forward is not None and fwd.kind in ("serial", "hybrid"):
         out.pretrain_prediction_nrmse = run.forward.pretrain(
             run.trajectory.position_signals(body.signals),
             true_commands_of(cfg, run.trajectory, run.max_speed_rad_s),  # chained: one step
             0 if fwd.input == "chained" else body.delay, sensor_noise=body.sensor_noise)
-    if isinstance(rule, NoLearning):  # the feedback controller alone: nothing to learn
+    if isinstance(method, NoLearning):  # the feedback controller alone: nothing to learn
         return out
-    if isinstance(rule, TrueTarget):
+    if isinstance(method, TrueTarget):
         out.true_target = train_true_target(
-            run.esn, run.desired, run.true_commands, rule, noise=cfg.noise_level > 0,
+            run.esn, run.desired, run.true_commands, method, noise=cfg.noise_level > 0,
             one_step=act.one_step(run.training, run.max_speed_rad_s),
             extra_inputs=act.teacher_inputs(run.training, run.max_speed_rad_s),
             input_rngs=[protocol.tt_input_rng(s) for s in run.seeds])
         _report(progress, 1, 1)
         return out
-    method = rule  # FEL: Original or New, the controllers' method types with their fit
+    # FEL: Original or New, the controllers' method types with their fit
     per_epoch = method.learning_cycles + 2
     total = method.epochs * per_epoch
 
     def tick(epoch: int, cycle: int, ro, y_used) -> None:
         _report(progress, epoch * per_epoch + cycle + 1, total)
 
-    out.rule = make_rule(cfg, run.esn, len(run.desired) - 1)  # rule.fit (training.fits)
+    out.rule = make_rule(cfg, run.esn, len(run.desired) - 1)  # method.fit (training.fits)
     out.feedback_share = act.recorder(method, run.esn.n_runs)  # the actuation's, if any
     loop = run.loop(act.hook(run.training, run.max_speed_rad_s, run.plant),
-                    protocol.feedback_of(method.u_error_gain, method.u_error_damping))
+                    protocol.feedback_of(method.u_error_gain, method.u_error_damping), out.rule)
     out.fel = fel.train(run.esn, run.plant, fel.Task(run.desired, run.true_commands, run.scored),
-                        method, loop, rule=out.rule,
-                        observe=_all(observe, out.feedback_share, tick))
+                        method, loop, observe=_all(observe, out.feedback_share, tick))
     return out
-
-
-@dataclass
-class TestOutcome:
-    """A closed-loop test (K = 0) of a trained network on one movement."""
-
-    position_nrmse: float | None
-    motor_nrmse: float | None
-    failed: bool
-    fail_reason: str | None
-    rollout: fel.Rollout = field(repr=False)
-    trajectory: Any = field(repr=False)
-    desired: np.ndarray = field(repr=False)
-    true_commands: np.ndarray = field(repr=False)
-    #: torque body: per-run torque figures and series (:func:`torque_training.test_torques`)
-    torque: dict | None = field(default=None, repr=False)
 
 
 @single_threaded
@@ -258,24 +255,8 @@ def evaluate(run: Run, trajectory=None, *, plant_seeds: Sequence[int] | None = N
     ) for r in range(run.esn.n_runs)]
 
 
-@dataclass
-class TrainOutcome:
-    """Everything one run produced: metrics (JSON-ready), the network, the test."""
-
-    config: TrainConfig
-    seed: int
-    metrics: dict
-    esn: ESN = field(repr=False)
-    test: TestOutcome = field(repr=False)
-    max_speed_rad_s: np.ndarray = field(repr=False)
-
-    @property
-    def failed(self) -> bool:
-        return bool(self.metrics["failed"])
-
-
 def train(cfg: TrainConfig, seed: int = 0,
-          progress: Callable[[int, int], None] | None = None) -> TrainOutcome:
+          progress: Callable[[int, int], None] | None = None) -> RunResult:
     """Train one ESN inverse model with ``cfg`` and test it on one repetition.
 
     ``progress(done, total)`` is called after every cycle (for a progress bar).
@@ -285,88 +266,117 @@ def train(cfg: TrainConfig, seed: int = 0,
 
 @single_threaded
 def train_batch(cfg: TrainConfig, seeds: Sequence[int],
-                progress: Callable[[int, int], None] | None = None) -> list[TrainOutcome]:
-    """Train R = len(seeds) runs of ``cfg`` in lockstep; run r equals ``train(cfg, seeds[r])``.
+                progress: Callable[[int, int], None] | None = None,
+                tests: Sequence[Test] = STANDARD) -> list[RunResult]:
+    """Train R = len(seeds) runs of ``cfg`` in lockstep, then take ``tests`` in order
+    (default: the standard test, one repetition of the training movement); run r equals
+    ``train_batch(cfg, [seeds[r]], tests=tests)``.
 
-    ``metrics["wall_s"]`` is the batch's wall time divided by R (and
-    ``metrics["lockstep_runs"]`` = R). With ``plant.backend == "env"`` (dm_control, one
-    run per environment) the runs are trained one after another.
+    A result's ``wall_s`` is the batch's wall time divided by R (``lockstep_runs`` = R).
+    With ``plant.backend == "env"`` (dm_control, one run per environment) the runs are
+    trained one after another.
     """
     seeds = [int(s) for s in seeds]
     if cfg.plant.backend == "env" and len(seeds) > 1:
-        return [o for s in seeds for o in train_batch(cfg, [s], progress)]
+        return [o for s in seeds for o in train_batch(cfg, [s], progress, tests)]
     if not seeds:
         return []
     start = time.perf_counter()
     run = build_run(cfg, seeds)
     trained = train_run(run, progress)
-    tests = evaluate(run)
-    if len(seeds) > 1 and physics_warnings(run, tests[0]):
+    train_wall = (time.perf_counter() - start) / len(seeds)
+    taken = {t.name: take_test(run, t) for t in tests}
+    standard = taken.get("")
+    if len(seeds) > 1 and standard is not None and physics_warnings(run, standard[0]):
         # the lockstep runs share one MjData, which MuJoCo resets whole when one run
         # diverges: the batch no longer equals its runs alone, so run them alone
         raise PhysicsBatchError(f"MuJoCo warnings in a lockstep batch of {len(seeds)} runs")
-    return [_outcome(run, trained, r, test, (time.perf_counter() - start) / len(seeds))
-            for r, test in enumerate(tests)]
+    wall = (time.perf_counter() - start) / len(seeds)
+    figures = _rollout_figures(run, trained)
+    return [_result(run, trained, r, {name: t[r] for name, t in taken.items()},
+                    None if figures is None else figures[r], wall, train_wall)
+            for r in range(len(seeds))]
 
 
-def _outcome(run: Run, trained: Training, r: int, test: TestOutcome,
-             wall_share: float) -> TrainOutcome:
-    """Run r's :class:`TrainOutcome` with the standard metrics."""
-    metrics: dict[str, Any] = {}
+def take_test(run: Run, test: Test) -> list[TestOutcome]:
+    """The R trained networks of ``run`` take ``test`` (:class:`Test`)."""
+    cfg = run.cfg.override(dict(test.overrides)) if test.overrides else run.cfg
+    taker = run if cfg is run.cfg else dataclasses.replace(run, cfg=cfg)
+    trajectory = None if test.movement is None else test.movement(run.cfg)
+    if test.plant == "training":
+        return evaluate(taker, trajectory, plant=run.plant)
+    seeds = None if not test.plant_seed_offset else \
+        [s + test.plant_seed_offset for s in run.plant_seeds]
+    return evaluate(taker, trajectory, plant_seeds=seeds)
+
+
+def _rollout_figures(run: Run, trained: Training) -> list[RolloutFigures] | None:
+    """Per run the figures of FEL's last training rollout (None: no FEL training)."""
+    ro = None if trained.fel is None else trained.fel.last_rollout
+    if ro is None:
+        return None
+    mae, share = mean_abs_error(ro.true_signals, run.desired), feedback_share(ro)
+    ratio = ro.correction_ratio
+    prediction = None if run.forward is None else rollout_prediction_error(ro)
+    return [RolloutFigures(float(mae[r]), float(ratio[r]), float(share[r]),
+                           None if prediction is None else float(prediction[r]),
+                           ro.select(r)) for r in range(run.esn.n_runs)]
+
+
+def _train_figures(run: Run, trained: Training, r: int) -> TrainFigures:
+    """Run r's :class:`TrainFigures`."""
     if trained.true_target is not None:
         tt = trained.true_target
-        metrics["train"] = {"motor_nrmse": float(tt.motor_nrmse[r]),
-                            "position_nrmse": None if tt.position_nrmse is None
-                            else float(tt.position_nrmse[r])}
-    elif trained.fel is None:  # rule=none: nothing was trained
-        metrics["train"] = {}
-    else:
-        result = trained.fel
-        curve = result.to_dict()
-        metrics["train"] = {"gains": curve["gains"], "position_nrmse": curve["position_nrmse"][r],
-                            "motor_nrmse": curve["motor_nrmse"][r]}
-        metrics["train"].update(run.actuation.recorded(trained.feedback_share, r))
-        reported = getattr(trained.rule, "metrics", None)  # the rule's own, if any
-        if reported is not None:
-            metrics["train"].update(reported(r))
-        if result.failed[r]:
-            metrics.update(failed=True, fail_reason=result.fail_reason[r],
-                           fail_epoch=result.fail_epoch[r])
-    if not metrics.get("failed") and test.failed:
-        metrics.update(failed=True, fail_reason=f"test: {test.fail_reason}")
-    metrics.setdefault("failed", False)
-    if metrics["failed"]:  # a diverged network has no test result, only its reason
-        metrics["test"] = {"position_nrmse": None, "motor_nrmse": None}
-    else:
-        metrics["test"] = {"position_nrmse": test.position_nrmse,
-                           "motor_nrmse": test.motor_nrmse, **test_robot_metrics(run, test)}
-    if test.torque is not None:
-        metrics["test"]["torque"] = test.torque["metrics"]
-        metrics["train_warnings"] = run.actuation.train_warnings(run)
-        n_warnings = physics_warnings(run, test)
-        if n_warnings and not metrics["failed"]:  # MuJoCo reset a diverged simulation
-            metrics.update(failed=True, fail_reason=f"physics diverged: {n_warnings} MuJoCo "
-                           "warning(s) in training or test")
-            metrics["test"].update(position_nrmse=None, motor_nrmse=None)
-            for key in ROBOT_METRICS:  # no figures of a diverged simulation
-                metrics["test"].pop(key, None)
-    if trained.pretrain_prediction_nrmse is not None:
-        metrics["pretrain_prediction_nrmse"] = float(trained.pretrain_prediction_nrmse[r])
-    metrics.update(
-        config=run.cfg.to_dict(), seed=run.seeds[r], steps_per_cycle=len(run.desired),
-        max_speed_rad_s=[float(v) for v in run.max_speed_rad_s],
-        clipped_samples=int(run.report.clipped_samples), wall_s=wall_share,
-        lockstep_runs=len(run.seeds),
-    )
-    return TrainOutcome(run.cfg, run.seeds[r], metrics, esn_run(run.esn, r), test,
-                        run.max_speed_rad_s)
+        return TrainFigures("true-target", None if tt.position_nrmse is None
+                            else float(tt.position_nrmse[r]), float(tt.motor_nrmse[r]))
+    if trained.fel is None:  # method=none: nothing was trained
+        return TrainFigures("none")
+    result = trained.fel
+    curve = result.to_dict()
+    extra = dict(run.actuation.recorded(trained.feedback_share, r))
+    reported = getattr(trained.rule, "metrics", None)  # the rule's own, if any
+    if reported is not None:
+        extra.update(reported(r))
+    return TrainFigures("fel", curve["position_nrmse"][r], curve["motor_nrmse"][r],
+                        curve["gains"], extra, bool(result.failed[r]), result.fail_reason[r],
+                        result.fail_epoch[r])
+
+
+def _result(run: Run, trained: Training, r: int, tests: dict[str, TestOutcome],
+            figures: RolloutFigures | None, wall_share: float,
+            train_wall_share: float) -> RunResult:
+    """Run r's :class:`RunResult`: fails with its training, then its standard test, then
+    (torque body) MuJoCo's warnings."""
+    train = _train_figures(run, trained, r)
+    standard = tests.get("")
+    stage, reason = None, None
+    if train.failed:
+        stage, reason = "train", train.fail_reason
+    elif standard is not None and standard.failed:
+        stage, reason = "test", f"test: {standard.fail_reason}"
+    warnings = None
+    if standard is not None and standard.torque is not None:
+        warnings = run.actuation.train_warnings(run)
+        n_warnings = physics_warnings(run, standard)
+        if n_warnings and stage is None:  # MuJoCo reset a diverged simulation
+            stage, reason = "physics", (f"physics diverged: {n_warnings} MuJoCo warning(s) "
+                                        "in training or test")
+    pretrain = trained.pretrain_prediction_nrmse
+    return RunResult(
+        config=run.cfg, seed=run.seeds[r], train=train, tests=tests,
+        failed=stage is not None, fail_reason=reason, fail_stage=stage,
+        last_rollout=figures,
+        pretrain_prediction_nrmse=None if pretrain is None else float(pretrain[r]),
+        train_warnings=warnings, steps_per_cycle=len(run.desired),
+        max_speed_rad_s=run.max_speed_rad_s, clipped_samples=int(run.report.clipped_samples),
+        wall_s=wall_share, train_wall_s=train_wall_share, lockstep_runs=len(run.seeds),
+        trajectory=run.trajectory, esn=esn_run(run.esn, r))
 
 
 def test_robot_metrics(run: Run, test: TestOutcome) -> dict[str, float]:
     """A test's :func:`skinny_mj.training.imitation.robot_metrics` (joint error in degrees,
     hand error in cm, lag in s) of its produced joint angles against its movement's."""
-    return robot_metrics(test.rollout.angles[0], test.trajectory.angles, run.cfg.plant.body,
-                         test.trajectory.dt)
+    return test.robot_metrics(run.cfg.plant.body)
 
 
 def physics_warnings(run: Run, test: TestOutcome) -> int:

@@ -82,7 +82,7 @@ def train_estimate(cfg: Any, steps: int, test_steps: int, runs: int = 1,
     steps per training cycle (the movement x its reps), ``test_steps`` in the test."""
     lay = _layout(cfg)
     step = _per_step(cfg, lay) * _F8
-    n_res, epochs = cfg.esn.n_reservoir, getattr(cfg.rule, "epochs", 0)
+    n_res, epochs = cfg.esn.n_reservoir, getattr(cfg.method, "epochs", 0)
     fit = (lay["D"] + lay["n_out"]) * _F8 + 8 * lay["n_out"] * runs * _F8
     if runs > 1:  # pinv of the live runs only copies their states
         fit += lay["D"] * runs * _F8
@@ -90,7 +90,7 @@ def train_estimate(cfg: Any, steps: int, test_steps: int, runs: int = 1,
         fit += lay["D"] * _F8
     if _forward_size(cfg):
         fit += (lay["D_fm"] + lay["n_sig"]) * _F8
-    if isinstance(cfg.rule, TrueTarget):  # teacher-forced states of every run, then the fit
+    if isinstance(cfg.method, TrueTarget):  # teacher-forced states of every run, then the fit
         fit += lay["D"] * runs * _F8
     kept, drawing = _weights(n_res, lay["n_in"], lay["n_out"], runs)
     if _forward_size(cfg):

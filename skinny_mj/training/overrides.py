@@ -8,17 +8,20 @@ the settings the old and the new type inherit from a common base (and starting a
 unrelated type from its defaults). One mechanism then serves the command
 line, config files and studies::
 
-    override(cfg, {"esn.spectral_radius": 0.9, "rule": "original", "rule.epochs": 2})
-    flatten(cfg)  # {"plant.dof": 4, ..., "rule": "new", "rule.beta": 0.1, ...}
+    override(cfg, {"esn.spectral_radius": 0.9, "method": "original", "method.epochs": 2})
+    flatten(cfg)  # {"plant.dof": 4, ..., "method": "new", "method.beta": 0.1, ...}
     parse_value(cfg, "esn.n_reservoir", "400")  # 400 (the field's type)
 
 A choice may also be a *registry* (a dataclass base with ``REGISTRY`` and the class
 methods ``choose(name)`` -> the member type and ``names()``): its members are those
-registered when the key is set (``rule.fit=NAME``, :mod:`skinny_mj.training.fits`), and
-the chosen member's fields are keys too (``rule.fit.forgetting``). A type's ``ALIASES``
+registered when the key is set (``method.fit=NAME``, :mod:`skinny_mj.training.fits`), and
+the chosen member's fields are keys too (``method.fit.forgetting``). A type's ``ALIASES``
 (old name -> (the key it names now, relative; the type checking a value the chosen
 member has no field for)) keep an old key: it sets its new key, or, when the chosen type
-has no such setting, is checked and ignored (``rule.forgetting``).
+has no such setting, is checked and ignored (``method.forgetting``). A type's
+``RENAMED`` (old field name -> new field name) keeps the old name of a renamed field and
+every key under it (``rule.epochs`` -> ``method.epochs``): :func:`canonical` gives a key's
+current name and logs one warning line per old key and process.
 
 A key naming a type's field applies after the key that chooses the type, whatever the
 order given. An unknown key, a field the chosen type does not have, or a value of the
@@ -30,6 +33,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import functools
+import logging
 import math
 import types
 import typing
@@ -38,10 +42,15 @@ from typing import Any
 
 from skinny_mj.errors import SkinnyInputError
 
-__all__ = ["override", "flatten", "parse_value", "keys", "field_type", "node", "KIND"]
+__all__ = ["override", "flatten", "parse_value", "keys", "field_type", "node", "canonical",
+           "renamed", "KIND"]
+
+_log = logging.getLogger(__name__)
 
 #: The field that names a union member's type.
 KIND = "kind"
+#: The old keys warned about in this process (each once).
+_WARNED: set[str] = set()
 
 
 @functools.cache
@@ -96,7 +105,7 @@ def _has(obj: Any, name: str) -> bool:
 
 
 def flatten(cfg: Any, prefix: str = "") -> dict[str, Any]:
-    """Every leaf as ``{"a.b": value}``; a union field as its kind (``"rule": "new"``)
+    """Every leaf as ``{"a.b": value}``; a union field as its kind (``"method": "new"``)
     followed by the chosen type's fields. JSON-ready (tuples become lists)."""
     out: dict[str, Any] = {}
     for f in dataclasses.fields(cfg):
@@ -141,10 +150,41 @@ def _unknown(key: str, owner: Any, root: Any) -> SkinnyInputError:
     return SkinnyInputError(f"unknown config key {key!r}{hint}")
 
 
+def canonical(cfg: Any, key: str) -> str:
+    """``key`` under its current name: each part a type on its path renamed (its
+    ``RENAMED``: old field name -> new) replaced by the new name; an old key is logged
+    once per process (``rule.epochs is now method.epochs``)."""
+    parts, obj = key.split("."), cfg
+    for i, part in enumerate(parts):
+        new = getattr(type(obj), "RENAMED", {}).get(part)
+        if new is not None and not _has(obj, part):
+            parts[i] = new
+        obj = getattr(obj, parts[i], None) if _has(obj, parts[i]) else None
+    now = ".".join(parts)
+    if now != key and key not in _WARNED:
+        _WARNED.add(key)
+        _log.warning("%s is now %s", key, now)
+    return now
+
+
+def renamed(cfg: Any, changes: Mapping[str, Any]) -> dict[str, Any]:
+    """``changes`` with every key under its current name (:func:`canonical`); an old and
+    a new key setting one setting to different values are refused."""
+    out: dict[str, Any] = {}
+    given: dict[str, str] = {}  # current key -> the key it was given as
+    for key, value in changes.items():
+        now = canonical(cfg, key)
+        if now in out and out[now] != value:
+            raise SkinnyInputError(f"{given[now]}={out[now]} and {key}={value} set the same "
+                                   f"key, {now}: give it once")
+        out[now], given[now] = value, key
+    return out
+
+
 def node(cfg: Any, dotted: str) -> Any:
     """The value at the dotted key on ``cfg`` (a component or a leaf), or None when
     ``cfg`` as it is has no such key."""
-    for part in dotted.split("."):
+    for part in canonical(cfg, dotted).split("."):
         if not _has(cfg, part):
             return None
         cfg = getattr(cfg, part)
@@ -157,7 +197,7 @@ _node = node
 def _apply(node: Any, changes: Mapping[str, Any], prefix: str, root: Any) -> Any:
     """``node`` (at ``prefix``) with its relative dotted ``changes`` set: per field, a
     type chosen first, then its own settings; then ``node`` rebuilt once, so its checks
-    see all the changes together (``rule=none`` with ``test.gain=1``)."""
+    see all the changes together (``method=none`` with ``test.gain=1``)."""
     groups: dict[str, dict[str, Any]] = {}
     aliases = getattr(type(node), "ALIASES", {})
     legacy: dict[tuple[str, str], str] = {}  # (field, its key) set by an old key
@@ -250,12 +290,14 @@ def _describe(annotation: Any) -> str:
 
 def override(cfg: Any, changes: Mapping[str, Any]) -> Any:
     """``cfg`` with the dotted keys of ``changes`` set (a type-choosing key before its
-    fields), validated again by the dataclasses' own checks, once with all the changes."""
-    return _apply(cfg, changes, "", cfg) if changes else cfg
+    fields; an old key under its current name, :func:`renamed`), validated again by the
+    dataclasses' own checks, once with all the changes."""
+    return _apply(cfg, renamed(cfg, changes), "", cfg) if changes else cfg
 
 
 def field_type(cfg: Any, key: str) -> Any:
     """The annotation of the leaf ``key`` on ``cfg`` (a union field: ``str``)."""
+    key = canonical(cfg, key)
     *owner, name = key.split(".")
     node = _node(cfg, ".".join(owner)) if owner else cfg
     alias = getattr(type(node), "ALIASES", {}).get(name) if node is not None else None

@@ -66,7 +66,7 @@ GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
         "seeds; without the elbow angles 0.064 and 0.052)",
         {"plant.body": "2d", "plant.signals": "cartesian-elbow",
          "movement.trajectory": "babble:seed=0,duration=60,limits=0.5,holds=0.2",
-         "movement.full_scale_factor": 4.0, "rule.u_error_gain": 3.0,
+         "movement.full_scale_factor": 4.0, "method.u_error_gain": 3.0,
          "test.washout_cycles": 1},
     ),
     (8, "cartesian"): (
@@ -94,25 +94,24 @@ SHIPPED: dict[str, tuple[int, str]] = {
 #: ``fel-arm`` rows (inertia-scaled PD, beta = 1, forgetting readout); 240 s of slow
 #: babbling, then YMCA, 3 learning cycles per epoch.
 _TORQUE_FEL = {"actuation": "torque", "plant.signals": "joint",
-               "actuation.feedback": "inertia-pd", "rule.fit": "forgetting", "rule.beta": 1.0,
+               "actuation.feedback": "inertia-pd", "method.fit": "forgetting", "method.beta": 1.0,
                "movement.trajectory": "set:babble:seed=0,duration=240,vmin=0.5,vmax=4+ymca",
-               "rule.cycles": 3}
+               "method.cycles": 3}
 TORQUE_GENERAL: dict[int, tuple[str, dict[str, Any]]] = {
     4: ("torque twin, 2D, joint-angle signals, trained on 240 s of motor babbling at peak "
         "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
         "inertia-scaled PD teacher, beta = 1, 3 cycles x 30 epochs, readout on the normal "
         "equations with forgetting: row 2d-general of `skinny experiment dynamic --rows "
         "general` (unseen md_02 at 0.18x speed 0.0163, md_03 at 0.27x 0.0116, 10 seeds)",
-        {"plant.body": "2d-torque", **_TORQUE_FEL, "rule.epochs": 30}),
+        {"plant.body": "2d-torque", **_TORQUE_FEL, "method.epochs": 30}),
     8: ("torque twin, 3D, joint-angle signals, trained on 240 s of motor babbling at peak "
         "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
         "inertia-scaled PD teacher at poles of 20 rad/s, beta = 1, 3 cycles x 15 epochs, "
-        "readout on the normal equations with forgetting 0.9: row "
-        "3d-general-babble240+ymca-omega20+forget0.9-n200 of `skinny experiment dynamic "
-        "--rows general`, the same as row 3d-general (unseen md_02 at 0.45x speed 0.0189, "
+        "readout on the normal equations with forgetting 0.9: row 3d-general of `skinny "
+        "experiment dynamic --rows general` (unseen md_02 at 0.45x speed 0.0189, "
         "md_03 at 0.44x 0.0142, 10 seeds)",
-        {"plant.body": "3d-torque", **_TORQUE_FEL, "rule.epochs": 15, "actuation.omega": 20.0,
-         "rule.fit.forgetting": 0.9}),
+        {"plant.body": "3d-torque", **_TORQUE_FEL, "method.epochs": 15, "actuation.omega": 20.0,
+         "method.fit.forgetting": 0.9}),
 }
 #: The same names for the torque bodies (``general``: the 2D body's).
 TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {"general": TORQUE_GENERAL[4]}

@@ -2,9 +2,9 @@
 
 Each is a :class:`skinny_mj.training.config.TrainConfig` setting whose default is the thesis
 code's behaviour bit for bit: ``test.noise`` (reservoir noise during the K = 0 test),
-``rule.u_error_gain`` (FEL: a scalar on the feedback controller's u_error, which the
-thesis leaves unstated), ``rule.u_error_damping`` (its damped-least-squares lambda near
-a singular Jacobian) and ``rule.input_noise`` (true target: noise on the
+``method.u_error_gain`` (FEL: a scalar on the feedback controller's u_error, which the
+thesis leaves unstated), ``method.u_error_damping`` (its damped-least-squares lambda near
+a singular Jacobian) and ``method.input_noise`` (true target: noise on the
 teacher-forced inputs).
 """
 

@@ -37,6 +37,7 @@ import functools
 import numpy as np
 
 from skinny_mj.controllers.metrics import position_nrmse
+from skinny_mj.controllers.sensing import JointSensing
 from skinny_mj.controllers.torque_arm import ArmGains, DesiredMotion
 from skinny_mj.controllers.torque_arm_loop import ArmLoop
 from skinny_mj.controllers.torque_feedback import TorqueFeedbackController, TorqueGains
@@ -48,14 +49,16 @@ from skinny_mj.plant.body import BodyLike, body_of
 from skinny_mj.plant.dynamics import BatchArmState, feasibility_lines
 from skinny_mj.plant.path_dynamics import torque_dynamics
 from skinny_mj.plant.perturb import perturb  # noqa: F401  (re-exported: the robustness test plant)
-from skinny_mj.training.config import ARM_LAWS, Torque, TrainConfig
+from skinny_mj.training import adaptive
+from skinny_mj.training.config import ARM_LAWS, OracleSensing, Torque, TrainConfig
 
 #: Default pole placement omega (rad/s) per law, zeta 1 (critically damped): computed
 #: torque and PD + gravity at 15 rad/s (omega dt = 0.3 at the 20 ms hold), the ID
 #: feed-forward's low-gain PD and FEL's teacher at 5 rad/s.
 #: Ridge of the remembering readout fits when the ESN's readout is not "ridge".
 MEMORY_RIDGE = 1e-2
-ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0}
+ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0,
+             "const-pd": 5.0, "adaptive-ct": 15.0}
 
 
 @functools.lru_cache(maxsize=8)
@@ -128,40 +131,98 @@ def arm_gains(act: Torque) -> ArmGains:
     return ArmGains(omega, act.zeta)
 
 
+#: the stream of a run's encoder noise beside its plant's sensor noise (same plant seed)
+SENSING_STREAM = 0x5E45
+
+
+def sensing_of(act: Torque, plant, dt: float) -> JointSensing | None:
+    """The joints' sensing of ``act`` for ``plant``'s R runs (None: the oracle's
+    information); run r's encoder noise from ``default_rng([seeds[r], SENSING_STREAM])``."""
+    s = act.sensing
+    if isinstance(s, OracleSensing):
+        return None
+    seeds = getattr(plant, "seeds", None) or range(plant.n_runs)
+    return JointSensing(s.encoder_noise, s.velocity, s.velocity_filter_hz, s.delay, dt,
+                        [np.random.default_rng([int(x), SENSING_STREAM]) for x in seeds])
+
+
+def sensing_delay(act: Torque | None) -> int:
+    """Control steps by which ``act``'s sensing lags (0 for the oracle and the servo)."""
+    return getattr(getattr(act, "sensing", None), "delay", 0)
+
+
+def home_mass(which: BodyLike) -> np.ndarray:
+    """(n, n) M of the body's nominal torque twin at its home pose (every angle 0 or its
+    range's nearest end: arms hanging, elbows straight), kg m^2: the constant-inertia
+    teacher's M."""
+    lo, hi = body_of(which).joint_ranges().T
+    return torque_dynamics(which).mass_matrix(np.clip(0.0, lo, hi))
+
+
 def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
-             plant=None) -> TorqueLoop | None:
+             plant=None, nominal: bool | None = None) -> TorqueLoop | None:
     """The torque loop of ``trajectory`` (None for the velocity servo); the laws of
-    :mod:`skinny_mj.controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant)."""
+    :mod:`skinny_mj.controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant).
+    ``nominal``: the controllers use the nominal twin's model (None: :func:`nominal_model`;
+    True for a plant that will change while the loop runs)."""
     act, which, signals = cfg.torque, cfg.plant.body, cfg.plant.signals
     if act is None:
         return None
-    if act.feedback in ARM_LAWS:
-        law = ARM_LAWS[act.feedback]
+    sensing = None if plant is None else sensing_of(act, plant, trajectory.dt)
+    if act.feedback in ARM_LAWS or act.feedback == "adaptive-ct":
+        law = ARM_LAWS.get(act.feedback, "ct")
         if plant is None or not hasattr(plant, "model"):
             raise SkinnyInputError(f"feedback {act.feedback!r} needs the lockstep plant "
                                    "(plant.backend=batch)")
-        return ArmLoop(controller(which, signals),
-                       desired_velocities_rad_s(trajectory.angles, trajectory.dt),
-                       np.asarray(max_speed_rad_s, float),
-                       velocity_inputs=act.velocity_inputs,
-                       gravity_feedforward=act.gravity_feedforward, law=law,
-                       gains=arm_gains(act),
-                       motion=desired_motion(which, trajectory, law == "id-pd"),
-                       state_of=BatchArmState(plant, gravity=law == "pd-g",
-                                              nominal=perturbed(act)),
-                       dt=trajectory.dt)
+        if nominal is None:
+            nominal = nominal_model(act)
+        state_of = BatchArmState(plant, gravity=law == "pd-g", nominal=nominal,
+                                 sensing=sensing,
+                                 constant_mass=home_mass(which) if law == "fel-const" else None)
+        common = dict(velocity_inputs=act.velocity_inputs,
+                      gravity_feedforward=act.gravity_feedforward, law=law,
+                      gains=arm_gains(act),
+                      motion=desired_motion(which, trajectory, law == "id-pd"),
+                      state_of=state_of, dt=trajectory.dt, sensing=sensing)
+        args = (controller(which, signals),
+                desired_velocities_rad_s(trajectory.angles, trajectory.dt),
+                np.asarray(max_speed_rad_s, float))
+        if act.feedback == "adaptive-ct":
+            return adaptive.loop(which, *args, **common)
+        return ArmLoop(*args, **common)
     ff = true_torques(which, trajectory) if act.feedback == "computed-torque" else None
     return TorqueLoop(controller(which, signals),
                       desired_velocities_rad_s(trajectory.angles, trajectory.dt),
                       np.asarray(max_speed_rad_s, float),
                       velocity_inputs=act.velocity_inputs,
-                      gravity_feedforward=act.gravity_feedforward, inverse_dynamics=ff)
+                      gravity_feedforward=act.gravity_feedforward, inverse_dynamics=ff,
+                      sensing=sensing)
+
+
+def nominal_model(act: Torque) -> bool:
+    """Do the controllers of ``act`` use the nominal twin's model rather than the plant's
+    own? (With ``model="nominal"``, whenever the plant or its test differs from the
+    nominal twin; on an unchanged plant the two give the same numbers.)"""
+    return act.model == "nominal" and (perturbed(act) or plant_changed(act))
+
+
+def plant_changed(act: Torque) -> bool:
+    """Does the plant as it is (training and test) differ from the nominal twin?"""
+    return (act.payload_kg, act.mass_scale, act.friction_nm, act.damping_nm_s_rad) \
+        != (0.0, 1.0, 0.0, 0.0)
 
 
 def perturbed(act: Torque) -> bool:
-    """Does the test plant of ``act`` differ from the nominal twin (the controllers'
-    model)?"""
-    return act.test_payload_kg != 0 or act.test_mass_scale != 1
+    """Does the test plant of ``act`` differ from the training plant?"""
+    return act.test_payload_kg != 0 or act.test_mass_scale != 1 or act.test_friction_nm != 0
+
+
+def change_plant(act: Torque, plant, test: bool) -> None:
+    """The plant as it is (``act.payload_kg`` ...), and at test (``test``) the test
+    plant's changes on top (:func:`skinny_mj.plant.perturb.perturb`)."""
+    perturb(plant, act.payload_kg, act.mass_scale, act.friction_nm, act.damping_nm_s_rad)
+    if test:
+        perturb(plant, act.test_payload_kg, act.test_mass_scale, act.test_friction_nm)
 
 
 def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
@@ -183,7 +244,7 @@ def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
     metrics["warnings"] = int(plant.warning_count())
     metrics["within_limits"] = bool(max(metrics["max_commanded_ratio"],
                                         metrics["max_applied_ratio"]) <= 1 + 1e-9)
-    metrics["limit_overshoot_rad"] = limit_overshoot_rad(rollout.angles[r], plant.n_dof)
+    metrics["limit_overshoot_rad"] = limit_overshoot_rad(rollout.angles[r], plant.body)
     series = {"commanded_nm": rollout.commands[r] * limit,
               "applied_nm": hook.applied_nm[:, r].copy(),
               "gravity_nm": hook.bias_nm[:, r].copy(), "limit_nm": limit.copy()}
@@ -224,11 +285,11 @@ def feasibility_report(which: BodyLike, trajectory) -> list[str]:
 
 
 def readout_fitter(cfg: TrainConfig, esn, steps: int):
-    """FEL's readout fit for ``rule.fit`` (None: each cycle alone, ``esn.fit``): the
-    normal equations with forgetting, or RLS, remembering ``rule.fit.forgetting`` of the
+    """FEL's readout fit for ``method.fit`` (None: each cycle alone, ``esn.fit``): the
+    normal equations with forgetting, or RLS, remembering ``method.fit.forgetting`` of the
     statistics per learning cycle of ``steps`` samples; ridge ``esn.ridge_lambda`` with a
     ridge readout, else :data:`MEMORY_RIDGE`."""
-    fit = cfg.rule.fit
+    fit = cfg.method.fit
     ridge = cfg.esn.ridge_lambda if cfg.esn.readout == "ridge" else MEMORY_RIDGE
     if fit.kind == "forgetting":
         return ForgettingReadout(esn, fit.forgetting, ridge)
@@ -270,7 +331,7 @@ class ShareRecorder:
 
 def joint_nrmse(outcome) -> float:
     """Test joint-angle NRMSE (each angle normalized to [-1, 1] over its range) of a
-    :class:`skinny_mj.training.loop.TrainOutcome` against its movement's angles."""
+    :class:`skinny_mj.training.result.RunResult` against its movement's angles."""
     skinny = body_of(outcome.config.plant.body)
     angles = outcome.test.rollout.angles[:, :, :skinny.dof]
     return float(position_nrmse(skinny.normalize_angles(angles),

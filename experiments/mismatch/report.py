@@ -1,0 +1,129 @@
+"""The mismatch study's report: the mismatch x controller table (position NRMSE and RMS
+joint error in degrees, mean ± sd over ok runs) and the goals, from the run files
+(:mod:`skinny_mj.experiments.mismatch.study`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from skinny_mj.experiments.mismatch.study import (
+    BODIES,
+    CONTROLLERS,
+    GOAL_K0,
+    GOAL_RATIO,
+    GOAL_VS_CT,
+    MISMATCHES,
+    MODEL_ERROR,
+    row_id,
+)
+from skinny_mj.experiments.mismatch.switch import LEARNERS, PRE
+
+from skinny_mj.engine.stats import load_runs
+
+#: table columns: header, row's controller, metric suffix
+COLUMNS = (("PD + g", "pd-g", ""), ("teacher alone", "teacher", ""),
+           ("nominal CT", "ct-nominal", ""), ("adaptive CT", "ct-adaptive", ""),
+           ("oracle CT", "ct-oracle", ""), ("ESN K = 0", "esn", ""),
+           ("ESN K = 1", "esn", "_k1"), ("ESN trained nominal, K = 0", "esn", "_on"))
+
+
+def values(records: list[dict], row: str, metric: str) -> list[float]:
+    """The finite values of ``metric`` over the ok runs of ``row``."""
+    out = []
+    for rec in records:
+        v = rec["metrics"].get(metric) if rec["row"] == row and rec.get("status") == "ok" \
+            else None
+        if isinstance(v, int | float) and np.isfinite(v):
+            out.append(float(v))
+    return out
+
+
+def _cell(vals: list[float], degrees: list[float]) -> str:
+    if not vals:
+        return "—"
+    text = f"{np.mean(vals):.4f} ± {np.std(vals):.4f}"
+    return f"{text} ({np.mean(degrees):.2f}°)" if degrees else text
+
+
+def _lookup(records, bd: str, m: str, ctl: str, suffix: str, metric: str) -> list[float]:
+    if suffix == "_on":
+        if m == "none":
+            return values(records, row_id(bd, "none", "esn"), metric)
+        return values(records, row_id(bd, "none", "esn"), f"{metric}_on_{m}")
+    return values(records, row_id(bd, m, ctl), metric + suffix)
+
+
+def mean(records, bd, m, ctl, suffix="", metric="position_nrmse") -> float:
+    vals = _lookup(records, bd, m, ctl, suffix, metric)
+    return float(np.mean(vals)) if vals else float("nan")
+
+
+def table(records: list[dict], bd: str) -> list[str]:
+    """Markdown: one line per mismatch, position NRMSE mean ± sd (RMS joint error, °)."""
+    lines = ["| mismatch | " + " | ".join(h for h, _, _ in COLUMNS) + " |",
+             "|---|" + "---|" * len(COLUMNS)]
+    for m in MISMATCHES:
+        cells = [_cell(_lookup(records, bd, m, c, s, "position_nrmse"),
+                       _lookup(records, bd, m, c, s, "rms_error_deg")) for _, c, s in COLUMNS]
+        lines.append(f"| {m} | " + " | ".join(cells) + " |")
+    n = sorted({len(values(records, row_id(bd, m, c), "position_nrmse"))
+                for m in MISMATCHES for c in CONTROLLERS} - {0})
+    lines.append("")
+    lines.append(f"Position NRMSE, mean ± sd over {'/'.join(map(str, n))} ok runs per row "
+                 "(RMS joint error in degrees).")
+    return lines
+
+
+def goals(records: list[dict], bd: str) -> list[str]:
+    """The goals against what was measured."""
+    base = mean(records, bd, "none", "esn")
+    out = [f"- ESN + FEL, nominal teacher, realistic sensing, K = 0, no mismatch: "
+           f"{base:.4f} (goal <= {GOAL_K0[bd]})"]
+    for m in MISMATCHES:
+        if m == "none":
+            continue
+        v = mean(records, bd, m, "esn")
+        if np.isnan(v):  # that row was not swept
+            continue
+        out.append(f"- {m}: ESN K = 0 {v:.4f} = {v / base:.2f}x its no-mismatch error "
+                   f"(goal <= {GOAL_RATIO}x)")
+    for m in MODEL_ERROR:
+        k1, ct = mean(records, bd, m, "esn", "_k1"), mean(records, bd, m, "ct-nominal")
+        ad = mean(records, bd, m, "ct-adaptive")
+        if np.isnan(k1) or np.isnan(ct):  # those rows were not swept
+            continue
+        out.append(f"- {m}: ESN K = 1 {k1:.4f}, nominal CT {ct:.4f} ({ct / k1:.2f}x; goal >= "
+                   f"{GOAL_VS_CT}x), adaptive CT {ad:.4f} ({ad / k1:.2f}x)")
+    return out
+
+
+def switch_table(records: list[dict]) -> list[str]:
+    """Markdown: the payload switch per learner, mean position NRMSE per cycle."""
+    lines = ["| controller | before | switch cycle | +1 | +2 | +3 | last | recover (cycles) |",
+             "|---|---|---|---|---|---|---|---|"]
+    for learner in LEARNERS:
+        row = f"2d-ymca-switch-{learner}"
+        curves = [r["metrics"]["curve"] for r in records
+                  if r["row"] == row and r.get("status") == "ok"]
+        if not curves:
+            continue
+        c = np.mean(curves, axis=0)
+        rec = values(records, row, "recover_cycles")
+        cells = [np.mean(values(records, row, "pre_switch")), *c[PRE:PRE + 4], c[-1]]
+        lines.append(f"| {learner} | " + " | ".join(f"{v:.4f}" for v in cells)
+                     + f" | {np.mean(rec):.1f} |")
+    return lines
+
+
+def report(results: dict, plan, out_dir: Path) -> str:
+    """The table and the goals of each body with runs, and the payload switch."""
+    records = load_runs(Path(out_dir))
+    lines: list[str] = []
+    for bd in BODIES:
+        if not any(r["row"].startswith(bd) and "-switch-" not in r["row"] for r in records):
+            continue
+        lines += [f"## {bd}", "", *table(records, bd), "", *goals(records, bd), ""]
+    if any("-switch-" in r["row"] for r in records):
+        lines += ["## Payload switched on mid-movement", "", *switch_table(records), ""]
+    return "\n".join(lines) if lines else "no runs"

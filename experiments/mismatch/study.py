@@ -1,0 +1,196 @@
+"""Model mismatch: does a learned inverse model earn its place when the controllers'
+model of the arm is wrong and they see only what a robot senses?
+
+Every row runs on the torque body (2D unless ``3d-``), YMCA, with the realistic sensing
+(``actuation.sensing=encoders``: encoder noise 5e-4 rad, second-order finite-difference
+velocities at 50 Hz) and controllers that know at most the nominal body (payload 0, masses x 1, no
+friction). Rows ``<body>-ymca-<mismatch>-<controller>``; the mismatch is the plant as it
+is, in training and test alike:
+
+- ``none``; ``payload0.5`` / ``payload1``: 0.5 / 1 kg at the right hand's centre of mass;
+  ``mass+20`` / ``mass-20``: every arm link's mass and inertia x 1.2 / x 0.8;
+  ``friction``: 1 N m Coulomb friction and 0.5 N m s/rad more viscous damping on every
+  arm joint; ``noisy-encoders``: encoder noise 5e-3 rad (x 10); ``delay``: one control
+  step (20 ms) of sensing latency (the ESN's position inputs lag too).
+
+Controllers (all on the same sensed state):
+
+- ``pd-g``: PD + the nominal gravity torque, poles at 15 rad/s (inertia-scaled by the
+  nominal M(q) at the sensed pose);
+- ``teacher``: FEL's teacher alone, the inertia-scaled PD at 5 rad/s, nominal M(q);
+- ``ct-nominal``: computed torque (15 rad/s) on the nominal model;
+- ``ct-adaptive``: computed torque whose model adapts online (the nominal model plus an
+  exact inertial regressor: link mass scales, hand payload, viscous and Coulomb friction
+  per joint; the desired-compensation adaptation law, :mod:`skinny_mj.training.adaptive`),
+  its estimate carried through ``ADAPT_CYCLES`` unscored cycles before the scored one;
+- ``ct-oracle``: computed torque on the plant's true model (an oracle: no robot has it);
+- ``esn``: ESN + FEL trained on the plant as it is with the nominal teacher (the dynamic
+  study's recipe: beta 1, 3 learning cycles per epoch, readout on the normal equations
+  with forgetting 0.8, K 1 -> 0 over ``EPOCHS`` epochs), tested at K = 0
+  (``position_nrmse``) and with its teacher on at K = 1 (``*_k1``) after one training; the
+  ``none`` row's ESN (trained on the nominal arm) is also tested on every changed plant
+  (``*_on_<mismatch>``): the network trained on the nominal arm, tested on the changed one.
+
+Groups: ``2d`` and ``3d`` (the 3D body: the dynamic study's 3D recipe for the ESN, 500
+units, 6 learning cycles per epoch, the teacher at 20 rad/s, forgetting 0.9), and
+``switch``: a 1 kg payload switched on mid-movement
+(:mod:`skinny_mj.experiments.mismatch.switch`).
+
+Seeds come from the engine (each row's own). ``--quick``: a smoke test (one run, three
+mismatches and two switch rows, two epochs, one adaptation cycle).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from skinny_mj.experiments.dynamic.study import ARM_GOALS, TABLE_COLUMNS
+from skinny_mj.experiments.dynamic.study import metrics as dynamic_metrics
+from skinny_mj.experiments.mismatch.switch import LEARNERS, run_switch
+
+from skinny_mj.engine.experiment import RunFailed
+from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.training.config import TrainConfig
+
+NAME = "mismatch"
+#: mismatch id -> the plant as it is (TrainConfig overrides)
+MISMATCHES = {
+    "none": {},
+    "payload0.5": {"actuation.payload_kg": 0.5},
+    "payload1": {"actuation.payload_kg": 1.0},
+    "mass+20": {"actuation.mass_scale": 1.2},
+    "mass-20": {"actuation.mass_scale": 0.8},
+    "friction": {"actuation.friction_nm": 1.0, "actuation.damping_nm_s_rad": 0.5},
+    "noisy-encoders": {"actuation.sensing.encoder_noise": 5e-3},
+    "delay": {"actuation.sensing.delay": 1},
+}
+#: where the model's error matters (the goal: the ESN with feedback >= 2x better than
+#: nominal computed torque there)
+MODEL_ERROR = ("payload0.5", "payload1", "friction")
+EPOCHS, QUICK_EPOCHS = 15, 2
+ADAPT_CYCLES, QUICK_ADAPT_CYCLES = 5, 1
+ESN = {"method": "new", "method.beta": 1.0, "method.cycles": 3, "method.epochs": EPOCHS,
+       "actuation.feedback": "inertia-pd", "method.fit": "forgetting", "test.gain": 0.0}
+ALONE = {"method": "none", "test.gain": 1.0}
+CONTROLLERS = {
+    "pd-g": {**ALONE, "actuation.feedback": "pd-gravity"},
+    "teacher": {**ALONE, "actuation.feedback": "inertia-pd"},
+    "ct-nominal": {**ALONE, "actuation.feedback": "ct"},
+    "ct-adaptive": {**ALONE, "actuation.feedback": "adaptive-ct",
+                    "test.washout_cycles": ADAPT_CYCLES},
+    "ct-oracle": {**ALONE, "actuation.feedback": "ct", "actuation.model": "true"},
+    "esn": ESN,
+}
+#: the 3D body: the dynamic study's 3D recipe (500 units, 6 cycles, teacher at 20 rad/s,
+#: forgetting 0.9)
+BODIES = {"2d": {"plant.dof": 4},
+          "3d": {"plant.dof": 8, "esn.n_reservoir": 500, "method.cycles": 6,
+                 "actuation.omega": 20.0, "method.fit.forgetting": 0.9}}
+GOAL_K0 = ARM_GOALS  # the dynamic study's goals for the ESN alone on YMCA, now without the oracle
+GOAL_RATIO, GOAL_VS_CT = 1.3, 2.0
+COLUMNS = {**{k: TABLE_COLUMNS[k] for k in ("position_nrmse", "joint_nrmse", "rms_error_deg",
+                                            "peak_error_deg", "hand_error_cm")},
+           "position_nrmse_k1": "ESN, K = 1", "rms_error_deg_k1": "ESN, K = 1 (°)",
+           **{k: TABLE_COLUMNS[k] for k in ("max_torque_ratio", "train_wall_s")}}
+
+
+def row_id(bd: str, mismatch: str, controller: str) -> str:
+    return f"{bd}-ymca-{mismatch}-{controller}"
+
+
+def _rows() -> tuple[Row, ...]:
+    out = []
+    for bd, body_keys in BODIES.items():
+        for m, changes in MISMATCHES.items():
+            for ctl, keys in CONTROLLERS.items():
+                over = {"movement.trajectory": "ymca", **keys, **changes}
+                over.update({k: v for k, v in body_keys.items()
+                             if ctl == "esn" or k == "plant.dof"})
+                if bd == "3d" and ctl != "esn" and "actuation.omega" in body_keys \
+                        and keys["actuation.feedback"] == "inertia-pd":
+                    over["actuation.omega"] = body_keys["actuation.omega"]
+                quick = {"method.epochs": QUICK_EPOCHS} if ctl == "esn" else \
+                    {"test.washout_cycles": QUICK_ADAPT_CYCLES} if ctl == "ct-adaptive" else {}
+                params = {"also": tuple(k for k in MISMATCHES if k != "none")} \
+                    if ctl == "esn" and m == "none" else {}
+                out.append(Row(row_id(bd, m, ctl), over, group=bd, quick=quick,
+                               params=params, run_batch=run_esn if ctl == "esn" else None))
+    return tuple(out)
+
+
+def _figures(run, test, label: str) -> dict:
+    """One test's metrics, each key + ``label``."""
+    from skinny_mj.controllers.metrics import position_nrmse
+
+    from skinny_mj.plant import body
+    from skinny_mj.training.loop import test_robot_metrics
+
+    if test.failed:
+        return {f"position_nrmse{label}": None}
+    dof = run.cfg.plant.dof
+    angles = test.rollout.angles[:, :, :dof]
+    joint = float(position_nrmse(body.body_of(dof).normalize_angles(angles),
+                                 body.body_of(dof).normalize_angles(test.trajectory.angles))[0])
+    tq = test.torque["metrics"]
+    out = {"position_nrmse": test.position_nrmse, "joint_nrmse": joint,
+           **test_robot_metrics(run, test),
+           "max_torque_ratio": max(tq["max_commanded_ratio"], tq["max_applied_ratio"]),
+           "warnings": tq["warnings"]}
+    return {f"{k}{label}": v for k, v in out.items()}
+
+
+def run_esn(config: TrainConfig, row: Row, seeds: list[int]) -> list:
+    """ESN + FEL trained once per seed on the plant as it is, then tested at K = 0, at
+    K = 1 and (the ``none`` row) on each changed plant of ``row.params["also"]``."""
+    import time
+
+    from skinny_mj.training.loop import build_run, evaluate, train_run
+
+    start = time.perf_counter()
+    run = build_run(config, seeds)
+    trained = train_run(run)
+    tests = {"": {}, "_k1": {"test.gain": 1.0},
+             **{f"_on_{m}": MISMATCHES[m] for m in row.params.get("also", ())}}
+    out = [{} for _ in seeds]
+    for label, changes in tests.items():
+        tested = dataclasses.replace(run, cfg=config.override(changes)) if changes else run
+        for r, test in enumerate(evaluate(tested)):
+            out[r].update(_figures(tested, test, label))
+    wall = (time.perf_counter() - start) / len(seeds)
+    results = []
+    for r, metrics in enumerate(out):
+        if trained.fel.failed[r] or metrics.get("position_nrmse") is None:
+            results.append(RunFailed(trained.fel.fail_reason[r] or "test diverged"))
+            continue
+        metrics["curve_position_nrmse"] = [float(v) for v in
+                                           np.asarray(trained.fel.position_nrmse)[r]]
+        metrics["train_wall_s"] = wall
+        results.append(metrics)
+    return results
+
+
+def _switch_rows() -> tuple[Row, ...]:
+    """The payload switched on mid-movement (:mod:`skinny_mj.experiments.mismatch.switch`)."""
+    out = []
+    for learner in LEARNERS:
+        keys = ESN if learner.startswith("esn") else CONTROLLERS[learner]
+        keys = {k: v for k, v in keys.items() if k != "test.washout_cycles"}
+        out.append(Row(f"2d-ymca-switch-{learner}", {"movement.trajectory": "ymca",
+                                                      "plant.dof": 4, **keys},
+                       group="switch", params={"learner": learner}, run_batch=run_switch,
+                       quick={"method.epochs": QUICK_EPOCHS} if learner.startswith("esn")
+                       else {}))
+    return tuple(out)
+
+
+ROWS = (*_rows(), *_switch_rows())
+QUICK_ROWS = (*(row_id("2d", m, c) for m in ("none", "payload1", "delay")
+                for c in CONTROLLERS), "2d-ymca-switch-esn-rls", "2d-ymca-switch-ct-adaptive")
+STUDY = Study(
+    name=NAME, description=__doc__, rows=ROWS, runs=10, takes=(),
+    base=TrainConfig().override({"actuation": "torque", "plant.signals": "cartesian"}),
+    metrics=dynamic_metrics, columns=COLUMNS,  # a controller alone: the dynamic study's
+    quick=Quick(runs=1, rows=QUICK_ROWS),
+    report="skinny_mj.experiments.mismatch.report:report",
+)

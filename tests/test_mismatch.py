@@ -1,0 +1,47 @@
+"""The mismatch study's runs: one training tested on several plants, the payload switch."""
+
+from skinny_mj.experiments.mismatch import study, switch
+
+from skinny_mj.engine.study import Row
+
+
+class _Hook:
+    def __init__(self):
+        self.calls = []
+
+    def begin(self, plant, n_steps):
+        self.calls.append(("begin", n_steps))
+
+    def after_step(self, t, plant):
+        self.calls.append(("after", t))
+
+
+def test_switch_hook_changes_the_plant_once_at_its_cycle_and_step():
+    inner, fired = _Hook(), []
+    hook = switch.SwitchHook(inner, cycle=1, step=2, change=lambda: fired.append(len(inner.calls)))
+    for _ in range(3):
+        hook.begin(None, 4)
+        for t in range(3):
+            hook.after_step(t, None)
+    assert len(fired) == 1 and inner.calls[fired[0] - 1] == ("after", 2)
+    assert inner.calls.count(("begin", 4)) == 3
+
+
+def test_one_esn_training_is_tested_at_k0_k1_and_on_changed_plants():
+    config = study.STUDY.base.override({**study.ESN, "plant.dof": 4, "movement.trajectory": "y",
+                                        "method.epochs": 1})
+    row = Row("t", {}, params={"also": ("payload1", "delay")})
+    (out,) = study.run_esn(config, row, [0])
+    for key in ("position_nrmse", "position_nrmse_k1", "position_nrmse_on_payload1",
+                "position_nrmse_on_delay"):
+        assert 0 < out[key] < 10
+    assert 0 < out["rms_error_deg_on_payload1"] < 180
+    assert out["position_nrmse_on_payload1"] != out["position_nrmse"]
+
+
+def test_every_mismatch_has_a_row_per_controller_and_body():
+    ids = {r.id for r in study.ROWS}
+    for bd in study.BODIES:
+        for m in study.MISMATCHES:
+            for c in study.CONTROLLERS:
+                assert study.row_id(bd, m, c) in ids
