@@ -30,6 +30,7 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).parent))
 from torque_stability_check import CONTROL_DT_S, episodes  # noqa: E402
 
+from skinny_mj.plant.body import by_dof  # noqa: E402
 from skinny_mj.plant.model import TORQUE_LIMIT_SOLREF, load_model  # noqa: E402
 
 DRIVE_S = 2.0
@@ -41,7 +42,7 @@ LIMITS = {"the twin": None,
 
 
 def model_with(dof: int, limits) -> mujoco.MjModel:
-    model = load_model(dof, "torque")
+    model = load_model(by_dof(dof, "torque"))
     if limits is not None:
         model.jnt_solref[:], model.jnt_solimp[:] = limits
     return model

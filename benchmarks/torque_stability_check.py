@@ -40,6 +40,7 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from skinny_mj.plant import body  # noqa: E402
+from skinny_mj.plant.body import body_of, by_dof  # noqa: E402
 from skinny_mj.plant.model import TORQUE_ARMATURE_3D_SHOULDER, load_model  # noqa: E402
 
 CONTROL_DT_S = 0.02
@@ -72,7 +73,7 @@ def shoulder_dofs(model: mujoco.MjModel) -> np.ndarray:
 def variant(dof: int, armature: float, integrator, timestep: float,
             limit_timeconst: float | None) -> mujoco.MjModel:
     """The torque twin with its shoulder armature, integrator, step and limits replaced."""
-    model = load_model(dof, "torque")
+    model = load_model(by_dof(dof, "torque"))
     if dof == 8:
         model.dof_armature[shoulder_dofs(model)] = armature
     model.opt.integrator = integrator
@@ -135,10 +136,10 @@ def fidelity_table() -> str:
     from skinny_mj.plant.dynamics import Dynamics
     from skinny_mj.trajectories import get
 
-    with_arm = Dynamics(load_model(8, "torque"))
-    bare_model = load_model(8, "torque")
+    with_arm = Dynamics(load_model("3d-torque"), body_of("3d-torque"))
+    bare_model = load_model("3d-torque")
     bare_model.dof_armature[:] = 0.0
-    bare = Dynamics(bare_model)
+    bare = Dynamics(bare_model, body_of("3d-torque"))
     (lo_a, hi_a), (lo_b, hi_b) = with_arm.inertia_range(), bare.inertia_range()
     angles = get("ymca", 8).angles
     d_tau = np.abs(with_arm.normalize(with_arm.trajectory_torques_nm(angles))
@@ -146,7 +147,7 @@ def fidelity_table() -> str:
     lines = ["| DOF | own inertia, armature 0 (kg m²) | with armature (kg m²) |"
              " armature / smallest own inertia | YMCA: max \\|Δτ\\| / limit |",
              "|---|---|---|---|---|"]
-    for i, name in enumerate(body.dof_names(8)):
+    for i, name in enumerate(body.body_of(8).dof_names):
         arm = with_arm.model.dof_armature[with_arm.layout.dof_adr[i]]
         lines.append(f"| {name} | {lo_b[i]:.4f} – {hi_b[i]:.4f} | {lo_a[i]:.4f} – {hi_a[i]:.4f} |"
                      f" {arm / lo_b[i]:.0%} | {d_tau[i]:.1e} |")

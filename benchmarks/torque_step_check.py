@@ -35,6 +35,7 @@ os.environ.setdefault("MUJOCO_GL", "disabled")
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
+from skinny_mj.plant.body import by_dof  # noqa: E402
 from skinny_mj.plant.model import load_model  # noqa: E402
 
 CONTROL_DT_S = 0.02
@@ -49,7 +50,7 @@ START = {4: np.array([1.3, 0.9, 1.1, 0.6]),
 
 
 def _model(dof: int, integrator: str, timestep: float, *, limits: bool, damping: bool):
-    model = load_model(dof, "torque")
+    model = load_model(by_dof(dof, "torque"))
     model.opt.integrator = INTEGRATORS[integrator]
     model.opt.timestep = timestep
     model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)

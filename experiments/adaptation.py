@@ -79,7 +79,7 @@ COLUMNS = {"nominal": "nominal", "change_first": "1st changed", "change_last": "
            "undone_last": "last undone", "angle_nominal": "angle: nominal",
            "angle_change_last": "angle: last changed"}
 #: The performance after training: feedback gain K, cycles nominal / changed / undone, the
-#: changes' sizes (``offset_dof`` 1: the right elbow, ``body.dof_names(4)[1]``; the
+#: changes' sizes (``offset_dof`` 1: the right elbow, ``body_of("2d").dof_names[1]``; the
 #: forearm's length factor; the torque twin's payload in the right hand and its links'
 #: mass factor) and RLS's forgetting and P_0 = I / ``rls_lambda``.
 PARAMS = {"gain": 0.5, "pre_cycles": 2, "change_cycles": 8, "post_cycles": 4,
@@ -141,7 +141,7 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
         ok = np.array([r is None for r in fel.health(esn, ro)]) & alive
         alive &= ok
         curve[alive, c] = position_nrmse(ro.true_signals, run.desired)[alive]
-        angles = body.normalize_angles(ro.angles, config.plant.dof)
+        angles = body.body_of(config.plant.body).normalize_angles(ro.angles)
         angle_curve[alive, c] = position_nrmse(angles, desired_angles)[alive]
         if learner in ("fel", "fel-noise") and alive.any():  # as in training: the new method
             esn.fit(ro.states, fel.beta_target(ro.y_est, ro.y_esn, config.method.beta),

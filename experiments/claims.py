@@ -112,8 +112,8 @@ def _measure_c7(out_dir: Path, dof: int) -> list[str]:
             continue
         produced = np.asarray(run["metrics"]["angles__ym"], float)
         n = min(len(produced), len(ym))
-        split = error_split(body.normalize_angles(produced[:n], dof),
-                            body.normalize_angles(ym[:n], dof), folded[:n])
+        split = error_split(body.body_of(dof).normalize_angles(produced[:n]),
+                            body.body_of(dof).normalize_angles(ym[:n]), folded[:n])
         lines.append(f"seed {run['seed']}: elbows' share of the YM error "
                      f"{split['share'][elbows].sum():.3f}; NRMSE where YM's elbows have "
                      f"folded ({folded[:n].mean():.0%} of steps) {split['nrmse_selected']:.4f}, "
@@ -130,7 +130,7 @@ def _measure_mirrors() -> list[str]:
             most, frac = range_excursion(paper_c.load(paper_c.MOVEMENTS[name], dof).angles,
                                          ymca)
             beyond = [f"{j} {np.degrees(most[i]):.1f} deg ({frac[i]:.0%} of steps)"
-                      for i, j in enumerate(body.dof_names(dof)) if most[i] > 0]
+                      for i, j in enumerate(body.body_of(dof).dof_names) if most[i] > 0]
             lines.append(f"{dof} DOF, {name}: beyond YMCA's range: "
                          f"{', '.join(beyond) if beyond else 'none'}")
     return lines

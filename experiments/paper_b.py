@@ -256,6 +256,6 @@ STUDY = Study(
     name=NAME, description=__doc__, base=MODEL, runs=10,  # runs: not stated in the paper
     rows=tuple(Row(name, {"movement.trajectory": PREFIX + name}, params=asdict(p))
                for name, p in PATTERNS.items()),
-    tests=TESTS, failure=failure, metrics=metrics, columns=COLUMNS, takes=("dof", "signals"),
+    tests=TESTS, failure=failure, metrics=metrics, columns=COLUMNS, takes=("body", "signals"),
     quick=Quick({"method.epochs": 2}, runs=1), report=report,
 )

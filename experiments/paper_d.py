@@ -182,7 +182,7 @@ def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
                                   == run["metrics"]["tt_position_test"])
     if not picked:
         return None
-    names = body.signal_names(plan.base.plant.dof, plan.base.plant.signals)
+    names = body.body_of(plan.base.plant.body).signal_names(plan.base.plant.signals)
     plt = pyplot()
     fig, axes = plt.subplots(len(picked), 2, figsize=(11, 2.6 * len(picked)), squeeze=False,
                              sharex=True)

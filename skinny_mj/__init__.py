@@ -18,23 +18,23 @@ _LAZY = {
 }
 
 
-def load(dof: int = 4, signals: str = "cartesian", trajectory: Any = None, *args: Any,
-         **kwargs: Any) -> Any:
+def load(*args: Any, **kwargs: Any) -> Any:
     """Skinny imitating ``trajectory`` as a dm_control ``control.Environment``:
-    :func:`skinny_mj.plant.task.load`, whose other arguments (``actuation``,
-    ``sensor_noise``, ``seed``, ``max_speed_rad_s``, ``speed_factor``) it passes on.
-    ``trajectory``: None (the synthesized YMCA), any movement name or file the command
-    line's ``--trajectory`` takes (``"ym"``, ``"ymca@0.5"``, ``"babble:seed=3"``,
-    ``"set:ymca+md_03.amc"``, ``"clip.csv@start=2"``), (T, dof) angles in rad or a
-    :class:`~skinny_mj.trajectories.Trajectory`
+    :func:`skinny_mj.plant.task.load`, its arguments (``body``, ``signals``,
+    ``trajectory``, ``sensor_noise``, ``seed``, ``max_speed_rad_s``, ``speed_factor``)
+    given the same way. ``trajectory``: None (the synthesized YMCA), any movement name or
+    file the command line's ``--trajectory`` takes (``"ym"``, ``"ymca@0.5"``,
+    ``"babble:seed=3"``, ``"set:ymca+md_03.amc"``, ``"clip.csv@start=2"``), (T, n_dof)
+    angles in rad or a :class:`~skinny_mj.trajectories.Trajectory`
     (:func:`skinny_mj.trajectories.resolve_trajectory`). The plant has no movement of its
     own; this package supplies the default and reads the names.
     """
     from skinny_mj import trajectories  # here, not above: importing skinny_mj stays light
     from skinny_mj.plant import task
 
-    return task.load(dof, signals, trajectories.resolve_trajectory(trajectory, dof), *args,
-                     **kwargs)
+    given = task.arguments(*args, **kwargs)
+    given["trajectory"] = trajectories.resolve_trajectory(given["trajectory"], given["body"])
+    return task.load(**given)
 
 
 def __getattr__(name: str) -> Any:

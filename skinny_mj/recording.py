@@ -69,12 +69,13 @@ def _recording_id(arrays: Sequence[np.ndarray | None], text: str) -> str:
     return str(uuid.UUID(bytes=h.digest()[:16]))
 
 
-def _info_markdown(title: str, dof: int, dof_names: Sequence[str], signal_names: Sequence[str],
-                   dt: float, steps: int, metadata: Mapping[str, Any]) -> str:
+def _info_markdown(title: str, skinny: body.Body, dof_names: Sequence[str],
+                   signal_names: Sequence[str], dt: float, steps: int,
+                   metadata: Mapping[str, Any]) -> str:
     lines = [f"# {title or 'Skinny-MJ run'}", "",
-             f"{dof} DOF, {steps} steps of {dt * 1000:g} ms ({steps * dt:.2f} s).", "",
+             f"{skinny.dof} DOF, {steps} steps of {dt * 1000:g} ms ({steps * dt:.2f} s).", "",
              "| DOF | range (deg) |", "|---|---|"]
-    ranges = np.degrees(body.joint_ranges(dof)) if dof in body.BODIES else None
+    ranges = np.degrees(skinny.joint_ranges())
     for i, name in enumerate(dof_names):
         rng = "?" if ranges is None else f"{ranges[i, 0]:.0f} .. {ranges[i, 1]:.0f}"
         lines.append(f"| {name} | {rng} |")
@@ -94,10 +95,11 @@ def _send_series(rec, entity: str, values: np.ndarray, steps: np.ndarray, dt: fl
     )
 
 
-def _send_pose(rec, entity: str, angles: np.ndarray, dof: int, dt: float, rgb) -> None:
+def _send_pose(rec, entity: str, angles: np.ndarray, skinny: body.Body, dt: float,
+               rgb) -> None:
     import rerun as rr
 
-    points = body.arm_points(angles, dof)  # (T, 2 arms, 3 points, 3)
+    points = skinny.arm_points(angles)  # (T, 2 arms, 3 points, 3)
     n_steps = points.shape[0]
     steps = np.arange(n_steps)
     rec.log(entity, rr.LineStrips3D.from_fields(colors=[rgb], radii=[0.012]), static=True)
@@ -110,10 +112,10 @@ def _send_pose(rec, entity: str, angles: np.ndarray, dof: int, dt: float, rgb) -
     )
 
 
-def _log_body(rec) -> None:
+def _log_body(rec, skinny: body.Body) -> None:
     import rerun as rr
 
-    shoulders = body.shoulder_positions()
+    shoulders = skinny.shoulder_positions()
     neck = shoulders.mean(axis=0)
     pelvis = np.array([0.0, 0.0, PELVIS_HEIGHT_M])
     hips = pelvis + np.array([[-0.12, 0.0, 0.0], [0.12, 0.0, 0.0]])
@@ -128,7 +130,7 @@ def write_recording(
     path: str | Path,
     *,
     dt: float,
-    dof: int,
+    which: body.BodyLike,
     dof_names: Sequence[str],
     signal_names: Sequence[str],
     desired_angles: np.ndarray,
@@ -149,8 +151,9 @@ def write_recording(
     ----------
     path : output file, conventionally ``run.rrd``.
     dt : control step, s.
-    dof : 4 (2D) or 8 (3D); used for the arm drawing and the joint ranges.
-    dof_names : (n_dof,) names in :func:`skinny_mj.plant.body.dof_names` order.
+    which : the body (:data:`skinny_mj.plant.body.BODIES`); its arm drawing and joint
+        ranges.
+    dof_names : (n_dof,) names in :attr:`skinny_mj.plant.body.Body.dof_names` order.
     signal_names : (n_sig,) names of the position signals.
     desired_angles, actual_angles : (T, n_dof) joint angles, rad.
     commands : (T-1, n_dof) normalized velocity commands in [-1, 1]; command t moves
@@ -173,6 +176,7 @@ def write_recording(
     """
     import rerun as rr
 
+    skinny = body.body_of(which)
     dof_names, signal_names = list(dof_names), list(signal_names)
     if dt <= 0:
         raise SkinnyInputError(f"dt must be positive, got {dt}")
@@ -195,11 +199,11 @@ def write_recording(
         if v.ndim > 2:
             raise SkinnyInputError(f"curve {k!r} must be (E,) or (R, E), got {v.shape}")
     metadata = dict(metadata or {})
-    info = _info_markdown(title, dof, dof_names, signal_names, dt, n_steps, metadata)
+    info = _info_markdown(title, skinny, dof_names, signal_names, dt, n_steps, metadata)
     rec_id = _recording_id(
         [desired_angles, actual_angles, commands, desired_signals, actual_signals,
          sensed_signals, *curve_arrays.values(), *(torques or {}).values()],
-        json.dumps([dt, dof, dof_names, signal_names, title, application_id,
+        json.dumps([dt, skinny.dof, dof_names, signal_names, title, application_id,
                     sorted(curve_arrays)]) + info,
     )
 
@@ -220,7 +224,7 @@ def write_recording(
         if title:
             rec.send_recording_name(title)
         rec.log("/info", rr.TextDocument(info, media_type=rr.MediaType.MARKDOWN), static=True)
-        _log_body(rec)
+        _log_body(rec, skinny)
         steps = np.arange(n_steps)
         roles = [("desired", desired_angles), ("actual", actual_angles)]
         for i, name in enumerate(dof_names):
@@ -239,8 +243,8 @@ def write_recording(
                 _send_series(rec, f"/signals/{name}/{role}", sig[:, j], steps, dt)
         if torques is not None:
             _log_torques(rec, torques, dof_names, steps, dt)
-        _send_pose(rec, "/pose/desired", desired_angles, dof, dt, DESIRED_RGB)
-        _send_pose(rec, "/pose/actual", actual_angles, dof, dt, ACTUAL_RGB)
+        _send_pose(rec, "/pose/desired", desired_angles, skinny, dt, DESIRED_RGB)
+        _send_pose(rec, "/pose/actual", actual_angles, skinny, dt, ACTUAL_RGB)
         for name, values in curve_arrays.items():
             rows = [values] if values.ndim == 1 else list(values)
             for r, row in enumerate(rows):
@@ -353,10 +357,10 @@ def record_test(path: str | Path, outcome: Any, title: str,
                                                    dtype=float)}
     meta = {"seed": outcome.seed, "test": dict(figures or {}),
             "movement": cfg.movement.trajectory, **(metadata or {})}
-    dof = cfg.plant.dof
+    skinny = body.body_of(cfg.plant.body)
     return write_recording(
-        path, dt=test.trajectory.dt, dof=dof, dof_names=list(body.dof_names(dof)),
-        signal_names=list(body.signal_names(dof, cfg.plant.signals)),
+        path, dt=test.trajectory.dt, which=skinny, dof_names=list(skinny.dof_names),
+        signal_names=list(skinny.signal_names(cfg.plant.signals)),
         desired_angles=test.trajectory.angles, actual_angles=ro.angles[0],
         commands=ro.commands[0], desired_signals=test.desired,
         actual_signals=ro.true_signals[0], sensed_signals=ro.sensed[0], title=title,

@@ -35,13 +35,13 @@ def test_longer_forearm_is_longer_and_the_controller_keeps_the_nominal_jacobian(
     _posed(plant)
     for r in range(2):  # every copy: the right forearm 1.2 x, the rest as it was
         assert _site_gap(plant, r, "right_elbow", "right_wrist") == pytest.approx(
-            1.2 * body.FOREARM_LENGTH_M, abs=1e-12)
+            1.2 * body.body_of("2d").lengths_m()[1], abs=1e-12)
         assert _site_gap(plant, r, "left_elbow", "left_wrist") == pytest.approx(
-            body.FOREARM_LENGTH_M, abs=1e-12)
+            body.body_of("2d").lengths_m()[1], abs=1e-12)
         assert _site_gap(plant, r, "right_shoulder", "right_elbow") == pytest.approx(
-            body.UPPER_ARM_LENGTH_M, abs=1e-12)
+            body.body_of("2d").lengths_m()[0], abs=1e-12)
     rows = forearm_rows(4, "cartesian")
-    assert [body.signal_names(4, "cartesian")[i] for i in rows] == ["right_wrist_x",
+    assert [body.body_of(4).signal_names("cartesian")[i] for i in rows] == ["right_wrist_x",
                                                                     "right_wrist_z"]
     diff = plant.true_signals() - nominal.true_signals()
     assert np.allclose(diff[:, rows], 0.2 * nominal.true_signals()[:, rows], atol=1e-12)
@@ -57,15 +57,15 @@ def test_longer_forearm_is_longer_and_the_controller_keeps_the_nominal_jacobian(
 
 
 def test_torque_payload_adds_mass_at_the_right_hand_and_heavier_links_scale_the_arms():
-    nominal = _posed(BatchPlant(4, "cartesian", get("ymca", 4), n_runs=2, actuation="torque"))
-    plant = PerturbedPlant(BatchPlant(4, "cartesian", get("ymca", 4), n_runs=2, actuation="torque"))
+    nominal = _posed(BatchPlant("2d-torque", "cartesian", get("ymca", 4), n_runs=2))
+    plant = PerturbedPlant(BatchPlant("2d-torque", "cartesian", get("ymca", 4), n_runs=2))
     m0 = plant.model.body_mass.copy()
     hands = [plant.model.body(f"r{r}/right_hand").id for r in range(2)]
     plant.set(payload_kg=1.0)
     added = plant.model.body_mass - m0
     assert np.allclose(added[hands], 1.0) and np.count_nonzero(added) == 2
     _posed(plant)
-    shoulder = body.dof_names(4).index("right_shoulder_abduction")
+    shoulder = body.body_of(4).dof_names.index("right_shoulder_abduction")
     assert np.all(np.abs(plant.bias_torque_nm()[:, shoulder])
                   > np.abs(nominal.bias_torque_nm()[:, shoulder]) + 1.0)  # > 1 N m more
     plant.set(mass_scale=1.2)  # replaces the payload

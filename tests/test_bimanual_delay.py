@@ -13,7 +13,7 @@ from skinny_mj.experiments.bimanual_delay import study as bd
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import bimanual as bm
-from skinny_mj.plant.body import position_signals
+from skinny_mj.plant.body import body_of
 from skinny_mj.plant.ideal import max_speeds
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.trajectories import get
@@ -42,7 +42,7 @@ def test_the_lagging_arm_gets_delayed_state_its_prediction_and_what_the_leader_s
     if fm.esn.lead is not None:
         fm.esn.lead.W_out[..., -1] = -0.3
     esn = ESN(ESNConfig(8, 2, N, 0.5), seed=0)
-    desired = position_signals(traj.angles, 4, "joint")
+    desired = body_of("2d").position_signals(traj.angles, "joint")
     ro = fel.rollout(esn, plant, desired, 1.0,
                      fel.Loop(inputs="sensed", forward=fm, delay_steps=2), noise=False)
     u = ro.states[0, :, N:N + 8]  # the inverse model's input [s(t - 2); p(t)]
@@ -117,7 +117,7 @@ def test_rows_cover_patterns_architectures_and_delays():
     assert (inverse.forward.kind, inverse.plant.leading_arm) == ("none", "right")
     assert exp.groups["share-predictions"] == tuple(
         f"{p}-share-predictions-d{d}" for p in bd.PATTERNS for d in bd.DELAYS)
-    assert bd.STUDY.build(dof=8).config.config("phase0-forward-d4").plant.dof == 8
+    assert bd.STUDY.build(body=8).config.config("phase0-forward-d4").plant.dof == 8
     for option in ({"movement": "ymca"}, {"signals": "cartesian"}):
         with pytest.raises(SkinnyInputError):
             bd.STUDY.build(**option)

@@ -74,6 +74,9 @@ def test_track_real_motion_capture_3d(tmp_path):
     (["train", "--noise", "-0.1"], "--noise"),
     (["train", "--reservoir", "0"], "--reservoir"),
     (["test", "--model", "missing.npz"], "missing.npz"),
+    (["train", "--dof", "4", "--body", "3d"], "--dof) is the 2d body and plant.body=3d"),
+    (["train", "--body", "4d"], "unknown body '4d'; the bodies: 2d, 3d, 2d-torque, 3d-torque"),
+    (["track", "--body", "2d-torque"], "the 2d-torque body is torque-driven"),
 ])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(argv, needle, tmp_path):
     out = tmp_path / "out"
@@ -193,3 +196,33 @@ def test_train_takes_the_torque_teacher_and_readout_fit_flags(tmp_path):
     cfg = json.loads((out / "metrics.json").read_text())["config"]
     assert (cfg["actuation.feedback"], cfg["method.fit"], cfg["method.fit.forgetting"]) == \
         ("inertia-pd", "forgetting", 0.7)
+
+
+def test_body_flags_name_a_body_and_dof_is_its_alias(tmp_path, capsys):
+    """``--body NAME`` (the help lists the registered bodies) and ``--dof 4|8``, the same
+    body by its number of hinges (with a torque actuation, its twin): the same run."""
+    from skinny_mj.cli.config_files import train_config
+    from skinny_mj.cli.parser import build_parser
+
+    def config(*argv):
+        return train_config(build_parser().parse_args(["train", *argv]))[0]
+
+    assert config("--dof", "8") == config("--body", "3d") == config("plant.dof=8") \
+        == config("--dof", "8", "--body", "3d")
+    torque = config("--body", "2d-torque")
+    assert torque.actuation.kind == "torque" and torque.plant.body == "2d-torque"
+    assert config("--dof", "4", "--actuation", "torque") == config("--body", "2d",
+                                                                   "--actuation", "torque")
+    assert config("--dof", "4", "--actuation", "torque").plant.body == "2d-torque"
+    with pytest.raises(SystemExit):
+        main(["train", "--help"])
+    assert "2d, 3d, 2d-torque, 3d-torque" in " ".join(capsys.readouterr().out.split())
+    runs = {}
+    for argv in (["--body", "2d-torque"], ["--dof", "4", "--actuation", "torque"]):
+        out = tmp_path / argv[-1]
+        assert main(["train", *argv, "--epochs", "1", "--quiet", "--out", str(out)]) == 0
+        runs[argv[-1]] = json.loads((out / "metrics.json").read_text())
+    first, second = runs.values()
+    assert first["config"]["plant.body"] == "2d-torque" and first["test"] == second["test"]
+    with np.load(out / "model.npz", allow_pickle=False) as model:
+        assert json.loads(str(model["metadata"]))["body"] == "2d-torque"

@@ -14,6 +14,7 @@ from skinny_mj.cli.parser import main
 from skinny_mj.engine import registry
 from skinny_mj.engine.experiment import Experiment, Row
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant.body import body_of
 
 TINY = ["--reservoir", "30", "--epochs", "1", "--quiet"]
 
@@ -171,8 +172,8 @@ def _toy_module() -> types.ModuleType:
     toy = types.ModuleType("toy_experiment")
     toy.NAME = "toy"
 
-    def build(*, quick=False, movement=None, asf=None, dof=None, signals=None):
-        dof = 4 if dof is None else dof
+    def build(*, quick=False, movement=None, asf=None, body=None, signals=None):
+        dof = 4 if body is None else body_of(body).dof
         return Experiment(name="toy", rows=tuple(Row(str(k), {"k": k}) for k in (1, 2, 3)),
                           run_one=partial(_toy_run, quick, dof), runs=3,
                           config={"quick": quick, "dof": dof}, groups={"odd": ("1", "3")},
@@ -206,7 +207,7 @@ def test_experiment_repeats_from_its_config_json(toy, tmp_path, capsys):
     assert "warning" not in capsys.readouterr().err
     assert _results(again) == _results(first)
     cfg = json.loads((again / "config.json").read_text())
-    assert cfg["options"]["quick"] is True and cfg["options"]["dof"] == 8
+    assert cfg["options"]["quick"] is True and cfg["options"]["body"] == 8
     assert cfg["selection"] == {"requested": ["odd"], "rows": ["1", "3"]} and cfg["runs"] == 2
     assert sorted(p.name for p in (first / "runs").iterdir()) == \
         sorted(p.name for p in (again / "runs").iterdir())
@@ -220,7 +221,14 @@ def test_experiment_flags_override_the_config_json(toy, tmp_path):
     assert main(["experiment", "toy", "--config", str(first / "config.json"), "--rows", "2",
                  "--dof", "8", "--workers", "1", "--quiet", "--out", str(other)]) == 0
     cfg = json.loads((other / "config.json").read_text())
-    assert cfg["options"]["quick"] is True and cfg["options"]["dof"] == 8  # file + flag
+    assert cfg["options"]["quick"] is True and cfg["options"]["body"] == 8  # file + flag
+    third = tmp_path / "third"  # a config.json of an earlier version: options.dof
+    old = json.loads((first / "config.json").read_text())
+    old["options"]["dof"] = old["options"].pop("body")
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    assert main(["experiment", "toy", "--config", str(tmp_path / "old.json"), "--body", "3d",
+                 "--workers", "1", "--quiet", "--out", str(third)]) == 0
+    assert json.loads((third / "config.json").read_text())["options"]["body"] == "3d"
     assert cfg["selection"]["rows"] == ["2"] and cfg["runs"] == 2
 
 

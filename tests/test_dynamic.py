@@ -76,7 +76,7 @@ def test_perturbed_test_plant_changes_every_copy():
     from skinny_mj.plant.perturb import perturb
     from skinny_mj.trajectories import get
 
-    plant = BatchPlant(4, "cartesian", get("ymca", 4), n_runs=2, actuation="torque")
+    plant = BatchPlant("2d-torque", "cartesian", get("ymca", 4), n_runs=2)
     names = [mujoco.mj_id2name(plant.model, mujoco.mjtObj.mjOBJ_BODY, i)
              for i in range(plant.model.nbody)]
     before = plant.model.body_mass.copy()

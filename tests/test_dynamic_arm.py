@@ -145,10 +145,11 @@ def test_the_batch_arm_state_mass_matrix_is_each_robots_block_of_mj_fullm(dof):
     import mujoco
 
     from skinny_mj.plant.adapters import BatchPlant
+    from skinny_mj.plant.body import by_dof
     from skinny_mj.plant.dynamics import BatchArmState
     from skinny_mj.trajectories import get
 
-    plant = BatchPlant(dof, "cartesian", get("ymca", dof), n_runs=3, actuation="torque")
+    plant = BatchPlant(by_dof(dof, "torque"), "cartesian", get("ymca", dof), n_runs=3)
     state = BatchArmState(plant)
     m, d, n1 = plant.model, plant.data, plant.model.nv // 3
     rng = np.random.default_rng(0)

@@ -44,7 +44,7 @@ def test_arm_state_matches_the_one_robot_dynamics():
     from skinny_mj.plant.dynamics import BatchArmState
 
     traj = get("ymca", 8)
-    plant = BatchPlant(8, "joint", traj, n_runs=2, actuation="torque", sensor_noise=0.0)
+    plant = BatchPlant("3d-torque", "joint", traj, n_runs=2, sensor_noise=0.0)
     plant.reset()
     plant.step(np.full((2, 8), 0.3))
     state = BatchArmState(plant, gravity=True)(plant.true_signals())
@@ -76,8 +76,7 @@ def test_a_perturbed_plant_is_controlled_with_the_nominal_model():
     from skinny_mj.plant.adapters import BatchPlant
     from skinny_mj.plant.dynamics import BatchArmState
 
-    plant = BatchPlant(4, "joint", get("ymca", 4), n_runs=2, actuation="torque",
-                       sensor_noise=0.0)
+    plant = BatchPlant("2d-torque", "joint", get("ymca", 4), n_runs=2, sensor_noise=0.0)
     plant.reset()
     plant.step(np.full((2, 4), 0.4))
     own, nominal = BatchArmState(plant)(plant.true_signals()), \

@@ -41,7 +41,7 @@ def test_torque_general_babbling_is_within_the_torque_limits(dof):
     from skinny_mj.trajectories.library import load_movement
 
     fields = preset_fields("general", "torque", dof=dof)
-    assert fields["plant.dof"] == dof  # each body its own preset
+    assert fields["plant.body"] == {4: "2d-torque", 8: "3d-torque"}[dof]  # each its own
     traj, _ = load_movement(fields["movement.trajectory"], dof)
     assert bool(feasibility(dof, traj)["feasible"])
     full_speed, _ = load_movement("md_02.amc", dof)  # the shipped clip is not, at full speed

@@ -17,7 +17,6 @@ from skinny_mj.plant.model import (
     TORQUE_ARMATURE,
     TORQUE_ARMATURE_3D_SHOULDER,
     load_model,
-    xml_path,
 )
 from skinny_mj.recording import recording_entities
 from skinny_mj.trajectories import get
@@ -26,17 +25,18 @@ TORQUE_ROLES = ("commanded", "applied", "gravity", "limit_upper", "limit_lower")
 
 
 def test_armature_sits_on_the_3d_shoulder_hinges_only():
-    m3 = load_model(8, "torque")
-    for name in body.dof_names(8):
+    m3 = load_model("3d-torque")
+    for name in body.body_of(8).dof_names:
         want = TORQUE_ARMATURE_3D_SHOULDER if "shoulder" in name else TORQUE_ARMATURE
         assert m3.dof_armature[m3.joint(name).dofadr[0]] == want
     assert TORQUE_ARMATURE == 0.0 and TORQUE_ARMATURE_3D_SHOULDER > 0
-    np.testing.assert_array_equal(load_model(4, "torque").dof_armature, 0.0)
+    np.testing.assert_array_equal(load_model("2d-torque").dof_armature, 0.0)
     for dof in (4, 8):  # the velocity servo is the XML as it is
         servo = load_model(dof)
         np.testing.assert_array_equal(servo.dof_armature, 0.0)
         assert servo.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-        assert servo.opt.timestep == mujoco.MjModel.from_xml_path(str(xml_path(dof))).opt.timestep
+        path = body.body_of(dof).path()
+        assert servo.opt.timestep == mujoco.MjModel.from_xml_path(str(path)).opt.timestep
 
 
 def _bang_bang(model: mujoco.MjModel, seed: int, seconds: float) -> str | None:
@@ -63,11 +63,11 @@ def test_saturated_torques_diverged_without_the_armature_and_stay_clean_with_it(
     """Seeds 2 and 8 blew up within 0.3 s on the model as it was (armature 0, MuJoCo's
     default joint limits, which let flexion pass toward 90 deg): the shoulder's singular
     inertia there; with the armature, 1 s is clean."""
-    bare = load_model(8, "torque")
+    bare = load_model("3d-torque")
     bare.dof_armature[:] = 0.0
     bare.jnt_solref[:], bare.jnt_solimp[:] = (0.02, 1.0), (0.9, 0.95, 0.001, 0.5, 2.0)
     assert _bang_bang(bare, seed, 1.0) in ("mjWARN_BADQACC", "mjWARN_BADQVEL", "mjWARN_BADQPOS")
-    assert _bang_bang(load_model(8, "torque"), seed, 1.0) is None
+    assert _bang_bang(load_model("3d-torque"), seed, 1.0) is None
 
 
 def test_each_plant_has_its_own_read_only_full_scale():
@@ -124,7 +124,7 @@ def test_skinny_test_on_a_torque_model_records_the_torques(tmp_path):
     assert torque["within_limits"] and torque["warnings"] == 0
     rrd = tested / "run.rrd"
     entities = set(recording_entities(rrd))
-    names = body.dof_names(4)
+    names = body.body_of(4).dof_names
     assert {f"/torques/{n}/{r}" for n in names for r in TORQUE_ROLES} <= entities
     applied = read_recording_series(rrd, "/torques/right_elbow_flexion/applied")
     command = read_recording_series(rrd, "/skinny/right/elbow_flexion/command")
@@ -164,13 +164,13 @@ def _drive_into_limit(model: mujoco.MjModel, joint: int, sign: float) -> tuple[f
 
 @pytest.mark.parametrize("dof", [4, 8])
 def test_a_saturated_joint_stays_near_its_limit(dof):
-    twin = load_model(dof, "torque")
+    twin = load_model(body.body_of(dof).twin("torque"))
     runs = [_drive_into_limit(twin, j, s) for j in range(twin.njnt) for s in (-1.0, 1.0)]
     assert max(w for w, _ in runs) <= LIMIT_PASS_RAD
     assert max(r for _, r in runs) <= LIMIT_REST_RAD
     # the same drives with MuJoCo's default limits (the twin's before) pass them by
     # 0.5-0.6 rad: the drives are a real test of the limit
-    soft = load_model(dof, "torque")
+    soft = load_model(body.body_of(dof).twin("torque"))
     soft.jnt_solref[:], soft.jnt_solimp[:] = (0.02, 1.0), (0.9, 0.95, 0.001, 0.5, 2.0)
     assert max(_drive_into_limit(soft, j, s)[0] for j in range(soft.njnt)
                for s in (-1.0, 1.0)) > 3 * LIMIT_PASS_RAD

@@ -20,12 +20,13 @@ from skinny_mj.plant.model import (
 )
 
 G = 9.81
-L_UPPER = body.UPPER_ARM_LENGTH_M
+L_UPPER = body.body_of("2d").lengths_m()[0]
 
 
 @pytest.fixture(scope="module", params=[4, 8])
 def dyn(request):
-    return Dynamics(load_model(request.param, "torque"))
+    torque = body.body_of(request.param).twin("torque")
+    return Dynamics(load_model(torque), torque)
 
 
 def _two_link():
@@ -39,7 +40,7 @@ def _two_link():
 def _pose(dof, abduction, elbow):
     """Both arms at the same abduction and elbow angles (rad), other DOFs 0."""
     q = np.zeros(dof)
-    names = body.dof_names(dof)
+    names = body.body_of(dof).dof_names
     for side in body.SIDES:
         q[names.index(f"{side}_shoulder_abduction")] = abduction
         q[names.index(f"{side}_elbow_flexion")] = elbow
@@ -47,7 +48,7 @@ def _pose(dof, abduction, elbow):
 
 
 def _abd_elbow(dof):
-    names = body.dof_names(dof)
+    names = body.body_of(dof).dof_names
     return [names.index(f"{s}_{j}") for s in body.SIDES
             for j in ("shoulder_abduction", "elbow_flexion")]
 
@@ -101,7 +102,7 @@ def test_inverse_dynamics_inverts_the_forward_dynamics(dyn):
     model = dyn.model
     data = mujoco.MjData(model)
     lay, rng = dyn.layout, np.random.default_rng(1)
-    lo, hi = body.joint_ranges(dyn.n_dof).T
+    lo, hi = body.body_of(dyn.n_dof).joint_ranges().T
     for _ in range(10):
         q, qd = rng.uniform(lo + 0.1, hi - 0.1), rng.uniform(-2, 2, dyn.n_dof)
         qdd = rng.uniform(-5, 5, dyn.n_dof)
@@ -114,13 +115,13 @@ def test_inverse_dynamics_inverts_the_forward_dynamics(dyn):
         np.testing.assert_allclose(data.qacc[lay.dof_adr], qdd, rtol=0, atol=1e-9)
     np.testing.assert_allclose(dyn.torque_limits_nm(),
                                [TORQUE_GEAR_NM[n.split("_", 1)[1]]
-                                for n in body.dof_names(dyn.n_dof)])
+                                for n in body.body_of(dyn.n_dof).dof_names])
 
 
 def _minimum_jerk(dof, seconds, dt, seed):
     """A movement from rest to rest between two random poses inside the ranges."""
     rng = np.random.default_rng(seed)
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     q0, q1 = rng.uniform(lo + 0.3, hi - 0.3), rng.uniform(lo + 0.3, hi - 0.3)
     s = np.linspace(0.0, 1.0, int(round(seconds / dt)) + 1)[:, None]
     return q0 + (q1 - q0) * (10 * s**3 - 15 * s**4 + 6 * s**5)
@@ -147,8 +148,8 @@ def test_true_torques_replay_the_movement_open_loop(dyn, seed):
     angles = _minimum_jerk(dof, 0.5, 0.02, seed)
     u = dyn.normalize(dyn.trajectory_torques_nm(angles, 0.02))
     assert np.all(np.abs(u) < 1.0)
-    plant = BatchPlant(dof, "joint", _Movement(angles, dof), n_runs=1, sensor_noise=0.0,
-                       actuation="torque")
+    plant = BatchPlant(body.body_of(dof).twin("torque"), "joint", _Movement(angles, dof),
+                       n_runs=1, sensor_noise=0.0)
     plant.set_joint_angles(angles[:1])
     worst = 0.0
     for k, command in enumerate(u):

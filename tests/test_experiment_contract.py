@@ -251,8 +251,8 @@ def test_leftover_temp_files_of_atomic_writes_are_ignored(tmp_path):
 def _fake_module(calls: list, rows: tuple[Row, ...]) -> types.ModuleType:
     module = types.ModuleType("fake_paper", "A fake paper.")
 
-    def build(*, quick, movement, asf, dof, signals):
-        calls.append({"quick": quick, "movement": movement, "asf": asf, "dof": dof,
+    def build(*, quick, movement, asf, body, signals):
+        calls.append({"quick": quick, "movement": movement, "asf": asf, "body": body,
                       "signals": signals})
         return dataclasses.replace(fake(rows=rows, groups={"both": ("ok", rows[1].row_id)}),
                                    report=lambda results, out: f"- {results['n_error']} errored")
@@ -277,7 +277,7 @@ def test_cli_exits_1_when_a_run_errored_and_still_writes_everything(tmp_path, mo
     code = _cli(monkeypatch, module, "--out", str(out), "--movement", "ym", "--dof", "8",
                 "--signals", "joint", "--rows", "both")
     assert code == 1
-    assert calls == [{"quick": False, "movement": "ym", "asf": None, "dof": 8,
+    assert calls == [{"quick": False, "movement": "ym", "asf": None, "body": 8,
                       "signals": "joint"}]
     printed = capsys.readouterr().out
     assert "3 run(s) errored (bugs, not data): see" in printed and "runs/*.json" in printed
@@ -296,10 +296,20 @@ def test_cli_exits_0_with_failed_runs_and_2_on_an_unknown_row(tmp_path, monkeypa
     assert "'nope'" in capsys.readouterr().err
 
 
-def test_cli_parser_knows_dof_and_signals():
+def test_cli_parser_knows_body_dof_and_signals():
+    from skinny_mj.cli.config_flags import chosen_body
     from skinny_mj.cli.parser import build_parser
 
     args = build_parser().parse_args(["experiment", "paper-e"])
-    assert isinstance(args, argparse.Namespace) and args.dof is None and args.signals is None
-    with pytest.raises(SystemExit):
-        build_parser().parse_args(["experiment", "paper-e", "--dof", "5"])
+    assert isinstance(args, argparse.Namespace) and args.signals is None
+    assert chosen_body(args, None) is None  # the study's own
+    for argv, body in ((["--body", "3d"], "3d"), (["--dof", "8"], 8),
+                       (["--dof", "4", "--body", "2d"], "2d")):
+        assert chosen_body(build_parser().parse_args(["experiment", "paper-e", *argv]),
+                           None) == body
+    for bad in (["--dof", "5"], ["--body", "4d"]):
+        with pytest.raises(SystemExit):
+            build_parser().parse_args(["experiment", "paper-e", *bad])
+    with pytest.raises(SkinnyInputError, match="--dof 8 is the 3d body and --body 2d another"):
+        chosen_body(build_parser().parse_args(["experiment", "paper-e", "--dof", "8",
+                                               "--body", "2d"]), None)

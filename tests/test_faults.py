@@ -107,11 +107,11 @@ def test_a_failing_gl_context_is_one_line_exit_1(tmp_path, monkeypatch, capsys):
 
 
 def test_a_missing_model_folder_is_an_environment_error(tmp_path, monkeypatch, capsys):
-    from skinny_mj.plant.model import xml_path
+    from skinny_mj.plant.body import body_of
 
     monkeypatch.setenv("SKINNY_MJ_MODELS", str(tmp_path / "nowhere"))
     with pytest.raises(SkinnyEnvironmentError, match="SKINNY_MJ_MODELS"):
-        xml_path(4)
+        body_of("2d").path()
 
 
 def _dies_on(seed_to_kill: int | None):
@@ -190,14 +190,13 @@ def test_singular_readout_solves_give_finite_or_nan_never_raise():
     assert np.all(np.isnan(pinv_solve(np.full((1, 50, 21), np.nan), targets)))
 
 
-def test_an_unstable_torque_plant_counts_warnings_and_does_not_crash(monkeypatch):
-    import skinny_mj.plant.model as model
+def test_an_unstable_torque_plant_counts_warnings_and_does_not_crash():
     from skinny_mj.plant.adapters import BatchPlant
     from skinny_mj.trajectories import get
 
-    monkeypatch.setattr(model, "TORQUE_GEAR_NM",
-                        {k: v * 1e12 for k, v in model.TORQUE_GEAR_NM.items()})
-    plant = BatchPlant(4, "joint", get("ymca", 4), n_runs=2, seeds=[1, 2], actuation="torque")
+    plant = BatchPlant("2d-torque", "joint", get("ymca", 4), n_runs=2, seeds=[1, 2])
+    plant.model.actuator_gear[:, 0] *= 1e12  # motors no arm survives
+    plant.model.jnt_actfrcrange *= 1e12
     plant.reset()
     for _ in range(20):
         sensed = plant.step(np.ones((2, 4)))

@@ -47,7 +47,7 @@ BAD_TOKENS = ["nan", "NaN", "inf", "-inf", "1e309", "-1e309", "1e300", "-1e300",
 def _valid(traj: Trajectory, dof: int | None = None) -> None:
     """What a loader that did not raise must give: a well-formed trajectory."""
     assert isinstance(traj, Trajectory)
-    assert traj.angles.ndim == 2 and len(traj) >= 1 and traj.dof in body.BODIES
+    assert traj.angles.ndim == 2 and len(traj) >= 1 and traj.dof == traj.skinny.dof
     assert np.all(np.isfinite(traj.angles)) and math.isfinite(traj.dt) and traj.dt > 0
     if dof is not None:
         assert traj.dof == dof
@@ -132,7 +132,7 @@ def _npz_bytes(**arrays) -> bytes:
 
 VALID_NPZ = _npz_bytes(angles=ymca(4).angles[:10], meta=np.array(json.dumps(
     {"format_version": 1, "name": "fuzz", "dt": 0.02, "dof": 4,
-     "dof_names": list(body.dof_names(4))})))
+     "dof_names": list(body.body_of(4).dof_names)})))
 _DTYPES = ["float64", "float32", "float16", "int64", "int8", "uint8", "bool", "complex128",
            "U4", "S4", "datetime64[s]"]
 

@@ -25,7 +25,7 @@ def test_babble_is_seeded_inside_the_ranges_and_at_human_speeds(dof):
     assert np.array_equal(a.angles, babble(dof, seed=3, duration_s=12.0, v_min=1.0,
                                            v_max=6.0).angles)
     assert not np.array_equal(a.angles, babble(dof, seed=4, duration_s=12.0).angles)
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     assert np.all(a.angles >= lo + LIMIT_MARGIN_RAD - 1e-12)
     assert np.all(a.angles <= hi - LIMIT_MARGIN_RAD + 1e-12)
     speed = np.abs(a.velocities())

@@ -16,7 +16,7 @@ from skinny_mj.trajectories.babble import HOLD_S, LIMIT_MARGIN_RAD, babble
 
 
 def _near_limit(angles: np.ndarray, dof: int, tol_rad: float) -> np.ndarray:
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     return (angles - lo < tol_rad) | (hi - angles < tol_rad)
 
 
@@ -26,7 +26,7 @@ def test_babble_limits_and_holds_reach_the_limits_and_rest(dof):
     assert np.array_equal(plain.angles, babble(dof, seed=2, duration_s=30.0, limits=0.0,
                                                holds=0.0).angles)
     a = babble(dof, seed=2, duration_s=30.0, limits=0.5, holds=0.2)
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     assert np.all(a.angles >= lo + LIMIT_MARGIN_RAD - 1e-12)
     assert np.all(a.angles <= hi - LIMIT_MARGIN_RAD + 1e-12)
     tol = np.radians(3.0)
@@ -65,7 +65,8 @@ def test_general_preset_per_body_and_signal(dof, signals):
 
     fields = preset_fields("general", dof=dof, signals=signals)
     # the signals asked for, or a refinement of them (cartesian -> cartesian-elbow)
-    assert fields["plant.dof"] == dof and fields["plant.signals"] in (signals, f"{signals}-elbow")
+    assert body.body_of(fields["plant.body"]).dof == dof
+    assert fields["plant.signals"] in (signals, f"{signals}-elbow")
     cfg = _train_config(["train", "--preset", "general", "--dof", str(dof),
                          "--signals", signals])
     assert cfg == TrainConfig().override(fields)
@@ -81,7 +82,7 @@ def test_general_preset_defaults_to_2d_joint_and_the_torque_one_is_apart():
     torque = preset_fields("general", "torque", dof=4, signals="cartesian")
     assert torque == preset_fields("general", "torque") and torque["actuation"] == "torque"
     torque3 = preset_fields("general", "torque", dof=8, signals="cartesian")  # one per body
-    assert (torque3["plant.dof"], torque3["plant.signals"]) == (8, "joint")
+    assert (torque3["plant.body"], torque3["plant.signals"]) == ("3d-torque", "joint")
     with pytest.raises(SkinnyInputError):
         _train_config(["train", "--preset", "general", "plant.dof=x"])
 

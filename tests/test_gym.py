@@ -20,10 +20,11 @@ from skinny_mj.errors import SkinnyInputError  # noqa: E402
 from skinny_mj.gym import IDS  # noqa: E402
 from skinny_mj.gym.env import SkinnyEnv  # noqa: E402
 from skinny_mj.gym.vector import SkinnyVectorEnv  # noqa: E402
+from skinny_mj.plant.body import body_of  # noqa: E402
 from skinny_mj.trajectories import get  # noqa: E402
 
-VELOCITY_IDS = [i for i, kw in IDS.items() if kw["actuation"] == "velocity"]
-TORQUE_IDS = [i for i, kw in IDS.items() if kw["actuation"] == "torque"]
+VELOCITY_IDS = [i for i, kw in IDS.items() if body_of(kw["body"]).actuation == "velocity"]
+TORQUE_IDS = [i for i, kw in IDS.items() if body_of(kw["body"]).actuation == "torque"]
 # The only warnings check_env may give: the sensed signals carry Gaussian noise, so
 # their Box is unbounded (as Gymnasium's own MuJoCo envs' observations are).
 UNBOUNDED = ("observation space minimum value is -infinity",
@@ -44,7 +45,7 @@ def test_ids_are_registered_with_both_entry_points():
     for env_id, kwargs in IDS.items():
         spec = gymnasium.spec(env_id)
         assert spec.kwargs == {"env_id": env_id, **kwargs}
-        assert spec.max_episode_steps == len(get("ymca", kwargs["dof"])) - 1  # YMCA's
+        assert spec.max_episode_steps == len(get("ymca", kwargs["body"])) - 1  # YMCA's
         assert spec.entry_point == "skinny_mj.gym.env:SkinnyEnv"
         assert spec.vector_entry_point == "skinny_mj.gym.vector:SkinnyVectorEnv"
     skinny_mj.gym.register()  # a second registration is a no-op, not a warning
@@ -58,7 +59,7 @@ def test_check_env_passes(env_id):
         check_env(env.unwrapped, skip_render_check=True)  # the suite has no OpenGL
     messages = [str(w.message) for w in caught]
     assert all(any(u in m for u in UNBOUNDED) for m in messages), messages
-    dof = IDS[env_id]["dof"]
+    dof = body_of(IDS[env_id]["body"]).dof
     assert env.action_space.shape == (dof,)
     assert env.observation_space.shape == (3 * env.unwrapped.setup.desired.shape[1],)
 
@@ -103,7 +104,7 @@ def _episode(env, seed, actions):
 @pytest.mark.parametrize("env_id", ["SkinnyMJ/Skinny2D-v0", "SkinnyMJ/Skinny3D-Torque-v0"])
 def test_reset_seed_is_reproducible_and_means_the_task_seed(env_id):
     env = gymnasium.make(env_id)
-    dof = IDS[env_id]["dof"]
+    dof = body_of(IDS[env_id]["body"]).dof
     actions = np.random.default_rng(0).uniform(-0.3, 0.3, (25, dof))
     a, b, c = (_episode(env, s, actions) for s in (7, 7, 8))
     for x, y, z in zip(a, b, c, strict=True):
@@ -112,7 +113,7 @@ def test_reset_seed_is_reproducible_and_means_the_task_seed(env_id):
         assert np.abs(x[:n] - z[:n]).max() > 0  # other seed, other sensor noise
         np.testing.assert_array_equal(x[n:3 * n], z[n:3 * n])  # same movement
     # reset(seed=s) is skinny_mj.load(..., seed=s); reset() continues the stream
-    dm = skinny_mj.load(dof, actuation=IDS[env_id]["actuation"], seed=7)
+    dm = skinny_mj.load(IDS[env_id]["body"], seed=7)
     for episode in range(2):
         obs, _ = env.reset(seed=7 if episode == 0 else None)
         ts = dm.reset()
@@ -204,7 +205,7 @@ def test_torque_vector_env_equals_single_envs(env_id):
 
 
 def test_vector_env_seeding_and_refusals():
-    envs = SkinnyVectorEnv(3, dof=4, trajectory="y")
+    envs = SkinnyVectorEnv(3, body="2d", trajectory="y")
     actions = np.random.default_rng(1).uniform(-1, 1, (10, 3, 4))
 
     def run(seed):
@@ -219,7 +220,7 @@ def test_vector_env_seeding_and_refusals():
     np.testing.assert_array_equal(other[:, :2], first[:, :2])
     assert np.abs(other[:, 2] - first[:, 2]).max() > 0
     # no seed: the constructor's seed, then the streams go on
-    fresh = SkinnyVectorEnv(3, dof=4, trajectory="y", seed=3)
+    fresh = SkinnyVectorEnv(3, body="2d", trajectory="y", seed=3)
     np.testing.assert_array_equal(fresh.reset()[0], first[0])
     assert not np.array_equal(fresh.reset()[0], first[0])
     with pytest.raises(ValueError):
@@ -243,7 +244,7 @@ def test_a_diverging_robot_raises_in_the_vector_env_as_in_a_single_env():
         single.step(np.zeros(4))
     with pytest.raises(RuntimeError):
         single.step(np.zeros(4))
-    envs = SkinnyVectorEnv(3, dof=4)
+    envs = SkinnyVectorEnv(3, body="2d")
     envs.reset(seed=0)
     envs.step(np.zeros((3, 4)))
     envs.plant.data.qvel[envs.plant.model.nv // 3] = 1e11  # robot 1 of 3
@@ -256,9 +257,11 @@ def test_a_diverging_robot_raises_in_the_vector_env_as_in_a_single_env():
 
 
 @pytest.mark.parametrize("env_id,kwargs,says", [
-    ("SkinnyMJ/Skinny2D-v0", {"dof": 8}, "has dof=4, got dof=8: use SkinnyMJ/Skinny3D-v0"),
-    ("SkinnyMJ/Skinny3D-v0", {"dof": 4}, "has dof=8, got dof=4: use SkinnyMJ/Skinny2D-v0"),
-    ("SkinnyMJ/Skinny2D-v0", {"actuation": "torque"}, "use SkinnyMJ/Skinny2D-Torque-v0"),
+    ("SkinnyMJ/Skinny2D-v0", {"body": "3d"},
+     "has body='2d', got body='3d': use SkinnyMJ/Skinny3D-v0"),
+    ("SkinnyMJ/Skinny3D-v0", {"body": 4}, "has body='3d', got body='2d': use SkinnyMJ/Skinny2D-v0"),
+    ("SkinnyMJ/Skinny2D-v0", {"body": "2d-torque"}, "use SkinnyMJ/Skinny2D-Torque-v0"),
+    ("SkinnyMJ/Skinny2D-v0", {"dof": 8}, "unexpected keyword argument 'dof'; the task takes body"),
     ("SkinnyMJ/Skinny2D-v0", {"trajectory": "nope"}, "unknown movement 'nope'"),
     ("SkinnyMJ/Skinny2D-v0", {"trajectory": 3}, "trajectory must be a movement name"),
 ])

@@ -11,7 +11,7 @@ import sys
 
 _PROBE = """
 import json, os, skinny_mj
-env = skinny_mj.load(dof=4)
+env = skinny_mj.load(body="2d")
 env.reset(); env.step([0.0] * 4)
 from dm_control import _render
 print(json.dumps({"backend": _render.BACKEND, "gl": os.environ.get("MUJOCO_GL")}))

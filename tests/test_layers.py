@@ -35,8 +35,10 @@ MAPPED = {folder: name for name, folder in tomllib.loads((ROOT / "pyproject.toml
     "tool"]["setuptools"]["package-dir"].items()}
 CONTROLLERS = ("skinny_mj.controllers",)
 EXPERIMENTS = ("skinny_mj.experiments",)
-# The body as data (its joints, ranges, signals; no MuJoCo): what a movement is made for.
-BODY = ("skinny_mj.plant.body",)
+# The bodies by name and their arms as numbers (joints, ranges, signals, kinematics; read
+# from each body's MJCF through skinny_mj.mjcf, never importing MuJoCo themselves): what a
+# movement is made for.
+BODY = ("skinny_mj.plant.body", "skinny_mj.plant.kinematics")
 # Its MuJoCo model, the dm_control task, the plant adapters, the analytic ideal
 # controller, changes of the body, pictures.
 PLANT = ("skinny_mj.plant",)
@@ -55,9 +57,10 @@ ENGINE = ("skinny_mj.engine",)
 # from its files with --config), help texts, bench, viewer, the commands' memory checks.
 COMMAND_LINE = ("skinny_mj.cli",)
 # Shared by every part: errors, other packages' entry points (plugins), io, threads,
-# progress, preflight (its memory check too), plots, the MJCF.
+# progress, preflight (its memory check too), plots, the MJCF and its reader.
 SHARED = ("skinny_mj.errors", "skinny_mj.plugins", "skinny_mj.io", "skinny_mj.threads",
-          "skinny_mj.progress", "skinny_mj.preflight", "skinny_mj.plots", "skinny_mj.models")
+          "skinny_mj.progress", "skinny_mj.preflight", "skinny_mj.plots", "skinny_mj.models",
+          "skinny_mj.mjcf")
 # rerun recordings of the body and their blueprint.
 RECORDING = ("skinny_mj.recording", "skinny_mj.recording_layout")
 # The package itself (this module only, not its sub-modules): skinny_mj.load, with the
@@ -437,12 +440,13 @@ def test_every_package_folder_is_listed_in_pyproject():
 
 
 def test_models_and_sample_clips_are_package_data():
-    import skinny_mj.plant.model as model
+    import skinny_mj.plant.body as body
     from skinny_mj.trajectories import SAMPLE_ASF, SAMPLE_CLIPS, load_movement, sample_clip
 
     assert _setuptools()["package-dir"]["skinny_mj.models"] == "models"
-    if not os.environ.get(model.MODELS_ENV_VAR):
-        assert (model.models_dir() / "scene_2d.xml").is_file()
+    if not os.environ.get(body.MODELS_ENV_VAR):
+        for name in body.BODIES:  # every shipped body's files
+            assert body.body_of(name).path().is_file()
     assert SAMPLE_ASF.is_file() and (SAMPLE_ASF.parent / "README.md").is_file()
     for name in SAMPLE_CLIPS:
         assert sample_clip(name) == sample_clip(f"{name}.amc") and sample_clip(name).is_file()

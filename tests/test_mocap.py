@@ -21,7 +21,7 @@ DOFS = (4, 8)
 
 
 def _random_poses(dof, n, rng):
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     q = rng.uniform(lo + 0.1, hi - 0.1, size=(n, dof))
     if dof == 8:  # the rotation is only observable with a bent elbow
         q[:, [3, 7]] = rng.uniform(0.4, 2.5, size=(n, 2))
@@ -30,7 +30,7 @@ def _random_poses(dof, n, rng):
 
 def _clip_from_poses(q, dof, rot, shift):
     """An ArmClip of Skinny itself in pose q (T, dof), seen in a rotated/shifted world."""
-    pts = body.arm_points(q, dof)  # (T, 2, 3, 3) Skinny frame
+    pts = body.body_of(dof).arm_points(q)  # (T, 2, 3, 3) Skinny frame
     root = np.broadcast_to([0.0, 0.0, 0.9], (len(q), 3))
 
     def world(p):
@@ -46,7 +46,7 @@ def _clip_from_poses(q, dof, rot, shift):
 def test_solve_angles_inverts_body_kinematics(dof):
     rng = np.random.default_rng(1)
     q = _random_poses(dof, 100, rng)
-    seg = body.segment_vectors(q, dof)
+    seg = body.body_of(dof).segment_vectors(q)
     unit = seg / np.linalg.norm(seg, axis=-1, keepdims=True)
     for t in range(len(q)):  # frame by frame: no help from temporal continuity
         got, filled = solve_angles(unit[t : t + 1, :, 0], unit[t : t + 1, :, 1], dof)
@@ -73,7 +73,7 @@ def test_retarget_is_invariant_to_world_pose_and_segment_lengths(dof):
 
 def test_clip_continuous_ramps_instead_of_jumping():
     # right abduction goes down, across the body, round and back in from the top
-    lo, hi = body.joint_ranges(4)[0]
+    lo, hi = body.body_of(4).joint_ranges()[0]
     path = np.concatenate([np.linspace(0.5, -0.5, 20), np.linspace(-0.5, -3.5, 20)])
     q = np.zeros((40, 4))
     q[:, 0], q[:, 1:] = path, 0.3
@@ -246,7 +246,7 @@ def test_cmu_clips_retarget(clip_name, frames, dof):
     traj, report = load_movement(CMU / f"{clip_name}.amc", dof, asf=CMU / "moderndance.asf")
     assert report.source_frames == frames and report.source_fps == 120.0
     assert len(traj) == int((frames - 1) / 120 / 0.02 + 1e-9) + 1
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     assert np.all(np.isfinite(traj.angles))
     assert np.all((traj.angles >= lo) & (traj.angles <= hi))
     # plausible: a dancer is mostly inside Skinny's ranges; excess is bounded by the wrap

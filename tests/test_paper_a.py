@@ -182,6 +182,6 @@ def test_full_config_matches_the_paper():
 
 
 def test_dof_8_builds_a_3d_sweep():
-    exp = paper_a.STUDY.build(quick=True, dof=8, signals="cartesian")
+    exp = paper_a.STUDY.build(quick=True, body=8, signals="cartesian")
     assert {(exp.config.config(r.row_id).plant.dof, exp.config.config(r.row_id).plant.signals)
             for r in exp.rows} == {(8, "cartesian")}

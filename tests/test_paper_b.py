@@ -12,7 +12,7 @@ from skinny_mj.controllers.plant import Plant
 from skinny_mj.experiments import paper_b
 
 from skinny_mj.plant import bimanual as bm
-from skinny_mj.plant.body import position_signals
+from skinny_mj.plant.body import body_of
 from skinny_mj.plant.ideal import max_speeds
 from skinny_mj.trajectories import get
 from skinny_mj.trajectories import patterns as pt
@@ -66,7 +66,7 @@ def test_plant_forces_the_leader_and_controls_only_the_lagging_arm():
     assert isinstance(plant, Plant)
     assert (plant.n_dof, plant.n_signals) == (2, 4)
     s0 = plant.reset()
-    np.testing.assert_allclose(s0, position_signals(q[0], 4, "joint")[None].repeat(2, 0),
+    np.testing.assert_allclose(s0, body_of("2d").position_signals(q[0], "joint")[None].repeat(2, 0),
                                atol=2e-3)
     jac = plant.command_jacobian()
     assert jac.shape == (2, 4, 2)
@@ -95,7 +95,7 @@ def test_3d_plant_controls_the_lagging_arms_four_dofs():
 def test_esn_sees_only_the_current_state_of_both_arms():
     q, plant = _plant()
     esn = ESN(ESNConfig(4, 2, 20, 0.5), seed=0)
-    desired = position_signals(q, 4, "joint")
+    desired = body_of("2d").position_signals(q, "joint")
     ro = fel.rollout(esn, plant, desired, 1.0, fel.Loop(inputs="sensed"), noise=False)
     # input block of the extended state [x; u; 1] is the sensed state s(t)
     np.testing.assert_allclose(ro.states[0, :, 20:24], ro.sensed[0, :-1])

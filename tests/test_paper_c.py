@@ -101,7 +101,7 @@ def test_rows_and_the_movement_option():
     assert clip.config("ymca").movement.asf is None
     with pytest.raises(SkinnyInputError, match="nope"):
         run_sweep(full, None, rows=["nope"], progress=False)
-    eight = plan(paper_c.STUDY, quick=True, dof=8, signals="cartesian").config("ymca")
+    eight = plan(paper_c.STUDY, quick=True, body=8, signals="cartesian").config("ymca")
     assert (eight.plant.dof, eight.plant.signals) == (8, "cartesian")
 
 

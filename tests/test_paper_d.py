@@ -54,7 +54,7 @@ def test_build_options():
     assert exp.runs == 2 and fel.method.epochs == 2 and tt.method.cycles == 3
     assert tt.movement.trajectory == "y" and len(exp.rows) == 5
     assert exp.name == paper_d.STUDY.build().name == "paper-d"  # the movement is in the config
-    two_d = paper_d.STUDY.build(dof=4, signals="joint").config.config("1")
+    two_d = paper_d.STUDY.build(body=4, signals="joint").config.config("1")
     assert (two_d.plant.dof, two_d.plant.signals) == (4, "joint")
     assert set(paper_d.COLUMNS) <= set(exp.table_columns)
 

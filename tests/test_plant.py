@@ -22,7 +22,7 @@ class StandIn:
 
 def stand_in(dof: int, n: int = 30) -> StandIn:
     t = np.linspace(0.0, 1.0, n)[:, None]
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     return StandIn(lo + (hi - lo) * (0.5 + 0.4 * np.sin(2 * np.pi * t + np.arange(dof))), dof)
 
 
@@ -33,9 +33,9 @@ def stand_in(dof: int, n: int = 30) -> StandIn:
 def test_batch_plant_equals_env_plants(dof, signals, actuation):
     traj = stand_in(dof)
     seeds = [11, 12, 13]
-    batch = BatchPlant(dof, signals, traj, n_runs=3, seeds=seeds, sensor_noise=0.01,
-                       actuation=actuation)
-    envs = [EnvPlant(load(dof, signals, traj, actuation, 0.01, seed=s)) for s in seeds]
+    skinny = body.body_of(dof).twin(actuation)
+    batch = BatchPlant(skinny, signals, traj, n_runs=3, seeds=seeds, sensor_noise=0.01)
+    envs = [EnvPlant(load(skinny, signals, traj, 0.01, seed=s)) for s in seeds]
     assert isinstance(batch, Plant) and isinstance(envs[0], Plant)
     # Same operations, same bits. The torque twin runs into its soft joint limits, and
     # MuJoCo solves a batch model's constraints island by island but a one-robot
@@ -110,7 +110,8 @@ def test_batch_model_copies_are_the_one_robot_model(dof, actuation):
     the fast path rest on it."""
     from skinny_mj.plant.model import load_batch_model, load_model
 
-    one, batch = load_model(dof, actuation), load_batch_model(dof, 3, actuation)
+    skinny = body.body_of(dof).twin(actuation)
+    one, batch = load_model(skinny), load_batch_model(skinny, 3)
     compared = 0
     for prefix, world in (("body_", 1), ("jnt_", 0), ("dof_", 0), ("site_", 0),
                           ("actuator_", 0)):
@@ -142,7 +143,7 @@ def test_torque_copy_is_the_robot_alone_in_a_large_batch():
     traj = stand_in(8)
     rng = np.random.default_rng(3)
     commands = rng.uniform(-1.0, 1.0, (40, 8, 8))
-    plants = [BatchPlant(8, "cartesian", traj, n_runs=n, seeds=range(n), actuation="torque")
+    plants = [BatchPlant("3d-torque", "cartesian", traj, n_runs=n, seeds=range(n))
               for n in (1, 8)]
     for p in plants:
         p.reset()

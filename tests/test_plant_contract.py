@@ -40,7 +40,7 @@ SOFT_LIMIT_RAD = 0.05
 def stand_in(dof: int) -> Trajectory:
     """A smooth movement whose first pose is inside every range, off any symmetry."""
     t = np.linspace(0.0, 1.0, EPISODE + 1)[:, None]
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     return Trajectory(lo + (hi - lo) * (0.5 + 0.4 * np.sin(2 * np.pi * t + np.arange(dof))))
 
 
@@ -50,7 +50,7 @@ def _toy(dof: int, signals: str) -> Callable:
     signal_map = {"joint": "joint", "cartesian": "planar_arm"}[signals]  # its x-z analogue
 
     def make(seeds: Sequence[int], noise: float) -> Plant:
-        return ToyPlant(len(seeds), traj.angles[0], body.joint_ranges(dof),
+        return ToyPlant(len(seeds), traj.angles[0], body.body_of(dof).joint_ranges(),
                         max_speeds(traj.angles, traj.dt), traj.dt, signal_map,
                         sensor_noise_std=noise, rngs=[np.random.default_rng(s) for s in seeds])
     return make
@@ -62,7 +62,8 @@ def _env(dof: int, signals: str, actuation: str) -> Callable:
 
     def make(seeds: Sequence[int], noise: float) -> Plant:
         (seed,) = seeds
-        return EnvPlant(load(dof, signals, stand_in(dof), actuation, noise, seed=seed))
+        return EnvPlant(load(body.body_of(dof).twin(actuation), signals, stand_in(dof), noise,
+                             seed=seed))
     return make
 
 
@@ -70,8 +71,8 @@ def _batch(dof: int, signals: str, actuation: str) -> Callable:
     from skinny_mj.plant.adapters import BatchPlant
 
     def make(seeds: Sequence[int], noise: float) -> Plant:
-        return BatchPlant(dof, signals, stand_in(dof), n_runs=len(seeds), seeds=list(seeds),
-                          sensor_noise=noise, actuation=actuation)
+        return BatchPlant(body.body_of(dof).twin(actuation), signals, stand_in(dof),
+                          n_runs=len(seeds), seeds=list(seeds), sensor_noise=noise)
     return make
 
 
@@ -116,7 +117,7 @@ class Case:
 
 def _case(kind: str, make: Callable, dof: int, signals: str, n_runs: int, **kw) -> Case:
     kw.setdefault("n_dof", dof)
-    kw.setdefault("n_signals", body.n_signals(dof, signals))
+    kw.setdefault("n_signals", body.body_of(dof).n_signals(signals))
     kw.setdefault("commanded", tuple(range(dof)))
     return Case(f"{kind}-{dof}dof-{signals}", make, dof, signals, n_runs, **kw)
 
@@ -136,7 +137,7 @@ def _cases() -> list[Case]:
             _case("batch-torque", _batch(dof, sig, "torque"), dof, sig, 3, **torque, **batch),
             # the right arm leads (forced), the left arm is commanded
             _case("bimanual", _bimanual(dof, sig), dof, sig, 2, n_dof=dof // 2,
-                  commanded=tuple(range(dof // 2, dof)), mj_data=lambda p: p.body.data),
+                  commanded=tuple(range(dof // 2, dof)), mj_data=lambda p: p.whole.data),
         ]
     return cases
 
@@ -248,7 +249,7 @@ def test_saturating_commands_keep_the_physics_valid(case):
 def test_joints_stay_in_their_ranges(case):
     u = commands(case, 4 * EPISODE, amp=1.5)  # saturating: every joint meets its limits
     q = drive(case.make(_seeds(case), 0.01), u).stacked("angles")
-    lo, hi = body.joint_ranges(case.dof).T
+    lo, hi = body.body_of(case.dof).joint_ranges().T
     tol = 0.0 if case.velocity else SOFT_LIMIT_RAD
     assert np.all(q.min(axis=(0, 1)) >= lo - tol - 1e-12)
     assert np.all(q.max(axis=(0, 1)) <= hi + tol + 1e-12)

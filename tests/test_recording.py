@@ -18,19 +18,19 @@ RERUN_CLI = shutil.which("rerun")
 def _run(n_steps: int = 60, dof: int = 4, signals: str = "cartesian", seed: int = 0,
          curves: bool = True) -> dict:
     rng = np.random.default_rng(seed)
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     t = np.linspace(0.0, 1.0, n_steps)[:, None]
     desired = lo + (hi - lo) * (0.5 + 0.4 * np.sin(2 * np.pi * t * np.arange(1, dof + 1)))
     actual = np.clip(desired + 0.02 * rng.standard_normal(desired.shape), lo, hi)
-    n_sig = body.n_signals(dof, signals)
+    n_sig = body.body_of(dof).n_signals(signals)
     kw = dict(
-        dt=0.02, dof=dof, dof_names=body.dof_names(dof),
-        signal_names=body.signal_names(dof, signals),
+        dt=0.02, which=dof, dof_names=body.body_of(dof).dof_names,
+        signal_names=body.body_of(dof).signal_names(signals),
         desired_angles=desired, actual_angles=actual,
         commands=rng.uniform(-1, 1, (n_steps - 1, dof)),
-        desired_signals=body.position_signals(desired, dof, signals),
-        actual_signals=body.position_signals(actual, dof, signals),
-        sensed_signals=body.position_signals(actual, dof, signals)
+        desired_signals=body.body_of(dof).position_signals(desired, signals),
+        actual_signals=body.body_of(dof).position_signals(actual, signals),
+        sensed_signals=body.body_of(dof).position_signals(actual, signals)
         + 0.01 * rng.standard_normal((n_steps, n_sig)),
         title="unit test", metadata={"seed": seed, "position_nrmse": 0.01},
     )
@@ -44,7 +44,7 @@ def _run(n_steps: int = 60, dof: int = 4, signals: str = "cartesian", seed: int 
 def test_series_round_trip_through_rerun_reader(tmp_path, dof):
     kw = _run(dof=dof)
     path = write_recording(tmp_path / "run.rrd", **kw)
-    names = body.dof_names(dof)
+    names = body.body_of(dof).dof_names
     for i, name in enumerate(names):
         side, joint = name.split("_", 1)
         base = f"/skinny/{side}/{joint}"

@@ -197,7 +197,7 @@ def test_every_study_estimates_every_row_quick_and_full(monkeypatch):
     for name in names:
         module = registry.get(name)
         for quick in (True, False):
-            exp = module.build(quick=quick, movement=None, asf=None, dof=None, signals=None)
+            exp = module.build(quick=quick, movement=None, asf=None, body=None, signals=None)
             ests = {r.row_id: row_estimate(module, exp, r, exp.runs, cache)
                     for r in exp.rows}
             missing = [rid for rid, est in ests.items() if est is None]
@@ -325,7 +325,7 @@ def _edited_models(tmp_path: Path, edit) -> Path:
     ``skinny_2d.xml``."""
     import shutil
 
-    from skinny_mj.plant.model import models_dir
+    from skinny_mj.plant.body import models_dir
 
     folder = tmp_path / "models"
     shutil.copytree(models_dir(), folder)
@@ -348,15 +348,16 @@ def _drop_line(needle: str):
                                'class="shoulder_abduction" axis="0 0 0"', 1),
      "skinny_2d.xml:26: MJCF error: axis too small"),
     (_drop_line('<velocity name="right_shoulder_abduction"'),
-     "skinny_2d.xml: the MJCF does not match the 2D body's spec (skinny_mj.plant.body): "
-     "no actuator 'right_shoulder_abduction'"),
+     "skinny_2d.xml: not a body of two arms: the actuators ['right_elbow_flexion', "
+     "'left_shoulder_abduction', 'left_elbow_flexion'] are not one per hinge"),
     (_drop_line('<site name="left_wrist"'), "no site 'left_wrist'"),
     (lambda text: text.replace("skinny_defaults.xml", "nope.xml"),
      "nope.xml: cannot read the file: No such file or directory (included by skinny_2d.xml)"),
 ])
 def test_a_broken_mjcf_is_one_line_naming_file_and_line(edit, says, tmp_path, monkeypatch,
                                                        capsys):
-    from skinny_mj.plant.model import MODELS_ENV_VAR, load_model
+    from skinny_mj.plant.body import MODELS_ENV_VAR
+    from skinny_mj.plant.model import load_model
 
     monkeypatch.setenv(MODELS_ENV_VAR, str(_edited_models(tmp_path, edit)))
     err = _one_line_exit_2(["track", "--out", str(tmp_path / "o")], capsys)
@@ -364,8 +365,7 @@ def test_a_broken_mjcf_is_one_line_naming_file_and_line(edit, says, tmp_path, mo
     assert not (tmp_path / "o").exists()
     with pytest.raises(SkinnyInputError, match="skinny_2d.xml"):
         load_model(4)
-    with pytest.raises(SkinnyInputError, match="skinny_2d.xml"):
-        load_model(4, "torque")
+    assert load_model("2d-torque").nu == 4  # the torque body is a file of its own
 
 
 # -- motion capture's skeleton -----------------------------------------------------------------

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from skinny_mj.controllers.adaptive_ct import ParameterRLS
 
+from skinny_mj.plant import body
 from skinny_mj.plant.dynamics import Dynamics
 from skinny_mj.plant.model import load_model
 from skinny_mj.plant.perturb import perturb
@@ -18,7 +19,7 @@ from skinny_mj.training.torque import joint_nrmse
 @pytest.mark.parametrize("dof", [4, 8])
 def test_regressor_times_theta_is_mj_inverse_of_the_changed_twin(dof):
     reg = InertialRegressor(dof)
-    changed = copy.copy(load_model(dof, "torque"))
+    changed = copy.copy(load_model(body.body_of(dof).twin("torque")))
     perturb(type("P", (), {"model": changed, "data": mujoco.MjData(changed)})(),
             payload_kg=0.7, mass_scale=1.2, damping_nm_s_rad=0.3)
     rng = np.random.default_rng(0)
@@ -28,7 +29,7 @@ def test_regressor_times_theta_is_mj_inverse_of_the_changed_twin(dof):
     theta[:6] = 0.2
     theta[6] = 0.7
     theta[7:7 + dof] = 0.3
-    want = Dynamics(changed).inverse_dynamics_nm(q, qd, qdd)
+    want = Dynamics(changed, body.body_of(dof).twin("torque")).inverse_dynamics_nm(q, qd, qdd)
     assert np.allclose(tau_nom + y @ theta, want, atol=1e-9)
 
 

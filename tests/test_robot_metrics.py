@@ -16,7 +16,7 @@ from skinny_mj.training.imitation import ROBOT_METRICS, TORQUE_METRICS, robot_me
 
 def _still(dof: int, steps: int = 40) -> np.ndarray:
     """A pose inside every joint range, held for ``steps`` steps."""
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     return np.broadcast_to(0.5 * (lo + hi), (steps, dof)).copy()
 
 
@@ -47,21 +47,22 @@ def test_hand_error_in_cm():
     wanted = _still(4)
     produced = wanted.copy()
     a = np.radians(2.0)
-    elbows = body.elbow_dofs(4)
+    elbows = body.body_of(4).elbow_dofs()
     produced[1:, elbows[0]] += a  # one arm only
     m = robot_metrics(produced, wanted, 4, 0.02)
-    chord_cm = 100 * 2 * body.FOREARM_LENGTH_M * math.sin(a / 2)
+    chord_cm = 100 * 2 * body.body_of("2d").lengths_m()[1] * math.sin(a / 2)
     assert m["peak_hand_error_cm"] == pytest.approx(chord_cm, rel=1e-9)
     assert m["hand_error_cm"] == pytest.approx(chord_cm / math.sqrt(2), rel=1e-9)  # 2 arms
     # the same from the body's forward kinematics, by hand
-    wrist = body.arm_points(produced[5], 4)[:, 2] - body.arm_points(wanted[5], 4)[:, 2]
+    skinny = body.body_of(4)
+    wrist = skinny.arm_points(produced[5])[:, 2] - skinny.arm_points(wanted[5])[:, 2]
     assert 100 * np.linalg.norm(wrist, axis=-1).max() == pytest.approx(chord_cm)
 
 
 def test_a_late_movement_has_a_positive_lag():
     dof, dt, steps = 4, 0.02, 90
     t = np.arange(steps + 3) * dt
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     wave = 0.5 * (lo + hi) + 0.2 * (hi - lo) * np.sin(2 * np.pi * t)[:, None]
     m = robot_metrics(wave[:steps], wave[3:], dof, dt)
     assert m["lag_s"] == pytest.approx(3 * dt)

@@ -77,5 +77,5 @@ def test_a_study_refuses_an_option_it_does_not_take():
     study = Study(name="fixed-body", rows=(Row("a"),), metrics={"x": "wall_s"},
                   takes=("movement",))
     assert study.build(movement="y").config.config("a").movement.trajectory == "y"
-    with pytest.raises(SkinnyInputError, match="takes no --dof"):
-        study.build(dof=8)
+    with pytest.raises(SkinnyInputError, match="takes no --body"):
+        study.build(body=8)

@@ -57,11 +57,11 @@ def test_rows_configs_params_groups_and_quick_are_derived():
 
 
 def test_options_are_overrides_of_the_base_and_refused_when_not_taken():
-    exp = toy().build(movement="md_02.amc", asf=None, dof=8, signals="joint")
+    exp = toy().build(movement="md_02.amc", asf=None, body=8, signals="joint")
     assert {(c.movement.trajectory, c.plant.dof, c.plant.signals) for c in
             (exp.config.config(r.row_id) for r in exp.rows)} == {("md_02.amc", 8, "joint")}
-    with pytest.raises(SkinnyInputError, match="takes no --dof"):
-        toy(takes=("movement",)).build(dof=8)
+    with pytest.raises(SkinnyInputError, match="takes no --body"):
+        toy(takes=("movement",)).build(body=8)
     with pytest.raises(SkinnyInputError, match="unknown config key"):
         Study("bad", (Row("a", {"no_such_key": 1}),), metrics={"x": "wall_s"}).build()
 
@@ -77,7 +77,7 @@ def _with_movement(study: Study, movement: str, asf: str | None) -> Study:
 def test_an_own_option_derives_the_study_and_sets_no_config_key():
     study = toy(own_options={"movement": _with_movement})
     assert plan(study).to_dict() == plan(toy()).to_dict()  # not given: the study as it is
-    moved = plan(study, movement="y", asf="s.asf", dof=8)
+    moved = plan(study, movement="y", asf="s.asf", body=8)
     assert [p.row.id for p in moved.rows] == ["a", "b", "c", "own"]
     assert moved.params["moved"] == ("y", "s.asf") and moved.row("own").params["k"] == 9
     assert {moved.config(i).movement.trajectory for i in ("a", "own")} == \

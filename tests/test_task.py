@@ -30,7 +30,7 @@ class StandIn:
 def stand_in(dof: int, n: int = 40, still_dof: int | None = None) -> StandIn:
     """Smooth movement starting arms down (on the lower limits of abduction/elbow)."""
     t = np.linspace(0.0, 1.0, n)[:, None]
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     angles = lo + (hi - lo) * 0.45 * (1 - np.cos(np.pi * t * (1 + np.arange(dof) % 3)))
     angles = np.clip(angles, lo, hi)
     if still_dof is not None:
@@ -50,7 +50,7 @@ class Env3DTest(test_utils.EnvironmentTestMixin, absltest.TestCase):
 
 class Env3DTorqueJointTest(test_utils.EnvironmentTestMixin, absltest.TestCase):
     def make_object_under_test(self):
-        return load(8, "joint", stand_in(8), actuation="torque", seed=1)
+        return load("3d-torque", "joint", stand_in(8), seed=1)
 
 
 def _rollout(env, commands):
@@ -80,9 +80,9 @@ def test_same_seed_same_numbers_other_seed_other_noise(dof):
 def test_episode_observations_and_reward(signals):
     traj = stand_in(4, n=25)
     env = load(4, signals, traj, sensor_noise=0.05, seed=0)
-    desired = body.position_signals(traj.angles, 4, signals)
+    desired = body.body_of(4).position_signals(traj.angles, signals)
     ts = env.reset()
-    lo, hi = body.joint_ranges(4).T
+    lo, hi = body.body_of(4).joint_ranges().T
     np.testing.assert_allclose(ts.observation["joint_angles"],
                                np.clip(traj.angles[0], lo + 1e-3, hi - 1e-3), atol=1e-12)
     assert list(ts.observation) == ["sensed", "desired", "desired_next", "joint_angles", "step"]
@@ -93,11 +93,11 @@ def test_episode_observations_and_reward(signals):
         assert t == steps
         np.testing.assert_array_equal(ts.observation["desired"], desired[t])
         np.testing.assert_array_equal(ts.observation["desired_next"], desired[t + 1])
-        true = body.position_signals(ts.observation["joint_angles"], 4, signals)
+        true = body.body_of(4).position_signals(ts.observation["joint_angles"], signals)
         noise.append(ts.observation["sensed"] - true)
         ts = env.step(np.zeros(4))
         steps += 1
-        true = body.position_signals(ts.observation["joint_angles"], 4, signals)
+        true = body.body_of(4).position_signals(ts.observation["joint_angles"], signals)
         assert ts.reward == pytest.approx(-np.mean(np.abs(desired[steps] - true)), abs=1e-12)
     assert steps == len(traj.angles) - 1
     noise = np.concatenate(noise)
@@ -144,7 +144,7 @@ def test_servo_moves_command_times_full_scale_step(dof):
     speed = np.linspace(2.0, 10.0, dof)
     step_rad = speed * 0.02
     plant = BatchPlant(dof, "joint", stand_in(dof), sensor_noise=0.0, max_speed_rad_s=speed)
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     mid = (lo + hi) / 2
     worst = 0.0
     for c_prev, c in [(0.0, 1.0), (0.0, -0.3), (0.5, 0.5), (-1.0, 1.0), (1.0, -1.0), (0.2, -0.7)]:
@@ -162,7 +162,7 @@ def test_servo_moves_command_times_full_scale_step(dof):
 @pytest.mark.parametrize("dof", [4, 8])
 def test_random_commands_never_pass_the_range(dof):
     plant = BatchPlant(dof, "cartesian", stand_in(dof), sensor_noise=0.0, max_speed_rad_s=12.0)
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     rng = np.random.default_rng(dof)
     plant.reset()
     worst = -np.inf
@@ -187,13 +187,13 @@ def test_the_default_trajectory_is_ymca_and_the_packages_not_the_plants():
 @pytest.mark.parametrize(
     "kwargs,match",
     [
-        ({"dof": 5}, "dof"),
+        ({"body": 5}, "unknown body 5"),
+        ({"body": "2d-long"}, "unknown body '2d-long'; the bodies: 2d, 3d, 2d-torque"),
         ({"signals": "polar"}, "signals"),
-        ({"actuation": "position"}, "actuation"),
         ({"sensor_noise": -0.1}, "sensor_noise"),
         ({"max_speed_rad_s": 0.0}, "max_speed"),
         ({"speed_factor": 0.0}, "speed_factor"),
-        ({"trajectory": StandIn(np.zeros((10, 8)), 8)}, "dof"),
+        ({"trajectory": StandIn(np.zeros((10, 8)), 8)}, "trajectory has 8 DOFs, the 2d body 4"),
         ({"trajectory": StandIn(np.full((10, 4), np.nan), 4)}, "NaN"),
         ({"trajectory": StandIn(np.zeros((1, 4)), 4)}, "T >= 2"),
         ({"trajectory": StandIn(np.zeros((10, 4)), 4, dt=0.01)}, "dt"),
@@ -206,7 +206,7 @@ def test_the_default_trajectory_is_ymca_and_the_packages_not_the_plants():
     ],
 )
 def test_bad_arguments_raise_input_error(kwargs, match):
-    args = {"dof": 4, "trajectory": stand_in(4)} | kwargs
+    args = {"body": "2d", "trajectory": stand_in(4)} | kwargs
     with pytest.raises(SkinnyInputError, match=match):
         load(**args)
 
@@ -214,7 +214,7 @@ def test_bad_arguments_raise_input_error(kwargs, match):
 @pytest.mark.parametrize("actuation", ["velocity", "torque"])
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
 def test_a_non_finite_action_is_refused_before_mujoco(actuation, bad):
-    env = load(4, trajectory=stand_in(4), seed=0, actuation=actuation)
+    env = load(body.body_of(4).twin(actuation), trajectory=stand_in(4), seed=0)
     env.reset()
     before = env.physics.data.qpos.copy()
     with pytest.raises(ValueError, match=r"action \(2,\) is .*must be finite"):

@@ -56,13 +56,13 @@ def test_rows_are_the_papers_own_on_both_bodies_the_3d_twin_on_the_2d_seeds():
             assert (trained.plant.dof, trained.plant.signals) == \
                 ((4, "joint") if dim == "2d" else (8, "cartesian"))
             assert trained == paper_a.STUDY.build(**({} if dim == "2d" else {
-                "dof": 8, "signals": "cartesian"})).config.config(rid)
+                "body": 8, "signals": "cartesian"})).config.config(rid)
     assert set(exp.groups["3d"]) == {i for i in ids if "-3d-" in i}
     quick = three_d.STUDY.build(quick=True)
     assert [r.row_id for r in quick.rows[:6]] == [
         "a-2d-inverse-d0", "a-2d-serial-d4", "b-2d-phase0", "b-2d-phase90", "c-2d-ymca",
         "c-2d-mirror-left"]  # each sweep's own order: its seeds
-    body = three_d.STUDY.build(dof=8, signals="joint").config
+    body = three_d.STUDY.build(body=8, signals="joint").config
     assert body.config("a-3d-serial-d4").plant.signals == "joint"
     assert body.config("a-2d-serial-d4").plant.signals == "joint"
     with pytest.raises(SkinnyInputError, match="takes no --movement"):
@@ -134,7 +134,7 @@ def test_angle_nrmse_is_the_joint_angle_error_on_either_body():
     q = get("ymca", 8).angles
     assert three_d_report.angle_nrmse(q, q, 8) == 0.0
     assert three_d_report.angle_nrmse(q[:-1], q, 8) is None
-    lo, hi = body.joint_ranges(8).T
+    lo, hi = body.body_of(8).joint_ranges().T
     shifted = q + 0.01 * (hi - lo)  # 1 % of every range = 0.02 in normalized units
     assert three_d_report.angle_nrmse(shifted, q, 8) == pytest.approx(0.01, rel=1e-6)
 

@@ -1,6 +1,8 @@
-"""The torque twin's shipped MJCF (models/skinny/*_torque.xml): each file compiles to the
-model the package builds in code, field by field and exactly, is what the generator
-writes today (Menagerie's model test, 1 s of random torques, runs on it in tests/test_model.py)."""
+"""The torque bodies' shipped MJCF (models/skinny/*_torque.xml): each file compiles to the
+model the generator builds in code from the velocity body (``torque_spec``), field by
+field and exactly, is what the generator writes today, and is the body the package loads
+as ``2d-torque`` / ``3d-torque`` (Menagerie's model test, 1 s of random torques, runs on
+it in tests/test_model.py)."""
 
 from __future__ import annotations
 
@@ -10,10 +12,12 @@ import mujoco
 import numpy as np
 import pytest
 
-from skinny_mj.plant.model import load_model, load_spec, models_dir
+from skinny_mj.plant.body import body_of, models_dir
+from skinny_mj.plant.model import load_model, torque_spec
 from skinny_mj.plant.torque_files import torque_file_names, torque_robot_xml, torque_scene_xml
 
 DOFS = [4, 8]
+TWINS = {4: "2d-torque", 8: "3d-torque"}
 #: Model-level structs compared field by field beside MjModel's own arrays and sizes.
 STRUCTS = ("opt", "stat", "vis")
 
@@ -53,9 +57,13 @@ def _assert_same_model(got: mujoco.MjModel, want: mujoco.MjModel) -> list[str]:
 def test_shipped_torque_files_compile_to_the_package_model(dof):
     robot, scene = (models_dir() / name for name in torque_file_names(dof))
     compared = _assert_same_model(mujoco.MjModel.from_xml_path(str(scene)),
-                                  load_model(dof, "torque"))
+                                  torque_spec(dof).compile())
     _assert_same_model(mujoco.MjModel.from_xml_path(str(robot)),
-                       load_spec(dof, "torque", scene=False).compile())
+                       torque_spec(dof, scene=False).compile())
+    twin = body_of(TWINS[dof])  # the body the package loads: these files
+    assert (twin.path(), twin.path(scene=False)) == (scene, robot)
+    assert body_of(dof).twin("torque") is twin
+    _assert_same_model(load_model(twin), torque_spec(dof).compile())
     # the fields the model card lists are among those compared, exactly
     for field in ("nq", "nv", "nu", "body_mass", "body_inertia", "body_ipos", "body_gravcomp",
                   "dof_damping", "dof_armature", "jnt_range", "jnt_solref", "jnt_solimp",

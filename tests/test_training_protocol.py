@@ -127,10 +127,10 @@ def test_explicit_desired_signals_travel_with_the_trajectory(tmp_path):
 def test_ik_recovers_skinnys_own_angles():
     for dof in (4, 8):
         q = ymca(dof).angles
-        seg = body.segment_vectors(q, dof)
+        seg = body.body_of(dof).segment_vectors(q)
         unit = seg / np.linalg.norm(seg, axis=-1, keepdims=True)
         angles, target = solve_ik(unit[:, :, 0], unit[:, :, 1], dof)
-        np.testing.assert_allclose(target, body.cartesian_signals(q, dof), atol=1e-12)
+        np.testing.assert_allclose(target, body.body_of(dof).cartesian_signals(q), atol=1e-12)
         assert ik.residual(angles, target, dof).max() < 1e-6
 
 
@@ -151,7 +151,7 @@ def test_build_run_picks_up_explicit_signals():
     run = build_run(TrainConfig().override({"movement.trajectory": "ymca-recorded",
                                             "esn.n_reservoir": 20, "method.epochs": 1}), [0])
     np.testing.assert_array_equal(run.desired, ymca_recorded(4).position_signals("cartesian"))
-    assert not np.allclose(run.desired, body.cartesian_signals(run.trajectory.angles, 4))
+    assert not np.allclose(run.desired, body.body_of(4).cartesian_signals(run.trajectory.angles))
 
 
 def test_position_retargeting_of_motion_capture():

@@ -22,11 +22,12 @@ from skinny_mj.trajectories.patterns import PATTERNS
 
 DOFS = (4, 8)
 MARGIN_RAD = np.deg2rad(2.0)
-HEAD_TOP_Z_M = body.SHOULDER_HEIGHT_M + 0.30  # about where a 1.75 m person's crown is
+# about where a 1.75 m person's crown is
+HEAD_TOP_Z_M = body.body_of("2d").shoulder_positions()[0, 2] + 0.30
 
 
 def _elbow_cols(dof):
-    return [i for i, n in enumerate(body.dof_names(dof)) if n.endswith("elbow_flexion")]
+    return [i for i, n in enumerate(body.body_of(dof).dof_names) if n.endswith("elbow_flexion")]
 
 
 # -- the Trajectory value ------------------------------------------------------------
@@ -49,7 +50,7 @@ def test_trajectory_rejects_bad_dt(dt):
 
 def test_trajectory_is_immutable_and_basic_properties():
     t = Trajectory(np.zeros((50, 8)), 0.02, "still")
-    assert len(t) == 50 and t.dof == 8 and t.dof_names == body.dof_names(8)
+    assert len(t) == 50 and t.dof == 8 and t.dof_names == body.body_of(8).dof_names
     assert t.duration_s == pytest.approx(1.0)
     with pytest.raises(ValueError):
         t.angles[0, 0] = 1.0
@@ -60,7 +61,7 @@ def test_trajectory_is_immutable_and_basic_properties():
 @pytest.mark.parametrize("signals", ["joint", "cartesian"])
 def test_position_signals_shape_and_range(dof, signals):
     sig = ymca(dof).position_signals(signals)
-    assert sig.shape == (313, body.n_signals(dof, signals))
+    assert sig.shape == (313, body.body_of(dof).n_signals(signals))
     assert np.all(np.abs(sig) <= 1.0 + 1e-12)
 
 
@@ -93,7 +94,7 @@ def test_resample_lengths_endpoints_ranges(speed, steps):
     r = y.resample(speed)
     assert len(r) == steps
     np.testing.assert_allclose(r.angles[[0, -1]], y.angles[[0, -1]], atol=1e-12)
-    lo, hi = body.joint_ranges(4).T
+    lo, hi = body.body_of(4).joint_ranges().T
     assert np.all((r.angles >= lo) & (r.angles <= hi))
     # faster playback -> proportionally faster joints (same path)
     np.testing.assert_allclose(r.max_speed_rad_s(), speed * y.max_speed_rad_s(), rtol=0.05)
@@ -130,7 +131,7 @@ def test_excerpt():
 def test_ymca_length_ranges_continuity(dof):
     y = ymca(dof)
     assert len(y) == 313 and y.dt == 0.02 and y.duration_s == pytest.approx(6.26)
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     for pose in key_poses(dof).values():
         assert np.all(pose >= lo + MARGIN_RAD) and np.all(pose <= hi - MARGIN_RAD)
     assert np.all((y.angles >= lo + MARGIN_RAD) & (y.angles <= hi - MARGIN_RAD))
@@ -146,8 +147,8 @@ def test_ymca_length_ranges_continuity(dof):
 @pytest.mark.parametrize("dof", DOFS)
 def test_ymca_letters_geometry(dof):
     poses = key_poses(dof)
-    pts = {k: body.arm_points(q, dof) for k, q in poses.items()}  # (2 arms, 3 points, 3)
-    shoulder = body.shoulder_positions()
+    pts = {k: body.body_of(dof).arm_points(q) for k, q in poses.items()}  # (2 arms, 3 points, 3)
+    shoulder = body.body_of("2d").shoulder_positions()
     # A: hands meet above the head
     wr = pts["A"][:, 2]
     assert np.linalg.norm(wr[0] - wr[1]) < 0.08
@@ -169,7 +170,7 @@ def test_ymca_letters_geometry(dof):
 
 def test_ymca_3d_uses_flexion_and_rotation():
     y = ymca(8)
-    names8 = body.dof_names(8)
+    names8 = body.body_of(8).dof_names
     for part in ("shoulder_flexion", "shoulder_rotation"):
         cols = [i for i, n in enumerate(names8) if n.endswith(part)]
         assert np.abs(y.angles[:, cols]).max() > np.deg2rad(5)
@@ -221,7 +222,7 @@ def test_y_pure_has_constant_elbows(dof):
 @pytest.mark.parametrize("side", ["right", "left"])
 def test_mirrors_are_symmetric(dof, side):
     t = get(f"mirror-{side}", dof)
-    pts = body.arm_points(t.angles, dof)  # (T, 2, 3, 3)
+    pts = body.body_of(dof).arm_points(t.angles)  # (T, 2, 3, 3)
     np.testing.assert_allclose(pts[:, 1], pts[:, 0] * [-1.0, 1.0, 1.0], atol=1e-12)
     src = 0 if side == "right" else 1
     n_arm = dof // 2
@@ -258,7 +259,7 @@ def test_load_movement_by_name_reports_no_clipping():
 @pytest.mark.parametrize("suffix", [".npz", ".csv"])
 def test_file_round_trip_is_exact(tmp_path, dof, suffix):
     rng = np.random.default_rng(7)
-    lo, hi = body.joint_ranges(dof).T
+    lo, hi = body.body_of(dof).joint_ranges().T
     t = Trajectory(rng.uniform(lo, hi, size=(37, dof)), 0.02, "random")
     path = t.save(tmp_path / f"t{suffix}")
     back = Trajectory.load(path)
@@ -271,7 +272,7 @@ def test_file_round_trip_is_exact(tmp_path, dof, suffix):
 
 def test_csv_without_comment_uses_defaults(tmp_path):
     p = tmp_path / "hand.csv"
-    p.write_text(",".join(body.dof_names(4)) + "\n0,0.1,0,0.1\n0.1,0.2,0.1,0.2\n")
+    p.write_text(",".join(body.body_of(4).dof_names) + "\n0,0.1,0,0.1\n0.1,0.2,0.1,0.2\n")
     t = Trajectory.load(p)
     assert len(t) == 2 and t.dt == 0.02 and t.name == "hand"
 
@@ -286,7 +287,7 @@ def test_loaded_file_is_clipped_and_reported(tmp_path):
     assert report.max_excess_deg == pytest.approx(np.rad2deg(0.2))
 
 
-_HEADER4 = ",".join(body.dof_names(4))
+_HEADER4 = ",".join(body.body_of(4).dof_names)
 
 
 @pytest.mark.parametrize(
@@ -297,7 +298,7 @@ _HEADER4 = ",".join(body.dof_names(4))
         (f"{_HEADER4}\n0,0,0,0\n0,0,0\n", 3, "3 columns"),
         (f"{_HEADER4}\n0,0,x,0\n", 2, "not a number"),
         ("a,b,c,d\n0,0,0,0\n", 1, "header"),
-        (",".join(body.dof_names(4)[:3]) + "\n0,0,0\n", 1, "header"),
+        (",".join(body.body_of(4).dof_names[:3]) + "\n0,0,0\n", 1, "header"),
     ],
 )
 def test_bad_csv_names_file_and_line(tmp_path, text, line, match):
@@ -337,7 +338,7 @@ def test_bad_npz_files(tmp_path):
 def test_dof_mismatch_and_missing_file(tmp_path):
     p = ymca(4).save(tmp_path / "y.npz")
     with pytest.raises(SkinnyInputError, match="DOF mismatch"):
-        Trajectory.load(p, dof=8)
+        Trajectory.load(p, 8)
     with pytest.raises(SkinnyInputError, match="DOF mismatch"):
         load_movement(p, 8)
     with pytest.raises(SkinnyInputError, match="no such"):
@@ -346,12 +347,15 @@ def test_dof_mismatch_and_missing_file(tmp_path):
         ymca(4).save(tmp_path / "y.txt")
 
 
-def test_package_does_not_import_mujoco_or_dm_control():
+def test_package_imports_no_dm_control_and_mujoco_only_to_read_a_body():
+    """Importing the movements loads no simulator; making one reads its body's MJCF (with
+    MuJoCo's MjSpec, :mod:`skinny_mj.mjcf`), never dm_control."""
     code = (
-        "import sys, skinny_mj.trajectories as t; t.get('ymca', 8); "
-        "t.load_movement('tests/data/arms.bvh', 4); "
-        "bad = [m for m in ('mujoco', 'dm_control') if m in sys.modules]; "
-        "sys.exit(1 if bad else 0)"
+        "import sys, skinny_mj.trajectories as t; "
+        "assert not {'mujoco', 'dm_control'} & set(sys.modules), 'imported'; "
+        "t.get('ymca', 8); t.load_movement('tests/data/arms.bvh', 4); "
+        "bad = [m for m in ('dm_control',) if m in sys.modules]; "
+        "sys.exit(1 if bad or 'skinny_mj.mjcf' not in sys.modules else 0)"
     )
     from pathlib import Path
 

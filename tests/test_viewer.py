@@ -57,8 +57,8 @@ def _write_run(path: Path, dof: int, torque: bool = False) -> Path:
                    "gravity_nm": 0.05 * limit * np.cos(2 * np.pi * 0.2 * t + k),
                    "limit_nm": limit}
     return write_recording(
-        path, dt=body.CONTROL_DT_S, dof=dof, dof_names=list(body.dof_names(dof)),
-        signal_names=list(body.signal_names(dof, "cartesian")), desired_angles=traj.angles,
+        path, dt=body.CONTROL_DT_S, which=dof, dof_names=list(body.body_of(dof).dof_names),
+        signal_names=list(body.body_of(dof).signal_names("cartesian")), desired_angles=traj.angles,
         actual_angles=lag, commands=commands, desired_signals=desired, actual_signals=actual,
         title=f"viewer test, {dof} DOF" + (", torque" if torque else ""),
         curves={"train_position_nrmse": np.geomspace(1, .1, 5)}, torques=torques)
@@ -188,7 +188,7 @@ def _arm_views(title: str) -> dict[str, str]:
 
 
 def _dofs(side: str) -> list[str]:
-    return [n for n in body.dof_names(8) if layout.split_dof(n)[0] == side]
+    return [n for n in body.body_of(8).dof_names if layout.split_dof(n)[0] == side]
 
 
 def _last_time_s(path: Path, entity: str) -> float:
@@ -263,7 +263,7 @@ def test_one_colour_and_one_legend_name_per_joint(run_3d, torque_3d, torque):
     path = torque_3d if torque else run_3d
     saved, styles = layout.read_layout(path), layout.read_styles(path)
     entities = recording_entities(path)
-    joint_colours = {layout.joint_rgb(n) for n in body.dof_names(8)}
+    joint_colours = {layout.joint_rgb(n) for n in body.body_of(8).dof_names}
     assert len(joint_colours) == 4 and not joint_colours & {DESIRED_RGB, ACTUAL_RGB}
     arm_plots = [v for v in saved.views.values() if " arm: " in v.name]
     assert len(arm_plots) == (6 if torque else 4)
@@ -271,7 +271,7 @@ def test_one_colour_and_one_legend_name_per_joint(run_3d, torque_3d, torque):
         assert view.legend == "RightTop"
         legend: dict[str, set] = {}
         for entity in view.shows(entities):
-            dof = next(n for n in body.dof_names(8)
+            dof = next(n for n in body.body_of(8).dof_names
                        if entity.startswith(f"{layout.dof_entity(n)}/")
                        or entity.startswith(f"/torques/{n}/"))
             role = entity.rsplit("/", 1)[1]

@@ -100,5 +100,5 @@ STUDY = Study(
                 rows=tuple(row_id("phase0", a, d) for a in ARCHITECTURES for d in (0, 4))),
     # --dof 8 runs the patterns on the 3D body; the movements are paper B's patterns and
     # the signals its joint angles (the per-arm forward models need joint signals)
-    takes=("dof",), report="skinny_mj.experiments.bimanual_delay.report:report",
+    takes=("body",), report="skinny_mj.experiments.bimanual_delay.report:report",
 )

@@ -46,7 +46,7 @@ def feasibility_table(movements: tuple[str, ...], bodies: tuple[str, ...]) -> li
             worst = int(f["peak_ratio"].argmax())
             lines.append(
                 f"| {mv} | {bd} | {f['peak_ratio'][worst]:.2f} "
-                f"({body.dof_names(dof)[worst]}) | {f['p99_ratio'].max():.2f} | "
+                f"({body.body_of(dof).dof_names[worst]}) | {f['p99_ratio'].max():.2f} | "
                 f"{100 * f['over_limit_share'].max():.1f} % | {f['mean_abs_nm'].mean():.2f} | "
                 f"{f['peak_speed_rad_s'].max():.1f} | {f['peak_accel_rad_s2'].max():.0f} | "
                 f"{f['work_j'].sum():.0f} | {'yes' if f['feasible'] else '**no**'} |")

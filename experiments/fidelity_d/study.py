@@ -132,6 +132,6 @@ STUDY = Study(
     groups={"stage1": [r.id for r in _ROWS if r.params["exp"] in STAGE_1_EXPS],
             "stage2": [*STAGE_2_CELLS, *cells(QUICK_GRID)]},
     quick=Quick(runs=2, rows=cells(QUICK_GRID)),
-    takes=("dof", "signals"),  # the movements are the study's
+    takes=("body", "signals"),  # the movements are the study's
     report="skinny_mj.experiments.fidelity_d.report:report",
 )

@@ -69,5 +69,5 @@ STUDY = Study(
     columns=("position_nrmse", "noisy_position_nrmse", "motor_nrmse", "noisy_motor_nrmse"),
     quick=Quick({"method.epochs": 2}, runs=2,
                 rows=tuple(f"{m}-g1-e{e}" for m in MOVEMENTS for e in EXPS)),
-    takes=("dof", "signals"),  # the movements are the study's
+    takes=("body", "signals"),  # the movements are the study's
 )

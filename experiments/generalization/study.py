@@ -170,8 +170,9 @@ def clipped_ideal_nrmse(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarr
     for t in range(1, len(angles)):  # sequential: each step starts where the last ended
         q[t] = q[t - 1] + np.clip((angles[t] - q[t - 1]) / step, -1.0, 1.0) * step
     dof = angles.shape[1]
-    return float(position_nrmse(body.position_signals(q, dof, signals)[None],
-                                body.position_signals(angles, dof, signals))[0])
+    skinny = body.body_of(dof)
+    return float(position_nrmse(skinny.position_signals(q, signals)[None],
+                                skinny.position_signals(angles, signals))[0])
 
 
 def test_movement(column: str, config: TrainConfig):
@@ -213,7 +214,7 @@ def metrics(result: RunResult) -> dict:
 def coverage(angles: np.ndarray, dof: int, bins: int = 6) -> float:
     """Fraction of the joint space a movement visits: per arm, the occupied cells of a
     ``bins``-per-DOF grid over the arm's joint ranges, over all cells; mean of the arms."""
-    q = body.normalize_angles(np.asarray(angles), dof)  # [-1, 1] per DOF
+    q = body.body_of(dof).normalize_angles(np.asarray(angles))  # [-1, 1] per DOF
     cells = np.clip(((q + 1.0) / 2.0 * bins).astype(int), 0, bins - 1)
     n_arm = dof // 2
     return float(np.mean([len({tuple(c) for c in cells[:, a * n_arm:(a + 1) * n_arm]})

@@ -130,8 +130,8 @@ def _figures(run, test, label: str) -> dict:
         return {f"position_nrmse{label}": None}
     dof = run.cfg.plant.dof
     angles = test.rollout.angles[:, :, :dof]
-    joint = float(position_nrmse(body.normalize_angles(angles, dof),
-                                 body.normalize_angles(test.trajectory.angles, dof))[0])
+    joint = float(position_nrmse(body.body_of(dof).normalize_angles(angles),
+                                 body.body_of(dof).normalize_angles(test.trajectory.angles))[0])
     tq = test.torque["metrics"]
     out = {"position_nrmse": test.position_nrmse, "joint_nrmse": joint,
            **test_robot_metrics(run, test),

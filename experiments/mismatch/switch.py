@@ -102,13 +102,13 @@ def run_switch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     n = PRE + 1 + POST
     curve = np.full((len(seeds), n), np.nan)
     angle_curve = curve.copy()
-    desired_angles = body.normalize_angles(run.training.angles, config.plant.dof)
+    desired_angles = body.body_of(config.plant.dof).normalize_angles(run.training.angles)
     run.esn.reset()
     for c in range(n):
         ro = fel.rollout(run.esn, plant, run.desired, gain, loop, noise=False)
         alive &= np.array([r is None for r in fel.health(run.esn, ro)])
         curve[alive, c] = position_nrmse(ro.true_signals, run.desired)[alive]
-        angles = body.normalize_angles(ro.angles[:, :, :config.plant.dof], config.plant.dof)
+        angles = body.body_of(config.plant.dof).normalize_angles(ro.angles[:, :, :config.plant.dof])
         angle_curve[alive, c] = position_nrmse(angles, desired_angles)[alive]
     change.undo()
     return [summary(curve[r], angle_curve[r]) if alive[r]

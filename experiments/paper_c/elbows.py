@@ -42,15 +42,16 @@ def jacobian(esn, r: int, states: np.ndarray, y_esn: np.ndarray, n_in: int) -> n
 def dead_beat_gain(run, joint: int, dof: int, dt: float) -> float:
     """The ideal inverse model's gain on a joint's desired (+) and sensed (−) angle:
     1 / (signal per rad x full-scale speed x dt), normalized units."""
-    per_rad = body.normalize_angles(np.eye(dof), dof) - body.normalize_angles(
-        np.zeros((1, dof)), dof)
+    skinny = body.body_of(dof)
+    per_rad = skinny.normalize_angles(np.eye(dof)) - skinny.normalize_angles(
+        np.zeros((1, dof)))
     return float(1.0 / (per_rad[joint, joint] * run.max_speed_rad_s[joint] * dt))
 
 
 def analyse(run, dof: int = 4) -> list[dict]:
     """Per run: YM elbow range ratio and correlation, the elbows' Jacobian rows, and the
     produced elbow ranges (deg) with YM's elbow targets held (both, left only)."""
-    names, elbows = body.dof_names(dof), paper_c.elbow_dofs(dof)
+    names, elbows = body.body_of(dof).dof_names, paper_c.elbow_dofs(dof)
     ym, pure = paper_c.load("ym", dof), paper_c.load("y-pure", dof)
     held, left_held = ym.angles.copy(), ym.angles.copy()
     held[:, elbows] = pure.angles[0, elbows]

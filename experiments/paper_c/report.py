@@ -68,7 +68,7 @@ def arm_figure_png(path: Path, cases: list[tuple[str, np.ndarray, np.ndarray | N
     cases : (title, desired (T, n_dof) rad, produced (T, n_dof) rad or None).
     """
     plt = pyplot()
-    names = body.dof_names(dof)
+    names = body.body_of(dof).dof_names
     fig, axes = plt.subplots(len(cases), 2, figsize=(7.5, 3.0 * len(cases)), squeeze=False)
     for i, (title, desired, produced) in enumerate(cases):
         for j, side in enumerate(("right", "left")):
@@ -148,8 +148,8 @@ def claims(runs: list[dict], dof: int = 4) -> list[str]:
                                                                            "ymca")
     if left is not None and right is not None:
         n = min(len(left), len(right))
-        gap = float(nrmse(body.normalize_angles(left[:n], dof),
-                          body.normalize_angles(right[:n], dof)))
+        gap = float(nrmse(body.body_of(dof).normalize_angles(left[:n]),
+                          body.body_of(dof).normalize_angles(right[:n])))
         asym_d = _mean(runs, "mirror-left", "ymca__asym_desired")
         out.append(_line(bool(gap < SYMMETRIC_FACTOR * asym_d),
                          "left- and right-mirror networks produce practically the same YMCA",

@@ -125,7 +125,7 @@ def columns(params) -> dict[str, str]:
 
 def elbow_dofs(dof: int) -> list[int]:
     """Indices of the elbow DOFs of the body with ``dof`` DOFs."""
-    return [i for i, n in enumerate(body.dof_names(dof)) if n.endswith("elbow_flexion")]
+    return [i for i, n in enumerate(body.body_of(dof).dof_names) if n.endswith("elbow_flexion")]
 
 
 def arm_metrics(produced: np.ndarray, desired: np.ndarray, dof: int) -> dict[str, float]:
@@ -136,7 +136,7 @@ def arm_metrics(produced: np.ndarray, desired: np.ndarray, dof: int) -> dict[str
     correlation averaged over the joints whose target moves.
     """
     n_arm = dof // 2
-    p, d = body.normalize_angles(produced, dof), body.normalize_angles(desired, dof)
+    p, d = body.body_of(dof).normalize_angles(produced), body.body_of(dof).normalize_angles(desired)
     avg = np.tile((d[:, :n_arm] + d[:, n_arm:]) / 2.0, 2)
 
     def corr(a: np.ndarray, b: np.ndarray) -> float:

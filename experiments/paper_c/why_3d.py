@@ -62,7 +62,8 @@ def per_joint_error(true_signals: np.ndarray, desired: np.ndarray) -> np.ndarray
 def signal_per_command(run) -> np.ndarray:
     """(n_dof,) normalized signal one full-scale command moves a joint in one step."""
     dof = run.cfg.plant.dof
-    return 2.0 / np.ptp(body.joint_ranges(dof), axis=1) * run.max_speed_rad_s * run.trajectory.dt
+    return 2.0 / np.ptp(body.body_of(dof).joint_ranges(), axis=1) * run.max_speed_rad_s \
+        * run.trajectory.dt
 
 
 def loop_gains(run, r: int, rollout) -> dict:
@@ -131,7 +132,8 @@ def analyse(row: str, overrides: dict, seeds: list[int], epochs: int | None = No
                 per_joint_error(oc.rollout.true_signals, oc.desired)[0], 3).tolist()
             out.update(loop_gains(run, r, oc.rollout))
         runs.append(out)
-    return {"row": row, "overrides": overrides, "joints": list(body.dof_names(cfg.plant.dof)),
+    joints = list(body.body_of(cfg.plant.body).dof_names)
+    return {"row": row, "overrides": overrides, "joints": joints,
             "true_command_rms": np.round(true_rms, 4).tolist(), "runs": runs}
 
 

@@ -234,7 +234,7 @@ def estimate_bytes(config: TrainConfig, row: Row, runs: int):
     from skinny_mj.experiments.rl_vs_fel.agents import HYPERPARAMS
 
     dof = config.plant.dof
-    n_obs = 2 * body.n_signals(dof, config.plant.signals) + 2 * dof
+    n_obs = 2 * body.body_of(dof).n_signals(config.plant.signals) + 2 * dof
     algo = RL[p["learner"]][0]
     steps = HYPERPARAMS["ppo"][1]["n_steps"] if algo == "ppo" else p["span"][1]
     return Estimate({"buffer": steps * (2 * n_obs + dof + 5) * 8},

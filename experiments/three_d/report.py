@@ -63,8 +63,8 @@ def angle_nrmse(produced: np.ndarray, desired: np.ndarray, dof: int) -> float | 
     lengths differ: the same measure on both bodies, whatever the signals."""
     if produced.shape != desired.shape:
         return None
-    return float(nrmse(body.normalize_angles(produced, dof),
-                       body.normalize_angles(desired, dof)))
+    return float(nrmse(body.body_of(dof).normalize_angles(produced),
+                       body.body_of(dof).normalize_angles(desired)))
 
 
 def _with_angle_errors(rec: dict, dof: int) -> dict:

@@ -80,7 +80,7 @@ def row_id(paper: str, dim: str, paper_row: str) -> str:
 @functools.lru_cache(maxsize=16)
 def paper_experiment(paper: str, dim: str, quick: bool, dof: int, signals: str) -> Experiment:
     """Paper ``paper``'s own sweep on ``dim``'s body (2D: the paper's default)."""
-    body = {} if dim == "2d" else {"dof": dof, "signals": signals}
+    body = {} if dim == "2d" else {"body": dof, "signals": signals}
     return registry.get(PAPERS[paper]).build(quick=quick, **body)
 
 
@@ -158,6 +158,6 @@ STUDY = Study(
     quick=Quick(runs=2, rows=tuple(row_id(p, d, r) for d in DIMS
                                    for p, ids in QUICK_SUBSET.items() for r in ids),
                 params={"quick": True}),
-    takes=("dof", "signals"),  # the papers' own rows name their movements
+    takes=("body", "signals"),  # the papers' own rows name their movements
     report="skinny_mj.experiments.three_d.report:report",
 )

@@ -29,14 +29,14 @@ BODIES = ((4, "joint"), (4, "cartesian"), (8, "joint"), (8, "cartesian"))
 
 def target_noise(dof: int, signals: str, sensor_noise: float, seed: int = 0) -> dict:
     """One feedback-only cycle of YMCA: y_est's error per DOF against the true commands."""
-    tc = paper_c.STUDY.config("ymca", dof=dof, signals=signals).override({
+    tc = paper_c.STUDY.config("ymca", body=dof, signals=signals).override({
         "esn.n_reservoir": 50, "method": "original", "plant.sensor_noise": sensor_noise})
     run = build_run(tc, [seed])
     run.esn.W_out[:] = 0.0  # the feedback controller alone
     ro = rollout(run.esn, run.plant, run.desired, 1.0, noise=False)
     err = ro.y_est[0] - run.true_commands
     return {"dof": dof, "signals": signals, "sensor_noise": sensor_noise,
-            "full_scale_rad_s": dict(zip(body.dof_names(dof),
+            "full_scale_rad_s": dict(zip(body.body_of(dof).dof_names,
                                          np.round(run.max_speed_rad_s, 2).tolist(), strict=True)),
             "y_est_nrmse": float(nrmse(ro.y_est[0][None], run.true_commands)[0]),
             "rms_error_per_dof": np.round(np.sqrt(np.mean(err**2, axis=0)), 3).tolist(),
@@ -55,7 +55,8 @@ def main() -> None:
         ratio = part / np.asarray(clean["rms_true_command_per_dof"])
         print(json.dumps({"noisy": noisy, "clean": clean,
                           "noise_part_over_true_command": dict(zip(
-                              body.dof_names(dof), np.round(ratio, 2).tolist(), strict=True))}),
+                              body.body_of(dof).dof_names, np.round(ratio, 2).tolist(),
+                              strict=True))}),
               flush=True)
 
 

@@ -80,7 +80,7 @@ def separate_robots(plant) -> tuple:
 
     from skinny_mj.plant.model import load_model
 
-    one, spec = load_model(plant.n_dof), mujoco.mjtState.mjSTATE_FULLPHYSICS
+    one, spec = load_model(plant.body), mujoco.mjtState.mjSTATE_FULLPHYSICS
     data = mujoco.MjData(one)
     states = np.empty((plant.n_runs, mujoco.mj_stateSize(one, spec)))
     plant.layout.set_joint_angles(data, plant.setup.start_rad)

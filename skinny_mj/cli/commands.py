@@ -20,7 +20,14 @@ from skinny_mj.cli import config_files as cf
 from skinny_mj.cli import memory
 from skinny_mj.cli.claims import cmd_claims  # noqa: F401 (the `skinny claims` handler)
 from skinny_mj.cli.config_files import file_config, train_config
-from skinny_mj.cli.config_flags import TEST_FLAGS, TRACK_FLAGS, changes, flag_names, given
+from skinny_mj.cli.config_flags import (
+    TEST_FLAGS,
+    TRACK_FLAGS,
+    changes,
+    chosen_body,
+    flag_names,
+    given,
+)
 from skinny_mj.cli.memory import check_bench, check_export, check_sweep, check_train
 from skinny_mj.cli.movement_list import list_text
 from skinny_mj.cli.viewer import cmd_view  # noqa: F401 (the `skinny view` handler; no rerun import)
@@ -92,27 +99,29 @@ def _flag_config(args: argparse.Namespace, groups, base=None):
     return base.override(changes(base, given(args, groups), flag_names(groups)))
 
 
-def _load_movement(mv, dof: int, check=None):
-    """The movement ``mv`` (a :class:`skinny_mj.training.config.Movement`); ``check(steps, cause)``
+def _load_movement(mv, which, check=None):
+    """The movement ``mv`` (a :class:`skinny_mj.training.config.Movement`) for the body
+    ``which``; ``check(steps, cause)``
     first sees its length x reps (one repetition loaded), so a run too big for the
     memory is refused before it is."""
     check_asf(mv.trajectory, mv.asf, mv.retarget)  # not silently unused
     kw = {"asf": mv.asf, "speed": mv.speed, "retarget": mv.retarget}
     if check is not None:
-        one, report = load_movement(mv.trajectory, dof, reps=1, **kw)
+        one, report = load_movement(mv.trajectory, which, reps=1, **kw)
         check(len(one) * mv.reps, steps_cause(one.name, len(one), mv.reps))
         if mv.reps == 1:
             return one, report
-    return load_movement(mv.trajectory, dof, reps=mv.reps, **kw)
+    return load_movement(mv.trajectory, which, reps=mv.reps, **kw)
 
 
-def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_angles, commands,
+def _recording(path: Path, *, which, signals: str, desired_angles, actual_angles, commands,
                desired_signals, actual_signals, sensed_signals=None, title: str = "",
                metadata: dict | None = None, curves: dict | None = None,
                torques: dict | None = None) -> Path:
+    skinny = body.body_of(which)
     return write_recording(
-        path, dt=body.CONTROL_DT_S, dof=dof, dof_names=list(body.dof_names(dof)),
-        signal_names=list(body.signal_names(dof, signals)), desired_angles=desired_angles,
+        path, dt=body.CONTROL_DT_S, which=skinny, dof_names=list(skinny.dof_names),
+        signal_names=list(skinny.signal_names(signals)), desired_angles=desired_angles,
         actual_angles=actual_angles, commands=commands, desired_signals=desired_signals,
         actual_signals=actual_signals, sensed_signals=sensed_signals, title=title,
         metadata=metadata, curves=curves, torques=torques,
@@ -122,11 +131,17 @@ def _recording(path: Path, *, dof: int, signals: str, desired_angles, actual_ang
 # -- track ------------------------------------------------------------------------------
 def cmd_track(args: argparse.Namespace) -> int:
     cfg = _flag_config(args, TRACK_FLAGS)
-    dof, signals, mv = cfg.plant.dof, cfg.plant.signals, cfg.movement
+    skinny, signals, mv = body.body_of(cfg.plant.body), cfg.plant.signals, cfg.movement
+    if skinny.actuation != "velocity":  # the ideal controller commands joint velocities
+        raise SkinnyInputError(f"track runs the ideal velocity commands: the {skinny.name} "
+                               "body is torque-driven (a torque controller alone: skinny "
+                               f"train --body {skinny.name} --feedback ct --method none "
+                               "test.gain=1)")
+    dof = skinny.dof
     out = _out_dir(args, "track")
     traj, report = _load_movement(
-        mv, dof, memory.check_track(dof, body.n_signals(dof, signals)))
-    env = task.load(dof, signals, traj, sensor_noise=cfg.plant.sensor_noise, seed=args.seed)
+        mv, skinny, memory.check_track(dof, skinny.n_signals(signals)))
+    env = task.load(skinny, signals, traj, sensor_noise=cfg.plant.sensor_noise, seed=args.seed)
     ctrl = IdealController(traj.angles, env.task.max_speed_rad_s, traj.dt)
     ts = env.reset()
     angles, true_sig = [env.physics.joint_angles()], [env.physics.position_signals(signals)]
@@ -142,20 +157,22 @@ def cmd_track(args: argparse.Namespace) -> int:
     true_sig = np.array(true_sig)
     nrmse = float(position_nrmse(true_sig[None], desired)[0])
     metrics = {
-        "position_nrmse": nrmse, "steps": len(traj), "dof": dof, "signals": signals,
+        "position_nrmse": nrmse, "steps": len(traj), "body": skinny.name, "dof": dof,
+        "signals": signals,
         "trajectory": str(mv.trajectory), "speed": mv.speed, "reps": mv.reps,
         "seed": args.seed, "sensor_noise": cfg.plant.sensor_noise,
         "max_speed_rad_s": [float(v) for v in env.task.max_speed_rad_s],
         "clipped_samples": int(report.clipped_samples), "retarget": report.to_dict(),
     }
     with _writing(args, out) as out:
-        _recording(out / "run.rrd", dof=dof, signals=signals,
+        _recording(out / "run.rrd", which=skinny, signals=signals,
                    desired_angles=traj.angles, actual_angles=np.array(angles),
                    commands=np.array(commands), desired_signals=desired,
                    actual_signals=true_sig, sensed_signals=np.array(sensed),
                    title=f"ideal controller on {traj.name}", metadata=metrics)
         atomic_write_json(out / "metrics.json", metrics)
-    print(f"track {traj.name}: {dof} DOF, {len(traj)} steps, position NRMSE {nrmse:.2e}, "
+    print(f"track {traj.name}: {skinny.name} ({dof} DOF), {len(traj)} steps, position NRMSE "
+          f"{nrmse:.2e}, "
           f"clipped samples {report.clipped_samples} -> {out}")
     return 0
 
@@ -178,7 +195,7 @@ def _write_run(out: Path, outcome, title: str, preset: str | None = None) -> Non
                            xlabel="epoch (feedback gain K falls linearly from 1 to 0 in the last)")
     record_test(out / "run.rrd", outcome, title, figures=test_figures(outcome))
     outcome.esn.save(out / "model.npz", metadata={
-        "dof": cfg.plant.dof, "signals": cfg.plant.signals,
+        "body": cfg.plant.body, "dof": cfg.plant.dof, "signals": cfg.plant.signals,
         "sensor_noise": cfg.plant.sensor_noise, "actuation": cfg.actuation.kind,
         "max_speed_rad_s": [float(v) for v in outcome.max_speed_rad_s],
         "trained_on": cfg.movement.trajectory, "config": cfg.to_dict(),
@@ -280,19 +297,19 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def cmd_test(args: argparse.Namespace) -> int:
     path, esn, meta = read_model(args.model)  # a shipped model's name, or a file
-    dof, signals = meta["dof"], meta["signals"]
+    which, dof, signals = meta["body"], meta["dof"], meta["signals"]
 
     asked = _flag_config(args, TEST_FLAGS)  # the test's movement and sensor noise
     out = _out_dir(args, "test")
     if args.overwrite and args.out is not None and path.resolve().parent == out.resolve():
         raise SkinnyInputError("--overwrite would delete the --model itself (it is in --out); "
                                "choose another --out", path=path)
-    traj, report = _load_movement(asked.movement, dof,
-                                  memory.check_test(esn.cfg, dof, body.n_signals(dof, signals)))
+    traj, report = _load_movement(asked.movement, which, memory.check_test(
+        esn.cfg, dof, body.body_of(which).n_signals(signals)))
     saved = meta.get("config") if isinstance(meta.get("config"), dict) else {}
     try:
         cfg = TrainConfig.from_dict(saved).override({
-            "plant.dof": dof, "plant.signals": signals,
+            "plant.body": which, "plant.signals": signals,
             "plant.sensor_noise": asked.plant.sensor_noise})
     except SkinnyInputError as err:
         raise SkinnyInputError(f"model metadata holds a bad config ({err})", path=path) from None
@@ -303,7 +320,7 @@ def cmd_test(args: argparse.Namespace) -> int:
     metrics: dict[str, Any] = {
         "model": str(path), "trained_on": meta.get("trained_on"),
         "trajectory": str(asked.movement.trajectory),
-        "dof": dof, "signals": signals, "steps": len(traj), "seed": args.seed,
+        "body": which, "dof": dof, "signals": signals, "steps": len(traj), "seed": args.seed,
         "clipped_samples": int(report.clipped_samples), "failed": test.failed,
         "fail_reason": test.fail_reason,
         "test": {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse},
@@ -316,11 +333,11 @@ def cmd_test(args: argparse.Namespace) -> int:
     if not test.failed and cfg.torque is None:  # DTW, within 5°, lag
 
         # beside "test" (which stays the train command's own test dict, key for key)
-        metrics["imitation"] = {**imitation_metrics(test, dof),
+        metrics["imitation"] = {**imitation_metrics(test, which),
                                 "saturated": saturation(traj.angles, traj.dt, run.max_speed_rad_s)}
     ro = test.rollout
     with _writing(args, out) as out:
-        _recording(out / "run.rrd", dof=dof, signals=signals, desired_angles=traj.angles,
+        _recording(out / "run.rrd", which=which, signals=signals, desired_angles=traj.angles,
                    actual_angles=ro.angles[0], commands=ro.commands[0],
                    desired_signals=test.desired, actual_signals=ro.true_signals[0],
                    sensed_signals=ro.sensed[0], title=f"test on {traj.name}",
@@ -348,24 +365,25 @@ def cmd_trajectory(args: argparse.Namespace) -> int:
     if args.action == "list":
         print(list_text())
         return 0
+    which = body.body_name(chosen_body(args))
     if args.action == "show":
         traj, _ = _load_movement(Movement(args.name, asf=args.asf, retarget=args.retarget),
-                                 args.dof)
-        print(f"{traj.name} (dof {args.dof}, explicit desired signals: "
+                                 which)
+        print(f"{traj.name} (body {which}, {traj.dof} DOF, explicit desired signals: "
               f"{sorted(traj.desired) if traj.desired else 'none'})")
         for key, value in movement_stats(traj).items():
             print(f"  {key:32} {value:.4g}")
         if getattr(args, "actuation", "velocity") == "torque":
             print("torque twin: inverse-dynamics torques of the movement against the limits")
-            for line in torque_training.feasibility_report(args.dof, traj):
+            for line in torque_training.feasibility_report(which, traj):
                 print(line)
         return 0
     out = check_new_file(args.out, args.overwrite)
     traj, _ = _load_movement(Movement(args.name, asf=args.asf, speed=args.speed,
-                                      reps=args.reps), args.dof,
-                             check_export(args.dof, args.out))
+                                      reps=args.reps), which,
+                             check_export(body.body_of(which).dof, args.out))
     traj.save(check_new_file(out, args.overwrite))  # again: another command may have written it
-    print(f"wrote {traj.name}: {len(traj)} steps, {args.dof} DOF -> {out}")
+    print(f"wrote {traj.name}: {len(traj)} steps, body {which} ({traj.dof} DOF) -> {out}")
     return 0
 
 
@@ -376,14 +394,14 @@ def cmd_render(args: argparse.Namespace) -> int:
         raise SkinnyInputError(f"--out: render writes a PNG: give a name ending in .png, got "
                                f"{args.out}")
     check_new_file(args.out, args.overwrite)
-    angles = None
+    angles, which = None, body.body_name(chosen_body(args))
     if args.trajectory is not None:
-        traj, _ = _load_movement(Movement(args.trajectory), args.dof)
+        traj, _ = _load_movement(Movement(args.trajectory), which)
         if not 0 <= args.frame < len(traj):
             raise SkinnyInputError(f"--frame must be in [0, {len(traj) - 1}], got {args.frame}")
         angles = traj.angles[args.frame]
     check_new_file(args.out, args.overwrite)  # again: another command may have written it
-    path = render_png(args.dof, args.out, width=args.width, height=args.height, angles=angles)
+    path = render_png(which, args.out, width=args.width, height=args.height, angles=angles)
     print(f"wrote {path}")
     return 0
 
@@ -395,7 +413,8 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     module = registry.get(args.name)  # `experiment list` is answered by the parser's main
     rows = [r.strip() for r in args.rows.split(",") if r.strip()] if args.rows else None
     options = {"quick": bool(args.quick), "movement": args.movement,
-               "asf": None if args.asf is None else str(args.asf), "dof": args.dof,
+               "asf": None if args.asf is None else str(args.asf),
+               "body": chosen_body(args, None),
                "signals": args.signals, "protocol": args.protocol}
 
     options, rows, runs, invocation = cf.apply_sweep_config(args, options, rows)

@@ -3,7 +3,7 @@
 
 ``skinny train`` writes ``metrics.json`` with the run's whole :class:`TrainConfig`
 (``config``, flat dotted keys) and its ``seed``; a sweep writes ``config.json`` with the
-CLI options (``options``: quick, movement, asf, dof, signals), the selection of rows and
+CLI options (``options``: quick, movement, asf, body, signals), the selection of rows and
 the runs per row. Fed back, each repeats the run exactly; a flag given on the command line
 as well overrides that one setting (only the flags given reach ``skinny train``'s
 arguments; ``skinny experiment``'s ``args.given``, from :func:`skinny_mj.cli.parser.given_options`,
@@ -44,7 +44,9 @@ __all__ = ["read_json", "read_train_file", "file_config", "train_config", "Sweep
 
 #: The CLI options a sweep's ``config.json`` records (``options``): ``build`` takes them, but
 #: ``protocol``, which is applied to the study before it is built.
-SWEEP_OPTIONS = ("quick", "movement", "asf", "dof", "signals", "protocol")
+SWEEP_OPTIONS = ("quick", "movement", "asf", "body", "signals", "protocol")
+#: An earlier version's options: ``dof`` (4 or 8) is ``body`` by its number of hinges.
+_OLD_OPTIONS = {"dof": "body"}
 
 
 def read_json(path: str | Path) -> dict[str, Any]:
@@ -136,7 +138,8 @@ def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     preset = getattr(args, "preset", None)
     if preset is not None:
         fields = preset_fields(preset, str(texts.get("actuation", "velocity")),
-                               dof=texts.get("plant.dof"), signals=texts.get("plant.signals"))
+                               dof=texts.get("plant.dof"), signals=texts.get("plant.signals"),
+                               body=texts.get("plant.body"))
         cfg = cfg.override(fields)
         # --signals chose a preset that refines them (cartesian -> cartesian-elbow): keep it
         if "plant.signals" not in keyed and str(fields.get("plant.signals")).startswith(
@@ -184,6 +187,7 @@ def sweep_invocation(args: argparse.Namespace, name: str, options: dict[str, Any
         raise SkinnyInputError("not a sweep's config.json (no options or selection); a "
                                "training run's file goes to `skinny train --config`",
                                path=path)
+    recorded_opts = {_OLD_OPTIONS.get(k, k): v for k, v in recorded_opts.items()}
     unknown = sorted(set(recorded_opts) - set(SWEEP_OPTIONS))
     if unknown:
         raise SkinnyInputError(f"unknown sweep option(s) {unknown}", path=path)

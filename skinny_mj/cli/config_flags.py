@@ -19,10 +19,11 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any, NamedTuple
 
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.plant.body import check_dof
+from skinny_mj.plant.body import DOF_ALIASES, body_name, body_names, body_of, by_dof
 from skinny_mj.training import fits, overrides
 from skinny_mj.training.config import (
     ACTUATIONS,
+    DOF_KEY,
     FEEDBACKS,
     METHODS,
     RETARGETS,
@@ -32,7 +33,8 @@ from skinny_mj.training.config import (
 from skinny_mj.training.fits import FITS
 
 __all__ = ["Flag", "TRAIN_FLAGS", "TEST_FLAGS", "TRACK_FLAGS", "MOVEMENT_FLAGS", "add_flags",
-           "given", "pairs", "check_no_conflict", "changes", "flag_names", "default_of"]
+           "given", "pairs", "check_no_conflict", "changes", "flag_names", "default_of",
+           "add_body_flags", "chosen_body"]
 
 
 class Flag(NamedTuple):
@@ -44,10 +46,19 @@ class Flag(NamedTuple):
     choices: Sequence[Any] | None = None
     switch: bool = False  # a flag without a value that sets the key to true
     valid: Callable[[str], object] | None = None  # refuses a bad value (open choices)
+    default: str | None = None  # the default the help shows (None: the config's)
+    metavar: str | None = None  # the value's name in the help (None: from its type)
 
 
-def _valid_dof(text: str) -> object:
-    return check_dof(int(text))
+#: The help of ``--body`` and ``--dof`` (``{bodies}``: the registered bodies' names).
+BODY_HELP = ("the body, by name: {bodies} (a torque body trains with the torque "
+             "actuation; docs/adding-a-body.md adds one)")
+DOF_HELP = ("Skinny's body by its number of hinges: 4 = --body 2d, 8 = --body 3d (with a "
+            "torque actuation, their torque twins)")
+
+
+def _bodies_help(text: str) -> str:
+    return text.replace("{bodies}", ", ".join(body_names()))
 
 
 def _checked(valid: Callable[[str], object]) -> Callable[[str], str]:
@@ -70,8 +81,8 @@ MOVEMENT_FLAGS = [
          "subject's normalized segment vectors as desired positions", RETARGETS),
 ]
 _BODY = [
-    Flag("--dof", "plant.dof", "4 = 2D, 8 = 3D (or a body another package registered)",
-         valid=_valid_dof),
+    Flag("--body", "plant.body", BODY_HELP, valid=body_name, metavar="NAME"),
+    Flag("--dof", DOF_KEY, DOF_HELP, tuple(DOF_ALIASES), default="the body's"),
     Flag("--signals", "plant.signals", "position signals the controller sees", SIGNALS),
 ]
 _SENSOR_NOISE = Flag("--sensor-noise", "plant.sensor_noise", "SD of the sensed positions' noise")
@@ -173,7 +184,8 @@ def add_flags(parser: argparse.ArgumentParser, groups: Mapping[str, list[Flag]])
     for title, flags in groups.items():
         group = parser.add_argument_group(title)
         for f in flags:
-            text = f"{f.help} (default: {_shown(default_of(f.key))})"
+            shown = f.default if f.default is not None else _shown(default_of(f.key))
+            text = f"{_bodies_help(f.help)} (default: {shown})"
             if f.switch:
                 group.add_argument(f.flag, dest=f.key, action="store_true",
                                    default=argparse.SUPPRESS, help=text)
@@ -182,7 +194,8 @@ def add_flags(parser: argparse.ArgumentParser, groups: Mapping[str, list[Flag]])
                                    choices=None if f.choices is None
                                    else [str(c) for c in f.choices],
                                    type=None if f.valid is None else _checked(f.valid),
-                                   metavar=None if f.choices is not None else _metavar(f.key))
+                                   metavar=None if f.choices is not None
+                                   else f.metavar or _metavar(f.key))
 
 
 def given(args: argparse.Namespace, groups: Mapping[str, list[Flag]]) -> dict[str, Any]:
@@ -232,6 +245,9 @@ def changes(base: TrainConfig, texts: Mapping[str, Any],
     out = {}
     for key, value in texts.items():
         def typed(key=key, value=value):
+            if key == DOF_KEY:  # plant.body's number of hinges (4, 8), not a field
+                by_dof(value)
+                return int(value)
             typed = overrides.parse_value(chosen, key, value) if isinstance(value, str) \
                 else value
             chosen.override({key: typed}, check=False)  # its part's own checks
@@ -262,3 +278,25 @@ def flag_names(groups: Mapping[str, list[Flag]]) -> dict[str, str]:
 def _is_choice(cfg: TrainConfig, key: str) -> bool:
     """Does ``key`` choose a type (``method``, ``actuation``, ``forward``, ``method.fit``)?"""
     return dataclasses.is_dataclass(overrides.node(cfg, key))
+
+
+def add_body_flags(parser: argparse.ArgumentParser, default: str) -> None:
+    """``--body NAME`` and its alias ``--dof 4|8`` on a command that is not a training
+    (``default``: what the help says the default is); :func:`chosen_body` reads them."""
+    parser.add_argument("--body", type=_checked(body_name), default=argparse.SUPPRESS,
+                        metavar="NAME", help=f"{_bodies_help(BODY_HELP)} (default: {default})")
+    parser.add_argument("--dof", type=int, choices=tuple(DOF_ALIASES), default=argparse.SUPPRESS,
+                        help=f"{DOF_HELP} (default: {default})")
+
+
+def chosen_body(args: argparse.Namespace, default: str | None = "2d") -> str | int | None:
+    """The body :func:`add_body_flags`' flags chose: ``--body``'s name, or ``--dof``'s
+    number of hinges (``default`` when neither is given: a name, or None); both given and
+    naming different bodies is a :class:`SkinnyInputError`."""
+    name, dof = getattr(args, "body", None), getattr(args, "dof", None)
+    if name is not None and dof is not None:
+        if by_dof(dof, body_of(name).actuation) != name:
+            raise SkinnyInputError(f"--dof {dof} is the {by_dof(dof)} body and --body {name} "
+                                   "another: give one of them")
+        return name
+    return name if name is not None else dof if dof is not None else default

@@ -26,19 +26,19 @@ def check_train(cfg: Any, what: str = "the training") -> None:
     check(train_estimate(cfg, one * reps, one, 1, steps_cause(traj.name, one, reps)), what)
 
 
-def check_test(esn_cfg: Any, dof: int, n_sig: int) -> Any:
+def check_test(esn_cfg: Any, n_dof: int, n_sig: int) -> Any:
     """``check(steps, cause)`` for ``skinny test`` of a network with ``esn_cfg``."""
     def run(steps: int, cause: str) -> None:
-        check(test_estimate(esn_cfg.n_reservoir, esn_cfg.n_inputs, esn_cfg.n_outputs, dof,
+        check(test_estimate(esn_cfg.n_reservoir, esn_cfg.n_inputs, esn_cfg.n_outputs, n_dof,
                             n_sig, steps, cause), "the test",
               hint="use a shorter movement or fewer --reps")
     return run
 
 
-def check_track(dof: int, n_sig: int) -> Any:
+def check_track(n_dof: int, n_sig: int) -> Any:
     """``check(steps, cause)`` for ``skinny track``."""
     def run(steps: int, cause: str) -> None:
-        check(track_estimate(dof, n_sig, steps, cause), "tracking",
+        check(track_estimate(n_dof, n_sig, steps, cause), "tracking",
               hint="use a shorter movement or fewer --reps")
     return run
 
@@ -60,7 +60,7 @@ def check_sweep(module: Any, experiment: Any, rows: Any, runs: int | None,
               hint="use fewer --workers or --runs, or leave that row out with --rows")
 
 
-def check_export(dof: int, out: Any) -> Any:
+def check_export(n_dof: int, out: Any) -> Any:
     """Check ``skinny trajectory export``'s ``out`` (a writable .npz or .csv), and return
     ``check(steps, cause)`` for its memory: the repeated angles, the resampled and clipped
     copies and the file's text."""
@@ -69,7 +69,7 @@ def check_export(dof: int, out: Any) -> Any:
     check_writable_file(out)
 
     def run(steps: int, cause: str) -> None:
-        check(Estimate({"movement": steps * dof * _F8 * 4 + steps * dof * 25},
+        check(Estimate({"movement": steps * n_dof * _F8 * 4 + steps * n_dof * 25},
                        {"movement": cause}), "the export", hint="use fewer --reps")
     return run
 

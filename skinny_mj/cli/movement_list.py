@@ -81,17 +81,17 @@ def _pattern_about(name: str) -> str:
 def _named_rows() -> list[tuple[str, str]]:
     rows = []
     for name in names():
-        dofs = []
+        bodies = []
         duration = steps = None
-        for dof in sorted(body.BODIES):
+        for which in body.body_names():
             try:
-                traj = get(name, dof)
+                traj = get(name, which)
             except SkinnyInputError:
                 continue
-            dofs.append(str(dof))
+            bodies.append(which)
             steps, duration = len(traj), traj.duration_s
         about = ABOUT.get(name) or _pattern_about(name)
-        rows.append((name, f"{', '.join(dofs)} dof; {steps} steps, {duration:.2f} s; "
+        rows.append((name, f"{', '.join(bodies)}; {steps} steps, {duration:.2f} s; "
                            f"{about}"))
     return rows
 
@@ -111,7 +111,7 @@ def list_text(width: int | None = None) -> str:
     lines += columns(_named_rows(), width)
     lines += ["", *_heading(f"Shipped motion capture (CMU subject 05, modern dance, "
                             f"{CMU_FPS:g} Hz; a bare name or the path; retargeted onto "
-                            "dof 4 or 8 by joint angles):", width)]
+                            "any body by joint angles):", width)]
     frames = {clip: _frames(sample_clip(clip)) for clip in SAMPLE_CLIPS}
     lines += columns([(f"{clip}.amc", f"{n} frames, {n / CMU_FPS:.2f} s; skeleton "
                        f"{SAMPLE_ASF.name}, beside it, so no --asf is needed")
@@ -126,7 +126,7 @@ def list_text(width: int | None = None) -> str:
         ("FILE@start=S,duration=D", "an excerpt of any file above, in seconds: "
                                     "md_02.amc@start=3,duration=6.26"),
         ("ANY@feasible[=MARGIN]", "any movement (a name or a file) re-timed along its "
-                                  "own path for the torque twin of --dof: as fast as "
+                                  "own path for the body's torque twin: as fast as "
                                   "shipped where the "
                                   "torque limits allow, slower where not (at most MARGIN, "
                                   "default 0.9, of a limit): md_02.amc@feasible"),

@@ -31,6 +31,7 @@ class _Parser(argparse.ArgumentParser):
     --help`` does not import the config."""
 
     config_flags: str | None = None
+    body_flags: str | None = None  # a command's --body/--dof: the help's default body
 
     def _complete(self) -> None:
         name, self.config_flags = self.config_flags, None
@@ -38,6 +39,11 @@ class _Parser(argparse.ArgumentParser):
             from skinny_mj.cli import config_flags
 
             config_flags.add_flags(self, getattr(config_flags, name))
+        default, self.body_flags = self.body_flags, None
+        if default is not None:
+            from skinny_mj.cli import config_flags
+
+            config_flags.add_body_flags(self, default)
 
     def format_usage(self) -> str:
         self._complete()
@@ -103,15 +109,6 @@ class _Version(argparse.Action):
         parser.exit()
 
 
-def _dof(text: str) -> int:
-    """argparse type of ``--dof``: a body's dof (4, 8 or one another package registered),
-    else a one-line usage error naming the known ones."""
-    from skinny_mj.plant.body import check_dof
-
-    try:
-        return check_dof(int(text))
-    except (SkinnyInputError, ValueError) as err:
-        raise argparse.ArgumentTypeError(str(err)) from None
 
 def _out_path(text: str) -> Path:
     """argparse type of ``--out``: a path, not empty (``Path("")`` is the current folder:
@@ -204,7 +201,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "config JSON of dotted keys); flags given as well override its settings")
     p.add_argument("--preset", choices=("general",), help="a named configuration; flags "
                    "given as well override its settings. general: the inverse model for "
-                   "unseen movements, one per --dof and --signals (default: 2D, joint "
+                   "unseen movements, one per --body and --signals (default: 2D, joint "
                    "angles): motor babbling over every joint's whole range, its limits "
                    "and rests, full scale 4x its fastest speed (3D Cartesian: 240 s of "
                    "babbling then YMCA, 2x), paper E exp. 5 schedule; the configuration "
@@ -213,7 +210,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "general-3d-joint, general-2d-cartesian, general-3d-cartesian): skinny "
                    "test --model general-2d-joint --trajectory md_02.amc (a shipped clip; "
                    "another CMU clip: --trajectory CLIP.amc --asf SUBJECT.asf). "
-                   "With --actuation torque: the torque twin's general, one per --dof (joint "
+                   "On a torque body: the torque twin's general, one per body (joint "
                    "angles): 240 s of babbling at 0.5-4 rad/s (within the torque limits) then "
                    "YMCA, the inertia-scaled PD teacher (3D: poles at 20 rad/s, forgetting "
                    "0.9), the forgetting readout")
@@ -233,14 +230,14 @@ def build_parser() -> argparse.ArgumentParser:
     w = tsub.add_parser("show", help="a movement's statistics (still steps, peak speeds, "
                         "unreachable targets, tremor band)")
     w.add_argument("name")
-    w.add_argument("--dof", type=_dof, metavar="{4,8}", default=4)
+    w.body_flags = "2d"
     w.add_argument("--asf", type=Path)
     w.add_argument("--retarget", choices=("angles", "positions"), default="angles")
     w.add_argument("--actuation", choices=("velocity", "torque"), default="velocity",
                    help="torque: also the torques the movement needs on the torque twin")
     e = tsub.add_parser("export", help="write a movement to .npz or .csv")
     e.add_argument("name")
-    e.add_argument("--dof", type=_dof, metavar="{4,8}", default=4)
+    e.body_flags = "2d"
     e.add_argument("--asf", type=Path)
     e.add_argument("--speed", type=float, default=1.0)
     e.add_argument("--reps", type=_positive_int, default=1)
@@ -266,8 +263,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--movement", help="train/test every row on another movement (name or "
                    "file; default: the paper's); recorded in config.json, the name stays")
     p.add_argument("--asf", type=Path, help="ASF skeleton for an .amc --movement")
-    p.add_argument("--dof", type=_dof, metavar="{4,8}", help="2D (4) or 3D (8) Skinny "
-                   "(default: the paper's)")
+    p.body_flags = "the paper's"
     p.add_argument("--signals", choices=("joint", "cartesian"),
                    help="the networks' position signals (default: the paper's)")
     p.add_argument("--rows", type=_rows, help="comma-separated row ids and groups to run "
@@ -336,7 +332,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="processes for paper_e_full_s (default: all cores)")
 
     p = sub.add_parser("render", help="render Skinny to a PNG (needs MUJOCO_GL=egl)")
-    p.add_argument("--dof", type=_dof, metavar="{4,8}", default=4)
+    p.body_flags = "2d"
     p.add_argument("--trajectory", help="pose Skinny at a movement's frame (default: rest pose)")
     p.add_argument("--frame", type=int, default=0)
     p.add_argument("--width", type=_positive_int, default=640)
@@ -409,6 +405,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.command == "experiment" and args.config is not None:
         args.given = given_options(argv)  # which flags override the file
+        if "dof" in args.given:  # --dof is --body by its number of hinges
+            args.given.add("body")
     # Choose the GL backend before mujoco/dm_control are imported: no pixels unless rendering.
     if not os.environ.get("MUJOCO_GL", "").strip():  # unset, or set empty (`MUJOCO_GL= skinny`)
         os.environ["MUJOCO_GL"] = "egl" if args.command == "render" else "disabled"

@@ -2,7 +2,7 @@
 
 The help of one study is read off the study itself: its description (a Study's, or the
 module docstring), the rows, groups and runs of the ``Experiment`` its ``build()`` returns, which
-of ``--movement --dof --signals`` change its runs (each tried: a changed ``config.json``
+of ``--movement --body --signals`` change its runs (each tried: a changed ``config.json``
 means the option is taken, a refusal that it is not, no change that it has no effect),
 and its cost: the run count, the time per run measured by earlier sweeps under
 ``results/NAME/`` on this machine if any, and the wall time the docs report.
@@ -38,7 +38,7 @@ DOCUMENTED_WALL = {
     "generalization": "240 runs (its first 24 rows) in 21.5 min with --workers 1 on a "
                       "shared 2-core machine (docs/results/generalization.md)",
 }
-_PROBES = (("movement", ("y",)), ("dof", (4, 8)), ("signals", ("joint", "cartesian")))
+_PROBES = (("movement", ("y",)), ("body", ("2d", "3d")), ("signals", ("joint", "cartesian")))
 
 
 def list_text(width: int = WIDTH) -> str:

@@ -9,8 +9,8 @@ files only and :func:`markdown_table` sets our numbers beside the paper's.
 The contract
 ------------
 An :class:`Experiment` is the execution layer under a study. ``Study.build(*, quick=False,
-movement=None, asf=None, dof=None, signals=None) -> Experiment`` takes exactly the options
-of ``skinny experiment`` (``--quick --movement --asf --dof --signals``), each None meaning the
+movement=None, asf=None, body=None, signals=None) -> Experiment`` takes exactly the options
+of ``skinny experiment`` (``--quick --movement --asf --body --signals``), each None meaning the
 study's default; every one of them that changes the runs is in ``Experiment.config`` (the
 plan: ``config.json`` records it and ``--resume`` refuses a different one), never in the
 name: the name is the study's whatever the movement, so the default output folder stays
@@ -57,7 +57,7 @@ atomic writes are ignored)::
 **config.json** records ``experiment``, ``config``, every row (``rows``: row, params,
 paper[, runs]), ``groups``, ``runs``, ``base_seed``, ``selection`` (``{"requested":
 [entries] | None, "rows": [ids run]}``), ``options`` (the CLI's quick, movement, asf,
-dof, signals), ``started_at``, versions, and ``resumes`` (one ``{"at", "runs",
+body, signals), ``started_at``, versions, and ``resumes`` (one ``{"at", "runs",
 "selection", "options"}`` per ``--resume``). ``--resume`` needs the same experiment,
 config, rows and base_seed; the selection and ``--runs`` may differ. It reruns
 errored runs and runs missing ones, never an ok or failed one.
@@ -278,7 +278,7 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
         in lockstep; default :func:`default_batch_size` (whole rows when the rows
         share out evenly over the workers). 0 disables the fast path (every run
         through ``run_one``).
-    options : recorded in ``config.json`` (the CLI's quick, movement, asf, dof, signals).
+    options : recorded in ``config.json`` (the CLI's quick, movement, asf, body, signals).
 
     Returns
     -------

@@ -89,7 +89,7 @@ def prepare_out_dir(experiment: Any, out_dir: Path, runs: int, resume: bool,
 
 
 #: What each recorded key of a sweep's config.json is, in a refusal to resume it.
-_WHAT = {"config": "config (--quick, --movement, --dof, --signals, --protocol)",
+_WHAT = {"config": "config (--quick, --movement, --body, --signals, --protocol)",
          "rows": "rows (--rows, --quick)", "base_seed": "seed",
          "seeding": "seeding (this version seeds a run by its row's id, not its position)"}
 

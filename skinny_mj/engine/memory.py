@@ -25,7 +25,7 @@ def row_configs(module: Any, experiment: Any, row: Any) -> list[Any]:
 def _steps(cfg: Any, cache: dict) -> tuple[int, str]:
     """One repetition's control steps of ``cfg``'s movement (cached per movement)."""
     mv = cfg.movement
-    key = (mv.trajectory, mv.asf, cfg.plant.dof, mv.speed, mv.retarget)
+    key = (mv.trajectory, mv.asf, cfg.plant.body, mv.speed, mv.retarget)
     if key not in cache:
         from skinny_mj.training.parts import load_trajectory
 

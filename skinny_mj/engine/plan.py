@@ -4,7 +4,7 @@ kept row with its training configuration) and from it the engine's
 cost, table columns, the report).
 
 A row's configuration is ``study.base`` with, in order, the options of ``skinny
-experiment`` (``--movement`` -> trajectory + asf, ``--dof``, ``--signals``: those the
+experiment`` (``--movement`` -> trajectory + asf, ``--body``, ``--signals``: those the
 study ``takes``, any other refused in one line), the row's overrides (and, under
 ``--quick``, the row's ``quick`` ones), then the overrides after every row's
 (``Quick.overrides``; the contract test's ``tiny``). An option the study takes its own way
@@ -222,21 +222,21 @@ def _expand(study: Study, entries: Iterable[str]) -> set[str]:
 
 
 def plan(study: Study, *, quick: bool = False, tiny: bool = False,
-         movement: str | None = None, asf: Any = None, dof: int | None = None,
+         movement: str | None = None, asf: Any = None, body: str | int | None = None,
          signals: str | None = None) -> Plan:
     """Plan ``study`` for one sweep (see the module docstring); ``tiny``: also apply the
     study's ``tiny`` shrink (the contract test's)."""
-    given = {"movement": movement, "dof": dof, "signals": signals}
+    given = {"movement": movement, "body": body, "signals": signals}
     if refused := [k for k, v in given.items() if v is not None and k not in study.takes]:
         takes = ", ".join(f"--{k}" for k in study.takes) or "none of them"
         raise SkinnyInputError(f"study {study.name!r} takes no --{refused[0]} (it takes "
                                f"{takes})")
-    values = {"movement": {"movement": movement, "asf": asf}, "dof": {"dof": dof},
+    values = {"movement": {"movement": movement, "asf": asf}, "body": {"body": body},
               "signals": {"signals": signals}}
     for option, derive in study.own_options.items():  # a change of rows or params
         if given[option] is not None:
             study, given[option] = derive(study, **values[option]), None
-    changes = movement_changes(given["movement"], asf, given["dof"], given["signals"])
+    changes = movement_changes(given["movement"], asf, given["body"], given["signals"])
     base = study.base.override(changes) if changes else study.base
     after = dict(study.quick.overrides if quick else {})
     kept: Sequence[Row] = [r for r in study.rows if quick or not r.quick_only]

@@ -10,7 +10,7 @@ reproduces the thesis's numbers::
     skinny experiment paper-e --protocol thesis
 
 :func:`apply` sets a reading's config keys on the study's base (so ``--movement``,
-``--dof``, ``--signals`` and a row's own overrides still win: a row that sweeps the key
+``--body``, ``--signals`` and a row's own overrides still win: a row that sweeps the key
 keeps its values) and its parameters on the study's parameters (a custom run reads them).
 A reading names the studies whose setting it reads; a study that none of the protocol's
 readings is for is refused in one line.

@@ -10,7 +10,7 @@ declares one :class:`Study`::
         metrics={"position_nrmse": lambda r: r.test.position_nrmse}, runs=20)
 
 and the engine (:mod:`skinny_mj.engine.plan`) derives the rest: the sweep of (row, seed)
-runs, each run's training configuration (``base``, then ``--movement/--dof/--signals``,
+runs, each run's training configuration (``base``, then ``--movement/--body/--signals``,
 then the row's overrides, then ``--quick``'s), the lockstep run, its cost, its groups
 and its table.
 
@@ -28,8 +28,8 @@ A row's run that is none of these supplies ``run_batch(config, row, seeds) -> li
 whole study or for one row (:attr:`Row.run_batch`); ``config`` is the row's training
 configuration and ``row.params`` its study-specific parameters.
 
-An option of ``skinny experiment`` is a change of config keys (``--dof 8`` sets
-``plant.dof`` on the base). A study that takes one its own way instead, as a change of its
+An option of ``skinny experiment`` is a change of config keys (``--body 3d`` sets
+``plant.body`` on the base). A study that takes one its own way instead, as a change of its
 rows or params, names a function in ``own_options``: ``fn(study, **values) -> Study``, the
 study that option makes. Paper C's ``--movement X.amc --asf Y.asf`` adds a training row
 ``real`` and makes ``X.amc`` its test column ``real``::
@@ -203,7 +203,7 @@ class Study:
 
     def config(self, row_id: str, **options: Any) -> TrainConfig:
         """The training configuration of row ``row_id`` (full, not quick), with the
-        options of ``skinny experiment`` (``movement``, ``asf``, ``dof``, ``signals``)."""
+        options of ``skinny experiment`` (``movement``, ``asf``, ``body``, ``signals``)."""
         return plan(self, **options).config(row_id)
 
     def run(self, config: TrainConfig, row: Row, seeds: list[int]) -> list[Any]:
@@ -218,9 +218,9 @@ class Study:
 
     # -- what `skinny experiment`, the memory check and the study help call --
     def build(self, quick: bool = False, movement: str | None = None, asf: Any = None,
-              dof: int | None = None, signals: str | None = None) -> Any:
+              body: str | int | None = None, signals: str | None = None) -> Any:
         """The :class:`~skinny_mj.engine.experiment.Experiment` of ``skinny experiment NAME``."""
-        return plan(self, quick=quick, movement=movement, asf=asf, dof=dof,
+        return plan(self, quick=quick, movement=movement, asf=asf, body=body,
                     signals=signals).experiment()
 
     def train_configs(self, config: Any, row: Any) -> dict[str, TrainConfig]:

@@ -4,18 +4,18 @@
 >>> env = gymnasium.make("SkinnyMJ/Skinny2D-v0")                       # doctest: +SKIP
 >>> envs = gymnasium.make_vec("SkinnyMJ/Skinny2D-v0", num_envs=64)     # doctest: +SKIP
 
-====================================  ===  ==========  ===================================
-id                                    DOF  actuation   action
-====================================  ===  ==========  ===================================
-``SkinnyMJ/Skinny2D-v0``              4    velocity    normalized joint velocity
-``SkinnyMJ/Skinny3D-v0``              8    velocity    normalized joint velocity
-``SkinnyMJ/Skinny2D-Torque-v0``       4    torque      normalized torque (x gear N m)
-``SkinnyMJ/Skinny3D-Torque-v0``       8    torque      normalized torque (x gear N m)
-====================================  ===  ==========  ===================================
+====================================  ===========  ===  ===================================
+id                                    body         DOF  action
+====================================  ===========  ===  ===================================
+``SkinnyMJ/Skinny2D-v0``              2d           4    normalized joint velocity
+``SkinnyMJ/Skinny3D-v0``              3d           8    normalized joint velocity
+``SkinnyMJ/Skinny2D-Torque-v0``       2d-torque    4    normalized torque (x gear N m)
+``SkinnyMJ/Skinny3D-Torque-v0``       3d-torque    8    normalized torque (x gear N m)
+====================================  ===========  ===  ===================================
 
 Every other argument of :func:`skinny_mj.plant.task.load` is a ``make`` keyword
 (``signals``, ``trajectory``, ``sensor_noise``, ``seed``, ``max_speed_rad_s``,
-``speed_factor``); a ``dof`` or ``actuation`` that contradicts the id is refused
+``speed_factor``); a ``body`` that contradicts the id is refused
 (:class:`~skinny_mj.errors.SkinnyInputError`, naming the id that has it). Each id's
 ``max_episode_steps`` is YMCA's length, :data:`MAX_EPISODE_STEPS` control steps (the
 default movement's episode); another movement plays to its own end, and one longer than
@@ -51,10 +51,10 @@ NAMESPACE = "SkinnyMJ"
 #: control steps (the episode of the default movement; a test checks it).
 MAX_EPISODE_STEPS = 312
 IDS = {
-    f"{NAMESPACE}/Skinny2D-v0": {"dof": 4, "actuation": "velocity"},
-    f"{NAMESPACE}/Skinny3D-v0": {"dof": 8, "actuation": "velocity"},
-    f"{NAMESPACE}/Skinny2D-Torque-v0": {"dof": 4, "actuation": "torque"},
-    f"{NAMESPACE}/Skinny3D-Torque-v0": {"dof": 8, "actuation": "torque"},
+    f"{NAMESPACE}/Skinny2D-v0": {"body": "2d"},
+    f"{NAMESPACE}/Skinny3D-v0": {"body": "3d"},
+    f"{NAMESPACE}/Skinny2D-Torque-v0": {"body": "2d-torque"},
+    f"{NAMESPACE}/Skinny3D-Torque-v0": {"body": "3d-torque"},
 }
 
 
@@ -67,7 +67,7 @@ def register() -> None:
             id=env_id,
             entry_point="skinny_mj.gym.env:SkinnyEnv",
             vector_entry_point="skinny_mj.gym.vector:SkinnyVectorEnv",
-            kwargs={"env_id": env_id, **kwargs},  # the env refuses a dof the id contradicts
+            kwargs={"env_id": env_id, **kwargs},  # the env refuses a body the id contradicts
             max_episode_steps=MAX_EPISODE_STEPS,
         )
 

@@ -8,7 +8,7 @@ Observation, (3 n_signals,) float64, normalized units::
 ``sensed`` is the task's noisy position signals (unbounded: Gaussian sensor noise),
 ``desired`` / ``desired_next`` the movement's signals now and one step ahead (bounded by
 the movement's range, at least [-1, 1]). Action, (n_dof,) float64 in [-1, 1]: a
-normalized joint velocity (``actuation="velocity"``) or torque (``"torque"``); finite
+normalized joint velocity (a velocity body) or torque (a torque body); finite
 values outside are clipped by the task; a NaN or infinite action raises ``ValueError``
 (it never reaches MuJoCo). Reward: the task's, ``-mean |desired(t) - true(t)|``
 after the step. An episode is the movement, T - 1 steps; it ends with
@@ -35,28 +35,28 @@ from gymnasium.utils import seeding
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.gym import IDS, MAX_EPISODE_STEPS
+from skinny_mj.plant.body import BodyLike, body_name
 from skinny_mj.plant.render import check_rendering
-from skinny_mj.plant.task import Setup, finite_actions, load
+from skinny_mj.plant.task import Setup, arguments, finite_actions, load
 from skinny_mj.trajectories import resolve_trajectory
 
 RENDER_CAMERA = "front"
 
 
-def check_id(env_id: str | None, dof: int, actuation: str, n_steps: int,
+def check_id(env_id: str | None, body: BodyLike, n_steps: int,
              max_episode_steps: int | None = None) -> None:
-    """Refuse a ``dof`` or ``actuation`` that contradicts the registered ``env_id`` (a
+    """Refuse a ``body`` that contradicts the registered ``env_id`` (a
     :class:`SkinnyInputError` naming the id that has it); warn when the movement's
     ``n_steps`` exceed the episode's limit (``max_episode_steps``, default the id's)."""
     if env_id is None:
         return
     if env_id not in IDS:
         raise SkinnyInputError(f"unknown env_id {env_id!r}; known: {', '.join(IDS)}")
-    fixed = IDS[env_id]
-    for key, value in (("dof", dof), ("actuation", actuation)):
-        if value != fixed[key]:
-            other = [i for i, kw in IDS.items() if kw == {**fixed, key: value}]
-            raise SkinnyInputError(f"{env_id} has {key}={fixed[key]!r}, got {key}={value!r}"
-                                   + (f": use {other[0]}" if other else ""))
+    fixed, name = IDS[env_id]["body"], body_name(body)
+    if name != fixed:
+        other = [i for i, kw in IDS.items() if kw["body"] == name]
+        raise SkinnyInputError(f"{env_id} has body={fixed!r}, got body={name!r}"
+                               + (f": use {other[0]}" if other else ""))
     limit = MAX_EPISODE_STEPS if max_episode_steps is None else max_episode_steps
     if 0 < limit < n_steps:
         warnings.warn(f"{env_id}: episodes end after max_episode_steps={limit} of the "
@@ -75,9 +75,9 @@ def observation_space(setup: Setup) -> spaces.Box:
     return spaces.Box(low, high, dtype=np.float64)
 
 
-def action_space(dof: int) -> spaces.Box:
-    """(dof,) normalized commands in [-1, 1]."""
-    return spaces.Box(-1.0, 1.0, (dof,), dtype=np.float64)
+def action_space(n_dof: int) -> spaces.Box:
+    """(n_dof,) normalized commands in [-1, 1]."""
+    return spaces.Box(-1.0, 1.0, (n_dof,), dtype=np.float64)
 
 
 class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
@@ -85,32 +85,27 @@ class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
 
     Parameters
     ----------
-    dof, signals, actuation, sensor_noise, max_speed_rad_s, speed_factor :
-        as in :func:`skinny_mj.plant.task.load`.
-    trajectory : see :func:`resolve_trajectory`; default the synthesized YMCA.
-    seed : seed of the noise Generator until ``reset(seed=...)`` replaces it.
+    *task, **task_kw : the arguments of :func:`skinny_mj.plant.task.load` (``body``,
+        ``signals``, ``trajectory``, ``sensor_noise``, ``seed``, ``max_speed_rad_s``,
+        ``speed_factor``), ``trajectory`` also a name or file (:func:`resolve_trajectory`;
+        default the synthesized YMCA), ``seed`` the noise Generator's until
+        ``reset(seed=...)`` replaces it.
     render_mode : None or "rgb_array" (needs an OpenGL backend, e.g. ``MUJOCO_GL=egl``).
     width, height : rendered image size in pixels (at most 640 x 480).
     env_id : the Gymnasium id this env is made for (``gymnasium.make`` passes it): a
-        ``dof`` or ``actuation`` contradicting it is refused (:func:`check_id`).
+        ``body`` contradicting it is refused (:func:`check_id`).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
 
     def __init__(
         self,
-        dof: int = 4,
-        signals: str = "cartesian",
-        trajectory: Any = None,
-        actuation: str = "velocity",
-        sensor_noise: float = 0.01,
-        seed: int = 0,
-        max_speed_rad_s: float | np.ndarray | None = None,
-        speed_factor: float = 2.0,
+        *task: Any,
         render_mode: str | None = None,
         width: int = 320,
         height: int = 240,
         env_id: str | None = None,
+        **task_kw: Any,
     ):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise SkinnyInputError(f"render_mode must be None or 'rgb_array', got "
@@ -123,15 +118,15 @@ class SkinnyEnv(gymnasium.Env[np.ndarray, np.ndarray]):
             check_rendering()  # MUJOCO_GL=disabled: one line saying how to turn it on
         self.render_mode = render_mode
         self.width, self.height = int(width), int(height)
-        self.dm_control_env = load(dof, signals, resolve_trajectory(trajectory, dof),
-                                   actuation, sensor_noise, seed, max_speed_rad_s,
-                                   speed_factor)
+        given = arguments(*task, **task_kw)
+        given["trajectory"] = resolve_trajectory(given["trajectory"], given["body"])
+        self.dm_control_env = load(**given)
         self.setup: Setup = self.dm_control_env.task.setup
-        check_id(env_id, dof, actuation, self.n_steps)
+        check_id(env_id, self.setup.body, self.n_steps)
         self.observation_space = observation_space(self.setup)
-        self.action_space = action_space(dof)
+        self.action_space = action_space(self.setup.dof)
         # default_rng(seed) and Gymnasium's np_random(seed) are the same stream
-        self._np_random, self._np_random_seed = seeding.np_random(seed)
+        self._np_random, self._np_random_seed = seeding.np_random(given["seed"])
         self._running = False
 
     @property

@@ -51,7 +51,7 @@ from skinny_mj.gym.env import (
     resolve_trajectory,
 )
 from skinny_mj.plant.adapters import BatchPlant
-from skinny_mj.plant.task import finite_actions
+from skinny_mj.plant.task import arguments, finite_actions
 
 
 class SkinnyVectorEnv(VectorEnv):
@@ -60,12 +60,11 @@ class SkinnyVectorEnv(VectorEnv):
     Parameters
     ----------
     num_envs : N.
-    dof, signals, trajectory, actuation, sensor_noise, max_speed_rad_s, speed_factor :
-        as :class:`skinny_mj.gym.env.SkinnyEnv`.
-    seed : sub-environment i draws its noise from ``default_rng(seed + i)`` until
-        ``reset(seed=...)``.
-    env_id : the Gymnasium id (``make_vec`` passes it): a ``dof`` or ``actuation``
-        contradicting it is refused.
+    *task, **task_kw : the arguments of :func:`skinny_mj.plant.task.load`, as
+        :class:`skinny_mj.gym.env.SkinnyEnv` takes them; sub-environment i draws its noise
+        from ``default_rng(seed + i)`` until ``reset(seed=...)``.
+    env_id : the Gymnasium id (``make_vec`` passes it): a ``body`` contradicting it is
+        refused.
     max_episode_steps : episodes end (``truncated``) after this many steps, or at the
         movement's end if sooner (``make_vec`` passes the id's, YMCA's length); None:
         the movement's end.
@@ -76,32 +75,25 @@ class SkinnyVectorEnv(VectorEnv):
     def __init__(
         self,
         num_envs: int,
-        dof: int = 4,
-        signals: str = "cartesian",
-        trajectory: Any = None,
-        actuation: str = "velocity",
-        sensor_noise: float = 0.01,
-        seed: int = 0,
-        max_speed_rad_s: float | np.ndarray | None = None,
-        speed_factor: float = 2.0,
+        *task: Any,
         env_id: str | None = None,
         max_episode_steps: int | None = None,
+        **task_kw: Any,
     ):
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) \
                 or num_envs < 1:
             raise SkinnyInputError(f"num_envs must be a whole number >= 1, got {num_envs!r}")
         self.num_envs = int(num_envs)
         self.render_mode = None
-        self._plant_kwargs = dict(
-            dof=dof, signals=signals, trajectory=resolve_trajectory(trajectory, dof),
-            actuation=actuation, sensor_noise=sensor_noise, max_speed_rad_s=max_speed_rad_s,
-            speed_factor=speed_factor,
-        )
+        self._plant_kwargs = arguments(*task, **task_kw)
+        seed = self._plant_kwargs.pop("seed")
+        self._plant_kwargs["trajectory"] = resolve_trajectory(self._plant_kwargs["trajectory"],
+                                                              self._plant_kwargs["body"])
         seeds = [int(seed) + i for i in range(self.num_envs)]
         self.plant = BatchPlant(n_runs=self.num_envs, seeds=seeds, **self._plant_kwargs)
         self._fresh_seeds: list[int] | None = seeds  # the plant's Generators are unused
         self.setup = self.plant.setup
-        check_id(env_id, dof, actuation, len(self.setup.desired) - 1, max_episode_steps)
+        check_id(env_id, self.setup.body, len(self.setup.desired) - 1, max_episode_steps)
         if max_episode_steps == -1:  # Gymnasium's "no time limit"
             max_episode_steps = None
         if max_episode_steps is not None and max_episode_steps < 1:
@@ -109,7 +101,7 @@ class SkinnyVectorEnv(VectorEnv):
         self._limit = len(self.setup.desired) - 1 if max_episode_steps is None \
             else min(int(max_episode_steps), len(self.setup.desired) - 1)
         self.single_observation_space = observation_space(self.setup)
-        self.single_action_space = action_space(dof)
+        self.single_action_space = action_space(self.setup.dof)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._np_random, self._np_random_seed = seeding.np_random(seed)

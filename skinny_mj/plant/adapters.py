@@ -19,7 +19,7 @@ import mujoco
 import numpy as np
 
 from skinny_mj.controllers.plant import Plant as _Plant
-from skinny_mj.plant import body
+from skinny_mj.plant.body import BodyLike, signal_set
 from skinny_mj.plant.model import BATCH_PREFIX, load_batch_model, load_model
 from skinny_mj.plant.physics import Layout, segment_jacobian, segment_signals, servo_ctrl
 from skinny_mj.plant.task import Setup, prepare, widen_ctrlrange
@@ -42,6 +42,7 @@ class EnvPlant:
         self.task = env.task
         self.physics = env.physics
         setup: Setup = self.task.setup
+        self.body = setup.body
         self.n_runs = 1
         self.n_dof = setup.dof
         self.n_signals = setup.desired.shape[1]
@@ -107,7 +108,7 @@ class BatchPlant:
 
     Parameters
     ----------
-    dof, signals, trajectory, actuation, sensor_noise, max_speed_rad_s, speed_factor :
+    body, signals, trajectory, sensor_noise, max_speed_rad_s, speed_factor :
         as in :func:`skinny_mj.plant.task.load`.
     n_runs : R.
     seeds : R seeds of the per-run noise generators; default ``range(n_runs)``.
@@ -115,36 +116,37 @@ class BatchPlant:
 
     def __init__(
         self,
-        dof: int = 4,
+        body: BodyLike = "2d",
         signals: str = "cartesian",
         trajectory: Any = None,
         n_runs: int = 1,
         seeds: Sequence[int] | None = None,
         sensor_noise: float = 0.01,
-        actuation: str = "velocity",
         max_speed_rad_s: float | np.ndarray | None = None,
         speed_factor: float = 2.0,
     ):
-        self.setup = prepare(dof, signals, trajectory, actuation, sensor_noise,
-                             max_speed_rad_s, speed_factor)
+        self.setup = prepare(body, signals, trajectory, sensor_noise, max_speed_rad_s,
+                             speed_factor)
+        self.body = self.setup.body
         seeds = list(range(n_runs)) if seeds is None else list(seeds)
         if n_runs < 1 or len(seeds) != n_runs:
             raise ValueError(f"need n_runs >= 1 and one seed per run, got {n_runs}, {seeds}")
-        one = load_model(dof, actuation)  # names and indices of one robot
-        self.layout = Layout(one)
-        self.model = load_batch_model(dof, n_runs, actuation)
+        one = load_model(self.body)  # names and indices of one robot
+        self.layout = Layout(one, self.body)
+        self.model = load_batch_model(self.body, n_runs)
         for r in range(n_runs):
             widen_ctrlrange(self.model, r * one.nu + self.layout.actuator_ids, self.setup)
         self.data = mujoco.MjData(self.model)
         self.rngs = [np.random.default_rng(s) for s in seeds]
         self.seeds = seeds
         self.n_runs = n_runs
-        self.n_dof = dof
+        self.n_dof = self.body.dof
+        self._torque = self.setup.actuation == "torque"
         self.n_signals = self.setup.desired.shape[1]
         self.dt = self.setup.dt
         self.max_speed_rad_s = self.setup.max_speed_rad_s
         self.signals = signals
-        self._signal_set = body.signal_set(signals)
+        self._signal_set = signal_set(signals)
         self.n_substeps = int(round(self.dt / self.model.opt.timestep))
         self._rk4 = self.model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4
         self._init_views(one)
@@ -232,7 +234,7 @@ class BatchPlant:
 
     def step(self, command: np.ndarray) -> np.ndarray:
         command = np.asarray(command, dtype=float).reshape(self.n_runs, self.n_dof)
-        if self.setup.actuation == "torque":
+        if self._torque:
             ctrl = np.clip(command, -1.0, 1.0)
         else:
             ctrl = servo_ctrl(command, self.joint_angles(), self.max_speed_rad_s,
@@ -257,11 +259,11 @@ class BatchPlant:
         if self._signals is None:
             sig, q = self._signal_set, self.joint_angles()
             if sig.base == "joint":
-                base = body.normalize_angles(q, self.n_dof)
+                base = self.body.normalize_angles(q)
             else:
                 pts = self._site_xpos[:, self._site_sel].reshape(self.n_runs, 2, 3, 3)
                 base = segment_signals(pts, self.layout.arm_lengths, self._comp_sel)
-            self._signals = sig.extend(base, q, self.n_dof)
+            self._signals = sig.extend(base, q, self.body)
         return self._signals
 
     def joint_angles(self) -> np.ndarray:
@@ -277,7 +279,7 @@ class BatchPlant:
             points = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
             jac = segment_jacobian(axes, points, self.layout.segment_pairs,
                                    self.layout.segment_lengths, self.layout.components)
-        jac = sig.extend_jacobian(jac, self.n_dof) * (self.max_speed_rad_s * self.dt)
+        jac = sig.extend_jacobian(jac, self.body) * (self.max_speed_rad_s * self.dt)
         return jac  # as EnvPlant.command_jacobian
 
 

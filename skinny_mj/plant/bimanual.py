@@ -22,19 +22,22 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from skinny_mj.plant import body
 from skinny_mj.plant.adapters import BatchPlant
+from skinny_mj.plant.body import BodyLike, body_of
 from skinny_mj.plant.ideal import ideal_command
 
 
-def arm_dofs(dof: int, side: str) -> np.ndarray:
-    """Indices of ``side``'s DOFs in :func:`skinny_mj.plant.body.dof_names` order."""
-    return np.array([i for i, n in enumerate(body.dof_names(dof)) if n.startswith(side + "_")])
+def arm_dofs(which: BodyLike, side: str) -> np.ndarray:
+    """Indices of ``side``'s DOFs in the body's :attr:`~skinny_mj.plant.body.Body.dof_names`
+    order."""
+    return np.array([i for i, n in enumerate(body_of(which).dof_names)
+                     if n.startswith(side + "_")])
 
 
-def arm_signals(dof: int, signals: str, side: str) -> np.ndarray:
-    """Indices of ``side``'s position signals in :func:`skinny_mj.plant.body.signal_names` order."""
-    return np.array([i for i, n in enumerate(body.signal_names(dof, signals))
+def arm_signals(which: BodyLike, signals: str, side: str) -> np.ndarray:
+    """Indices of ``side``'s position signals in the body's
+    :meth:`~skinny_mj.plant.body.Body.signal_names` order."""
+    return np.array([i for i, n in enumerate(body_of(which).signal_names(signals))
                      if n.startswith(side + "_")])
 
 
@@ -49,38 +52,38 @@ class BimanualPlant:
 
     Parameters
     ----------
-    dof, signals : the body (4 or 8 DOF) and its position signals.
+    body, signals : the body and its position signals.
     trajectory : the whole movement (both arms, rad); the leader's part is enforced.
     leading : the forced arm, "right" or "left".
-    max_speed_rad_s : (dof,) full-scale speeds of the body, rad/s.
-    n_runs, seeds, sensor_noise, actuation : as :class:`BatchPlant`.
+    max_speed_rad_s : (n_dof,) full-scale speeds of the body, rad/s.
+    n_runs, seeds, sensor_noise : as :class:`BatchPlant`.
     """
 
-    def __init__(self, dof: int, signals: str, trajectory, leading: str,
+    def __init__(self, body: BodyLike, signals: str, trajectory, leading: str,
                  max_speed_rad_s: np.ndarray, n_runs: int = 1, seeds: Sequence[int] | None = None,
-                 sensor_noise: float = 0.01, actuation: str = "velocity"):
+                 sensor_noise: float = 0.01):
         if leading not in ("right", "left"):
             raise ValueError(f"leading arm must be 'right' or 'left', got {leading!r}")
         self.angles = np.asarray(trajectory.angles, float)
-        self.lead = arm_dofs(dof, leading)
-        self.lag = arm_dofs(dof, "left" if leading == "right" else "right")
-        self.body = BatchPlant(dof, signals, trajectory, n_runs=n_runs, seeds=seeds,
-                               sensor_noise=sensor_noise, actuation=actuation,
-                               max_speed_rad_s=max_speed_rad_s)
-        self.n_runs, self.n_dof, self.n_signals = n_runs, len(self.lag), self.body.n_signals
-        self.dt = self.body.dt
-        self.full_max_speed_rad_s = np.asarray(self.body.max_speed_rad_s, float)
+        self.lead = arm_dofs(body, leading)
+        self.lag = arm_dofs(body, "left" if leading == "right" else "right")
+        self.whole = BatchPlant(body, signals, trajectory, n_runs=n_runs, seeds=seeds,
+                                sensor_noise=sensor_noise, max_speed_rad_s=max_speed_rad_s)
+        self.body = self.whole.body
+        self.n_runs, self.n_dof, self.n_signals = n_runs, len(self.lag), self.whole.n_signals
+        self.dt = self.whole.dt
+        self.full_max_speed_rad_s = np.asarray(self.whole.max_speed_rad_s, float)
         self.max_speed_rad_s = self.full_max_speed_rad_s[self.lag]
         self._t = 0
 
     def reset(self) -> np.ndarray:
         self._t = 0
-        return self.body.reset()
+        return self.whole.reset()
 
     def leader_command(self) -> np.ndarray:
         """Ideal command (R, n_arm) that puts the leading arm on its next pose."""
         target = self.angles[min(self._t + 1, len(self.angles) - 1), self.lead]
-        q = self.body.joint_angles()[:, self.lead]
+        q = self.whole.joint_angles()[:, self.lead]
         return ideal_command(target, q, self.full_max_speed_rad_s[self.lead], self.dt)
 
     def step(self, command: np.ndarray) -> np.ndarray:
@@ -88,17 +91,17 @@ class BimanualPlant:
         full[:, self.lead] = self.leader_command()
         full[:, self.lag] = np.asarray(command, float).reshape(self.n_runs, self.n_dof)
         self._t += 1
-        return self.body.step(full)
+        return self.whole.step(full)
 
     def true_signals(self) -> np.ndarray:
-        return self.body.true_signals()
+        return self.whole.true_signals()
 
     def joint_angles(self) -> np.ndarray:
         """The whole body's joint angles (R, dof) rad (recordings show both arms)."""
-        return self.body.joint_angles()
+        return self.whole.joint_angles()
 
     def command_jacobian(self) -> np.ndarray:
-        return self.body.command_jacobian()[:, :, self.lag]
+        return self.whole.command_jacobian()[:, :, self.lag]
 
 
 def phase_lag_deg(actual: np.ndarray, desired: np.ndarray, period_steps: float) -> float:

@@ -3,8 +3,8 @@ joint trajectory, and the torques that replay a movement step by step.
 
 The plant side of torque control (the controllers in ``controllers/torque_feedback.py``
 are pure NumPy and take these as arrays). Every function works on one robot's compiled
-model (:func:`skinny_mj.plant.model.load_model` ``(dof, "torque")``) and returns per-DOF
-arrays in :func:`skinny_mj.plant.body.dof_names` order, in N m, or normalized by the motors'
+model (:func:`skinny_mj.plant.model.load_model` of a torque body) and returns per-DOF
+arrays in :attr:`skinny_mj.plant.body.Body.dof_names` order, in N m, or normalized by the motors'
 peak torques (:func:`torque_limits_nm`; normalized torque = ctrl).
 
 Conventions (MuJoCo's): ``M(q) qdd + c(q, qd) = tau + tau_passive``, with
@@ -21,7 +21,7 @@ import numpy as np
 
 from skinny_mj.controllers.feedback import jacobian_error
 from skinny_mj.controllers.torque_arm import ArmState
-from skinny_mj.plant import body
+from skinny_mj.plant.body import Body
 from skinny_mj.plant.model import load_batch_model
 from skinny_mj.plant.physics import Layout
 
@@ -32,12 +32,13 @@ class Dynamics:
 
     Parameters
     ----------
-    model : a compiled one-robot Skinny model, usually the torque twin.
+    model : a compiled one-robot model of ``skinny``, usually a torque body's.
+    skinny : the :class:`~skinny_mj.plant.body.Body` it is.
     """
 
-    def __init__(self, model: mujoco.MjModel):
+    def __init__(self, model: mujoco.MjModel, skinny: Body):
         self.model = model
-        self.layout = Layout(model)
+        self.layout = Layout(model, skinny)
         self.data = mujoco.MjData(model)
         self.n_dof = self.layout.dof
 
@@ -86,7 +87,7 @@ class Dynamics:
         """Smallest and largest diagonal of M (each (n_dof,), kg m^2) over ``n_poses``
         random poses inside the joint ranges: what a joint's own inertia can be."""
         rng = np.random.default_rng(seed)
-        lo, hi = body.joint_ranges(self.n_dof).T
+        lo, hi = self.layout.body.joint_ranges().T
         diag = np.array([np.diag(self.mass_matrix(rng.uniform(lo, hi)))
                          for _ in range(n_poses)])
         return diag.min(axis=0), diag.max(axis=0)
@@ -198,7 +199,7 @@ class BatchArmState:
     def __init__(self, plant, gravity: bool = False, nominal: bool = False, sensing=None,
                  constant_mass: np.ndarray | None = None):
         self.plant, self.n_runs, self.sensing = plant, plant.n_runs, sensing
-        self.model = load_batch_model(plant.n_dof, plant.n_runs, "torque") if nominal \
+        self.model = load_batch_model(plant.body, plant.n_runs) if nominal \
             else plant.model
         m = self.model
         self._own = mujoco.MjData(m) if nominal or sensing is not None else None
@@ -213,7 +214,7 @@ class BatchArmState:
         self._scratch = mujoco.MjData(m) if gravity else None
         self._constant = None if constant_mass is None else np.broadcast_to(
             np.asarray(constant_mass, float), (plant.n_runs, len(self.adr), len(self.adr)))
-        lo, hi = body.joint_ranges(plant.n_dof).T
+        lo, hi = plant.body.joint_ranges().T
         self._per_rad = 2.0 / (hi - lo)
 
     def sensed_angles(self, sensed: np.ndarray) -> np.ndarray:

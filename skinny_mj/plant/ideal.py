@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinny_mj.plant import body
+from skinny_mj.plant.body import BodyLike, body_of
 
 # Full scale of a DOF that (almost) does not move in the movement, rad/s: keeps a
 # still joint controllable (0.5 rad/s = 0.01 rad per 20 ms step at command 1).
@@ -77,16 +77,17 @@ class IdealController:
         return ideal_command(target, q, self.max_speed_rad_s, self.dt)
 
 
-def one_step_positions(trajectory, signals: str, max_speed_rad_s: np.ndarray):
+def one_step_positions(trajectory, which: BodyLike, signals: str,
+                       max_speed_rad_s: np.ndarray):
     """The true-target architecture's training position error: each teacher-forced
-    command applied for one step from the desired pose q_d(t), through Skinny's
+    command applied for one step from the desired pose q_d(t), through the body's
     kinematics (the servo follows a command to < 1 %; joints clip at their ranges)."""
-    dof, dt = trajectory.dof, trajectory.dt
-    lo, hi = body.joint_ranges(dof).T
+    skinny, dt = body_of(which), trajectory.dt
+    lo, hi = skinny.joint_ranges().T
     q_from = trajectory.angles[:-1]
 
     def one_step(_positions: np.ndarray, commands: np.ndarray) -> np.ndarray:
         q_next = np.clip(q_from + np.clip(commands, -1, 1) * max_speed_rad_s * dt, lo, hi)
-        return body.position_signals(q_next, dof, signals)
+        return skinny.position_signals(q_next, signals)
 
     return one_step

@@ -1,12 +1,14 @@
-"""Where Skinny's MJCF files live and how to load them (velocity servo or torque twin).
+"""Loading a body's MJCF (:class:`skinny_mj.plant.body.Body`): the scene, the robot alone,
+a batch of copies, and the check that its MJCF is what the analytic kinematics assumes.
 
-The XML in ``models/skinny/`` is the single body description; it ships inside the wheel
-as the package data ``skinny_mj.models``. The torque twin is
-made from the same XML with :class:`mujoco.MjSpec` (:func:`load_spec`): the velocity
-actuators become ``<motor>`` actuators of the same names, and the arm becomes a physical
-one: gravity acts (no gravity compensation), segment masses, centres of mass and
-inertias come from de Leva's (1996) anthropometric table scaled to Skinny's segment
-lengths (:func:`segment_inertias`), torques are limited to conservative human strength
+Every body, velocity servo or torque twin, is its own MJCF file. The torque twins'
+(``models/skinny/skinny_{2d,3d}_torque.xml``) are made from the velocity bodies' XML by
+:func:`torque_spec` with :class:`mujoco.MjSpec` edits (written out by
+:mod:`skinny_mj.plant.torque_files`): the velocity actuators become ``<motor>``
+actuators of the same names, and the arm becomes a physical one: gravity acts (no
+gravity compensation), segment masses, centres of mass and inertias come from de Leva's
+(1996) anthropometric table scaled to Skinny's segment lengths
+(:func:`segment_inertias`), torques are limited to conservative human strength
 (:data:`TORQUE_GEAR_NM`), and the physics step and integrator are the ones
 ``benchmarks/torque_step_check.py`` measured. The numbers and their sources are in
 ``models/skinny/README.md``.
@@ -14,21 +16,17 @@ lengths (:func:`segment_inertias`), torques are limited to conservative human st
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
-from importlib.resources import files
-from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.mjcf import compile_spec, read_model, read_spec
 from skinny_mj.plant import body
-from skinny_mj.plant.mjcf import compile_spec, read_model, read_spec
+from skinny_mj.plant.body import Body, BodyLike, body_of
 
-MODELS_ENV_VAR = "SKINNY_MJ_MODELS"
-ACTUATIONS = ("velocity", "torque")
 # -- the torque twin: a physical arm (sources and measurements: models/skinny/README.md)
 # Peak joint torque (N m): the motor's gear (ctrl in [-1, 1] times gear) and the joint's
 # actuatorfrcrange. Conservative adult-male strength: set by the weaker direction of each
@@ -97,61 +95,35 @@ DE_LEVA_MALE = {
     "forearm": (0.0162, 0.4574, 0.276, 0.265, 0.121),
     "hand": (0.0061, 0.3624, 0.288, 0.235, 0.184),
 }
-SEGMENT_LENGTH_M = {"upper_arm": body.UPPER_ARM_LENGTH_M, "forearm": body.FOREARM_LENGTH_M,
-                    "hand": body.HAND_LENGTH_M}
+#: The hand's length, m: the wrist's joint centre to the tip of the middle finger (the
+#: hand capsule of Skinny's MJCF; the arms' kinematics ends at the wrist).
+HAND_LENGTH_M = 0.18
 
 
-def models_dir() -> Path:
-    """The folder holding Skinny's XML: ``$SKINNY_MJ_MODELS``, else the installed package
-    data ``skinny_mj.models`` (the repo's top-level ``models/``, mapped in pyproject):
-    ``<repo>/models/skinny`` in an editable install, inside site-packages otherwise."""
-    override = os.environ.get(MODELS_ENV_VAR)
-    if override:
-        return Path(override)
-    try:
-        return Path(str(files("skinny_mj.models").joinpath("skinny")))
-    except ModuleNotFoundError:  # an install from before the models were package data
-        raise SkinnyEnvironmentError(f"skinny_mj.models is not installed: reinstall the "
-                                     f"package (pip install -e .) or set {MODELS_ENV_VAR}"
-                                     ) from None
+def load_spec(which: BodyLike, scene: bool = True) -> mujoco.MjSpec:
+    """The body's scene (``scene=False``: the robot alone) as an editable
+    :class:`mujoco.MjSpec`, its MJCF checked first (:func:`check_on_load`)."""
+    skinny = body_of(which)
+    check_on_load(skinny)
+    return read_spec(skinny.path(scene))
 
 
-def _check(dof: int, actuation: str = "velocity") -> None:
-    body.check_dof(dof)
-    if actuation not in ACTUATIONS:
-        raise SkinnyInputError(f"actuation must be one of {ACTUATIONS}, got {actuation!r}")
-
-
-def xml_path(dof: int, scene: bool = True) -> Path:
-    """Path of the body's scene (``scene_{2d,3d}.xml``: floor, light, camera) or, with
-    ``scene=False``, of the robot alone (``skinny_{2d,3d}.xml``); a body another package
-    registered (:class:`skinny_mj.plant.body.Body`) names its own folder and files."""
-    spec = body.body_of(dof)
-    path = (spec.folder or models_dir()) / (spec.scene if scene else spec.robot)
-    if not path.is_file():
-        # a missing model is the installation's fault (or $SKINNY_MJ_MODELS'), not the
-        # user's input: an environment error, exit 1
-        raise SkinnyEnvironmentError(
-            f"{path}: model file not found (set {MODELS_ENV_VAR} to the models/skinny folder)")
-    return path
-
-
-def load_spec(dof: int, actuation: str = "velocity", scene: bool = True) -> mujoco.MjSpec:
-    """The scene (``scene=False``: the robot alone) as an editable
-    :class:`mujoco.MjSpec`; ``actuation="torque"`` makes the torque twin: every
-    velocity actuator becomes a motor of the same name and joint, gear = peak torque
-    (:data:`TORQUE_GEAR_NM`, N m; ctrlrange and forcerange [-1, 1], the joint's
-    actuatorfrcrange +-gear), gravity compensation off, the arm bodies' inertials from
-    :func:`segment_inertias`, joint damping :data:`TORQUE_JOINT_DAMPING` and armature
-    :data:`TORQUE_ARMATURE` (the 3D shoulder hinges :data:`TORQUE_ARMATURE_3D_SHOULDER`),
-    :data:`TORQUE_INTEGRATOR` at :data:`TORQUE_TIMESTEP_S`. The
-    joints keep their limits (soft MuJoCo constraints). The velocity servo is the XML
-    as it is."""
-    _check(dof, actuation)
-    check_on_load(dof)
-    spec = read_spec(xml_path(dof, scene))
-    if actuation == "torque":
-        _make_physical(spec, dof)
+def torque_spec(which: BodyLike, scene: bool = True) -> mujoco.MjSpec:
+    """The torque twin of a velocity body, made with MjSpec edits of its scene
+    (``scene=False``: of the robot alone): every velocity actuator becomes a motor of the
+    same name and joint, gear = peak torque (:data:`TORQUE_GEAR_NM`, N m; ctrlrange and
+    forcerange [-1, 1], the joint's actuatorfrcrange +-gear), gravity compensation off,
+    the arm bodies' inertials from :func:`segment_inertias`, joint damping
+    :data:`TORQUE_JOINT_DAMPING` and armature :data:`TORQUE_ARMATURE` (the 3D shoulder
+    hinges :data:`TORQUE_ARMATURE_3D_SHOULDER`), :data:`TORQUE_INTEGRATOR` at
+    :data:`TORQUE_TIMESTEP_S`. The joints keep their limits (soft MuJoCo constraints).
+    What :mod:`skinny_mj.plant.torque_files` writes as the torque bodies' MJCF."""
+    velocity = body_of(which)
+    if velocity.actuation != "velocity":
+        raise SkinnyInputError(f"the torque twin is made from a velocity body; {velocity.name}"
+                               f" is driven by {velocity.actuation}")
+    spec = load_spec(velocity, scene)
+    _make_physical(spec, velocity)
     return spec
 
 
@@ -166,25 +138,36 @@ class SegmentInertia:
     inertia_kg_m2: tuple[float, float, float]
 
 
-def segment_inertias(body_mass_kg: float = BODY_MASS_KG) -> dict[str, SegmentInertia]:
-    """de Leva's male table (:data:`DE_LEVA_MALE`) scaled to Skinny's segment lengths:
-    masses are fractions of ``body_mass_kg``, CoM positions and radii of gyration
-    fractions of each segment's length. Keys "upper_arm", "forearm", "hand"."""
-    out = {}
+def segment_lengths_m(which: BodyLike = "2d") -> dict[str, float]:
+    """The body's upper arm and forearm (as its MJCF has them) and :data:`HAND_LENGTH_M`,
+    m, by segment."""
+    upper, fore = body_of(which).arms.lengths_m
+    return {"upper_arm": upper, "forearm": fore, "hand": HAND_LENGTH_M}
+
+
+def segment_inertias(body_mass_kg: float = BODY_MASS_KG, which: BodyLike = "2d"
+                     ) -> dict[str, SegmentInertia]:
+    """de Leva's male table (:data:`DE_LEVA_MALE`) scaled to the body's segment lengths
+    (:func:`segment_lengths_m`): masses are fractions of ``body_mass_kg``, CoM positions
+    and radii of gyration fractions of each segment's length. Keys "upper_arm",
+    "forearm", "hand"."""
+    out, lengths = {}, segment_lengths_m(which)
     for name, (m_frac, com_frac, r_ap, r_ml, r_long) in DE_LEVA_MALE.items():
-        length, mass = SEGMENT_LENGTH_M[name], m_frac * body_mass_kg
+        length, mass = lengths[name], m_frac * body_mass_kg
         inertia = tuple(mass * (r * length) ** 2 for r in (r_ml, r_ap, r_long))
         out[name] = SegmentInertia(mass, com_frac * length, inertia)
     return out
 
 
-def forearm_hand_inertia(body_mass_kg: float = BODY_MASS_KG) -> SegmentInertia:
+def forearm_hand_inertia(body_mass_kg: float = BODY_MASS_KG, which: BodyLike = "2d"
+                         ) -> SegmentInertia:
     """Forearm and hand as the one rigid body they are (no wrist joint): total mass, CoM
     distance from the elbow, and inertia about the combined CoM (parallel-axis theorem:
     each part's own inertia plus m d^2 about the two axes across the segment)."""
-    seg = segment_inertias(body_mass_kg)
+    seg = segment_inertias(body_mass_kg, which)
     fore, hand = seg["forearm"], seg["hand"]
-    d_fore, d_hand = fore.com_m, body.FOREARM_LENGTH_M + hand.com_m  # from the elbow
+    d_fore = fore.com_m  # from the elbow
+    d_hand = segment_lengths_m(which)["forearm"] + hand.com_m
     mass = fore.mass_kg + hand.mass_kg
     com = (fore.mass_kg * d_fore + hand.mass_kg * d_hand) / mass
     shift = fore.mass_kg * (d_fore - com) ** 2 + hand.mass_kg * (d_hand - com) ** 2
@@ -193,7 +176,7 @@ def forearm_hand_inertia(body_mass_kg: float = BODY_MASS_KG) -> SegmentInertia:
                                       float(own[2])))
 
 
-def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
+def _make_physical(spec: mujoco.MjSpec, velocity: Body) -> None:
     """Edit Skinny's spec into the torque twin (see the module docstring)."""
     spec.option.timestep = TORQUE_TIMESTEP_S
     spec.option.integrator = TORQUE_INTEGRATOR
@@ -202,7 +185,7 @@ def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
     # each copy is bit for bit one robot alone (tests/test_dynamic.py)
     spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_WARMSTART)
     for side in body.SIDES:
-        for name, seg in segment_inertias().items():
+        for name, seg in segment_inertias(which=velocity).items():
             b = spec.body(f"{side}_{name}")
             b.gravcomp = 0.0
             b.explicitinertial = True  # these numbers, not the capsules' volumes
@@ -210,7 +193,7 @@ def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
             b.ipos = [0.0, 0.0, -seg.com_m]  # every segment points down its -z at q = 0
             b.iquat = [1.0, 0.0, 0.0, 0.0]
             b.inertia = list(seg.inertia_kg_m2)
-    for name in body.dof_names(dof):
+    for name in velocity.dof_names:
         limit = TORQUE_GEAR_NM.get(name.split("_", 1)[1])
         if limit is None:
             raise SkinnyInputError(f"the torque body has no peak torque for {name!r} "
@@ -218,7 +201,7 @@ def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
                                    f"{', '.join(TORQUE_GEAR_NM)})")
         joint = spec.joint(name)
         joint.damping[0] = TORQUE_JOINT_DAMPING
-        joint.armature = TORQUE_ARMATURE_3D_SHOULDER if not body.body_of(dof).planar \
+        joint.armature = TORQUE_ARMATURE_3D_SHOULDER if not velocity.planar \
             and "shoulder" in name else TORQUE_ARMATURE
         joint.solref_limit = list(TORQUE_LIMIT_SOLREF)
         joint.solimp_limit = list(TORQUE_LIMIT_SOLIMP)
@@ -233,19 +216,18 @@ def _make_physical(spec: mujoco.MjSpec, dof: int) -> None:
         act.forcerange = [-1.0, 1.0]
 
 
-def load_model(dof: int, actuation: str = "velocity") -> mujoco.MjModel:
-    """Compile Skinny's scene: ``dof`` 4 (2D) or 8 (3D), velocity servo or torque twin."""
-    _check(dof, actuation)
-    if actuation == "velocity":
-        check_on_load(dof)
-        return read_model(xml_path(dof))
-    return compile_spec(load_spec(dof, actuation), xml_path(dof))
+def load_model(which: BodyLike) -> mujoco.MjModel:
+    """Compile the body's scene (velocity servo or torque twin, as its MJCF says), its
+    MJCF checked first (:func:`check_on_load`)."""
+    skinny = body_of(which)
+    check_on_load(skinny)
+    return read_model(skinny.path())
 
 
 BATCH_PREFIX = "r{}/"  # names of copy r in :func:`load_batch_model`
 
 
-def load_batch_model(dof: int, copies: int, actuation: str = "velocity",
+def load_batch_model(which: BodyLike, copies: int,
                      edit: Callable[[mujoco.MjSpec], None] | None = None) -> mujoco.MjModel:
     """``copies`` independent Skinnies (no scene) in one model, for stepping many runs
     with one ``mj_step``; ``edit`` (optional) changes each copy's spec before it is
@@ -257,11 +239,11 @@ def load_batch_model(dof: int, copies: int, actuation: str = "velocity",
     collide and the copies share nothing, so each copy computes bit for bit what a
     one-robot model computes (``tests/test_plant.py`` checks it).
     """
-    _check(dof, actuation)
+    skinny = body_of(which)
     if copies < 1:
         raise SkinnyInputError(f"copies must be >= 1, got {copies}")
     parent = mujoco.MjSpec()
-    one = load_spec(dof, actuation, scene=False)
+    one = load_spec(skinny, scene=False)
     for name in dir(one.option):  # the robot's physics options, field by field
         if not name.startswith("_"):
             setattr(parent.option, name, getattr(one.option, name))
@@ -273,65 +255,46 @@ def load_batch_model(dof: int, copies: int, actuation: str = "velocity",
     parent.compiler.degree = one.compiler.degree
     parent.compiler.autolimits = one.compiler.autolimits
     for r in range(copies):
-        robot = load_spec(dof, actuation, scene=False)
+        robot = load_spec(skinny, scene=False)
         if edit is not None:
             edit(robot)
         parent.attach(robot, prefix=BATCH_PREFIX.format(r), frame=parent.worldbody.add_frame())
-    return compile_spec(parent, xml_path(dof, scene=False))
+    return compile_spec(parent, skinny.path(scene=False))
 
 
-def check_body(dof: int, poses: int = 20, seed: int = 0) -> list[str]:
-    """What in a body's MJCF disagrees with its :class:`~skinny_mj.plant.body.Body` spec
-    (empty: they agree): every joint and actuator named and ordered as
-    :func:`~skinny_mj.plant.body.dof_names`, each hinge on its segment with the spec's
-    axis and limited to its range, the sites ``{side}_{shoulder,elbow,wrist}``, and the
-    sites' positions at ``poses`` random poses equal to
-    :func:`~skinny_mj.plant.body.arm_points` (1e-9 m)."""
-    _check(dof)
-    model = read_model(xml_path(dof))
+def check_body(which: BodyLike, poses: int = 20, seed: int = 0) -> list[str]:
+    """What in a body's MJCF the analytic kinematics cannot take (empty: nothing): its
+    arms read afresh (:meth:`~skinny_mj.plant.body.Body.read_arms`: hinges, actuators and
+    sites named and ordered as two arms), the left arm's hinge axes the mirror images of
+    the right's, and the sites' positions at ``poses`` random poses equal to
+    :meth:`~skinny_mj.plant.kinematics.Kinematics.arm_points` (1e-9 m)."""
+    skinny = body_of(which)
+    try:
+        skinny.read_arms()
+    except SkinnyInputError as err:
+        return [str(err)]
+    model = read_model(skinny.path(scene=False))
     problems = []
-    names = list(body.dof_names(dof))
-    joints = [model.joint(i).name for i in range(model.njnt)]
-    actuators = [model.actuator(i).name for i in range(model.nu)]
-    for kind, found in (("joint", joints), ("actuator", actuators)):
-        missing = [n for n in names if n not in found]
-        if missing:
-            problems.append(f"no {kind} {', '.join(map(repr, missing))}")
-        elif found != names:
-            problems.append(f"{kind}s {found}, the spec says {names}")
-    sites = [f"{s}_{p}" for s in body.SIDES for p in ("shoulder", "elbow", "wrist")]
-    missing = [s for s in sites if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, s) < 0]
-    problems += [f"no site {s!r}" for s in missing]
-    if problems:
-        return problems
-    for side in body.SIDES:
-        for spec in body.body_of(dof).arm_joints:
-            joint = model.joint(f"{side}_{spec.name}")
-            where = model.body(joint.bodyid[0]).name
-            if where != f"{side}_{spec.segment}":
-                problems.append(f"{joint.name} moves {where}, the spec says "
-                                f"{side}_{spec.segment}")
-            if not np.allclose(joint.axis, body.joint_axis(spec, side), atol=1e-12):
-                problems.append(f"{joint.name} axis {joint.axis}, the spec says "
-                                f"{body.joint_axis(spec, side)}")
-            if not model.jnt_limited[joint.id] or not np.allclose(
-                    joint.range, spec.range_rad, atol=1e-12):
-                problems.append(f"{joint.name} range {joint.range}, the spec says "
-                                f"{spec.range_rad} (limited)")
+    for i, joint in enumerate(skinny.arms.joints):
+        got = model.joint(f"left_{joint}").axis
+        if not np.allclose(got, skinny.joint_axis(i, "left"), atol=1e-12):
+            problems.append(f"left_{joint} axis {got}: not the mirror image of right_{joint}'s, "
+                            f"{skinny.joint_axis(i, 'left')}")
     if problems:
         return problems
     data = mujoco.MjData(model)
-    site_ids = [model.site(s).id for s in sites]
-    lo, hi = body.joint_ranges(dof).T
+    sites = [model.site(f"{s}_{p}").id for s in body.SIDES for p in ("shoulder", "elbow", "wrist")]
+    lo, hi = skinny.joint_ranges().T
     rng = np.random.default_rng(seed)
     for _ in range(poses):
         q = rng.uniform(lo, hi)
         data.qpos[model.jnt_qposadr] = q
         mujoco.mj_kinematics(model, data)
-        got = data.site_xpos[site_ids].reshape(2, 3, 3)
-        if not np.allclose(got, body.arm_points(q, dof), atol=1e-9):
+        got = data.site_xpos[sites].reshape(2, 3, 3)
+        if not np.allclose(got, skinny.arm_points(q), atol=1e-9):
             problems.append(f"the sites' positions at q = {np.round(q, 3).tolist()} are not "
-                            "the spec's (segment lengths, shoulder positions or axes)")
+                            "the analytic kinematics' (a hinge off its body's origin, or a "
+                            "site off its joint's centre)")
             break
     return problems
 
@@ -339,17 +302,19 @@ def check_body(dof: int, poses: int = 20, seed: int = 0) -> list[str]:
 _CHECKED: set[tuple] = set()
 
 
-def check_on_load(dof: int) -> None:
+def check_on_load(which: BodyLike) -> None:
     """:func:`check_body` of the body's MJCF, once per body and file version: an MJCF
-    that disagrees with its spec (an actuator taken out, a hinge renamed) is a
+    the analytic kinematics cannot take (an actuator taken out, a hinge renamed) is a
     :class:`SkinnyInputError` naming the file and what is wrong, not a ``KeyError``
     from deep inside the plant."""
-    spec, path = body.body_of(dof), xml_path(dof, scene=False)
-    key = (spec, *((str(f), f.stat().st_mtime_ns) for f in (path, xml_path(dof))))
+    skinny = body_of(which)
+    robot, scene = skinny.path(scene=False), skinny.path()
+    key = (skinny, *((str(f), f.stat().st_mtime_ns) for f in (robot, scene)))
     if key in _CHECKED:
         return
-    problems = check_body(dof)
+    skinny.read_arms()  # what it cannot read is refused naming the file (and line)
+    problems = check_body(skinny)
     if problems:
-        raise SkinnyInputError(f"the MJCF does not match the {spec.label} body's spec "
-                               f"(skinny_mj.plant.body): {'; '.join(problems)}", path=path)
+        raise SkinnyInputError(f"the {skinny.label} body's MJCF: {'; '.join(problems)}",
+                               path=robot)
     _CHECKED.add(key)

@@ -27,15 +27,21 @@ import functools
 
 import numpy as np
 
+from skinny_mj.plant.body import Body, BodyLike, body_of
 from skinny_mj.plant.dynamics import Dynamics
 from skinny_mj.plant.model import load_model
 from skinny_mj.plant.physics import Layout
 
 
+def torque_dynamics(which: BodyLike) -> Dynamics:
+    """The :class:`Dynamics` of the body's torque twin (itself, if it is a torque body;
+    cached: one per body)."""
+    return _dynamics(body_of(which).twin("torque"))
+
+
 @functools.lru_cache(maxsize=4)
-def torque_dynamics(dof: int) -> Dynamics:
-    """The :class:`Dynamics` of body ``dof``'s torque twin (cached: one per body)."""
-    return Dynamics(load_model(dof, "torque"))
+def _dynamics(torque: Body) -> Dynamics:
+    return Dynamics(load_model(torque), torque)
 
 
 def joint_damping(dyn: Dynamics) -> np.ndarray:
@@ -44,18 +50,19 @@ def joint_damping(dyn: Dynamics) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=4)
-def _servo_ctrlrange(dof: int) -> tuple[float, ...]:
-    model = load_model(dof, "velocity")
-    ids = Layout(model).actuator_ids
+def _servo_ctrlrange(velocity: Body) -> tuple[float, ...]:
+    model = load_model(velocity)
+    ids = Layout(model, velocity).actuator_ids
     return tuple(np.abs(model.actuator_ctrlrange[ids]).min(axis=1).tolist())
 
 
-def velocity_limits_rad_s(dof: int) -> np.ndarray:
+def velocity_limits_rad_s(which: BodyLike) -> np.ndarray:
     """(n_dof,) the joints' speed limit, rad/s: the velocity servo's command range as the
     MJCF declares it (``skinny_defaults.xml``, 30 rad/s; the servo widens it at run time
     to 1.5x a movement's full scale, the torque twin has no speed limit of its own): the
-    one joint-speed figure in the body's description."""
-    return np.array(_servo_ctrlrange(dof))
+    one joint-speed figure in the body's description; a torque body's are its velocity
+    twin's)."""
+    return np.array(_servo_ctrlrange(body_of(which).twin("velocity")))
 
 
 def path_torque_terms(dyn: Dynamics, q: np.ndarray, qs: np.ndarray, qss: np.ndarray

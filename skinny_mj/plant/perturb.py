@@ -43,6 +43,7 @@ import mujoco
 import numpy as np
 
 from skinny_mj.plant import body
+from skinny_mj.plant.body import BodyLike, body_of
 from skinny_mj.plant.model import load_batch_model
 
 #: the side whose forearm :func:`lengthen_forearm` lengthens by default
@@ -144,7 +145,7 @@ def perturb(plant, payload_kg: float = 0.0, mass_scale: float = 1.0,
 def forearm_change(plant: Any, factor: float) -> ModelChange:
     """The :class:`ModelChange` that lengthens ``plant``'s right forearms (every copy of
     a :class:`~skinny_mj.plant.adapters.BatchPlant`) ``factor`` x."""
-    args = (plant.n_dof, plant.n_runs, plant.setup.actuation)
+    args = (plant.body, plant.n_runs)
     edit = functools.partial(lengthen_forearm, factor=factor)
     return ModelChange(plant.model, load_batch_model(*args), load_batch_model(*args, edit=edit))
 
@@ -158,11 +159,11 @@ def mass_change(plant: Any, payload_kg: float, mass_scale: float) -> ModelChange
     return ModelChange(plant.model, plant.model, variant)
 
 
-def forearm_rows(n_dof: int, signals: str, side: str = FOREARM_SIDE) -> np.ndarray:
+def forearm_rows(which: BodyLike, signals: str, side: str = FOREARM_SIDE) -> np.ndarray:
     """Indices of the Cartesian signals of ``side``'s forearm (wrist relative to elbow)."""
     if signals == "joint":
         return np.zeros(0, int)
-    return np.array([i for i, n in enumerate(body.signal_names(n_dof, signals))
+    return np.array([i for i, n in enumerate(body_of(which).signal_names(signals))
                      if n.startswith(f"{side}_wrist_")])
 
 
@@ -230,7 +231,7 @@ class PerturbedPlant:
         """The nominal arm's command Jacobian at the present angles (not told)."""
         jac = self.plant.command_jacobian()
         if self.forearm != 1.0:
-            jac[:, forearm_rows(self.plant.n_dof, self.plant.signals)] /= self.forearm
+            jac[:, forearm_rows(self.plant.body, self.plant.signals)] /= self.forearm
         return jac
 
     def __getattr__(self, name: str) -> Any:  # the rest of the Plant protocol: as wrapped

@@ -17,6 +17,7 @@ import numpy as np
 from dm_control import mujoco as dm_mujoco
 
 from skinny_mj.plant import body
+from skinny_mj.plant.body import Body, BodyLike, body_of
 from skinny_mj.plant.model import load_model
 
 # A command never targets a joint closer than this to its range limit (rad): MuJoCo's
@@ -93,7 +94,7 @@ def segment_jacobian(
 
     Returns
     -------
-    (R, 4 * len(comps), n_dof), rows in :func:`body.signal_names` order.
+    (R, 4 * len(comps), n_dof), rows in :meth:`Body.signal_names` order.
     """
     n, n_dof = axes.shape[0], axes.shape[1]
     seg, dof = pairs
@@ -145,16 +146,18 @@ def _segment_pairs(model: mujoco.MjModel, site_ids: np.ndarray,
 
 
 class Layout:
-    """Name-resolved indices of Skinny's joints, actuators and sites in one MjModel.
+    """Name-resolved indices of a body's joints, actuators and sites in one MjModel.
 
     Parameters
     ----------
-    model : a compiled Skinny model (2D, 3D or a registered body; any actuation).
+    model : a compiled model of ``skinny`` (its scene or robot).
+    skinny : the :class:`Body` it is.
     """
 
-    def __init__(self, model: mujoco.MjModel):
-        self.dof = body.check_dof(model.njnt)  # Skinny's joints are the arms' hinges
-        names = body.dof_names(self.dof)
+    def __init__(self, model: mujoco.MjModel, skinny: Body):
+        self.body = skinny
+        self.dof = skinny.dof
+        names = skinny.dof_names
         jnt = [model.joint(n).id for n in names]
         self.qpos_adr = np.array([model.jnt_qposadr[j] for j in jnt])
         self.dof_adr = np.array([model.jnt_dofadr[j] for j in jnt])
@@ -164,14 +167,14 @@ class Layout:
             [[model.site(f"{s}_{p}").id for p in _POINTS] for s in body.SIDES]
         )
         self.range_rad = model.jnt_range[jnt].copy()
-        self.arm_lengths = np.array([body.UPPER_ARM_LENGTH_M, body.FOREARM_LENGTH_M])
-        self.components = [0, 2] if body.body_of(self.dof).planar else [0, 1, 2]
+        self.arm_lengths = skinny.lengths_m()
+        self.components = skinny.cartesian_components()
         self.segment_pairs = _segment_pairs(model, self.site_ids, self.dof_adr)
         self.segment_lengths = np.tile(self.arm_lengths, 2)
         self._jacp = np.zeros((3, model.nv))
 
     def joint_angles(self, data: mujoco.MjData) -> np.ndarray:
-        """(n_dof,) joint angles, rad, in :func:`body.dof_names` order."""
+        """(n_dof,) joint angles, rad, in :attr:`Body.dof_names` order."""
         return data.qpos[self.qpos_adr].copy()
 
     def set_joint_angles(self, data: mujoco.MjData, q: np.ndarray) -> None:
@@ -185,13 +188,13 @@ class Layout:
         return pts[:, 1:] - pts[:, :-1]
 
     def position_signals(self, data: mujoco.MjData, signals: str) -> np.ndarray:
-        """(n_signals,) normalized noise-free signals (see :func:`body.signal_names`)."""
+        """(n_signals,) normalized noise-free signals (see :meth:`Body.signal_names`)."""
         sig, q = body.signal_set(signals), self.joint_angles(data)
         if sig.base == "joint":
-            return sig.extend(body.normalize_angles(q, self.dof), q, self.dof)
+            return sig.extend(self.body.normalize_angles(q), q, self.body)
         out = segment_signals(data.site_xpos[self.site_ids][None], self.arm_lengths,
                               self.components)[0]
-        return sig.extend(out, q, self.dof)
+        return sig.extend(out, q, self.body)
 
     def site_jacobian(self, model: mujoco.MjModel, data: mujoco.MjData, site_id: int):
         """(3, nv) translational Jacobian of a site, m/rad (``mj_jacSite``)."""
@@ -206,40 +209,45 @@ class Layout:
         sig = body.signal_set(signals)
         if sig.base == "joint":
             lo, hi = self.range_rad.T
-            return sig.extend_jacobian(np.diag(2.0 / (hi - lo)), self.dof)
+            return sig.extend_jacobian(np.diag(2.0 / (hi - lo)), self.body)
         axes = data.cdof[self.dof_adr, :3][None]
         points = data.site_xpos[self.site_ids][None]
         jac = segment_jacobian(axes, points, self.segment_pairs, self.segment_lengths,
                                self.components)[0]
-        return sig.extend_jacobian(jac, self.dof)
+        return sig.extend_jacobian(jac, self.body)
 
 
 class SkinnyPhysics(dm_mujoco.Physics):
     """dm_control Physics for Skinny with named queries (angles in rad, lengths in m)."""
 
     @classmethod
-    def load(cls, dof: int = 4, actuation: str = "velocity") -> SkinnyPhysics:
-        """Skinny's scene (see :func:`skinny_mj.plant.model.load_model`) as a Physics."""
+    def load(cls, which: BodyLike = "2d") -> SkinnyPhysics:
+        """The body's scene (see :func:`skinny_mj.plant.model.load_model`) as a Physics."""
         from dm_control.mujoco import wrapper
 
-        return cls.from_model(wrapper.MjModel(load_model(dof, actuation)))
+        physics = cls.from_model(wrapper.MjModel(load_model(which)))
+        physics.skinny_body = body_of(which)
+        return physics
 
     @property
     def layout(self) -> Layout:
         """Name-resolved indices, built on first use."""
         layout = getattr(self, "_skinny_layout", None)
         if layout is None:
-            layout = Layout(self.model.ptr)
+            if getattr(self, "skinny_body", None) is None:
+                raise AttributeError("a SkinnyPhysics knows its body when made by "
+                                     "SkinnyPhysics.load(body)")
+            layout = Layout(self.model.ptr, self.skinny_body)
             self._skinny_layout = layout
         return layout
 
     @property
     def dof(self) -> int:
-        """4 (2D) or 8 (3D)."""
+        """The body's number of hinges."""
         return self.layout.dof
 
     def joint_angles(self) -> np.ndarray:
-        """(n_dof,) joint angles, rad, in :func:`body.dof_names` order."""
+        """(n_dof,) joint angles, rad, in :attr:`Body.dof_names` order."""
         return self.layout.joint_angles(self.data.ptr)
 
     def joint_velocities(self) -> np.ndarray:

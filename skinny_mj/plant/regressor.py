@@ -24,6 +24,7 @@ import copy
 import mujoco
 import numpy as np
 
+from skinny_mj.plant.body import BodyLike, body_of
 from skinny_mj.plant.dynamics import Dynamics
 from skinny_mj.plant.model import load_model
 from skinny_mj.plant.perturb import ARM_BODIES, PAYLOAD_BODY
@@ -44,18 +45,19 @@ def _variant(nominal: mujoco.MjModel, scale_body: str | None = None,
 
 
 class InertialRegressor:
-    """``tau_nom`` and Y of the module docstring for body ``dof``'s torque twin.
+    """``tau_nom`` and Y of the module docstring for the body ``which``'s torque twin.
 
     ``names`` : (p,) each parameter's name; ``n_params`` = len(names).
     """
 
-    def __init__(self, dof: int):
-        nominal = load_model(dof, "torque")
-        self.nominal = Dynamics(nominal)
-        self.n_dof = dof
-        self.variants = [Dynamics(_variant(nominal, scale_body=b)) for b in ARM_BODIES]
-        self.variants.append(Dynamics(_variant(nominal, payload_kg=1.0)))
-        joints = [f"j{j}" for j in range(dof)]
+    def __init__(self, which: BodyLike):
+        torque = body_of(which).twin("torque")
+        nominal = load_model(torque)
+        self.nominal = Dynamics(nominal, torque)
+        self.n_dof = torque.dof
+        self.variants = [Dynamics(_variant(nominal, scale_body=b), torque) for b in ARM_BODIES]
+        self.variants.append(Dynamics(_variant(nominal, payload_kg=1.0), torque))
+        joints = [f"j{j}" for j in range(self.n_dof)]
         self.names = (*(f"mass_scale_{b}" for b in ARM_BODIES), "payload_kg",
                       *(f"viscous_{j}" for j in joints), *(f"coulomb_{j}" for j in joints))
         self.n_params = len(self.names)

@@ -2,7 +2,7 @@
 
 Rendering needs an OpenGL backend chosen before mujoco is imported: this module sets
 ``MUJOCO_GL=egl`` unless the caller chose one. Run it in a fresh process
-(``python -m skinny_mj.plant.render --dof 4 --out skinny_2d.png``) if mujoco may already be
+(``python -m skinny_mj.plant.render --body 2d --out skinny_2d.png``) if mujoco may already be
 imported with ``MUJOCO_GL=disabled`` (as in the test suite).
 """
 
@@ -17,12 +17,16 @@ import numpy as np
 
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.io import atomic_path
+from skinny_mj.plant.body import BodyLike, body_of
 from skinny_mj.preflight import GL_OFF
 
 # A pose that shows every DOF: right arm raised and bent, left arm half raised.
+#: A pose that shows every hinge, by Skinny's joint names (another body: the middle of
+#: each range).
 _SHOW_POSE = {
-    4: [2.3, 0.9, 1.2, 0.4],
-    8: [2.3, 0.3, 0.4, 0.9, 1.2, -0.3, -0.4, 0.4],
+    ("shoulder_abduction", "elbow_flexion"): [2.3, 0.9, 1.2, 0.4],
+    ("shoulder_abduction", "shoulder_flexion", "shoulder_rotation", "elbow_flexion"):
+        [2.3, 0.3, 0.4, 0.9, 1.2, -0.3, -0.4, 0.4],
 }
 
 
@@ -47,20 +51,20 @@ def _no_backend(exc: Exception) -> SkinnyEnvironmentError:
 
 
 def render_png(
-    dof: int,
+    which: BodyLike,
     path: str | Path,
     width: int = 640,
     height: int = 480,
     angles: np.ndarray | None = None,
 ) -> Path:
-    """Render Skinny (``dof`` 4 or 8) from the ``front`` camera to a PNG file.
+    """Render a body from the ``front`` camera to a PNG file.
 
     Parameters
     ----------
-    dof : 4 (2D) or 8 (3D).
+    which : the body (its name, :data:`skinny_mj.plant.body.BODIES`).
     path : output .png (written atomically).
     width, height : image size in pixels, at most 640 x 480 (the offscreen buffer).
-    angles : (dof,) joint angles, rad; default a pose that shows every DOF.
+    angles : (n_dof,) joint angles, rad; default a pose that shows every DOF.
 
     Returns
     -------
@@ -82,12 +86,16 @@ def render_png(
 
     if not (0 < width <= 640 and 0 < height <= 480):
         raise SkinnyInputError(f"image size must be within 640 x 480, got {width} x {height}")
-    model = load_model(dof)
+    skinny = body_of(which)
+    model = load_model(skinny)
     data = mujoco.MjData(model)
-    q = np.asarray(_SHOW_POSE[dof] if angles is None else angles, dtype=float)
-    if q.shape != (dof,) or not np.all(np.isfinite(q)):
-        raise SkinnyInputError(f"angles must be {dof} finite numbers (rad), got {q.shape}")
-    Layout(model).set_joint_angles(data, q)
+    if angles is None:
+        angles = _SHOW_POSE.get(skinny.arms.joints, skinny.joint_ranges().mean(axis=1))
+    q = np.asarray(angles, dtype=float)
+    if q.shape != (skinny.dof,) or not np.all(np.isfinite(q)):
+        raise SkinnyInputError(f"angles must be {skinny.dof} finite numbers (rad), got "
+                               f"{q.shape}")
+    Layout(model, skinny).set_joint_angles(data, q)
     mujoco.mj_forward(model, data)
     try:
         with warnings.catch_warnings():  # glfw warns per failed call; the error says it all
@@ -108,12 +116,12 @@ def render_png(
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description="Render Skinny from the front camera.")
-    parser.add_argument("--dof", type=int, choices=(4, 8), default=4)
+    parser.add_argument("--body", default="2d", help="the body (default 2d)")
     parser.add_argument("--out", type=Path, required=True, help="output .png")
     parser.add_argument("--width", type=int, default=640)
     parser.add_argument("--height", type=int, default=480)
     args = parser.parse_args(argv)
-    print(render_png(args.dof, args.out, args.width, args.height))
+    print(render_png(args.body, args.out, args.width, args.height))
 
 
 if __name__ == "__main__":

@@ -11,6 +11,7 @@ on reset, so episode k of an environment continues episode k-1's stream.
 from __future__ import annotations
 
 import collections
+import inspect
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,6 +22,7 @@ from dm_env import specs
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
+from skinny_mj.plant.body import Body, BodyLike, body_of
 from skinny_mj.plant.ideal import max_speeds
 from skinny_mj.plant.physics import LIMIT_MARGIN_RAD, SkinnyPhysics, servo_ctrl
 
@@ -56,20 +58,31 @@ def finite_actions(action: Any, shape: tuple[int, ...]) -> np.ndarray:
 class Setup:
     """What a movement asks of the plant (validated; shared by the task and BatchPlant).
 
-    angles: (T, n_dof) desired joint angles, rad. desired: (T, n_signals) normalized
-    desired signals. start_rad: (n_dof,) first pose, moved ``LIMIT_MARGIN_RAD`` inside
-    the joint ranges. max_speed_rad_s: (n_dof,) full-scale speed.
+    body: the :class:`~skinny_mj.plant.body.Body` imitating it. angles: (T, n_dof)
+    desired joint angles, rad. desired: (T, n_signals) normalized desired signals.
+    start_rad: (n_dof,) first pose, moved ``LIMIT_MARGIN_RAD`` inside the joint ranges.
+    max_speed_rad_s: (n_dof,) full-scale speed.
     """
 
-    dof: int
+    body: Body
     signals: str
-    actuation: str
     sensor_noise: float
     angles: np.ndarray
     desired: np.ndarray
     start_rad: np.ndarray
     max_speed_rad_s: np.ndarray
     dt: float = CONTROL_DT_S
+
+    @property
+    def dof(self) -> int:
+        """The body's number of hinges (commands per step)."""
+        return self.body.dof
+
+    @property
+    def actuation(self) -> str:
+        """The body's: "velocity" (a command is a normalized joint velocity) or "torque"
+        (a normalized torque)."""
+        return self.body.actuation
 
 
 def _number(name: str, value: Any) -> float:
@@ -90,18 +103,17 @@ def check_seed(seed: Any) -> int:
 
 
 def prepare(
-    dof: int,
+    which: BodyLike,
     signals: str,
     trajectory: Any,
-    actuation: str = "velocity",
     sensor_noise: float = 0.01,
     max_speed_rad_s: float | np.ndarray | None = None,
     speed_factor: float = 2.0,
 ) -> Setup:
     """Validate the arguments of :func:`load` and derive the per-DOF numbers."""
-    body.check_dof(dof)
+    skinny = body_of(which)
     body.check_signals(signals)
-    body.check_actuation(actuation)
+    dof = skinny.dof
     sensor_noise = _number("sensor_noise", sensor_noise)
     speed_factor = _number("speed_factor", speed_factor)
     if not (np.isfinite(sensor_noise) and 0 <= sensor_noise <= MAX_SENSOR_NOISE):
@@ -110,13 +122,14 @@ def prepare(
                                f"{sensor_noise!r}")
     if trajectory is None:  # the plant has no movement of its own (it imports none)
         raise SkinnyInputError("the plant needs a trajectory; skinny_mj.load's default is "
-                               "the synthesized YMCA, skinny_mj.trajectories.get('ymca', dof)")
+                               "the synthesized YMCA, skinny_mj.trajectories.get('ymca', body)")
     if not hasattr(trajectory, "angles"):  # names and files: skinny_mj.load, the gym envs
         raise SkinnyInputError(f"the plant takes a Trajectory (an object with .angles), got "
                                f"{type(trajectory).__name__}; skinny_mj.load takes movement "
                                "names and files")
     if getattr(trajectory, "dof", dof) != dof:
-        raise SkinnyInputError(f"trajectory has dof={trajectory.dof}, the plant dof={dof}")
+        raise SkinnyInputError(f"trajectory has {trajectory.dof} DOFs, the {skinny.name} body "
+                               f"{dof}")
     angles = np.asarray(trajectory.angles, dtype=float)
     if angles.ndim != 2 or angles.shape[1] != dof or angles.shape[0] < 2:
         raise SkinnyInputError(f"trajectory angles must be (T >= 2, {dof}), got {angles.shape}")
@@ -139,16 +152,15 @@ def prepare(
         if not np.all(np.isfinite(speed) & (speed > 0)):
             raise SkinnyInputError(f"max_speed_rad_s must be finite and > 0, got {speed}")
     speed.flags.writeable = False  # the plant's full scale: its own, read-only copy
-    rng = body.joint_ranges(dof)
+    rng = skinny.joint_ranges()
     start = np.clip(angles[0], rng[:, 0] + LIMIT_MARGIN_RAD, rng[:, 1] - LIMIT_MARGIN_RAD)
     return Setup(
-        dof=dof,
+        body=skinny,
         signals=signals,
-        actuation=actuation,
         sensor_noise=float(sensor_noise),
         angles=angles,
-        desired=trajectory.position_signals(signals) if hasattr(trajectory, "position_signals")
-        else body.position_signals(angles, dof, signals),  # explicit recorded signals
+        desired=trajectory.position_signals(signals, skinny)  # its explicit signals, if any
+        if hasattr(trajectory, "position_signals") else skinny.position_signals(angles, signals),
         start_rad=start,
         max_speed_rad_s=speed,
         dt=dt,
@@ -182,6 +194,7 @@ class Imitation(base.Task):
         self.rng = np.random.default_rng(seed)
         self._t = 0
         self._noise = np.zeros(setup.desired.shape[1])
+        self._torque = setup.actuation == "torque"
 
     # --- what a controller may want to know -----------------------------------------
     @property
@@ -217,7 +230,7 @@ class Imitation(base.Task):
     def before_step(self, action: np.ndarray, physics: SkinnyPhysics) -> None:
         layout = physics.layout
         action = finite_actions(action, (self.setup.dof,))
-        if self.setup.actuation == "torque":
+        if self._torque:
             ctrl = np.clip(action, -1.0, 1.0)
         else:
             ctrl = servo_ctrl(
@@ -264,10 +277,9 @@ class Imitation(base.Task):
 
 
 def load(
-    dof: int = 4,
+    body: BodyLike = "2d",
     signals: str = "cartesian",
     trajectory: Any = None,
-    actuation: str = "velocity",
     sensor_noise: float = 0.01,
     seed: int = 0,
     max_speed_rad_s: float | np.ndarray | None = None,
@@ -275,15 +287,19 @@ def load(
 ) -> control.Environment:
     """Skinny imitating a movement, as a dm_control ``control.Environment``.
 
+    The one definition of the task's arguments: :func:`skinny_mj.load` and the Gymnasium
+    envs take these and pass them on (:func:`arguments`).
+
     Parameters
     ----------
-    dof : 4 (2D) or 8 (3D).
+    body : a body's name (:data:`skinny_mj.plant.body.BODIES`: "2d", "3d", or a torque
+        twin "2d-torque", "3d-torque", whose action is a normalized torque, ctrl x gear
+        N m, where a velocity body's is a normalized joint velocity), or 4 / 8 for "2d" /
+        "3d".
     signals : "joint" (normalized angles) or "cartesian" (normalized segment vectors).
-    trajectory : object with ``.angles`` (T, dof) rad, ``.dt`` (0.02 s) and ``.dof``
+    trajectory : object with ``.angles`` (T, n_dof) rad, ``.dt`` (0.02 s) and ``.dof``
         (required: :func:`skinny_mj.load` defaults to the synthesized YMCA,
-        ``skinny_mj.trajectories.get("ymca", dof)``, and takes movement names and files).
-    actuation : "velocity" (the kinematic servo; action = normalized joint velocity) or
-        "torque" (motor twin; action = normalized torque, ctrl x gear N m).
+        ``skinny_mj.trajectories.get("ymca", body)``, and takes movement names and files).
     sensor_noise : std of the Gaussian noise on the sensed signals (normalized units).
     seed : seed of the task's Generator.
     max_speed_rad_s : full scale of the command, scalar or (dof,) rad/s; default
@@ -297,9 +313,8 @@ def load(
     ``max_speed_rad_s``, ``signals``, ``setup``.
     """
     check_seed(seed)
-    setup = prepare(dof, signals, trajectory, actuation, sensor_noise, max_speed_rad_s,
-                    speed_factor)
-    physics = SkinnyPhysics.load(dof, actuation)
+    setup = prepare(body, signals, trajectory, sensor_noise, max_speed_rad_s, speed_factor)
+    physics = SkinnyPhysics.load(setup.body)
     widen_ctrlrange(physics.model.ptr, physics.layout.actuator_ids, setup)
     n_sub = int(round(setup.dt / physics.timestep()))
     task = Imitation(setup, seed)
@@ -308,3 +323,18 @@ def load(
     return control.Environment(
         physics, task, time_limit=(n_steps - 0.5) * setup.dt, n_sub_steps=n_sub
     )
+
+
+def arguments(*args: Any, **kwargs: Any) -> dict[str, Any]:
+    """The arguments of :func:`load` given as ``args`` and ``kwargs``, by name, every other
+    one at its default: what :func:`skinny_mj.load` and the Gymnasium envs take and pass
+    on. An argument :func:`load` does not take is a :class:`SkinnyInputError` naming those
+    it does."""
+    signature = inspect.signature(load)
+    try:
+        bound = signature.bind(*args, **kwargs)
+    except TypeError as err:
+        raise SkinnyInputError(f"{err}; the task takes {', '.join(signature.parameters)}"
+                               ) from None
+    bound.apply_defaults()
+    return dict(bound.arguments)

@@ -4,14 +4,15 @@ robot) and ``scene_{2d,3d}_torque.xml`` (floor, light, camera; ``<include>`` the
 opens the physical arm.
 
 The files are written, never edited: the robot is Skinny's XML with the MjSpec edits of
-:func:`skinny_mj.plant.model.load_spec` (``actuation="torque"``), those edits moved into
-the default classes (a class per joint kind holds the joint and its motor, as in the
-velocity XML), saved by :meth:`mujoco.MjSpec.to_xml` as authored (``savecompiled`` and
-``savecanonical`` off: default classes, ``fromto`` capsules, ``<motor>`` shortcuts and
-full-precision numbers kept); the scene is the velocity body's scene with its
-``<include>`` pointed at the torque robot. The package itself still builds the twin in
-code (:func:`load_model`); ``tests/test_torque_files.py`` checks that each shipped file compiles
-to that model, field by field. Regenerate after changing the XML or the twin's constants::
+:func:`skinny_mj.plant.model.torque_spec`, those edits moved into the default classes (a
+class per joint kind holds the joint and its motor, as in the velocity XML), saved by
+:meth:`mujoco.MjSpec.to_xml` as authored (``savecompiled`` and ``savecanonical`` off:
+default classes, ``fromto`` capsules, ``<motor>`` shortcuts and full-precision numbers
+kept); the scene is the velocity body's scene with its ``<include>`` pointed at the torque
+robot. They are the bodies ``2d-torque`` and ``3d-torque``
+(:data:`skinny_mj.plant.body.BODIES`); ``tests/test_torque_files.py`` checks that each
+shipped file compiles to the model :func:`torque_spec` builds, field by field.
+Regenerate after changing the XML or the twin's constants::
 
     python -m skinny_mj.plant.torque_files models/skinny
 """
@@ -26,34 +27,33 @@ import mujoco
 import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.plant import body
-from skinny_mj.plant.model import load_spec, xml_path
+from skinny_mj.plant.body import Body, BodyLike, body_of
+from skinny_mj.plant.model import torque_spec
 
 REGENERATE = "python -m skinny_mj.plant.torque_files models/skinny"
 
 
-def torque_file_names(dof: int) -> tuple[str, str]:
+def torque_file_names(velocity: BodyLike) -> tuple[str, str]:
     """The torque twin's robot and scene file names: the velocity body's with
     ``_torque`` before ``.xml`` (``skinny_2d_torque.xml``, ``scene_2d_torque.xml``)."""
-    spec = body.body_of(dof)
-    return (f"{Path(spec.robot).stem}_torque.xml", f"{Path(spec.scene).stem}_torque.xml")
+    skinny = body_of(velocity)
+    return (f"{Path(skinny.robot).stem}_torque.xml", f"{Path(skinny.scene).stem}_torque.xml")
 
 
-def _header(dof: int, source: str, what: str) -> str:
+def _header(velocity: Body, source: str, what: str) -> str:
     # no "--" in the text: an XML comment may not hold one
-    spec = body.body_of(dof)
-    if spec.folder is None:  # Skinny's own: shipped, with a model card and a test
+    call = f"torque_spec(\"{velocity.name}\")"
+    if velocity.folder is None:  # Skinny's own: shipped, with a model card and a test
         command = REGENERATE
         checked = ("     Model card: README.md. tests/test_torque_files.py checks that this file "
                    "compiles\n"
-                   f"     to the model skinny_mj.plant.model.load_model({dof}, \"torque\") "
-                   "builds.")
+                   f"     to the model skinny_mj.plant.model.{call} builds.")
     else:  # a registered body (docs/adding-a-body.md)
-        command = f"skinny_mj.plant.torque_files.write_torque_mjcf({dof}, folder)"
-        checked = (f"     It compiles to skinny_mj.plant.model.load_model({dof}, \"torque\") "
-                   "when written.")
+        command = f"skinny_mj.plant.torque_files.write_torque_mjcf(\"{velocity.name}\", folder)"
+        checked = f"     It compiles to skinny_mj.plant.model.{call} when written."
     return (f"<!-- GENERATED from {source} by `{command}`: do not edit.\n"
-            f"     Skinny {spec.label} ({dof} DOF), torque twin: {what}\n{checked} -->\n")
+            f"     Skinny {velocity.label} ({velocity.dof} DOF), torque twin: {what}\n"
+            f"{checked} -->\n")
 
 
 #: What the twin sets on the arm joints and motors (skinny_mj.plant.model._make_physical),
@@ -72,14 +72,14 @@ def _one_value(elements: list, field: str) -> object:
     return values[0].copy() if isinstance(values[0], np.ndarray) else values[0]
 
 
-def _defaults_hold_the_motors(spec: mujoco.MjSpec, dof: int) -> None:
+def _defaults_hold_the_motors(spec: mujoco.MjSpec, velocity: Body) -> None:
     """Re-express the twin's per-element edits as Skinny's default classes, as the velocity
     XML does (a class per joint kind holds the joint and its actuator): every class becomes
     a motor class with the settings shared by all arm joints and motors, each joint kind's
     class takes its own (gear, torque range, armature), and the classes of the other
     body's joints go; the arm's capsules lose their masses, which the segments' explicit
     inertials override. The compiled model is unchanged (tests/test_torque_files.py)."""
-    names = body.dof_names(dof)
+    names = velocity.dof_names
     elements = {"joint": [spec.joint(n) for n in names],
                 "actuator": [spec.actuator(n) for n in names]}
     used = {e.classname.name for e in (*elements["joint"], *elements["actuator"],
@@ -106,26 +106,28 @@ def _defaults_hold_the_motors(spec: mujoco.MjSpec, dof: int) -> None:
                     setattr(getattr(default, kind), field, _one_value(of_kind, field))
 
 
-def torque_robot_xml(dof: int) -> str:
-    """The torque robot's MJCF text: ``load_spec(dof, "torque", scene=False)`` saved as
+def torque_robot_xml(velocity: BodyLike) -> str:
+    """The torque robot's MJCF text: ``torque_spec(velocity, scene=False)`` saved as
     authored, under a comment saying where it comes from."""
-    spec = load_spec(dof, "torque", scene=False)
-    _defaults_hold_the_motors(spec, dof)
+    skinny = body_of(velocity)
+    spec = torque_spec(skinny, scene=False)
+    _defaults_hold_the_motors(spec, skinny)
     spec.compiler.savecompiled = False  # the spec as authored, not the compiled model
     spec.compiler.savecanonical = False  # and in its own terms: fromto, <motor>, radians
-    spec.modelname = Path(torque_file_names(dof)[0]).stem
+    spec.modelname = Path(torque_file_names(skinny)[0]).stem
     what = ("the robot's XML with <motor>\n"
             "     actuators of the velocity servos' names (ctrl = torque / limit in [-1, 1],\n"
             "     gear = limit in N m), gravity acting (no gravcomp), de Leva segment\n"
             "     inertials, stiff joint limits, RK4 at 5 ms.")
-    return _header(dof, xml_path(dof, scene=False).name, what) + spec.to_xml()
+    return _header(skinny, skinny.robot, what) + spec.to_xml()
 
 
-def torque_scene_xml(dof: int) -> str:
+def torque_scene_xml(velocity: BodyLike) -> str:
     """The torque scene's MJCF text: the velocity scene with its ``<include>`` pointed at
     the torque robot and its model renamed."""
-    robot, scene = xml_path(dof, scene=False).name, xml_path(dof)
-    torque_robot = torque_file_names(dof)[0]
+    skinny = body_of(velocity)
+    robot, scene = skinny.robot, skinny.path()
+    torque_robot = torque_file_names(skinny)[0]
     text = scene.read_text()
     include = f'<include file="{robot}"/>'
     if text.count(include) != 1 or not text.lstrip().startswith("<!--"):
@@ -137,17 +139,17 @@ def torque_scene_xml(dof: int) -> str:
         raise SkinnyInputError(f"{scene}: no <mujoco model=...> to rename")
     body_text = text[text.index("-->") + 3:].lstrip("\n")  # the scene's own comment goes
     what = f"{scene.name} including {torque_robot}\n     (floor, light, camera \"front\")."
-    return _header(dof, scene.name, what) + body_text
+    return _header(skinny, scene.name, what) + body_text
 
 
-def write_torque_mjcf(dof: int, folder: Path) -> tuple[Path, Path]:
-    """Write the torque robot and scene of body ``dof`` into ``folder``; return their
-    paths (robot, scene)."""
+def write_torque_mjcf(velocity: BodyLike, folder: Path) -> tuple[Path, Path]:
+    """Write the torque robot and scene of the velocity body ``velocity`` into ``folder``;
+    return their paths (robot, scene)."""
     folder = Path(folder)
-    robot_name, scene_name = torque_file_names(dof)
+    robot_name, scene_name = torque_file_names(velocity)
     robot, scene = folder / robot_name, folder / scene_name
-    robot.write_text(torque_robot_xml(dof))
-    scene.write_text(torque_scene_xml(dof))
+    robot.write_text(torque_robot_xml(velocity))
+    scene.write_text(torque_scene_xml(velocity))
     return robot, scene
 
 
@@ -156,11 +158,11 @@ def main(argv: list[str] | None = None) -> None:
         prog="python -m skinny_mj.plant.torque_files",
         description="Write the torque twin's MJCF (robot and scene) for each body.")
     parser.add_argument("folder", type=Path, help="where to write (models/skinny)")
-    parser.add_argument("--dof", type=int, nargs="+", default=[4, 8],
-                        help="the bodies (default: 4 8)")
+    parser.add_argument("--body", nargs="+", default=["2d", "3d"],
+                        help="the velocity bodies (default: 2d 3d)")
     args = parser.parse_args(argv)
-    for dof in args.dof:
-        for path in write_torque_mjcf(dof, args.folder):
+    for name in args.body:
+        for path in write_torque_mjcf(name, args.folder):
             print(path)
 
 

@@ -56,7 +56,8 @@ class VelocityActuation:
 
     def one_step(self, trajectory, max_speed_rad_s: np.ndarray):
         """The kinematic one-step map of the true-target training's position error."""
-        return ideal.one_step_positions(trajectory, self.cfg.plant.signals, max_speed_rad_s)
+        return ideal.one_step_positions(trajectory, self.cfg.plant.body, self.cfg.plant.signals,
+                                        max_speed_rad_s)
 
     def recorder(self, method: FELMethod, n_runs: int) -> None:
         return None
@@ -100,7 +101,7 @@ class TorqueActuation:
 
     def true_commands(self, trajectory, max_speed_rad_s: np.ndarray) -> np.ndarray:
         """(T-1, n_dof) :func:`skinny_mj.training.torque.true_torques` of ``trajectory``."""
-        return torque.true_torques(self.cfg.plant.dof, trajectory)
+        return torque.true_torques(self.cfg.plant.body, trajectory)
 
     def hook(self, trajectory, max_speed_rad_s: np.ndarray, plant=None):
         """:func:`skinny_mj.training.torque.hook_for`."""
@@ -116,7 +117,7 @@ class TorqueActuation:
     def recorder(self, method: FELMethod, n_runs: int) -> torque.ShareRecorder:
         """The feedback's share of the command per epoch (:class:`ShareRecorder`)."""
         return torque.ShareRecorder(method.gains(), n_runs, method.learning_cycles,
-                                    self.cfg.plant.dof)
+                                    self.cfg.plant.body)
 
     def recorded(self, recorder: torque.ShareRecorder, r: int) -> dict:
         """Run r's training metrics of ``recorder``."""

@@ -16,6 +16,7 @@ import functools
 import numpy as np
 
 from skinny_mj.controllers.adaptive_ct import AdaptiveArmLoop, ParameterRLS
+from skinny_mj.plant.body import BodyLike
 from skinny_mj.plant.regressor import InertialRegressor
 
 #: prior standard deviations: (mass scale, payload kg, viscous N m s/rad, Coulomb N m)
@@ -24,9 +25,9 @@ NOISE_NM = 1.0
 
 
 @functools.lru_cache(maxsize=4)
-def regressor(dof: int) -> InertialRegressor:
-    """The nominal twin's regressor of body ``dof`` (cached)."""
-    return InertialRegressor(dof)
+def regressor(which: BodyLike) -> InertialRegressor:
+    """The nominal torque twin's regressor of the body ``which`` (cached)."""
+    return InertialRegressor(which)
 
 
 def estimator(reg: InertialRegressor) -> ParameterRLS:
@@ -38,8 +39,8 @@ def estimator(reg: InertialRegressor) -> ParameterRLS:
     return ParameterRLS(prior, noise_sd=NOISE_NM, lo=lo, hi=np.full(len(prior), np.inf))
 
 
-def loop(dof: int, *args, **common) -> AdaptiveArmLoop:
-    """The adaptive computed-torque loop of body ``dof``: ``args`` and ``common`` as
+def loop(which: BodyLike, *args, **common) -> AdaptiveArmLoop:
+    """The adaptive computed-torque loop of the body ``which``: ``args`` and ``common`` as
     :class:`skinny_mj.controllers.torque_arm_loop.ArmLoop` takes them."""
-    reg = regressor(dof)
+    reg = regressor(which)
     return AdaptiveArmLoop(*args, **common, regressor=reg, estimator=estimator(reg))

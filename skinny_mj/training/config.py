@@ -3,13 +3,18 @@
 :class:`TrainConfig` says everything one training run of an ESN inverse model needs, as
 a composition of the parts' own configurations:
 
-- ``plant`` (:class:`Plant`): the body (``dof`` 4 = 2D, 8 = 3D), its ``signals`` (joint
+- ``plant`` (:class:`Plant`): the ``body`` by name (``2d``, ``3d``, their torque twins
+  ``2d-torque`` and ``3d-torque``, or a registered one; ``plant.dof=4|8`` names Skinny's
+  2D and 3D), its ``signals`` (joint
   angles or Cartesian segment vectors), ``sensor_noise``, the sensory ``delay`` of the
   internal models' sensed input (paper A), paper B's forced ``leading_arm`` and the
   simulation ``backend`` (the lockstep MuJoCo batch, or the dm_control env);
 - ``actuation``: :class:`Velocity` (the servo) or :class:`Torque` (the torque twin, with
   its feedback teacher, poles, gravity feed-forward, velocity inputs and the test
-  plant's payload and mass scale: settings that exist only on the torque body);
+  plant's payload and mass scale: settings that exist only on the torque body). The
+  body and the actuation agree: ``plant.body`` alone sets the actuation its MJCF has,
+  ``actuation`` picks the body's twin of that actuation (``2d`` and ``2d-torque``), and
+  ``plant.dof`` names Skinny's body of that many hinges;
 - ``movement`` (:class:`Movement`): trajectory, speed, repetitions, full scale;
 - ``esn``: :class:`skinny_mj.controllers.reservoir.ESNConfig` as it is (its sizes come from the
   plant; ``noise_level`` None: the method's default);
@@ -50,9 +55,13 @@ from skinny_mj.plant.body import (
     ACTUATIONS,
     MAX_SENSOR_NOISE,
     SIGNALS,
+    actuation_of,
+    body_name,
+    body_of,
+    by_dof,
     check_actuation,
-    check_dof,
     check_signals,
+    twin_name,
 )
 from skinny_mj.training import fits, overrides
 from skinny_mj.training.legacy import LEGACY_KEYS, from_legacy, is_legacy
@@ -60,7 +69,7 @@ from skinny_mj.training.legacy import LEGACY_KEYS, from_legacy, is_legacy
 __all__ = ["TrainConfig", "Plant", "Velocity", "Torque", "Movement", "Original", "New",
            "TrueTarget", "NoLearning", "Encoders", "OracleSensing", "NoForward", "Forward",
            "TestSetup", "relative_cost",
-           "check_dof", "check_signals", "check_actuation", "METHODS", "SIGNALS",
+           "check_signals", "check_actuation", "METHODS", "SIGNALS",
            "ACTUATIONS", "DEFAULT_NOISE", "PAPER_CYCLES_FOR_BETA", "ARM_LAWS", "LEGACY_KEYS"]
 
 METHODS = ("original", "new", "true-target", "none")
@@ -97,9 +106,9 @@ def _check(checks: list[tuple[bool, str]]) -> None:
 
 @dataclass(frozen=True)
 class Plant:
-    """The body and its sensors."""
+    """The body (by name, :data:`skinny_mj.plant.body.BODIES`) and its sensors."""
 
-    dof: int = 4
+    body: str = "2d"
     signals: str = "cartesian"
     sensor_noise: float = 0.01
     delay: int = 0  # steps by which the internal models' sensed input lags (paper A)
@@ -107,7 +116,9 @@ class Plant:
     backend: str = "batch"  # "batch" (MjData stepped directly) or "env" (dm_control)
 
     def __post_init__(self) -> None:
-        check_dof(self.dof)
+        if not isinstance(self.body, str):
+            raise SkinnyInputError(f"plant.body is a body's name, got {self.body!r}")
+        body_of(self.body)
         check_signals(self.signals)
         _check([
             (_at_least(self.sensor_noise, 0) and self.sensor_noise <= MAX_SENSOR_NOISE,
@@ -118,6 +129,11 @@ class Plant:
              f"leading arm must be none or one of {ARMS}, got {self.leading_arm!r}"),
             (self.backend in BACKENDS, f"backend must be one of {BACKENDS}, got {self.backend!r}"),
         ])
+
+    @property
+    def dof(self) -> int:
+        """The body's number of hinges (from its MJCF)."""
+        return body_of(self.body).dof
 
 
 @dataclass(frozen=True)
@@ -533,7 +549,8 @@ class TrainConfig:
         arguments take ``__`` for the dot (``esn__spectral_radius=0.9``). ``check=False``
         skips the cross-field checks (each part still checks its own settings): a
         probe of which keys the chosen types have, never a config to run."""
-        merged = {**(changes or {}), **{k.replace("__", "."): v for k, v in kw.items()}}
+        merged = _with_body(self, {**(changes or {}),
+                                   **{k.replace("__", "."): v for k, v in kw.items()}})
         if check:
             return overrides.override(self, merged)
         with _unchecked():
@@ -556,6 +573,42 @@ class TrainConfig:
 
 
 DERIVED = ("learning_cycles", "noise_level")
+#: ``plant.dof``: Skinny's body of that many hinges (4: 2d, 8: 3d) for the actuation.
+DOF_KEY = "plant.dof"
+
+
+def _with_body(cfg: TrainConfig, changes: dict[str, Any]) -> dict[str, Any]:
+    """``changes`` with the body and the actuation agreeing (see the module docstring):
+    ``plant.dof`` becomes the ``plant.body`` of that many hinges; ``plant.body`` alone
+    brings the actuation it has (:func:`~skinny_mj.plant.body.actuation_of`); an
+    ``actuation`` given picks the body's twin of that actuation
+    (:func:`~skinny_mj.plant.body.twin_name`; none is refused)."""
+    if DOF_KEY in changes:
+        dof = changes[DOF_KEY]
+        changes = {k: v for k, v in changes.items() if k != DOF_KEY}
+        if "plant.body" in changes:  # the same body twice is no conflict
+            named = changes["plant.body"]
+            if by_dof(dof, actuation_of(named)) != named:
+                raise SkinnyInputError(f"plant.dof={dof} (--dof) is the {by_dof(dof)} body "
+                                       f"and plant.body={named} (--body) another: give one "
+                                       "of them")
+        else:
+            kind = changes.get("actuation", cfg.actuation.kind)
+            check_actuation(kind)
+            changes = {**changes, "plant.body": by_dof(dof)}
+            if "actuation" not in changes:
+                changes["actuation"] = kind
+    named = changes.get("plant.body", cfg.plant.body)
+    if "actuation" in changes:
+        kind = check_actuation(changes["actuation"])
+        if actuation_of(named) != kind:
+            changes = {**changes, "plant.body": twin_name(body_name(named), kind)}
+    elif "plant.body" in changes:
+        actuation = actuation_of(named)
+        if actuation != cfg.actuation.kind:
+            changes = {**changes, "actuation": actuation}
+    return changes
+
 
 def relative_cost(cfg: TrainConfig) -> float:
     """A training's size, for scheduling sweeps (longest first): its cycles through the

@@ -53,6 +53,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant.body import Body, BodyLike, body_of
 from skinny_mj.plant.path_dynamics import (
     gravity_share,
     path_torque_terms,
@@ -81,29 +82,30 @@ _X_FLOOR = 1e-4  # smallest ṡ0² of the tangent bound (ṡ0 = 0.01)
 
 
 # -- the measure ---------------------------------------------------------------------------
-def peak_torque_ratio(traj: Trajectory, dof: int) -> float:
+def peak_torque_ratio(traj: Trajectory, which: BodyLike) -> float:
     """Largest |held step torque| / limit of ``traj`` over its steps and DOFs (the
     ``peak_ratio`` of :meth:`Dynamics.feasibility`, its largest DOF)."""
-    return float(step_torque_ratio(torque_dynamics(dof), traj.angles, traj.dt).max())
+    return float(step_torque_ratio(torque_dynamics(which), traj.angles, traj.dt).max())
 
 
-def peak_speed_ratio(traj: Trajectory, dof: int) -> float:
+def peak_speed_ratio(traj: Trajectory, which: BodyLike) -> float:
     """Largest |joint speed| / speed limit of ``traj``'s clamped cubic spline, at the
     4 Gauss nodes of each step (where :meth:`Dynamics.feasibility` reads its speeds)."""
     spline = path_spline(traj)
     t = traj.dt * np.arange(len(traj))
     nodes, _ = np.polynomial.legendre.leggauss(4)
     ts = (t[:-1, None] + 0.5 * traj.dt * (1.0 + nodes)).ravel()
-    return float((np.abs(spline(ts, 1)) / velocity_limits_rad_s(dof)).max())
+    return float((np.abs(spline(ts, 1)) / velocity_limits_rad_s(which)).max())
 
 
-def gravity_share_of(traj: Trajectory, dof: int) -> float:
-    """:func:`skinny_mj.plant.path_dynamics.gravity_share` of ``traj`` on body ``dof``."""
-    return gravity_share(torque_dynamics(dof), traj.angles, traj.dt)
+def gravity_share_of(traj: Trajectory, which: BodyLike) -> float:
+    """:func:`skinny_mj.plant.path_dynamics.gravity_share` of ``traj`` on the body's torque
+    twin."""
+    return gravity_share(torque_dynamics(which), traj.angles, traj.dt)
 
 
 # -- uniform slow-down -------------------------------------------------------------------
-def fastest_uniform_speed(traj: Trajectory, dof: int, limit_ratio: float = 1.0,
+def fastest_uniform_speed(traj: Trajectory, which: BodyLike, limit_ratio: float = 1.0,
                           step: float = UNIFORM_STEP, start: float = UNIFORM_START,
                           stop: float = UNIFORM_STOP) -> float:
     """The fastest speed factor on the grid ``stop``, ``stop + step``, ..., ``start`` at
@@ -121,7 +123,7 @@ def fastest_uniform_speed(traj: Trajectory, dof: int, limit_ratio: float = 1.0,
     fastest = None
     for k in range(first, last + 1):
         speed = round(k * step, 10)
-        if peak_torque_ratio(traj.resample(speed), dof) > limit_ratio:
+        if peak_torque_ratio(traj.resample(speed), which) > limit_ratio:
             break
         fastest = speed
     if fastest is None:
@@ -206,9 +208,9 @@ def _toppra_timing(path, grid, terms, limit_nm, vlim, x0):
     return np.minimum(sd, 1.0)
 
 
-def retime_movement(traj: Trajectory, dof: int, torque_margin: float = TORQUE_MARGIN,
+def retime_movement(traj: Trajectory, which: BodyLike, torque_margin: float = TORQUE_MARGIN,
                     points_per_step: int = POINTS_PER_STEP) -> Retimed:
-    """``traj`` re-timed along its path as fast as body ``dof``'s torque twin allows with
+    """``traj`` re-timed along its path as fast as the body's torque twin allows with
     ``torque_margin`` of each torque limit and the joints' speed limits, never faster
     than shipped (see the module docstring)."""
     import logging
@@ -217,15 +219,17 @@ def retime_movement(traj: Trajectory, dof: int, torque_margin: float = TORQUE_MA
 
     if not (math.isfinite(torque_margin) and 0 < torque_margin <= 1):
         raise SkinnyInputError(f"torque margin must be in (0, 1], got {torque_margin}")
-    if traj.dof != dof:
-        raise SkinnyInputError(f"trajectory {traj.name!r} has {traj.dof} DOFs, body {dof}")
+    skinny = body_of(which)
+    if traj.dof != skinny.dof:
+        raise SkinnyInputError(f"trajectory {traj.name!r} has {traj.dof} DOFs, the "
+                               f"{skinny.name} body {skinny.dof}")
     logging.getLogger("toppra").setLevel(logging.ERROR)  # its retries are not our errors
-    dyn = torque_dynamics(dof)
+    dyn = torque_dynamics(skinny)
     s_points = traj.dt * np.arange(len(traj))
     path = toppra.SplineInterpolator(s_points, traj.angles, bc_type="clamped")
     grid = path_grid(traj, points_per_step)
     terms = path_torque_terms(dyn, path(grid), path(grid, 1), path(grid, 2))
-    limit, vlim = dyn.torque_limits_nm(), velocity_limits_rad_s(dof)
+    limit, vlim = dyn.torque_limits_nm(), velocity_limits_rad_s(skinny)
     plan_margin, speed_scale = torque_margin, 1.0
     for _check in range(MAX_CHECKS + 1):
         x0 = np.ones(len(grid))
@@ -239,11 +243,11 @@ def retime_movement(traj: Trajectory, dof: int, torque_margin: float = TORQUE_MA
         if sd is None:
             raise SkinnyInputError(
                 f"{traj.name!r} cannot be played within {plan_margin:.3g} of the torque "
-                f"limits at any speed on body {dof} (holding a pose takes more)")
+                f"limits at any speed on the {skinny.name} body (holding a pose takes more)")
         timing = PathTiming(grid, sd)
         out = resample(traj, timing, name=f"{traj.name}@{SUFFIX}"
                        + (f"={torque_margin:g}" if torque_margin != TORQUE_MARGIN else ""))
-        peak, speed = peak_torque_ratio(out, dof), peak_speed_ratio(out, dof)
+        peak, speed = peak_torque_ratio(out, skinny), peak_speed_ratio(out, skinny)
         if peak <= torque_margin and speed <= 1.0:
             return Retimed(out, timing, torque_margin, plan_margin, peak, speed)
         plan_margin *= min(1.0, torque_margin / peak) * (1 - 1e-3)
@@ -252,10 +256,11 @@ def retime_movement(traj: Trajectory, dof: int, torque_margin: float = TORQUE_MA
                            f"{MAX_CHECKS} re-plans (peak {peak:.3f} of a limit)")
 
 
-def retime(traj: Trajectory, dof: int, torque_margin: float = TORQUE_MARGIN) -> Trajectory:
+def retime(traj: Trajectory, which: BodyLike, torque_margin: float = TORQUE_MARGIN
+           ) -> Trajectory:
     """:func:`retime_movement`'s trajectory: ``traj`` as fast as the limits allow, sampled
     every control step."""
-    return retime_movement(traj, dof, torque_margin).trajectory
+    return retime_movement(traj, which, torque_margin).trajectory
 
 
 # -- movement names ------------------------------------------------------------------------
@@ -279,20 +284,22 @@ def split_feasible(name: str) -> tuple[str, float | None]:
 
 
 @functools.lru_cache(maxsize=16)
-def _retimed(base: str, dof: int, margin: float, kw: tuple):
-    traj, report = _load_any(base, dof, **dict(kw))
-    return retime(traj, dof, margin), report
+def _retimed(base: str, skinny: Body, margin: float, kw: tuple):
+    traj, report = _load_any(base, skinny, **dict(kw))
+    return retime(traj, skinny, margin), report
 
 
-def load_movement(name_or_path, dof: int = 4, *, speed: float = 1.0, reps: int = 1, **kw):
+def load_movement(name_or_path, body: BodyLike = "2d", *, speed: float = 1.0, reps: int = 1,
+                  **kw):
     """:func:`skinny_mj.trajectories.load_movement`, and ``NAME@feasible[=MARGIN]``:
     the movement ``NAME`` (any name or file it accepts, excerpts too), at ``speed``,
-    re-timed by :func:`retime` for body ``dof`` with that torque margin (default 0.9),
-    then repeated ``reps`` times. Returns ``(trajectory, retarget report)``."""
+    re-timed by :func:`retime` for the body's torque twin with that torque margin
+    (default 0.9), then repeated ``reps`` times. Returns ``(trajectory, retarget
+    report)``."""
     base, margin = split_feasible(str(name_or_path))
     if margin is None:
-        return _load_any(name_or_path, dof, speed=speed, reps=reps, **kw)
+        return _load_any(name_or_path, body, speed=speed, reps=reps, **kw)
     extra = tuple(sorted((k, v if not hasattr(v, "__fspath__") else str(v))
                          for k, v in kw.items()))
-    traj, report = _retimed(base, int(dof), float(margin), (("speed", speed), *extra))
+    traj, report = _retimed(base, body_of(body), float(margin), (("speed", speed), *extra))
     return traj.repeat(reps), report

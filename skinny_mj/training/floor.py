@@ -279,7 +279,7 @@ def torque_floor(trajectory, dof: int, *, substeps: int | None = None,
     angles = xs[:, qa]
 
     def nrmse(produced):
-        return float(position_nrmse(body.normalize_angles(produced[None], dof),
-                                    body.normalize_angles(wanted, dof))[0])
+        return float(position_nrmse(body.body_of(dof).normalize_angles(produced[None]),
+                                    body.body_of(dof).normalize_angles(wanted))[0])
 
     return Floor(us, angles, nrmse(angles), j, it, nrmse(start_angles))

@@ -20,7 +20,7 @@ from skinny_mj.controllers.metrics import (
     rmse_per_signal,
     timing_lag,
 )
-from skinny_mj.plant import body
+from skinny_mj.plant.body import BodyLike, body_of
 from skinny_mj.training.dtw import available, dtw_nrmse
 from skinny_mj.trajectories import Trajectory, ik
 
@@ -48,42 +48,47 @@ def saturation(angles: np.ndarray, dt: float, max_speed_rad_s: np.ndarray) -> fl
     return float(np.mean(np.abs(raw) > 1.0 + 1e-9))
 
 
-def lag_s(produced: np.ndarray, wanted: np.ndarray, dof: int, dt: float) -> float:
-    """The timing lag of ``produced`` (T, >= dof) rad behind ``wanted`` (T, dof) rad, in s
-    (steps ``dt`` apart; positive = late): the cross-correlation shift of the normalized
-    angles, searched up to 25 steps or a third of the movement."""
+def lag_s(produced: np.ndarray, wanted: np.ndarray, which: BodyLike, dt: float) -> float:
+    """The timing lag of ``produced`` (T, n_dof) rad behind ``wanted`` (T, n_dof) rad, the
+    body ``which``'s angles, in s (steps ``dt`` apart; positive = late): the
+    cross-correlation shift of the normalized angles, searched up to 25 steps or a third
+    of the movement."""
     max_lag = min(25, (len(wanted) - 1) // 3)
-    return timing_lag(body.normalize_angles(produced, dof),
-                      body.normalize_angles(wanted, dof), max_lag) * dt
+    skinny = body_of(which)
+    return timing_lag(skinny.normalize_angles(produced),
+                      skinny.normalize_angles(wanted), max_lag) * dt
 
 
-def robot_metrics(produced: np.ndarray, wanted: np.ndarray, dof: int,
+def robot_metrics(produced: np.ndarray, wanted: np.ndarray, which: BodyLike,
                   dt: float) -> dict[str, float]:
-    """A test's errors in a roboticist's units, for the produced joint angles ``produced``
-    (T, >= dof) rad (extra columns ignored) against the movement's ``wanted`` (T, dof) rad,
-    steps ``dt`` s apart. Step 0 (the shared first pose) is not scored.
+    """A test's errors in a roboticist's units, for the body ``which``'s produced joint
+    angles ``produced`` (T, >= n_dof) rad (extra columns ignored) against the movement's
+    ``wanted`` (T, n_dof) rad, steps ``dt`` s apart. Step 0 (the shared first pose) is not
+    scored.
 
     ``rms_error_deg``: RMS joint-angle error over joints and steps, degrees;
     ``peak_error_deg``: the largest |joint-angle error|, degrees; ``hand_error_cm`` /
     ``peak_hand_error_cm``: RMS over arms and steps / largest distance between the
     produced and the desired hand (the wrist, the forearm's end, by the body's forward
-    kinematics :func:`skinny_mj.plant.body.arm_points`), cm; ``lag_s``: the timing lag
+    kinematics, :meth:`~skinny_mj.plant.body.Body.arm_points`), cm; ``lag_s``: the timing lag
     (cross-correlation shift of the normalized angles, as :func:`imitation_metrics`;
     positive = the produced movement is late), s."""
-    produced = np.asarray(produced, dtype=float)[..., :dof]
+    skinny = body_of(which)
+    produced = np.asarray(produced, dtype=float)[..., :skinny.dof]
     wanted = np.asarray(wanted, dtype=float)
     err = produced[1:] - wanted[1:]
-    hand = body.arm_points(produced, dof)[..., 2, :] - body.arm_points(wanted, dof)[..., 2, :]
+    hand = skinny.arm_points(produced)[..., 2, :] - skinny.arm_points(wanted)[..., 2, :]
     dist_cm = 100.0 * np.linalg.norm(hand[1:], axis=-1)  # (T-1, 2 arms)
     return {"rms_error_deg": float(np.degrees(np.sqrt(np.mean(err**2)))),
             "peak_error_deg": float(np.degrees(np.abs(err).max())),
             "hand_error_cm": float(np.sqrt(np.mean(dist_cm**2))),
             "peak_hand_error_cm": float(dist_cm.max()),
-            "lag_s": lag_s(produced, wanted, dof, dt)}
+            "lag_s": lag_s(produced, wanted, skinny, dt)}
 
 
-def imitation_metrics(outcome, dof: int, *, dtw: bool = True) -> dict[str, Any]:
-    """One run's figures on one test (a :class:`skinny_mj.training.loop.TestOutcome`):
+def imitation_metrics(outcome, which: BodyLike, *, dtw: bool = True) -> dict[str, Any]:
+    """One run's figures on one test (a :class:`skinny_mj.training.loop.TestOutcome`) of
+    the body ``which``:
     ``position_nrmse``, ``motor_nrmse``, ``dtw_nrmse`` (position signals, 1 s band;
     None when dtaidistance is missing), ``within5`` (mean over joints) and
     ``within5_per_joint``, ``rmse_deg`` (the mean over joints of each joint's RMS error;
@@ -99,13 +104,14 @@ def imitation_metrics(outcome, dof: int, *, dtw: bool = True) -> dict[str, Any]:
         "position_nrmse": outcome.position_nrmse, "motor_nrmse": outcome.motor_nrmse,
         "within5": float(within.mean()), "within5_per_joint": [float(v) for v in within],
         "rmse_deg": float(rmse.mean()), "rmse_deg_per_joint": [float(v) for v in rmse],
-        "lag_s": lag_s(produced, wanted, dof, test.dt),
+        "lag_s": lag_s(produced, wanted, which, test.dt),
     }
     # the same produced movement scored on Cartesian segment vectors, whatever signals the
     # network saw, so joint- and Cartesian-signal models compare on one scale
-    cart = body.position_signals(produced, dof, "cartesian")
+    skinny = body_of(which)
+    cart = skinny.position_signals(produced, "cartesian")
     out["cartesian_position_nrmse"] = float(nrmse(cart[1:], test.position_signals(
-        "cartesian")[1:]))
+        "cartesian", skinny)[1:]))
     if dtw:
         out["dtw_nrmse"] = dtw_nrmse(outcome.rollout.true_signals[0][1:],
                                      outcome.desired[1:]) if available() else None
@@ -123,8 +129,8 @@ def movement_stats(traj: Trajectory) -> dict[str, float]:
 
     target = traj.position_signals("cartesian")
     speed = np.abs(np.diff(traj.angles, axis=0)).max(axis=1) / traj.dt
-    res = ik.residual(traj.angles, target, traj.dof)
-    reached = body.cartesian_signals(traj.angles, traj.dof)
+    res = ik.residual(traj.angles, target, traj.skinny)
+    reached = traj.skinny.cartesian_signals(traj.angles)
     sos = butter(4, [8.0, 12.0], btype="band", fs=1.0 / traj.dt, output="sos")
     band = sosfiltfilt(sos, target, axis=0) if len(target) > 30 else np.zeros_like(target)
     return {"steps": len(traj), "still_steps": int((speed < 0.05).sum()),

@@ -84,6 +84,7 @@ def from_legacy(d: Mapping[str, Any], base: Any) -> Any:
     for name, value in d.items():
         if name in _LEGACY_CHOICES or (name == "cycles" and method == "true-target"):
             continue  # (FEL's cycles, which the true target ignored; its own: tt_cycles)
-        if LEGACY_KEYS[name] in available:  # else the old code ignored it: dropped
+        if LEGACY_KEYS[name] in available or name == "dof":  # else the old code ignored
+            # it: dropped (dof: plant.body by its number of hinges, a key of no field)
             changes[LEGACY_KEYS[name]] = value
     return base.override(changes)

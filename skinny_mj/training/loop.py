@@ -110,11 +110,11 @@ class Run:
     @property
     def scored(self) -> np.ndarray | None:
         """Signals the position metrics score: all (None), or paper B's lagging arm's."""
-        body = self.cfg.plant
-        if body.leading_arm is None:
+        plant = self.cfg.plant
+        if plant.leading_arm is None:
             return None
 
-        return arm_signals(body.dof, body.signals, lagging_arm(self.cfg))
+        return arm_signals(plant.body, plant.signals, lagging_arm(self.cfg))
 
     @functools.cached_property
     def actuation(self) -> Actuation:
@@ -376,7 +376,7 @@ def _result(run: Run, trained: Training, r: int, tests: dict[str, TestOutcome],
 def test_robot_metrics(run: Run, test: TestOutcome) -> dict[str, float]:
     """A test's :func:`skinny_mj.training.imitation.robot_metrics` (joint error in degrees,
     hand error in cm, lag in s) of its produced joint angles against its movement's."""
-    return test.robot_metrics(run.cfg.plant.dof)
+    return test.robot_metrics(run.cfg.plant.body)
 
 
 def physics_warnings(run: Run, test: TestOutcome) -> int:

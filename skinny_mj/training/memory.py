@@ -115,21 +115,21 @@ def train_estimate(cfg: Any, steps: int, test_steps: int, runs: int = 1,
          "learning curve": f"--epochs {epochs}{lockstep}"})
 
 
-def test_estimate(n_reservoir: int, n_inputs: int, n_outputs: int, dof: int, n_sig: int,
+def test_estimate(n_reservoir: int, n_inputs: int, n_outputs: int, n_dof: int, n_sig: int,
                   steps: int, steps_cause: str) -> Estimate:
     """Bytes ``skinny test`` needs: the saved network (loaded, then cast) and one test
     cycle of ``steps`` steps with its recording."""
     d = n_reservoir + n_inputs + 1
-    step = (2 * n_sig + dof + 3 * n_outputs + d) * _F8 + RECORDING_BYTES_PER_STEP
+    step = (2 * n_sig + n_dof + 3 * n_outputs + d) * _F8 + RECORDING_BYTES_PER_STEP
     return Estimate({"reservoir weights": 3 * n_reservoir * (n_reservoir + d) * _F8,
                      "per-step buffers": step * steps},
                     {"reservoir weights": f"the model's reservoir of {n_reservoir} units",
                      "per-step buffers": steps_cause})
 
 
-def track_estimate(dof: int, n_sig: int, steps: int, steps_cause: str) -> Estimate:
+def track_estimate(n_dof: int, n_sig: int, steps: int, steps_cause: str) -> Estimate:
     """Bytes ``skinny track`` needs: its per-step lists, their arrays and the recording."""
-    step = TRACK_BYTES_PER_STEP + 2 * (3 * n_sig + 2 * dof) * _F8 + RECORDING_BYTES_PER_STEP
+    step = TRACK_BYTES_PER_STEP + 2 * (3 * n_sig + 2 * n_dof) * _F8 + RECORDING_BYTES_PER_STEP
     return Estimate({"per-step buffers": step * steps}, {"per-step buffers": steps_cause})
 
 

@@ -23,9 +23,10 @@ _UNREADABLE = (OSError, ValueError, KeyError, TypeError, EOFError, NotImplemente
 
 
 def read_model(model: str | Path) -> tuple[Path, ESN, dict[str, Any]]:
-    """``(path, network, metadata)`` of a saved model; the metadata's ``dof`` and
-    ``signals`` name a body and a signal set, ``max_speed_rad_s`` is (dof,) finite
-    speeds > 0 rad/s (as a float array)."""
+    """``(path, network, metadata)`` of a saved model; the metadata's ``body`` (a name;
+    an earlier model's ``dof`` and ``actuation`` name Skinny's) and ``signals`` name a body
+    and a signal set, ``dof`` is the body's number of hinges, ``max_speed_rad_s`` is
+    (dof,) finite speeds > 0 rad/s (as a float array)."""
     path = model_path(model)  # a shipped model's name, or a file
     if path.is_dir():
         raise SkinnyInputError("a folder, not a model file", path=path)
@@ -47,11 +48,14 @@ def read_model(model: str | Path) -> tuple[Path, ESN, dict[str, Any]]:
             text = "it holds pickled Python objects, which are not loaded: they can run code"
         raise SkinnyInputError(f"not a model written by `skinny train` ({text})",
                                path=path) from None
-    if not isinstance(meta, dict) or not {"dof", "signals", "max_speed_rad_s"} <= meta.keys():
-        raise SkinnyInputError("model has no Skinny metadata (dof, signals, max speed)",
+    if not isinstance(meta, dict) or not {"signals", "max_speed_rad_s"} <= meta.keys() \
+            or not {"body", "dof"} & meta.keys():
+        raise SkinnyInputError("model has no Skinny metadata (body, signals, max speed)",
                                path=path)
     try:
-        dof = body.check_dof(meta["dof"])
+        name = body.body_name(meta["body"]) if "body" in meta else body.by_dof(
+            meta["dof"], meta.get("actuation", "velocity"))
+        dof = body.body_of(name).dof
         signals = body.check_signals(meta["signals"])
     except SkinnyInputError as err:
         raise SkinnyInputError(f"model metadata: {err}", path=path) from None
@@ -62,7 +66,8 @@ def read_model(model: str | Path) -> tuple[Path, ESN, dict[str, Any]]:
     if speed.shape != (dof,) or not np.all(np.isfinite(speed) & (speed > 0)):
         raise SkinnyInputError(f"model metadata: max_speed_rad_s must be {dof} finite speeds "
                                f"> 0 rad/s, got {meta['max_speed_rad_s']!r}", path=path)
-    return path, esn, {**meta, "dof": dof, "signals": signals, "max_speed_rad_s": speed}
+    return path, esn, {**meta, "body": name, "dof": dof, "signals": signals,
+                       "max_speed_rad_s": speed}
 
 
 #: The arrays of the network's weights in a model file (its state x, y is reset by a test).

@@ -12,6 +12,7 @@ import numpy as np
 
 from skinny_mj.controllers.arm_forward import ArmForwardModels
 from skinny_mj.controllers.esn import ESN
+from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.plant.adapters import BatchPlant, EnvPlant
 from skinny_mj.plant.bimanual import BimanualPlant, arm_dofs, arm_signals
@@ -43,7 +44,7 @@ def load_trajectory(cfg: TrainConfig):
     """The movement of one repetition (at cfg.movement.speed) and its retarget report."""
     mv = cfg.movement
     kw = {} if mv.retarget == "angles" else {"retarget": mv.retarget}  # today's call
-    return load_movement(mv.trajectory, cfg.plant.dof, asf=mv.asf, speed=mv.speed, **kw)
+    return load_movement(mv.trajectory, cfg.plant.body, asf=mv.asf, speed=mv.speed, **kw)
 
 
 def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
@@ -54,27 +55,33 @@ def full_scale_speeds(cfg: TrainConfig, trajectory) -> np.ndarray:
     ``movement.full_scale="shared"``: the fastest DOF's for every DOF."""
     mv = cfg.movement
     if mv.max_speed_from is not None:
-        trajectory, _ = load_movement(mv.max_speed_from, cfg.plant.dof, asf=mv.asf)
+        trajectory, _ = load_movement(mv.max_speed_from, cfg.plant.body, asf=mv.asf)
     speeds = max_speeds(trajectory.angles, trajectory.dt, speed_factor=mv.full_scale_factor)
     return np.full_like(speeds, speeds.max()) if mv.full_scale == "shared" else speeds
 
 
 def make_plant(cfg: TrainConfig, trajectory, plant_seeds: Sequence[int],
                max_speed_rad_s: np.ndarray):
-    """The plant of ``cfg`` imitating ``trajectory``, one run per plant seed."""
-    seeds, body = [int(s) for s in plant_seeds], cfg.plant
-    common = dict(n_runs=len(seeds), seeds=seeds, sensor_noise=body.sensor_noise,
-                  actuation=cfg.actuation.kind, max_speed_rad_s=max_speed_rad_s)
-    if body.leading_arm is not None:
-        return BimanualPlant(body.dof, body.signals, trajectory, body.leading_arm, **common)
-    if body.backend == "env":
+    """The plant of ``cfg`` imitating ``trajectory``, one run per plant seed; a body
+    driven otherwise than ``cfg.actuation`` says is a :class:`SkinnyInputError`."""
+    seeds, plant = [int(s) for s in plant_seeds], cfg.plant
+    skinny = body.body_of(plant.body)
+    if skinny.actuation != cfg.actuation.kind:
+        raise SkinnyInputError(f"plant.body={skinny.name} is driven by {skinny.actuation}, not "
+                               f"actuation={cfg.actuation.kind}: set one of them (the other "
+                               "follows)")
+    common = dict(n_runs=len(seeds), seeds=seeds, sensor_noise=plant.sensor_noise,
+                  max_speed_rad_s=max_speed_rad_s)
+    if plant.leading_arm is not None:
+        return BimanualPlant(skinny, plant.signals, trajectory, plant.leading_arm, **common)
+    if plant.backend == "env":
         if len(seeds) != 1:
             raise ValueError("the dm_control path steps one run per environment")
-        env = load(body.dof, body.signals, trajectory, actuation=cfg.actuation.kind,
-                   sensor_noise=body.sensor_noise, seed=seeds[0],
-                   max_speed_rad_s=max_speed_rad_s)
+        env = load(skinny, plant.signals, trajectory, sensor_noise=plant.sensor_noise,
+                   seed=seeds[0], max_speed_rad_s=max_speed_rad_s)
         return EnvPlant(env)
-    return BatchPlant(body.dof, body.signals, trajectory, **common)
+    return BatchPlant(skinny, plant.signals, trajectory, **common)
+
 
 
 def controlled_dofs(cfg: TrainConfig) -> np.ndarray | None:
@@ -82,14 +89,14 @@ def controlled_dofs(cfg: TrainConfig) -> np.ndarray | None:
     if cfg.plant.leading_arm is None:
         return None
 
-    return arm_dofs(cfg.plant.dof, lagging_arm(cfg))
+    return arm_dofs(cfg.plant.body, lagging_arm(cfg))
 
 
 def network_sizes(cfg: TrainConfig) -> tuple[int, int, int]:
     """(n_sig, n_out, n_in): the position signals, the inverse ESN's outputs (the DOFs
     it drives) and its inputs (desired and sensed signals, the forward model's
     prediction, the torque loop's velocity inputs)."""
-    n_sig = body.n_signals(cfg.plant.dof, cfg.plant.signals)
+    n_sig = body.body_of(cfg.plant.body).n_signals(cfg.plant.signals)
     dofs = controlled_dofs(cfg)
     n_out = cfg.plant.dof if dofs is None else len(dofs)
     n_in = (n_sig if cfg.inputs == "desired+sensed" else 0) + n_sig \
@@ -115,9 +122,9 @@ def arm_forward_models(cfg: TrainConfig, rngs: Sequence[np.random.Generator]):
     (:class:`skinny_mj.controllers.arm_forward.ArmForwardModels`,
     ``forward.sharing``): the lagging arm's network from each run's forward stream,
     the leading arm's (shared predictions only) from a child of that stream."""
-    body, sharing = cfg.plant, cfg.forward.sharing
-    lag_sig, lead_sig = (arm_signals(body.dof, body.signals, s)
-                         for s in (lagging_arm(cfg), body.leading_arm))
+    plant, sharing = cfg.plant, cfg.forward.sharing
+    lag_sig, lead_sig = (arm_signals(plant.body, plant.signals, s)
+                         for s in (lagging_arm(cfg), plant.leading_arm))
     n_arm = len(controlled_dofs(cfg))
 
     def nets(n_sig: int, streams):

@@ -1,7 +1,7 @@
 """Named training configurations for ``skinny train --preset NAME``.
 
 ``general`` is the inverse model for movements it never saw, one per body and signal
-(``--dof 4|8``, ``--signals joint|cartesian``; by default 2D joint angles): each is the
+(``--body 2d|3d``, ``--signals joint|cartesian``; by default 2D joint angles): each is the
 configuration with the lowest error on the real CMU clips it never trained on in the
 generalization study (``skinny experiment generalization --rows general,cartesian``,
 docs/results/generalization.md). The Cartesian ones see each elbow's angle beside the
@@ -11,10 +11,11 @@ angle between the two segments, so a Cartesian target fixes it too. All train on
 models ship with the package (:data:`SHIPPED`): ``skinny test --model general-3d-cartesian
 --trajectory CLIP.amc --asf SKELETON.asf`` runs one without training.
 
-With ``--actuation torque`` the same name picks the torque twin's ``general`` of the
-body (:data:`TORQUE_GENERAL`, ``--dof 4|8``, joint-angle signals): motor babbling in
-desired joint angles, slow enough for the motors' torque limits, then YMCA, learned by
-FEL with the inertia-scaled PD teacher and the forgetting readout; chosen in the dynamic
+On a torque body (``--body 2d-torque|3d-torque``, or ``--actuation torque``) the same
+name picks the torque twin's ``general`` (:data:`TORQUE_GENERAL`, joint-angle signals):
+motor babbling in desired joint angles, slow enough for the motors' torque limits, then
+YMCA, learned by FEL with the inertia-scaled PD teacher and the forgetting readout; chosen
+in the dynamic
 study (``skinny experiment dynamic --rows general``, docs/results/dynamic.md). The
 shipped clips need more torque than the motors have at full speed: test it on them as
 shipped and slowed down to what the motors can do, ``skinny test --model
@@ -29,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.plant.body import body_of
 
 __all__ = ["GENERAL", "PRESETS", "TORQUE_GENERAL", "TORQUE_PRESETS", "SHIPPED",
            "preset_fields", "describe", "model_name", "model_path"]
@@ -37,7 +39,8 @@ _LIMITS30 = "babble:seed=0,duration=30,limits=0.5,holds=0.2"
 #: The joint-angle presets' keys (2D and 3D alike).
 _JOINT = {"plant.signals": "joint", "movement.trajectory": _LIMITS30,
           "movement.full_scale_factor": 4.0, "test.washout_cycles": 1}
-#: ``general`` per (dof, signals): (one-line reason, the dotted TrainConfig keys).
+#: ``general`` per (the body's number of hinges, signals): (one-line reason, the dotted
+#: TrainConfig keys).
 GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
     (4, "joint"): (
         "2D, joint-angle signals, trained on 30 s of motor babbling (minimum-jerk moves "
@@ -46,13 +49,13 @@ GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
         "scale = 4x its fastest speed per DOF, paper E exp. 5 schedule (N = 200), one "
         "washout cycle before the test: row j2-limits30-scale4 (unseen md_02 0.0078, md_03 "
         "0.0060, 10 seeds)",
-        {"plant.dof": 4, **_JOINT},
+        {"plant.body": "2d", **_JOINT},
     ),
     (8, "joint"): (
         "3D, joint-angle signals, trained on 30 s of babbling that also moves to the "
         "joint limits and rests (limits=0.5, holds=0.2), full scale 4x: row j3-general "
         "(unseen md_02 0.011, md_03 0.012, 10 seeds)",
-        {"plant.dof": 8, **_JOINT},
+        {"plant.body": "3d", **_JOINT},
     ),
     (4, "cartesian"): (
         "2D, Cartesian signals with each elbow's angle beside them (cartesian-elbow: the "
@@ -61,7 +64,7 @@ GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
         "holds=0.2), full scale 4x, the feedback controller's correction x3 in the "
         "learning targets: row c2-general+elbow (unseen md_02 0.027, md_03 0.022, 10 "
         "seeds; without the elbow angles 0.064 and 0.052)",
-        {"plant.dof": 4, "plant.signals": "cartesian-elbow",
+        {"plant.body": "2d", "plant.signals": "cartesian-elbow",
          "movement.trajectory": "babble:seed=0,duration=60,limits=0.5,holds=0.2",
          "movement.full_scale_factor": 4.0, "method.u_error_gain": 3.0,
          "test.washout_cycles": 1},
@@ -72,7 +75,7 @@ GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
         "full scale 2x: row c3-babble15+ymca+elbow-babble240 (unseen md_02 0.029, md_03 "
         "0.026, 10 seeds; with 120 s of babbling 0.034 and 0.032, with 15 s 0.064 and "
         "0.048, without the elbow angles 0.127 and 0.100)",
-        {"plant.dof": 8, "plant.signals": "cartesian-elbow",
+        {"plant.body": "3d", "plant.signals": "cartesian-elbow",
          "movement.trajectory": "set:babble:seed=0,duration=240+ymca",
          "test.washout_cycles": 1},
     ),
@@ -80,12 +83,13 @@ GENERAL: dict[tuple[int, str], tuple[str, dict[str, Any]]] = {
 #: Preset name -> (one-line reason, the dotted TrainConfig keys) of its default body.
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {"general": GENERAL[4, "joint"]}
 #: The trained general models shipped as package data (``skinny_mj/data/models``):
-#: name -> (dof, signals); each file is ``skinny train --preset general --dof D
-#: --signals S --seed 0``'s model.npz, compressed, with its training metadata.
+#: name -> (the body's number of hinges, signals); each file is ``skinny train --preset
+#: general --body B --signals S --seed 0``'s model.npz, compressed, with its training
+#: metadata.
 SHIPPED: dict[str, tuple[int, str]] = {
     f"general-{'2d' if dof == 4 else '3d'}-{signals}": (dof, signals) for dof, signals in GENERAL}
 
-#: ``general`` for ``--actuation torque``, per body (dof): (one-line reason, the dotted
+#: ``general`` for the torque bodies, per number of hinges: (one-line reason, the dotted
 #: TrainConfig keys). Joint-angle signals; the teacher and readout of the dynamic study's
 #: ``fel-arm`` rows (inertia-scaled PD, beta = 1, forgetting readout); 240 s of slow
 #: babbling, then YMCA, 3 learning cycles per epoch.
@@ -99,17 +103,17 @@ TORQUE_GENERAL: dict[int, tuple[str, dict[str, Any]]] = {
         "inertia-scaled PD teacher, beta = 1, 3 cycles x 30 epochs, readout on the normal "
         "equations with forgetting: row 2d-general of `skinny experiment dynamic --rows "
         "general` (unseen md_02 at 0.18x speed 0.0163, md_03 at 0.27x 0.0116, 10 seeds)",
-        {"plant.dof": 4, **_TORQUE_FEL, "method.epochs": 30}),
+        {"plant.body": "2d-torque", **_TORQUE_FEL, "method.epochs": 30}),
     8: ("torque twin, 3D, joint-angle signals, trained on 240 s of motor babbling at peak "
         "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
         "inertia-scaled PD teacher at poles of 20 rad/s, beta = 1, 3 cycles x 15 epochs, "
         "readout on the normal equations with forgetting 0.9: row 3d-general of `skinny "
         "experiment dynamic --rows general` (unseen md_02 at 0.45x speed 0.0189, "
         "md_03 at 0.44x 0.0142, 10 seeds)",
-        {"plant.dof": 8, **_TORQUE_FEL, "method.epochs": 15, "actuation.omega": 20.0,
+        {"plant.body": "3d-torque", **_TORQUE_FEL, "method.epochs": 15, "actuation.omega": 20.0,
          "method.fit.forgetting": 0.9}),
 }
-#: The same names for ``--actuation torque`` (``general``: the 2D body's).
+#: The same names for the torque bodies (``general``: the 2D body's).
 TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {"general": TORQUE_GENERAL[4]}
 
 
@@ -133,11 +137,15 @@ def _entry(name: str, actuation: str, dof: Any, signals: Any) -> tuple[str, dict
 
 
 def preset_fields(name: str, actuation: str = "velocity", *, dof: Any = None,
-                  signals: Any = None) -> dict[str, Any]:
+                  signals: Any = None, body: Any = None) -> dict[str, Any]:
     """A copy of the dotted TrainConfig keys preset ``name`` sets for ``actuation``
     (``TrainConfig().override(preset_fields(name))`` is the preset's config); ``general``
-    on the velocity servo has one per ``dof`` (4, 8) and ``signals`` (joint, cartesian),
-    None: 4 and joint."""
+    on the velocity servo has one per number of hinges ``dof`` (4, 8) and ``signals``
+    (joint, cartesian), None: 4 and joint. A ``body`` (a name) gives the number of hinges
+    and the actuation of its MJCF."""
+    if body is not None:
+        skinny = body_of(body)
+        dof, actuation = skinny.dof, skinny.actuation
     return dict(_entry(name, actuation, dof, signals)[1])
 
 

@@ -68,10 +68,11 @@ class TestOutcome:
     #: torque body: per-run torque figures and series (:func:`torque_training.test_torques`)
     torque: dict | None = field(default=None, repr=False)
 
-    def robot_metrics(self, dof: int) -> dict[str, float]:
+    def robot_metrics(self, which: Any) -> dict[str, float]:
         """:func:`skinny_mj.training.imitation.robot_metrics` (joint error in degrees, hand
-        error in cm, lag in s) of the produced joint angles against the movement's."""
-        return robot_metrics(self.rollout.angles[0], self.trajectory.angles, dof,
+        error in cm, lag in s) of the produced joint angles of the body ``which`` against
+        the movement's."""
+        return robot_metrics(self.rollout.angles[0], self.trajectory.angles, which,
                              self.trajectory.dt)
 
     @property

@@ -45,6 +45,7 @@ from skinny_mj.controllers.torque_fel import TorqueLoop
 from skinny_mj.controllers.torque_readout import ForgettingReadout, RLSReadout
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
+from skinny_mj.plant.body import BodyLike, body_of
 from skinny_mj.plant.dynamics import BatchArmState, feasibility_lines
 from skinny_mj.plant.path_dynamics import torque_dynamics
 from skinny_mj.plant.perturb import perturb  # noqa: F401  (re-exported: the robustness test plant)
@@ -61,21 +62,22 @@ ARM_OMEGA = {"ct": 15.0, "pd-gravity": 15.0, "id-pd": 5.0, "inertia-pd": 5.0,
 
 
 @functools.lru_cache(maxsize=8)
-def controller(dof: int, signals: str) -> TorqueFeedbackController:
+def controller(which: BodyLike, signals: str) -> TorqueFeedbackController:
     """The PD teacher of the torque body (see the module docstring)."""
-    dyn = torque_dynamics(dof)
+    dyn = torque_dynamics(which)
     inertia_min, _ = dyn.inertia_range()
     gains = TorqueGains.from_limits(dyn.torque_limits_nm(), inertia_min, dt=body.CONTROL_DT_S)
     if signals == "joint":
-        lo, hi = body.joint_ranges(dof).T
+        lo, hi = body_of(which).joint_ranges().T
         return TorqueFeedbackController(gains, mode="joint",
                                         signal_per_rad=tuple((2.0 / (hi - lo)).tolist()))
     return TorqueFeedbackController(gains)
 
 
-def torque_limits_nm(dof: int) -> np.ndarray:
-    """(n_dof,) peak torques, N m (what a normalized command of 1 means)."""
-    return torque_dynamics(dof).torque_limits_nm()
+def torque_limits_nm(which: BodyLike) -> np.ndarray:
+    """(n_dof,) peak torques of the body's torque twin, N m (what a normalized command of
+    1 means)."""
+    return torque_dynamics(which).torque_limits_nm()
 
 
 def desired_velocities_rad_s(angles: np.ndarray, dt: float) -> np.ndarray:
@@ -88,11 +90,11 @@ def desired_velocities_rad_s(angles: np.ndarray, dt: float) -> np.ndarray:
     return CubicSpline(t, angles, axis=0, bc_type="clamped")(t, 1)
 
 
-def true_torques(dof: int, trajectory) -> np.ndarray:
+def true_torques(which: BodyLike, trajectory) -> np.ndarray:
     """(T-1, n_dof) the zero-order-hold inverse-dynamics torques of ``trajectory``
     divided by the limits (normalized torque; can exceed 1 where the movement asks
     more than the motors have)."""
-    dyn = torque_dynamics(dof)
+    dyn = torque_dynamics(which)
     return dyn.normalize(dyn.trajectory_torques_nm(trajectory.angles, trajectory.dt))
 
 
@@ -109,7 +111,7 @@ def n_extra_inputs(cfg: TrainConfig) -> int:
     return 2 * cfg.plant.dof if cfg.uses_velocity_inputs else 0
 
 
-def desired_motion(dof: int, trajectory, with_id: bool = False) -> DesiredMotion:
+def desired_motion(which: BodyLike, trajectory, with_id: bool = False) -> DesiredMotion:
     """The :class:`DesiredMotion` of ``trajectory`` for a held-torque loop: the clamped
     cubic spline's states, mid-step samples and (``with_id``) held inverse dynamics."""
     from scipy.interpolate import CubicSpline  # here: scipy.interpolate takes ~0.25 s
@@ -118,7 +120,7 @@ def desired_motion(dof: int, trajectory, with_id: bool = False) -> DesiredMotion
     t = dt * np.arange(len(angles))
     spline = CubicSpline(t, angles, axis=0, bc_type="clamped")
     mid = t[:-1] + 0.5 * dt
-    tau = torque_dynamics(dof).trajectory_torques_nm(angles, dt) if with_id else None
+    tau = torque_dynamics(which).trajectory_torques_nm(angles, dt) if with_id else None
     return DesiredMotion.from_samples(angles, spline(t, 1), dt, spline(mid), spline(mid, 1),
                                       tau)
 
@@ -149,11 +151,12 @@ def sensing_delay(act: Torque | None) -> int:
     return getattr(getattr(act, "sensing", None), "delay", 0)
 
 
-def home_mass(dof: int) -> np.ndarray:
-    """(n, n) M of the nominal twin at its home pose (every angle 0 or its range's nearest
-    end: arms hanging, elbows straight), kg m^2: the constant-inertia teacher's M."""
-    lo, hi = body.joint_ranges(dof).T
-    return torque_dynamics(dof).mass_matrix(np.clip(0.0, lo, hi))
+def home_mass(which: BodyLike) -> np.ndarray:
+    """(n, n) M of the body's nominal torque twin at its home pose (every angle 0 or its
+    range's nearest end: arms hanging, elbows straight), kg m^2: the constant-inertia
+    teacher's M."""
+    lo, hi = body_of(which).joint_ranges().T
+    return torque_dynamics(which).mass_matrix(np.clip(0.0, lo, hi))
 
 
 def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
@@ -162,7 +165,7 @@ def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
     :mod:`skinny_mj.controllers.torque_arm` read the arm's state from ``plant`` (a BatchPlant).
     ``nominal``: the controllers use the nominal twin's model (None: :func:`nominal_model`;
     True for a plant that will change while the loop runs)."""
-    act, dof, signals = cfg.torque, cfg.plant.dof, cfg.plant.signals
+    act, which, signals = cfg.torque, cfg.plant.body, cfg.plant.signals
     if act is None:
         return None
     sensing = None if plant is None else sensing_of(act, plant, trajectory.dt)
@@ -175,20 +178,20 @@ def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
             nominal = nominal_model(act)
         state_of = BatchArmState(plant, gravity=law == "pd-g", nominal=nominal,
                                  sensing=sensing,
-                                 constant_mass=home_mass(dof) if law == "fel-const" else None)
+                                 constant_mass=home_mass(which) if law == "fel-const" else None)
         common = dict(velocity_inputs=act.velocity_inputs,
                       gravity_feedforward=act.gravity_feedforward, law=law,
                       gains=arm_gains(act),
-                      motion=desired_motion(dof, trajectory, law == "id-pd"),
+                      motion=desired_motion(which, trajectory, law == "id-pd"),
                       state_of=state_of, dt=trajectory.dt, sensing=sensing)
-        args = (controller(dof, signals),
+        args = (controller(which, signals),
                 desired_velocities_rad_s(trajectory.angles, trajectory.dt),
                 np.asarray(max_speed_rad_s, float))
         if act.feedback == "adaptive-ct":
-            return adaptive.loop(dof, *args, **common)
+            return adaptive.loop(which, *args, **common)
         return ArmLoop(*args, **common)
-    ff = true_torques(dof, trajectory) if act.feedback == "computed-torque" else None
-    return TorqueLoop(controller(dof, signals),
+    ff = true_torques(which, trajectory) if act.feedback == "computed-torque" else None
+    return TorqueLoop(controller(which, signals),
                       desired_velocities_rad_s(trajectory.angles, trajectory.dt),
                       np.asarray(max_speed_rad_s, float),
                       velocity_inputs=act.velocity_inputs,
@@ -241,23 +244,24 @@ def test_torques(hook: TorqueLoop, rollout, plant, r: int) -> dict:
     metrics["warnings"] = int(plant.warning_count())
     metrics["within_limits"] = bool(max(metrics["max_commanded_ratio"],
                                         metrics["max_applied_ratio"]) <= 1 + 1e-9)
-    metrics["limit_overshoot_rad"] = limit_overshoot_rad(rollout.angles[r], plant.n_dof)
+    metrics["limit_overshoot_rad"] = limit_overshoot_rad(rollout.angles[r], plant.body)
     series = {"commanded_nm": rollout.commands[r] * limit,
               "applied_nm": hook.applied_nm[:, r].copy(),
               "gravity_nm": hook.bias_nm[:, r].copy(), "limit_nm": limit.copy()}
     return {"metrics": metrics, "series": series}
 
 
-def limit_overshoot_rad(angles: np.ndarray, dof: int) -> float:
-    """The largest joint angle past its range in ``angles`` (T, >= dof) rad, in rad (0
+def limit_overshoot_rad(angles: np.ndarray, which: BodyLike) -> float:
+    """The largest joint angle past its range in ``angles`` (T, >= n_dof) rad, the body
+    ``which``'s, in rad (0
     when every angle stays within :func:`skinny_mj.plant.body.joint_ranges`)."""
-    return float(_overshoot_per_run(np.asarray(angles)[None], dof)[0])
+    return float(_overshoot_per_run(np.asarray(angles)[None], which)[0])
 
 
-def _overshoot_per_run(angles: np.ndarray, dof: int) -> np.ndarray:
-    """(R,) each run's largest joint angle past its range in ``angles`` (R, T, >= dof)."""
-    lo, hi = body.joint_ranges(dof).T
-    q = angles[..., :dof]
+def _overshoot_per_run(angles: np.ndarray, which: BodyLike) -> np.ndarray:
+    """(R,) each run's largest joint angle past its range in ``angles`` (R, T, >= n_dof)."""
+    lo, hi = body_of(which).joint_ranges().T
+    q = angles[..., :len(lo)]
     return np.maximum(np.maximum(lo - q, q - hi).max(axis=(1, 2)), 0.0)
 
 
@@ -268,16 +272,16 @@ def train_warnings(run) -> int | None:
         else int(plant.warning_count())
 
 
-def feasibility(dof: int, trajectory) -> dict[str, np.ndarray]:
+def feasibility(which: BodyLike, trajectory) -> dict[str, np.ndarray]:
     """:meth:`skinny_mj.plant.dynamics.Dynamics.feasibility` of ``trajectory`` on the torque
     twin."""
-    return torque_dynamics(dof).feasibility(trajectory.angles, trajectory.dt)
+    return torque_dynamics(which).feasibility(trajectory.angles, trajectory.dt)
 
 
-def feasibility_report(dof: int, trajectory) -> list[str]:
+def feasibility_report(which: BodyLike, trajectory) -> list[str]:
     """The feasibility of ``trajectory`` as text lines (``skinny trajectory show
     --actuation torque``)."""
-    return feasibility_lines(feasibility(dof, trajectory), list(body.dof_names(dof)))
+    return feasibility_lines(feasibility(which, trajectory), list(body_of(which).dof_names))
 
 
 def readout_fitter(cfg: TrainConfig, esn, steps: int):
@@ -301,14 +305,14 @@ class ShareRecorder:
     the training, each run's largest joint angle past its range (``limit_overshoot_rad``
     (R,), rad: 0 for a run that never touched a joint limit)."""
 
-    def __init__(self, gains: np.ndarray, n_runs: int, cycles: int, dof: int):
-        self.gains, self.eval_cycle, self.dof = np.asarray(gains, float), cycles + 1, dof
+    def __init__(self, gains: np.ndarray, n_runs: int, cycles: int, which: BodyLike):
+        self.gains, self.eval_cycle, self.body = np.asarray(gains, float), cycles + 1, which
         self.share = np.full((n_runs, len(gains)), np.nan)
         self.error_signal = np.full((n_runs, len(gains)), np.nan)
         self.limit_overshoot_rad = np.zeros(n_runs)
 
     def __call__(self, epoch: int, cycle: int, ro, y_used) -> None:
-        np.maximum(self.limit_overshoot_rad, _overshoot_per_run(ro.angles, self.dof),
+        np.maximum(self.limit_overshoot_rad, _overshoot_per_run(ro.angles, self.body),
                    out=self.limit_overshoot_rad)
         if cycle != self.eval_cycle:
             return
@@ -328,7 +332,7 @@ class ShareRecorder:
 def joint_nrmse(outcome) -> float:
     """Test joint-angle NRMSE (each angle normalized to [-1, 1] over its range) of a
     :class:`skinny_mj.training.result.RunResult` against its movement's angles."""
-    dof = outcome.config.plant.dof
-    angles = outcome.test.rollout.angles[:, :, :dof]
-    return float(position_nrmse(body.normalize_angles(angles, dof),
-                                body.normalize_angles(outcome.test.trajectory.angles, dof))[0])
+    skinny = body_of(outcome.config.plant.body)
+    angles = outcome.test.rollout.angles[:, :, :skinny.dof]
+    return float(position_nrmse(skinny.normalize_angles(angles),
+                                skinny.normalize_angles(outcome.test.trajectory.angles))[0])

@@ -1,10 +1,11 @@
 """Movements for Skinny to imitate: the :class:`Trajectory` value, the synthesized YMCA
 and its derived movements (paper C), and motion capture (ASF/AMC, BVH) retargeted
-onto Skinny's joints. Pure NumPy/SciPy: no mujoco, no dm_control.
+onto Skinny's joints. NumPy/SciPy, no dm_control (a body's arms are read from its MJCF
+with MuJoCo on first use).
 
 >>> from skinny_mj.trajectories import get, load_movement
->>> traj = get("ymca", dof=4)                      # 313 steps at 50 Hz
->>> traj, report = load_movement("clip.amc", dof=8, asf="subject.asf")  # doctest: +SKIP
+>>> traj = get("ymca", "2d")                        # 313 steps at 50 Hz
+>>> traj, report = load_movement("clip.amc", "3d", asf="subject.asf")  # doctest: +SKIP
 """
 
 from skinny_mj.trajectories.library import get, load_movement, names, resolve_trajectory

@@ -57,11 +57,11 @@ def min_jerk(q0: np.ndarray, q1: np.ndarray, n: int) -> np.ndarray:
     return q0 + np.multiply.outer(shape, q1 - q0)
 
 
-def babble(dof: int, *, seed: int = 0, duration_s: float = 20.0, v_min: float = 1.0,
+def babble(which: body.BodyLike, *, seed: int = 0, duration_s: float = 20.0, v_min: float = 1.0,
            v_max: float = 8.0, limits: float = 0.0, holds: float = 0.0,
            dt: float = DEFAULT_DT_S, min_segment_s: float = 0.3,
            max_segment_s: float = 3.0) -> Trajectory:
-    """A babbling movement of ``duration_s`` seconds for ``dof`` (4 or 8).
+    """A babbling movement of ``duration_s`` seconds for the body ``which``.
 
     Parameters
     ----------
@@ -76,9 +76,10 @@ def babble(dof: int, *, seed: int = 0, duration_s: float = 20.0, v_min: float = 
 
     Returns
     -------
-    Trajectory (T, dof), rad, every angle at least 1e-3 rad inside the joint ranges.
+    Trajectory (T, n_dof), rad, every angle at least 1e-3 rad inside the joint ranges.
     """
-    body.check_dof(dof)
+    skinny = body.body_of(which)
+    dof = skinny.dof
     if not (math.isfinite(duration_s) and duration_s > 0):
         raise SkinnyInputError(f"babble duration must be > 0 s, got {duration_s}")
     if not (math.isfinite(v_min) and math.isfinite(v_max) and 0 < v_min <= v_max):
@@ -87,7 +88,7 @@ def babble(dof: int, *, seed: int = 0, duration_s: float = 20.0, v_min: float = 
         raise SkinnyInputError(f"babble needs limits, holds >= 0 with limits + holds <= 1, "
                                f"got {limits}, {holds}")
     rng = np.random.default_rng(int(seed))
-    lo, hi = (body.joint_ranges(dof) + [LIMIT_MARGIN_RAD, -LIMIT_MARGIN_RAD]).T
+    lo, hi = (skinny.joint_ranges() + [LIMIT_MARGIN_RAD, -LIMIT_MARGIN_RAD]).T
     steps = max(2, int(round(duration_s / dt)))
     check_size(steps, dof, f"babble duration {duration_s:g} s: {steps} steps")
     out = np.empty((steps, dof))
@@ -115,7 +116,8 @@ def babble(dof: int, *, seed: int = 0, duration_s: float = 20.0, v_min: float = 
             q = target
         out[:, j] = np.concatenate(pieces)[:steps]
     extra = "".join(f",{k}={v:g}" for k, v in (("limits", limits), ("holds", holds)) if v)
-    return Trajectory(out, dt, f"babble:seed={int(seed)},duration={duration_s:g}{extra}")
+    return Trajectory(out, dt, f"babble:seed={int(seed)},duration={duration_s:g}{extra}",
+                      body=skinny.name)
 
 
 def bridge(q0: np.ndarray, q1: np.ndarray, dt: float = DEFAULT_DT_S, *, peak_rad_s: float = 2.0,

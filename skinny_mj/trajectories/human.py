@@ -113,8 +113,8 @@ def markers(seed: int = DEFAULT_SEED, height_m: float = HEIGHT_M) -> np.ndarray:
     marker noise."""
     q = performance_angles(seed)
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 13]))
-    unit = body.segment_vectors(q, 8) / np.array(
-        [body.UPPER_ARM_LENGTH_M, body.FOREARM_LENGTH_M])[:, None]  # directions only
+    performer = body.body_of("3d")  # the performance's angles are Skinny's 3D hinges'
+    unit = performer.segment_vectors(q) / performer.lengths_m()[:, None]  # directions only
     half, top = BIACROMIAL_OF_HEIGHT * height_m / 2, SHOULDER_HEIGHT_OF_HEIGHT * height_m
     acromion = np.array([[-half, 0.0, top], [half, 0.0, top]])
     gh = acromion - [0.0, 0.0, GH_BELOW_ACROMION_M * height_m / 1.75]
@@ -130,28 +130,29 @@ def markers(seed: int = DEFAULT_SEED, height_m: float = HEIGHT_M) -> np.ndarray:
     return pts + MARKER_NOISE_M * rng.standard_normal(pts.shape)
 
 
-def ymca_recorded(dof: int = 4, seed: int = DEFAULT_SEED, *,
+def ymca_recorded(which: body.BodyLike = "2d", seed: int = DEFAULT_SEED, *,
                   unit_2d: bool = False) -> Trajectory:
-    """The recorded-like YMCA for ``dof``: 313 steps at 50 Hz; explicit desired Cartesian
+    """The recorded-like YMCA for the body: 313 steps at 50 Hz; explicit desired Cartesian
     signals (the person's normalized vectors, reachable or not); angles = their IK.
 
     ``unit_2d``: the other reading of §3.1.2 for 2D, the frontal projection normalized
     to unit length per frame (so the 2D targets are reachable up to marker effects);
     default: unit 3D vectors, then projected (the issue's reading)."""
-    body.check_dof(dof)
-    angles, target = _solved(dof, seed, unit_2d)
+    skinny = body.body_of(which)
+    angles, target = _solved(skinny, seed, unit_2d)
     name = "ymca-recorded" + ("-unit2d" if unit_2d else "") \
         + ("" if seed == DEFAULT_SEED else f"-s{seed}")
-    return Trajectory(angles.copy(), DEFAULT_DT_S, name, {"cartesian": target.copy()})
+    return Trajectory(angles.copy(), DEFAULT_DT_S, name, {"cartesian": target.copy()},
+                      skinny.name)
 
 
 @functools.lru_cache(maxsize=16)
-def _solved(dof: int, seed: int, unit_2d: bool) -> tuple[np.ndarray, np.ndarray]:
-    """The markers' IK (about 1 s), once per process and (dof, seed, reading); the
+def _solved(skinny: body.Body, seed: int, unit_2d: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The markers' IK (about 1 s), once per process and (body, seed, reading); the
     caller gets copies, so the cached arrays are never changed."""
     pts = markers(seed)[::DECIMATE]
     seg = np.stack([pts[:, :, 1] - pts[:, :, 0], pts[:, :, 2] - pts[:, :, 1]], axis=2)
-    if unit_2d and body.body_of(dof).planar:
+    if unit_2d and skinny.planar:
         seg[..., 1] = 0.0  # the frontal projection, then normalized below
     seg = seg / np.linalg.norm(seg, axis=-1, keepdims=True)
-    return solve_ik(seg[:, :, 0], seg[:, :, 1], dof)
+    return solve_ik(seg[:, :, 0], seg[:, :, 1], skinny)

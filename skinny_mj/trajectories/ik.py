@@ -26,27 +26,28 @@ DLS_MAX_STEP_RAD = 0.03  # per iteration: at most 0.9 rad from the analytic star
 UNREACHABLE_TOL = 0.05
 
 
-def target_signals(upper: np.ndarray, fore: np.ndarray, dof: int) -> np.ndarray:
+def target_signals(upper: np.ndarray, fore: np.ndarray, which: body.BodyLike) -> np.ndarray:
     """Desired Cartesian signals (T, n_sig) from unit segment directions (T, 2, 3) in the
     torso frame: 3D the x, y, z of each unit vector; 2D its frontal projection (x, z),
     whose length is below 1 where the segment leaves the frontal plane."""
-    comps = [0, 2] if body.body_of(dof).planar else [0, 1, 2]
+    comps = body.body_of(which).cartesian_components()
     seg = np.stack([upper, fore], axis=2)[..., comps]  # (T, arms, segments, comps)
     return seg.reshape(seg.shape[0], -1)
 
 
-def refine(angles: np.ndarray, target: np.ndarray, dof: int,
+def refine(angles: np.ndarray, target: np.ndarray, which: body.BodyLike,
            iterations: int = DLS_ITERATIONS, damping: float = DLS_DAMPING) -> np.ndarray:
     """Projected damped least squares: joint angles (T, n_dof) rad, started at ``angles``,
-    that bring ``body.cartesian_signals`` nearest to ``target`` (T, n_sig) inside the
-    joint ranges. Each step: dq = (J^T J + lambda^2 I)^-1 J^T (target - s(q)),
+    that bring the body's ``cartesian_signals`` nearest to ``target`` (T, n_sig) inside
+    the joint ranges. Each step: dq = (J^T J + lambda^2 I)^-1 J^T (target - s(q)),
     limited to DLS_MAX_STEP_RAD per joint, q clipped."""
-    lo, hi = body.joint_ranges(dof).T
+    skinny = body.body_of(which)
+    lo, hi = skinny.joint_ranges().T
     q = np.clip(np.array(angles, dtype=float), lo, hi)
-    eye = damping**2 * np.eye(dof)
+    eye = damping**2 * np.eye(skinny.dof)
     for _ in range(iterations):
-        err = target - body.cartesian_signals(q, dof)
-        jac = body.signal_jacobian(q, dof, "cartesian")
+        err = target - skinny.cartesian_signals(q)
+        jac = skinny.signal_jacobian(q, "cartesian")
         jt = np.swapaxes(jac, -1, -2)
         dq = np.linalg.solve(jt @ jac + eye, (jt @ err[..., None]))[..., 0]
         # a trust region: each step solved alone must stay in its neighbours' basin
@@ -55,10 +56,11 @@ def refine(angles: np.ndarray, target: np.ndarray, dof: int,
     return q
 
 
-def residual(angles: np.ndarray, target: np.ndarray, dof: int) -> np.ndarray:
+def residual(angles: np.ndarray, target: np.ndarray, which: body.BodyLike) -> np.ndarray:
     """Per step (T,), the largest distance between a target segment signal and the one
-    Skinny's ``angles`` reach (normalized units, per segment)."""
-    diff = target - body.cartesian_signals(angles, dof)
-    nc = 2 if body.body_of(dof).planar else 3
+    the body's ``angles`` reach (normalized units, per segment)."""
+    skinny = body.body_of(which)
+    diff = target - skinny.cartesian_signals(angles)
+    nc = len(skinny.cartesian_components())
     return np.linalg.norm(diff.reshape(diff.shape[0], -1, nc), axis=-1).max(axis=1)
 

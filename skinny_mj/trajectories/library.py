@@ -1,9 +1,9 @@
 """Named movements (SPEC §2, paper C) and one entry point for any movement source.
 
-``get("ymca", dof=4)``, ``get("y-pure@0.5", dof=8, reps=5)``; ``names()`` lists them.
-``load_movement(name_or_path, dof)`` also reads trajectory files (.npz/.csv) and motion
+``get("ymca", "2d")``, ``get("y-pure@0.5", "3d", reps=5)``; ``names()`` lists them.
+``load_movement(name_or_path, body)`` also reads trajectory files (.npz/.csv) and motion
 capture (.amc with its .asf, .bvh), and returns the trajectory with a report of how
-much had to be clipped into Skinny's joint ranges.
+much had to be clipped into the body's joint ranges.
 
 Two generated names (not in :func:`names`, which lists the fixed movements):
 
@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.plant import body
+from skinny_mj.plant.body import CONTROL_DT_S, Body, BodyLike, body_of
 from skinny_mj.trajectories import patterns
 from skinny_mj.trajectories.asf_amc import load_asf_amc
 from skinny_mj.trajectories.babble import babble, bridge, parse_babble_name
@@ -48,52 +48,52 @@ from skinny_mj.trajectories.ymca import letter_end_steps, ymca
 
 
 def _there_and_back(traj: Trajectory, end: int, name: str) -> Trajectory:
-    part = Trajectory(traj.angles[:end], traj.dt, name)
-    return Trajectory(np.concatenate([part.angles, part.angles[::-1]]), traj.dt, name)
+    part = traj.angles[:end]
+    return Trajectory(np.concatenate([part, part[::-1]]), traj.dt, name, body=traj.body)
 
 
-def _y(dof: int) -> Trajectory:
+def _y(skinny: Body) -> Trajectory:
     """Y, then back to the start by playing the Y part in reverse."""
-    return _there_and_back(ymca(dof), letter_end_steps()["Y"], "y")
+    return _there_and_back(ymca(skinny), letter_end_steps()["Y"], "y")
 
 
-def _y_pure(dof: int) -> Trajectory:
+def _y_pure(skinny: Body) -> Trajectory:
     """``y`` with every elbow held at its starting angle (no elbow motion at all)."""
-    angles = _y(dof).angles.copy()
-    elbows = [i for i, n in enumerate(body.dof_names(dof)) if n.endswith("elbow_flexion")]
+    angles = _y(skinny).angles.copy()
+    elbows = [i for i, n in enumerate(skinny.dof_names) if n.endswith("elbow_flexion")]
     angles[:, elbows] = angles[0, elbows]
-    return Trajectory(angles, _y(dof).dt, "y-pure")
+    return Trajectory(angles, _y(skinny).dt, "y-pure", body=skinny.name)
 
 
-def _ym(dof: int) -> Trajectory:
+def _ym(skinny: Body) -> Trajectory:
     """Y, M, then back by playing that part in reverse."""
-    return _there_and_back(ymca(dof), letter_end_steps()["M"], "ym")
+    return _there_and_back(ymca(skinny), letter_end_steps()["M"], "ym")
 
 
-def _mirror(side: str) -> Callable[[int], Trajectory]:
-    def make(dof: int) -> Trajectory:
+def _mirror(side: str) -> Callable[[Body], Trajectory]:
+    def make(skinny: Body) -> Trajectory:
         """Both arms do one arm's YMCA part; equal angles are mirror images (body.py)."""
-        angles = ymca(dof).angles.copy()
-        n_arm = dof // 2
-        src = slice(0, n_arm) if side == "right" else slice(n_arm, dof)
+        angles = ymca(skinny).angles.copy()
+        n_arm = skinny.dof // 2
+        src = slice(0, n_arm) if side == "right" else slice(n_arm, skinny.dof)
         angles[:, :n_arm] = angles[:, src]
         angles[:, n_arm:] = angles[:, src]
-        return Trajectory(angles, ymca(dof).dt, f"mirror-{side}")
+        return Trajectory(angles, ymca(skinny).dt, f"mirror-{side}", body=skinny.name)
 
     return make
 
 
-def _recorded(unit_2d: bool) -> Callable[[int], Trajectory]:
-    def make(dof: int) -> Trajectory:
+def _recorded(unit_2d: bool) -> Callable[[Body], Trajectory]:
+    def make(skinny: Body) -> Trajectory:
         """The recorded-like YMCA (``skinny_mj.trajectories.human``), default seed."""
-        return ymca_recorded(dof, unit_2d=unit_2d)
+        return ymca_recorded(skinny, unit_2d=unit_2d)
 
     return make
 
 
-_MOVEMENTS: dict[str, Callable[[int], Trajectory]] = {
+_MOVEMENTS: dict[str, Callable[[Body], Trajectory]] = {
     "ymca": ymca,
-    "ymca-smooth": lambda dof: ymca(dof).with_name("ymca-smooth"),  # today's ymca, by name
+    "ymca-smooth": lambda skinny: ymca(skinny).with_name("ymca-smooth"),  # ymca, by name
     "ymca-recorded": _recorded(False),
     "ymca-recorded-unit2d": _recorded(True),
     "y": _y,
@@ -110,16 +110,15 @@ def names() -> tuple[str, ...]:
     return tuple(_MOVEMENTS) + patterns.names()
 
 
-_check_dof = body.check_dof
-
-
-def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajectory:
-    """A named movement for ``dof`` (4 or 8), played at ``speed`` and repeated ``reps`` times.
+def get(name: str, body: BodyLike = "2d", *, speed: float = 1.0, reps: int = 1
+        ) -> Trajectory:
+    """A named movement for the body (its name, :data:`skinny_mj.plant.body.BODIES`),
+    played at ``speed`` and repeated ``reps`` times.
 
     ``name`` may end in ``@SPEED`` (``"ymca@1.5"``); giving both a suffix and a
     ``speed`` other than 1 is an error. The speed change comes before the repetitions.
     """
-    _check_dof(dof)
+    skinny = body_of(body)
     base, at, suffix = str(name).strip().lower().partition("@")
     babbling = parse_babble_name(base)
     if base not in names() and babbling is None:
@@ -134,14 +133,14 @@ def get(name: str, dof: int = 4, *, speed: float = 1.0, reps: int = 1) -> Trajec
         except ValueError:
             raise SkinnyInputError(f"bad speed suffix in {name!r} (use e.g. 'ymca@0.5')") from None
     if babbling is not None:
-        traj = babble(dof, seed=int(babbling["seed"]), duration_s=babbling["duration"],
+        traj = babble(skinny, seed=int(babbling["seed"]), duration_s=babbling["duration"],
                       v_min=babbling["vmin"], v_max=babbling["vmax"],
                       limits=babbling["limits"], holds=babbling["holds"]
                       ).resample(speed).repeat(reps)
     elif base in _MOVEMENTS:
-        traj = _MOVEMENTS[base](dof).resample(speed).repeat(reps)
+        traj = _MOVEMENTS[base](skinny).resample(speed).repeat(reps)
     else:  # a rhythmic pattern is a function of the leader's phase: made at that speed
-        traj = patterns.pattern_trajectory(base, dof, speed).repeat(reps)
+        traj = patterns.pattern_trajectory(base, skinny, speed).repeat(reps)
     label = base + (f"@{speed:g}" if speed != 1.0 else "") + (f"x{reps}" if reps != 1 else "")
     return traj.with_name(label)
 
@@ -223,7 +222,7 @@ def split_excerpt(text: str) -> tuple[str, tuple[float, float | None] | None]:
 
 def load_movement(
     name_or_path: str | Path,
-    dof: int = 4,
+    body: BodyLike = "2d",
     *,
     asf: str | Path | None = None,
     speed: float = 1.0,
@@ -232,8 +231,9 @@ def load_movement(
     cutoff_hz: float = 6.0,
     retarget: str = "angles",
 ) -> tuple[Trajectory, RetargetReport]:
-    """Any movement: a library name, a ``.npz``/``.csv`` trajectory, ``.amc`` (+ ``asf``,
-    or its subject's skeleton beside it, :func:`find_asf`) or ``.bvh`` motion capture.
+    """Any movement for the body: a library name, a ``.npz``/``.csv`` trajectory, ``.amc``
+    (+ ``asf``, or its subject's skeleton beside it, :func:`find_asf`) or ``.bvh`` motion
+    capture.
 
     Returns the trajectory (clipped into the joint ranges, at ``speed``, ``reps`` times)
     and a :class:`RetargetReport` saying how much was clipped (zero for library names).
@@ -248,12 +248,12 @@ def load_movement(
         if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Real)
                                   or not (np.isfinite(value) and value > 0)):
             raise SkinnyInputError(f"{name} must be a number > 0, got {value!r}")
-    _check_dof(dof)
+    skinny = body_of(body)
     if not str(name_or_path).strip():
         raise SkinnyInputError("empty movement name: give a name (`skinny trajectory "
                                "list`) or a file")
     if str(name_or_path).strip().lower().startswith(SET_PREFIX):
-        traj, report = training_set(str(name_or_path), dof, asf=asf, fps=fps,
+        traj, report = training_set(str(name_or_path), skinny, asf=asf, fps=fps,
                                     cutoff_hz=cutoff_hz, retarget=retarget)
         return traj.resample(speed).repeat(reps), report
     text, window = split_excerpt(str(name_or_path))
@@ -261,9 +261,9 @@ def load_movement(
     if suffix not in _FILE_SUFFIXES:
         base = text.strip().lower().partition("@")[0]
         if base in names() or parse_babble_name(base) is not None or not Path(text).exists():
-            traj = get(text, dof, speed=speed, reps=reps)
-            excess = range_excess(traj.angles, dof)
-            return traj, clip_report(excess, dof, source=text, source_fps=1.0 / traj.dt)
+            traj = get(text, skinny, speed=speed, reps=reps)
+            excess = range_excess(traj.angles, skinny)
+            return traj, clip_report(excess, skinny, source=text, source_fps=1.0 / traj.dt)
         if Path(text).is_dir():
             raise SkinnyInputError("a folder, not a movement file", path=text)
         raise SkinnyInputError(
@@ -278,16 +278,16 @@ def load_movement(
     if not path.is_file():
         raise SkinnyInputError("no such file", path=path)
     if suffix in (".npz", ".csv"):
-        raw = Trajectory.load(path, dof=dof)
-        if len(raw) < 2 or abs(raw.dt - body.CONTROL_DT_S) > 1e-9:
+        raw = Trajectory.load(path, skinny.dof).on(skinny)
+        if len(raw) < 2 or abs(raw.dt - CONTROL_DT_S) > 1e-9:
             raise SkinnyInputError(f"{len(raw)} step(s) every {raw.dt:g} s: a movement is at "
-                                   f"least 2 steps every {body.CONTROL_DT_S:g} s (50 Hz)",
+                                   f"least 2 steps every {CONTROL_DT_S:g} s (50 Hz)",
                                    path=path)
         if window is not None:
             raw = excerpt(raw, *window)
         clipped, _ = raw.clip_to_range()
-        excess = range_excess(raw.angles, dof)
-        report = clip_report(excess, dof, source=str(path), source_fps=1.0 / raw.dt)
+        excess = range_excess(raw.angles, skinny)
+        report = clip_report(excess, skinny, source=str(path), source_fps=1.0 / raw.dt)
         traj = clipped
     else:
         if suffix == ".amc":
@@ -295,7 +295,7 @@ def load_movement(
             clip = load_asf_amc(skeleton, path, fps=fps)
         else:
             clip = load_bvh(path, fps=fps)
-        traj, report = retarget_clip(clip, dof, cutoff_hz=cutoff_hz, window_s=window,
+        traj, report = retarget_clip(clip, skinny, cutoff_hz=cutoff_hz, window_s=window,
                                      targets=retarget)
         if suffix == ".amc":
             _say_skeleton(path, skeleton, asf is not None)
@@ -303,21 +303,21 @@ def load_movement(
     return traj, report
 
 
-def resolve_trajectory(trajectory: object, dof: int) -> object:
+def resolve_trajectory(trajectory: object, body: BodyLike) -> object:
     """The movement a ``trajectory`` argument (of :func:`skinny_mj.load`, the gym envs)
     names: None (the synthesized YMCA), any name or file the command line's
     ``--trajectory`` takes (``"ymca@0.5"``, ``"babble:seed=3"``, ``"set:ymca+md_03.amc"``,
-    ``"clip.csv@start=2"``; :func:`load_movement`), a (T, dof) array of angles in rad, or
-    an object with ``.angles`` (T, dof) rad, ``.dt`` and ``.dof`` (a :class:`Trajectory`),
-    returned as it is. Anything else is a :class:`SkinnyInputError`."""
+    ``"clip.csv@start=2"``; :func:`load_movement`), a (T, n_dof) array of angles in rad,
+    or an object with ``.angles`` (T, n_dof) rad, ``.dt`` and ``.dof`` (a
+    :class:`Trajectory`), returned as it is. Anything else is a :class:`SkinnyInputError`."""
     if trajectory is None:
-        return get("ymca", dof)
+        return get("ymca", body)
     if isinstance(trajectory, str | os.PathLike):
-        return load_movement(trajectory, dof)[0]
+        return load_movement(trajectory, body)[0]
     if isinstance(trajectory, np.ndarray):
-        return Trajectory(trajectory)
+        return Trajectory(trajectory, body=body_of(body).name)
     if not hasattr(trajectory, "angles"):
-        raise SkinnyInputError(f"trajectory must be a movement name or file, (T, {dof}) "
+        raise SkinnyInputError(f"trajectory must be a movement name or file, (T, n_dof) "
                                f"angles or a Trajectory, got {type(trajectory).__name__}")
     return trajectory
 
@@ -359,7 +359,7 @@ def check_asf(movement: str | Path | None, asf: str | Path | None,
                                f"the movement {text!r} has none: leave it out")
 
 
-def training_set(name: str, dof: int, *, asf: str | Path | None = None,
+def training_set(name: str, body: BodyLike, *, asf: str | Path | None = None,
                  fps: float | None = None, cutoff_hz: float = 6.0, retarget: str = "angles"
                  ) -> tuple[Trajectory, RetargetReport]:
     """The pieces of ``set:A+B+...`` (each through :func:`load_movement`) joined by
@@ -372,7 +372,7 @@ def training_set(name: str, dof: int, *, asf: str | Path | None = None,
     dt = None
     for piece in set_pieces(name):
         is_amc = split_excerpt(piece)[0].lower().endswith(".amc")
-        traj, report = load_movement(piece, dof, asf=asf if is_amc else None, fps=fps,
+        traj, report = load_movement(piece, body, asf=asf if is_amc else None, fps=fps,
                                      cutoff_hz=cutoff_hz, retarget=retarget)
         if dt is not None and abs(traj.dt - dt) > 1e-12:
             raise SkinnyInputError(f"training set {name!r}: pieces at different time steps")
@@ -381,7 +381,7 @@ def training_set(name: str, dof: int, *, asf: str | Path | None = None,
             parts.append(bridge(parts[-1][-1], traj.angles[0], dt))
         parts.append(traj.angles)
         reports.append(report)
-    joined = Trajectory(np.concatenate(parts), dt, str(name).strip())
+    joined = Trajectory(np.concatenate(parts), dt, str(name).strip(), body=traj.body)
     first = reports[0]
     per_dof = {k: sum(int(r.clipped_per_dof.get(k, 0)) for r in reports)
                for k in first.clipped_per_dof}

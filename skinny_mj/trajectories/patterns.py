@@ -90,14 +90,15 @@ class Movement:
 
 
 def pattern_angles(pattern: Pattern, movement: Movement = Movement(), speed: float = 1.0,
-                   dof: int = 4) -> np.ndarray:
-    """Joint angles (T, dof) rad of one cycle of ``pattern`` with the leader at ``speed``.
+                   which: body.BodyLike = "2d") -> np.ndarray:
+    """Joint angles (T, n_dof) rad of one cycle of ``pattern`` with the leader at
+    ``speed``, for the body ``which``.
 
     Leader shoulder abduction: c - A cos(ψ), ψ = 2π t speed / period (starts at the
     bottom). Lagging: c - a A cos(ψ f - Φ), f the frequency ratio, a the amplitude
     ratio, Φ the phase lag. Elbows at ``elbow_deg``, any other DOF at 0.
     """
-    names = body.dof_names(dof)
+    names = body.body_of(which).dof_names
     periods = pattern.leader_cycles * int(np.ceil(movement.min_leader_periods
                                                   / pattern.leader_cycles))
     n_steps = int(round(periods * movement.period_s / (speed * movement.dt))) + 1
@@ -106,7 +107,7 @@ def pattern_angles(pattern: Pattern, movement: Movement = Movement(), speed: flo
     lead = c - amp * np.cos(psi)
     lag = c - pattern.amplitude_ratio * amp * np.cos(
         pattern.frequency_ratio * psi - np.radians(pattern.phase_deg))
-    q = np.zeros((n_steps, dof))
+    q = np.zeros((n_steps, len(names)))
     for i, name in enumerate(names):
         if name.endswith("elbow_flexion"):
             q[:, i] = np.radians(movement.elbow_deg)
@@ -115,12 +116,13 @@ def pattern_angles(pattern: Pattern, movement: Movement = Movement(), speed: flo
     return q
 
 
-def pattern_trajectory(name: str, dof: int = 4, speed: float = 1.0,
+def pattern_trajectory(name: str, which: body.BodyLike = "2d", speed: float = 1.0,
                        movement: Movement = Movement()) -> Trajectory:
-    """The library movement ``bimanual-<pattern>`` at ``speed``."""
+    """The library movement ``bimanual-<pattern>`` at ``speed`` for the body ``which``."""
     pattern = PATTERNS[name.removeprefix(PREFIX)]
     label = name + (f"@{speed:g}" if speed != 1.0 else "")
-    return Trajectory(pattern_angles(pattern, movement, speed, dof), movement.dt, label)
+    return Trajectory(pattern_angles(pattern, movement, speed, which), movement.dt, label,
+                      body=body.body_of(which).name)
 
 
 def names() -> tuple[str, ...]:

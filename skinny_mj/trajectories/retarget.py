@@ -107,15 +107,15 @@ class RetargetReport:
         )
 
 
-def range_excess(angles: np.ndarray, dof: int) -> np.ndarray:
-    """How far (T, dof) rad each angle lies outside its joint range (0 inside)."""
-    lo, hi = body.joint_ranges(dof).T
+def range_excess(angles: np.ndarray, which: body.BodyLike) -> np.ndarray:
+    """How far (T, n_dof) rad each angle lies outside its joint range (0 inside)."""
+    lo, hi = body.body_of(which).joint_ranges().T
     return np.maximum(angles - hi, 0.0) + np.maximum(lo - angles, 0.0)
 
 
 def clip_report(
     excess: np.ndarray,
-    dof: int,
+    which: body.BodyLike,
     *,
     source: str,
     source_fps: float,
@@ -123,13 +123,13 @@ def clip_report(
     cutoff_hz: float | None = None,
     interpolated_samples: int = 0,
 ) -> RetargetReport:
-    """Describe a clipping from its excess (T, dof) rad (see :func:`range_excess`)."""
+    """Describe a clipping from its excess (T, n_dof) rad (see :func:`range_excess`)."""
     outside = excess > 0
-    names = body.dof_names(dof)
-    per_dof = excess.max(axis=0) if len(excess) else np.zeros(dof)
+    names = body.body_of(which).dof_names
+    per_dof = excess.max(axis=0) if len(excess) else np.zeros(len(names))
     return RetargetReport(
         source=source,
-        dof=dof,
+        dof=len(names),
         source_fps=float(source_fps),
         source_frames=int(source_frames if source_frames is not None else len(excess)),
         steps=len(excess),
@@ -185,27 +185,27 @@ def _fill(x: np.ndarray, good: np.ndarray, lo: float, hi: float) -> np.ndarray:
     return np.interp(t, t[good], _branch(x[good], lo, hi))
 
 
-def wrap_to_range(angles: np.ndarray, dof: int) -> np.ndarray:
-    """Wrap angles (T, dof) rad into the 2 pi window centred on each joint range."""
-    lo, hi = body.joint_ranges(dof).T
+def wrap_to_range(angles: np.ndarray, which: body.BodyLike) -> np.ndarray:
+    """Wrap angles (T, n_dof) rad into the 2 pi window centred on each joint range."""
+    lo, hi = body.body_of(which).joint_ranges().T
     start = (lo + hi) / 2 - np.pi
     return np.mod(angles - start, 2 * np.pi) + start
 
 
-def clip_continuous(angles: np.ndarray, dof: int) -> tuple[np.ndarray, np.ndarray]:
-    """Clip angles (T, dof) rad into the joint ranges without jumps.
+def clip_continuous(angles: np.ndarray, which: body.BodyLike) -> tuple[np.ndarray, np.ndarray]:
+    """Clip angles (T, n_dof) rad into the joint ranges without jumps.
 
     Each angle is wrapped into the 2 pi window centred on its range; a sample outside
     goes to the nearer limit on the circle. A run of outside samples that leaves
     through one limit and comes back through the other (the arm went round through
     the unreachable side) becomes a linear ramp between the two limits instead of a
-    jump. Returns the clipped angles and the excess (T, dof) rad (0 inside).
+    jump. Returns the clipped angles and the excess (T, n_dof) rad (0 inside).
     """
-    lo, hi = body.joint_ranges(dof).T
-    w = wrap_to_range(angles, dof)
+    lo, hi = body.body_of(which).joint_ranges().T
+    w = wrap_to_range(angles, which)
     excess = np.maximum(w - hi, 0.0) + np.maximum(lo - w, 0.0)
     out = np.clip(w, lo, hi)
-    for j in range(dof):
+    for j in range(len(lo)):
         outside = excess[:, j] > 0
         edges = np.flatnonzero(np.diff(np.concatenate([[0], outside.astype(int), [0]])))
         for s, e in zip(edges[::2], edges[1::2], strict=True):
@@ -216,26 +216,28 @@ def clip_continuous(angles: np.ndarray, dof: int) -> tuple[np.ndarray, np.ndarra
     return out, excess
 
 
-#: The bodies :func:`solve_angles` has a closed form for: Skinny's 2D and 3D.
-_CLOSED_FORM = (4, 8)
+#: The arms :func:`solve_angles` has a closed form for, by their hinges: Skinny's 2D and
+#: 3D (and any body with the same hinges).
+HINGES_2D = ("shoulder_abduction", "elbow_flexion")
+HINGES_3D = ("shoulder_abduction", "shoulder_flexion", "shoulder_rotation", "elbow_flexion")
 
 
-def _from_3d(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndarray, int]:
-    """A registered body's start for the refinement: the 3D closed form's angle of each
-    hinge named as one of Skinny's 3D hinges, 0 (clipped into range) for any other."""
-    q3d, filled = solve_angles(upper, fore, 8)
-    names3d = [j.name for j in body.body_of(8).arm_joints]
-    joints = body.body_of(dof).arm_joints
-    out = np.zeros((upper.shape[0], dof))
+def _from_3d(upper: np.ndarray, fore: np.ndarray, skinny: body.Body) -> tuple[np.ndarray, int]:
+    """Another body's start for the refinement: the 3D closed form's angle of each hinge
+    named as one of Skinny's 3D hinges, 0 (clipped into range) for any other."""
+    q3d, filled = solve_angles(upper, fore, "3d")
+    joints = skinny.arms.joints
+    out = np.zeros((upper.shape[0], skinny.dof))
     for k in range(2):
-        for i, spec in enumerate(joints):
-            if spec.name in names3d:
-                out[:, k * len(joints) + i] = q3d[:, k * len(names3d) + names3d.index(spec.name)]
+        for i, name in enumerate(joints):
+            if name in HINGES_3D:
+                out[:, k * len(joints) + i] = q3d[:, k * len(HINGES_3D) + HINGES_3D.index(name)]
     return out, filled
 
 
-def solve_angles(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndarray, int]:
-    """Skinny's joint angles (T, dof) rad from torso-frame directions (T, 2, 3).
+def solve_angles(upper: np.ndarray, fore: np.ndarray, which: body.BodyLike
+                 ) -> tuple[np.ndarray, int]:
+    """The body's joint angles (T, n_dof) rad from torso-frame directions (T, 2, 3).
 
     Continuous in time (unwrapped), not yet wrapped or clipped. An angle is undefined
     where its direction is nearly parallel to its hinge axis: the abduction (2D and 3D)
@@ -244,9 +246,12 @@ def solve_angles(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndar
     forearm, the 3D rotation when the elbow is nearly straight. Those samples are
     interpolated from their neighbours; the second value returned counts them.
     """
-    if dof not in _CLOSED_FORM:
-        return _from_3d(upper, fore, dof)
-    ranges = body.joint_ranges(dof)
+    skinny = body.body_of(which)
+    planar = skinny.arms.joints == HINGES_2D
+    if not planar and skinny.arms.joints != HINGES_3D:
+        return _from_3d(upper, fore, skinny)
+    dof = skinny.dof
+    ranges = skinny.joint_ranges()
     n_arm = dof // 2
     out = np.empty((upper.shape[0], dof))
     filled = 0
@@ -259,7 +264,7 @@ def solve_angles(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndar
         good_a = np.hypot(u[:, 0], u[:, 2]) >= MIN_PROJECTION
         a = _fill(np.arctan2(-u[:, 0], -u[:, 2]), good_a, *r[0])
         filled += int((~good_a).sum())
-        if dof == 4:
+        if planar:
             good_e = np.hypot(f[:, 0], f[:, 2]) >= MIN_PROJECTION
             e = _fill(np.arctan2(-f[:, 0], -f[:, 2]) - a, good_e, *r[1])
             filled += int((~good_e).sum())
@@ -280,14 +285,15 @@ def solve_angles(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndar
     return out, filled
 
 
-def solve_ik(upper: np.ndarray, fore: np.ndarray, dof: int) -> tuple[np.ndarray, np.ndarray]:
+def solve_ik(upper: np.ndarray, fore: np.ndarray, which: body.BodyLike
+             ) -> tuple[np.ndarray, np.ndarray]:
     """Joint angles (T, n_dof) rad and desired Cartesian signals (T, n_sig) for unit
     segment directions (T, 2, 3): :func:`solve_angles`, :func:`clip_continuous`, then
     :func:`skinny_mj.trajectories.ik.refine` (see :mod:`skinny_mj.trajectories.ik`)."""
-    target = ik.target_signals(upper, fore, dof)
-    analytic, _ = solve_angles(upper, fore, dof)
-    clipped, _ = clip_continuous(analytic, dof)
-    return ik.refine(clipped, target, dof), target
+    target = ik.target_signals(upper, fore, which)
+    analytic, _ = solve_angles(upper, fore, which)
+    clipped, _ = clip_continuous(analytic, which)
+    return ik.refine(clipped, target, which), target
 
 
 def lowpass(x: np.ndarray, fps: float, cutoff_hz: float) -> np.ndarray:
@@ -314,14 +320,14 @@ def resample_to(x: np.ndarray, fps: float, dt: float) -> np.ndarray:
 
 def retarget(
     clip: ArmClip,
-    dof: int = 4,
+    which: body.BodyLike = "2d",
     *,
     cutoff_hz: float = 6.0,
     dt: float = DEFAULT_DT_S,
     window_s: tuple[float, float | None] | None = None,
     targets: str = "angles",
 ) -> tuple[Trajectory, RetargetReport]:
-    """Joint-angle retargeting of a capture onto Skinny (see the module docstring).
+    """Joint-angle retargeting of a capture onto the body (see the module docstring).
 
     ``targets="positions"``: the subject's own unit segment vectors (low-passed
     and resampled the same way, renormalized; 2D: their frontal projection) become the
@@ -334,26 +340,26 @@ def retarget(
 
     Returns the clipped trajectory at ``dt`` and a :class:`RetargetReport`.
     """
-    body.check_dof(dof)
+    skinny = body.body_of(which)
     if len(clip) < 2:
         raise SkinnyInputError(f"{clip.source}: need at least 2 frames, got {len(clip)}")
     pts = np.concatenate([clip.shoulder, clip.elbow, clip.wrist], axis=1)
     if not np.all(np.isfinite(pts)) or not np.all(np.isfinite(clip.root)):
         raise SkinnyInputError(f"{clip.source}: non-finite joint positions")
     upper, fore = arm_directions(clip)
-    angles, filled = solve_angles(upper, fore, dof)
+    angles, filled = solve_angles(upper, fore, skinny)
     angles = resample_to(lowpass(angles, clip.fps, cutoff_hz), clip.fps, dt)
     name = Path(clip.source).stem
     if window_s is not None:
-        part = excerpt(Trajectory(angles, dt, name), *window_s)
+        part = excerpt(Trajectory(angles, dt, name, body=skinny.name), *window_s)
         angles, name = np.array(part.angles), part.name
-    angles, excess = clip_continuous(angles, dof)
-    clipped = Trajectory(angles, dt, name)
+    angles, excess = clip_continuous(angles, skinny)
+    clipped = Trajectory(angles, dt, name, body=skinny.name)
     if targets == "positions":
         clipped = _position_targets(clipped, upper, fore, clip.fps, cutoff_hz, window_s)
     report = clip_report(
         excess,
-        dof,
+        skinny,
         source=clip.source,
         source_fps=clip.fps,
         source_frames=len(clip),
@@ -373,6 +379,7 @@ def _position_targets(traj: Trajectory, upper: np.ndarray, fore: np.ndarray, fps
         start = int(round(float(window_s[0]) / traj.dt))
         dirs = dirs[start:start + len(traj)]
     dirs = _unit(dirs.reshape(len(dirs), 2, 2, 3))
-    target = ik.target_signals(dirs[:, 0], dirs[:, 1], traj.dof)  # (upper, fore) x arms
-    angles = ik.refine(traj.angles, target, traj.dof)
-    return Trajectory(angles, traj.dt, f"{traj.name}-positions", {"cartesian": target})
+    target = ik.target_signals(dirs[:, 0], dirs[:, 1], traj.skinny)  # (upper, fore) x arms
+    angles = ik.refine(traj.angles, target, traj.skinny)
+    return Trajectory(angles, traj.dt, f"{traj.name}-positions", {"cartesian": target},
+                      traj.body)

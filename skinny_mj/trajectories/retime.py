@@ -127,7 +127,7 @@ def resample(traj: Trajectory, timing: PathTiming, name: str | None = None) -> T
         own = traj.dt * np.arange(len(traj))
         desired = {k: np.stack([np.interp(s, own, col) for col in np.asarray(v).T], axis=1)
                    for k, v in traj.desired.items()}
-    return Trajectory(angles, traj.dt, name or traj.name, desired)
+    return Trajectory(angles, traj.dt, name or traj.name, desired, traj.body)
 
 
 def back_on_path(retimed: Trajectory, timing: PathTiming, original: Trajectory) -> np.ndarray:

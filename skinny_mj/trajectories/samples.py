@@ -2,7 +2,7 @@
 and their skeleton, in ``skinny_mj/data/mocap/cmu/`` (credit and terms in its README).
 
 >>> from skinny_mj.trajectories import load_movement, sample_clip
->>> traj, report = load_movement(sample_clip("md_02"), dof=8)  # doctest: +SKIP
+>>> traj, report = load_movement(sample_clip("md_02"), "3d")  # doctest: +SKIP
 
 An ``.amc`` without ``asf=`` finds its skeleton beside it by its CMU subject (``86_02.amc``:
 ``86.asf``); the shipped clips' subject ``md`` names ``moderndance.asf``

@@ -1,8 +1,9 @@
 """The :class:`Trajectory` value: joint angles over time, and its file formats.
 
 A trajectory is what Skinny is asked to imitate: ``angles`` (T, n_dof) in radians at a
-fixed step ``dt`` (0.02 s = 50 Hz), columns in :func:`skinny_mj.plant.body.dof_names` order.
-It is immutable; every operation returns a new one.
+fixed step ``dt`` (0.02 s = 50 Hz), columns in its body's
+:attr:`~skinny_mj.plant.body.Body.dof_names` order (``body``: a body's name; None: Skinny's
+2D or 3D by the number of columns). It is immutable; every operation returns a new one.
 
 Optional explicit desired signals: ``desired = {"cartesian": (T, n_sig)}``,
 a recorded position signal that is NOT Skinny's own kinematics of ``angles`` (a human's
@@ -31,6 +32,7 @@ import numpy as np
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_path, atomic_write_text
 from skinny_mj.plant import body
+from skinny_mj.plant.body import Body, BodyLike, body_of
 from skinny_mj.preflight import Estimate, check, check_path_name
 
 DEFAULT_DT_S = body.CONTROL_DT_S  # movements are sampled at the control rate
@@ -43,19 +45,23 @@ _FORMAT_VERSION = 1
 
 @dataclass(frozen=True, eq=False)
 class Trajectory:
-    """Joint angles over time for Skinny's 2D (dof=4) or 3D (dof=8) body.
+    """Joint angles over time for a body.
 
     Parameters
     ----------
-    angles : (T, n_dof) joint angles, rad, columns in ``body.dof_names(dof)`` order.
+    angles : (T, n_dof) joint angles, rad, columns in the body's ``dof_names`` order.
     dt : time step, s (default 0.02 = 50 Hz).
     name : a label (used in file metadata and recordings).
+    desired : {signals: (T, n_signals)} explicit desired signals, or None.
+    body : the name of the body the angles are for (a :data:`~skinny_mj.plant.body.
+        BodyLike`, kept as its name); None: Skinny's 2D (4 columns) or 3D (8).
     """
 
     angles: np.ndarray
     dt: float = DEFAULT_DT_S
     name: str = "trajectory"
     desired: dict | None = None  # {signals: (T, n_signals)} explicit desired signals
+    body: str | None = None
 
     def __post_init__(self) -> None:
         if np.iscomplexobj(self.angles):  # float() would drop the imaginary part, warning
@@ -71,10 +77,17 @@ class Trajectory:
             raise SkinnyInputError(
                 f"trajectory {self.name!r}: angles must be (T>=1, n_dof), got shape {a.shape}"
             )
-        if a.shape[1] not in body.BODIES:
+        if self.body is None and a.shape[1] not in body.DOF_ALIASES:
             raise SkinnyInputError(
-                f"trajectory {self.name!r}: {a.shape[1]} columns, expected 4 (2D) or 8 (3D) DOFs"
+                f"trajectory {self.name!r}: {a.shape[1]} columns, expected 4 (2D) or 8 (3D) "
+                "DOFs, or the name of the body they are for"
             )
+        if self.body is not None:
+            skinny = body_of(self.body)
+            if a.shape[1] != skinny.dof:
+                raise SkinnyInputError(f"trajectory {self.name!r}: {a.shape[1]} columns, the "
+                                       f"{skinny.name} body has {skinny.dof} DOFs")
+            object.__setattr__(self, "body", skinny.name)
         if not np.all(np.isfinite(a)):
             t, j = np.argwhere(~np.isfinite(a))[0]
             raise SkinnyInputError(
@@ -97,17 +110,23 @@ class Trajectory:
         object.__setattr__(self, "angles", a)
         object.__setattr__(self, "dt", dt)
         object.__setattr__(self, "name", str(self.name))
-        object.__setattr__(self, "desired", _check_desired(self.desired, a, self.name))
+        object.__setattr__(self, "desired", _check_desired(self.desired, a, self.name,
+                                                           self.skinny))
 
     # -- basic properties -------------------------------------------------------------
     @property
     def dof(self) -> int:
-        """4 (2D) or 8 (3D)."""
+        """The number of columns: the body's hinges."""
         return int(self.angles.shape[1])
 
     @property
+    def skinny(self) -> Body:
+        """The :class:`~skinny_mj.plant.body.Body` the angles are for."""
+        return body_of(self.dof if self.body is None else self.body)
+
+    @property
     def dof_names(self) -> tuple[str, ...]:
-        return body.dof_names(self.dof)
+        return self.skinny.dof_names
 
     def __len__(self) -> int:
         return int(self.angles.shape[0])
@@ -121,17 +140,21 @@ class Trajectory:
         return f"Trajectory(name={self.name!r}, steps={len(self)}, dof={self.dof}, dt={self.dt})"
 
     # -- signals ----------------------------------------------------------------------
-    def position_signals(self, signals: str = "joint") -> np.ndarray:
-        """Normalized position signals (T, n_signals), see ``body.position_signals``."""
+    def position_signals(self, signals: str = "joint", on: BodyLike | None = None
+                         ) -> np.ndarray:
+        """Normalized position signals (T, n_signals): the explicit ones if it has them,
+        else the kinematics of the body ``on`` (default its own,
+        :meth:`~skinny_mj.plant.body.Body.position_signals`)."""
         body.check_signals(signals)
         if self.desired and signals in self.desired:
             return np.array(self.desired[signals])
-        return body.position_signals(self.angles, self.dof, signals)
+        return body_of(self.skinny if on is None else on).position_signals(self.angles,
+                                                                             signals)
 
     def _map(self, angles: np.ndarray, name: str, fn) -> Trajectory:
         """A new trajectory of ``angles`` whose explicit signals are ``fn(signals)``."""
         desired = None if not self.desired else {k: fn(v) for k, v in self.desired.items()}
-        return Trajectory(angles, self.dt, name, desired)
+        return Trajectory(angles, self.dt, name, desired, self.body)
 
     def velocities(self) -> np.ndarray:
         """Joint velocities (T-1, n_dof), rad/s: forward differences / dt."""
@@ -188,29 +211,34 @@ class Trajectory:
         """This movement followed by ``other`` (same dof and dt)."""
         if not isinstance(other, Trajectory):
             return NotImplemented
-        if other.dof != self.dof:
-            raise SkinnyInputError(f"cannot join dof={self.dof} and dof={other.dof} trajectories")
+        if other.dof != self.dof or other.body != self.body:
+            raise SkinnyInputError(f"cannot join a trajectory for {self.body or self.dof} and "
+                                   f"one for {other.body or other.dof}")
         if not math.isclose(other.dt, self.dt, rel_tol=1e-9):
             raise SkinnyInputError(f"cannot join dt={self.dt} s and dt={other.dt} s trajectories")
         keys = set(self.desired or {}) & set(other.desired or {})  # signals both carry
         desired = {k: np.concatenate([self.desired[k], other.desired[k]]) for k in keys}
         return Trajectory(np.concatenate([self.angles, other.angles]), self.dt,
-                          f"{self.name}+{other.name}", desired or None)
+                          f"{self.name}+{other.name}", desired or None, self.body)
 
     __add__ = concat
 
     def with_name(self, name: str) -> Trajectory:
-        return Trajectory(self.angles, self.dt, name, self.desired)
+        return Trajectory(self.angles, self.dt, name, self.desired, self.body)
+
+    def on(self, which: BodyLike) -> Trajectory:
+        """The same angles for the body ``which`` (with as many hinges)."""
+        return Trajectory(self.angles, self.dt, self.name, self.desired, body_of(which).name)
 
     def clip_to_range(self) -> tuple[Trajectory, int]:
-        """Clip every angle into ``body.joint_ranges``; returns the clipped trajectory and
-        the number of (step, DOF) samples that were outside."""
-        lo, hi = body.joint_ranges(self.dof).T
+        """Clip every angle into the body's joint ranges; returns the clipped trajectory
+        and the number of (step, DOF) samples that were outside."""
+        lo, hi = self.skinny.joint_ranges().T
         outside = int(np.count_nonzero((self.angles < lo) | (self.angles > hi)))
         if outside == 0:
             return self, 0
         return Trajectory(np.clip(self.angles, lo, hi), self.dt, self.name,
-                          self.desired), outside
+                          self.desired, self.body), outside
 
     # -- files ------------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
@@ -224,6 +252,7 @@ class Trajectory:
                 "dt": self.dt,
                 "dof": self.dof,
                 "dof_names": list(self.dof_names),
+                **({} if self.body is None else {"body": self.body}),
             }
             extra = {f"desired_{k}": v for k, v in (self.desired or {}).items()}
             with atomic_path(path) as tmp, open(tmp, "wb") as fh:
@@ -233,7 +262,8 @@ class Trajectory:
             raise SkinnyInputError("explicit desired signals are stored in .npz only", path=path)
         if suffix == ".csv":
             buf = io.StringIO()
-            buf.write(f"# skinny-mj trajectory; name={self.name}; dt={self.dt!r}; dof={self.dof}\n")
+            buf.write(f"# skinny-mj trajectory; name={self.name}; dt={self.dt!r}; dof={self.dof}"
+                      + ("" if self.body is None else f"; body={self.body}") + "\n")
             buf.write(",".join(self.dof_names) + "\n")
             np.savetxt(buf, self.angles, fmt="%.17g", delimiter=",")
             atomic_write_text(path, buf.getvalue())
@@ -241,8 +271,9 @@ class Trajectory:
         raise SkinnyInputError("trajectory files must end in .npz or .csv", path=path)
 
     @classmethod
-    def load(cls, path: str | Path, dof: int | None = None) -> Trajectory:
-        """Read a ``.npz`` or ``.csv`` trajectory; ``dof`` (if given) must match the file."""
+    def load(cls, path: str | Path, n_dof: int | None = None) -> Trajectory:
+        """Read a ``.npz`` or ``.csv`` trajectory; ``n_dof`` (if given) must match the
+        file."""
         path = Path(path)
         if path.is_dir():
             raise SkinnyInputError("a folder, not a trajectory file", path=path)
@@ -255,9 +286,9 @@ class Trajectory:
             traj = _load_csv(path)
         else:
             raise SkinnyInputError("trajectory files must end in .npz or .csv", path=path)
-        if dof is not None and traj.dof != dof:
+        if n_dof is not None and traj.dof != n_dof:
             raise SkinnyInputError(
-                f"DOF mismatch: file has {traj.dof} DOFs, dof={dof} was asked for", path=path
+                f"DOF mismatch: file has {traj.dof} DOFs, {n_dof} were asked for", path=path
             )
         return traj
 
@@ -284,12 +315,17 @@ def _load_npz(path: Path) -> Trajectory:
         raise SkinnyInputError(f"not a readable trajectory npz ({text})", path=path) from None
     if not isinstance(meta, dict):
         raise SkinnyInputError("'meta' must be a JSON object", path=path)
-    if angles.ndim != 2 or angles.shape[1] not in body.BODIES:
-        raise SkinnyInputError(f"angles must be (T, 4 or 8), got shape {angles.shape}", path=path)
+    which = meta.get("body")
+    if which is not None and not isinstance(which, str):
+        raise SkinnyInputError(f"meta body must be a body's name, got {which!r}", path=path)
+    if angles.ndim != 2 or (which is None and angles.shape[1] not in body.DOF_ALIASES):
+        raise SkinnyInputError(f"angles must be (T, 4 or 8), or meta must name the body, got "
+                               f"shape {angles.shape}", path=path)
     names = meta.get("dof_names")
-    if names is not None and (not isinstance(names, list)
-                              or tuple(names) != body.dof_names(angles.shape[1])):
-        raise SkinnyInputError(f"DOF names {names} do not match dof={angles.shape[1]}", path=path)
+    if names is not None and (not isinstance(names, list) or tuple(names) != body_of(
+            angles.shape[1] if which is None else which).dof_names):
+        raise SkinnyInputError(f"DOF names {names} are not the {which or angles.shape[1]} "
+                               "body's", path=path)
     dof = meta.get("dof", angles.shape[1])
     if isinstance(dof, bool) or not isinstance(dof, int):
         raise SkinnyInputError(f"meta dof must be a whole number, got {dof!r}", path=path)
@@ -306,7 +342,7 @@ def _load_npz(path: Path) -> Trajectory:
         raise SkinnyInputError(f"non-finite angle at step {bad[0][0]}, DOF {bad[0][1]}", path=path)
     try:
         return Trajectory(angles, meta.get("dt", DEFAULT_DT_S), meta.get("name", path.stem),
-                          desired)
+                          desired, which)
     except (SkinnyInputError, TypeError, ValueError) as exc:  # e.g. "dt": "x" in meta
         raise SkinnyInputError(str(exc), path=path) from None
 
@@ -338,11 +374,12 @@ def _load_csv(path: Path) -> Trajectory:
         cells = [c.strip() for c in line.split(",")]
         if header is None:
             header = cells
-            n = len(header)
-            if n not in body.BODIES or tuple(header) != body.dof_names(n):
+            which = meta.get("body") or (len(header) if len(header) in body.DOF_ALIASES
+                                         else None)
+            if which is None or tuple(header) != body_of(which).dof_names:
                 raise SkinnyInputError(
-                    f"header must be the DOF names of dof=4 {list(body.dof_names(4))} or "
-                    f"dof=8, got {header}",
+                    f"header must be the DOF names of the body (2D: "
+                    f"{list(body_of('2d').dof_names)}; or name it: # body=NAME), got {header}",
                     path=path,
                     line=lineno,
                 )
@@ -362,7 +399,8 @@ def _load_csv(path: Path) -> Trajectory:
     if header is None or not rows:
         raise SkinnyInputError("no header or no data rows", path=path)
     try:
-        return Trajectory(np.array(rows), meta.get("dt", DEFAULT_DT_S), meta.get("name", path.stem))
+        return Trajectory(np.array(rows), meta.get("dt", DEFAULT_DT_S), meta.get("name", path.stem),
+                          body=meta.get("body"))
     except (SkinnyInputError, ValueError) as exc:
         raise SkinnyInputError(str(exc), path=path) from None
 
@@ -394,14 +432,16 @@ def excerpt(traj: Trajectory, start_s: float, duration_s: float | None) -> Traje
                      lambda v: v[start : start + n])
 
 
-def check_size(steps: int, dof: int, cause: str) -> None:
-    """Refuse (one line) a movement of ``steps`` steps the memory cannot hold: its angles,
-    the interpolation's or tiling's copies, explicit desired signals (about 6 arrays)."""
-    check(Estimate({"movement": steps * (dof + 1) * 8 * 6}, {"movement": cause}),
+def check_size(steps: int, n_dof: int, cause: str) -> None:
+    """Refuse (one line) a movement of ``steps`` steps of ``n_dof`` angles the memory
+    cannot hold: its angles, the interpolation's or tiling's copies, explicit desired
+    signals (about 6 arrays)."""
+    check(Estimate({"movement": steps * (n_dof + 1) * 8 * 6}, {"movement": cause}),
           "the movement")
 
 
-def _check_desired(desired: dict | None, angles: np.ndarray, name: str) -> dict | None:
+def _check_desired(desired: dict | None, angles: np.ndarray, name: str,
+                   skinny: Body) -> dict | None:
     """Explicit desired signals as read-only float arrays, or a SkinnyInputError."""
     if not desired:
         return None
@@ -410,7 +450,7 @@ def _check_desired(desired: dict | None, angles: np.ndarray, name: str) -> dict 
         if key not in body.SIGNALS:
             raise SkinnyInputError(f"trajectory {name!r}: unknown desired signals {key!r}")
         v = np.array(value, dtype=float)
-        shape = (angles.shape[0], body.n_signals(angles.shape[1], key))
+        shape = (angles.shape[0], skinny.n_signals(key))
         if v.shape != shape or not np.all(np.isfinite(v)) \
                 or np.any(np.abs(v) > MAX_ABS_ANGLE_RAD):
             raise SkinnyInputError(f"trajectory {name!r}: desired {key!r} signals must be "

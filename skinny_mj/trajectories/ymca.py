@@ -7,7 +7,7 @@ up; elbow flexion 0 = straight, positive folds the forearm on in the abduction
 direction (over towards the head when the arm is raised). Both arms use the same
 angles for a mirror-symmetric pose (body.py mirrors the left arm's axes).
 
-The M and A poses were found by inverse kinematics on ``body.arm_points`` (wrist
+The M and A poses were found by inverse kinematics on ``Body.arm_points`` (wrist
 targets: top of the head at about z = 1.74 m for M; x = +-0.03 m, z = 1.86 m, i.e.
 hands touching above the head, for A) and rounded; the tests check the geometry.
 """
@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.plant.body import body_of
+from skinny_mj.plant.body import BodyLike, body_of
 from skinny_mj.trajectories.trajectory import DEFAULT_DT_S, Trajectory
 
 YMCA_STEPS = 313  # 6.26 s at 50 Hz, as the thesis' recording
@@ -74,13 +74,24 @@ def min_jerk(n: int) -> np.ndarray:
     return tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
 
 
-def key_poses(dof: int) -> dict[str, np.ndarray]:
-    """Key poses {name: (n_dof,) rad} for dof 4 or 8 (Skinny's own bodies)."""
-    table = {4: POSES_2D_DEG, 8: POSES_3D_DEG}.get(body_of(dof).dof)
+#: The key poses by the arm's hinges they are written for: any body whose arms have
+#: Skinny's 2D or 3D hinges (the torque twins, a body with longer segments) dances them.
+POSES_BY_JOINTS = {
+    ("shoulder_abduction", "elbow_flexion"): POSES_2D_DEG,
+    ("shoulder_abduction", "shoulder_flexion", "shoulder_rotation", "elbow_flexion"):
+        POSES_3D_DEG,
+}
+
+
+def key_poses(body: BodyLike) -> dict[str, np.ndarray]:
+    """Key poses {name: (n_dof,) rad} for a body with Skinny's 2D or 3D hinges."""
+    skinny = body_of(body)
+    table = POSES_BY_JOINTS.get(skinny.arms.joints)
     if table is None:
-        raise SkinnyInputError(f"YMCA's key poses are written for Skinny's 2D and 3D bodies, "
-                               f"not for dof {dof}: train this body on babbling or a motion-"
-                               f"capture clip")
+        raise SkinnyInputError(f"YMCA's key poses are written for arms with Skinny's 2D or "
+                               f"3D hinges, not {', '.join(skinny.arms.joints)} (the "
+                               f"{skinny.name} body): train this body on babbling or a "
+                               "motion-capture clip")
     return {k: np.deg2rad(np.array(v, dtype=float)) for k, v in table.items()}
 
 
@@ -94,9 +105,11 @@ def letter_end_steps() -> dict[str, int]:
     return ends
 
 
-def ymca(dof: int = 4) -> Trajectory:
-    """The synthesized YMCA dance: 313 steps at 50 Hz, neutral -> Y -> M -> C -> A -> neutral."""
-    poses = key_poses(dof)
+def ymca(body: BodyLike = "2d") -> Trajectory:
+    """The synthesized YMCA dance for the body: 313 steps at 50 Hz, neutral -> Y -> M -> C
+    -> A -> neutral."""
+    skinny = body_of(body)
+    poses = key_poses(skinny)
     current = poses["neutral"]
     parts = [np.tile(current, (_START_HOLD, 1))]
     for pose, move, hold in SCHEDULE:
@@ -108,4 +121,4 @@ def ymca(dof: int = 4) -> Trajectory:
     if len(angles) > YMCA_STEPS:
         raise AssertionError("YMCA schedule longer than 313 steps")
     angles = np.concatenate([angles, np.tile(current, (YMCA_STEPS - len(angles), 1))])
-    return Trajectory(angles, DEFAULT_DT_S, "ymca")
+    return Trajectory(angles, DEFAULT_DT_S, "ymca", body=skinny.name)
