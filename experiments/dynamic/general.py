@@ -104,7 +104,7 @@ def floor_batch(config: TrainConfig, row, seeds: list[int]) -> list:
     start = time.perf_counter()
     for col in row.params["tests"]:
         movement = load_test(col, dof)
-        floor = torque_floor(movement, dof, iterations=row.params.get("iterations", 150),
+        floor = torque_floor(movement, dof, iterations=row.params["iterations"],
                              tolerance=1e-5)
         figures = floor.metrics(movement.angles, dof, movement.dt)
         out[f"{col}__position_nrmse"] = floor.joint_nrmse

@@ -115,10 +115,11 @@ class _Plant:
     """The torque twin stepped one control step at a time from a full state."""
 
     def __init__(self, dof: int, substeps: int):
-        dyn = torque_dynamics(dof)
-        self.model, self.layout, self.substeps = dyn.model, dyn.layout, substeps
+        self.dynamics = torque_dynamics(dof)
+        self.model, self.layout = self.dynamics.model, self.dynamics.layout
+        self.substeps = substeps
         self.data = mujoco.MjData(self.model)
-        self.nv, self.nu = self.model.nv, self.model.nu
+        self.nv = self.model.nv
         self.act = self.layout.actuator_ids
 
     def _set(self, x: np.ndarray, u: np.ndarray) -> None:
@@ -156,7 +157,7 @@ def _computed_torque(plant: _Plant, x0: np.ndarray, target: np.ndarray, dt: floa
     damped) on the exact state, its commands clipped at the limits: states (T, n) and
     commands (T-1, nu)."""
     nv, model, data = plant.nv, plant.model, plant.data
-    limit = model.actuator_gear[plant.act, 0]
+    limit = plant.dynamics.torque_limits_nm()
     steps = len(target) - 1
     xs, us = np.empty((steps + 1, len(x0))), np.empty((steps, len(plant.act)))
     xs[0] = x0
@@ -194,7 +195,7 @@ def torque_floor(trajectory, dof: int, *, substeps: int | None = None,
     nv, n = plant.nv, 2 * plant.nv
     qa = plant.layout.qpos_adr
     va = plant.layout.dof_adr
-    scale = 2.0 / np.ptp(plant.model.jnt_range[plant.model.dof_jntid[va]], axis=1)
+    scale = 2.0 / np.ptp(plant.layout.range_rad, axis=1)  # the NRMSE's normalisation
     steps = len(wanted) - 1
     wanted_v = np.gradient(wanted, dt, axis=0)
     # quadratic cost in the state: l_t(x) = (x - x*_t)' Q (x - x*_t)
