@@ -37,7 +37,7 @@ STAGE_1_EXPS = ("1", "2")
 #: issue rounds it: a cell is "in range" when exp 1's AND exp 2's means lie in it.
 THESIS_TRAIN_RANGE = (0.003, 0.009)
 #: Stage 2's cells: those whose stage-1 exp 1 and exp 2 mean TT position train NRMSE
-#: both lie in THESIS_TRAIN_RANGE (measured, docs/results/fidelity-d.md; the report
+#: both lie in THESIS_TRAIN_RANGE (measured, docs/results/fidelity.md; the report
 #: recomputes the criterion and says if this list disagrees with the run folder).
 STAGE_2_CELLS: tuple[str, ...] = (
     "recorded-n100-i0.01", "recorded-n100-i0.03", "recorded-n100-i0.05",
