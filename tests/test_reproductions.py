@@ -4,7 +4,7 @@ Each runs a paper's whole sweep (its rows, run counts and epochs; minutes to ten
 minutes on 2 cores) through the engine as ``skinny experiment NAME --workers 2`` does and
 checks that it is complete: every run finished (ok or diverged, none errored), every
 row holds the paper's run count, the table and the claims were written. The numbers
-themselves are in docs/RESULTS.md beside the thesis's; these tests do not pin them.
+themselves are on docs/papers/ beside the thesis's; these tests do not pin them.
 """
 
 from __future__ import annotations

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
     from skinny_mj.training.result import RunResult
 
 NAME = "fidelity-e"
-MD02 = "md_02.amc@start=3,duration=6.26"  # paper E's md_02 excerpt (docs/RESULTS.md)
+MD02 = "md_02.amc@start=3,duration=6.26"  # paper E's md_02 excerpt (docs/papers/paper-e.md)
 #: movement key -> (trajectory, retarget); md_02's path is the installed sample clip.
 MOVEMENTS = {"recorded": ("ymca-recorded", "angles"), "smooth": ("ymca-smooth", "angles"),
              "md02pos": (MD02, "positions"), "md02ang": (MD02, "angles")}
