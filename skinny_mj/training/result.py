@@ -1,6 +1,7 @@
 """What one run produced, as types: :class:`RunResult` (the training's figures, the last
-training rollout's figures, a test per movement, the torque figures, the failure) and the
-:class:`Test` a run is asked to take.
+training rollout's figures, a test per movement, the torque figures, the failure, what an
+observer saw), the :class:`Test` a run is asked to take and the :class:`Observer` that
+watches a training while it runs.
 
 :func:`skinny_mj.training.loop.train_batch` returns one :class:`RunResult` per seed; the
 engine (:mod:`skinny_mj.engine.results`) writes it into a run file, and a study reads its
@@ -11,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -20,8 +21,8 @@ from skinny_mj.controllers.rollout import Rollout, run_mean
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import ROBOT_METRICS, TORQUE_METRICS, robot_metrics
 
-__all__ = ["Test", "STANDARD", "TestOutcome", "TrainFigures", "RolloutFigures", "RunResult",
-           "mean_abs_error", "feedback_share"]
+__all__ = ["Test", "STANDARD", "Observer", "TestOutcome", "TrainFigures", "RolloutFigures",
+           "RunResult", "mean_abs_error", "feedback_share"]
 
 
 @dataclass(frozen=True)
@@ -51,6 +52,19 @@ class Test:
 
 #: The standard test alone: one repetition of the training movement on a fresh plant.
 STANDARD = (Test(),)
+
+
+class Observer(Protocol):
+    """Watches R lockstep runs train: FEL calls it after every cycle (cycle 0 the washout,
+    1..C the learning cycles with ``y_used`` the fitted target, C + 1 the epoch's
+    evaluation cycle with ``y_used`` None); ``observed(r)`` is what it saw of run r, kept
+    in :attr:`RunResult.observed`. A study declares how to make one from the run's parts
+    (``observe(run, row) -> Observer``); the true-target fit calls no observer."""
+
+    def __call__(self, epoch: int, cycle: int, ro: Rollout, y_used: np.ndarray | None
+                 ) -> None: ...
+
+    def observed(self, r: int) -> Any: ...
 
 
 @dataclass
@@ -154,7 +168,8 @@ class RunResult:
     test's, then the torque body's MuJoCo warnings: ``fail_stage`` says which);
     ``trajectory``: one repetition of the training movement; ``esn``: the trained network
     (one run); ``wall_s``: the lockstep batch's wall time / R, ``train_wall_s`` its
-    training's share.
+    training's share; ``observed``: what the study's :class:`Observer` saw of this run
+    (None without one).
     """
 
     config: TrainConfig
@@ -175,6 +190,7 @@ class RunResult:
     lockstep_runs: int = 1
     trajectory: Any = field(default=None, repr=False)
     esn: ESN | None = field(default=None, repr=False)
+    observed: Any = field(default=None, repr=False)
 
     @property
     def test(self) -> TestOutcome:
