@@ -30,8 +30,8 @@ def test_switch_hook_changes_the_plant_once_at_its_cycle_and_step():
 def test_one_esn_training_is_tested_at_k0_k1_and_on_changed_plants():
     config = study.STUDY.base.override({**study.ESN, "plant.dof": 4, "movement.trajectory": "y",
                                         "method.epochs": 1})
-    row = Row("t", {}, params={"also": ("payload1", "delay")})
-    (out,) = study.run_esn(config, row, [0])
+    row = Row("t", {}, params={"also": ("payload1", "delay")}, shape=study.ESN_SHAPE)
+    (out,) = study.STUDY.run(config, row, [0])
     for key in ("position_nrmse", "position_nrmse_k1", "position_nrmse_on_payload1",
                 "position_nrmse_on_delay"):
         assert 0 < out[key] < 10

@@ -33,7 +33,10 @@ from skinny_mj.controllers.online import OnlineRLS
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Row
 from skinny_mj.plant import body
+from skinny_mj.plant.perturb import mass_change
+from skinny_mj.training import torque
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.loop import build_run, train_run
 
 PRE, POST, PAYLOAD_KG, GAIN, FORGETTING = 2, 8, 1.0, 0.5, 0.999
 LEARNERS = ("esn-rls", "esn-frozen", "ct-adaptive", "ct-nominal", "esn-rls-0.99")
@@ -78,10 +81,6 @@ def summary(curve: np.ndarray, angle_curve: np.ndarray) -> dict:
 def run_switch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Train (the ESN rows), then PRE + 1 + POST cycles with the payload switched on in
     the middle of cycle PRE."""
-    from skinny_mj.plant.perturb import mass_change
-    from skinny_mj.training import torque
-    from skinny_mj.training.loop import build_run, train_run
-
     learner = row.params["learner"]
     run = build_run(config, seeds)
     alive = np.ones(len(seeds), bool)
