@@ -1,8 +1,9 @@
 """The mismatch study's runs: one training tested on several plants, the payload switch."""
 
-from skinny_mj.experiments.mismatch import study, switch
+from skinny_mj.experiments.mismatch import study
 
 from skinny_mj.engine.study import Row
+from skinny_mj.training.perform import SwitchHook
 
 
 class _Hook:
@@ -18,7 +19,7 @@ class _Hook:
 
 def test_switch_hook_changes_the_plant_once_at_its_cycle_and_step():
     inner, fired = _Hook(), []
-    hook = switch.SwitchHook(inner, cycle=1, step=2, change=lambda: fired.append(len(inner.calls)))
+    hook = SwitchHook(inner, cycle=1, step=2, change=lambda: fired.append(len(inner.calls)))
     for _ in range(3):
         hook.begin(None, 4)
         for t in range(3):

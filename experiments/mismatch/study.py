@@ -45,7 +45,7 @@ from __future__ import annotations
 from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.experiments.dynamic.study import ARM_GOALS, TABLE_COLUMNS
 from skinny_mj.experiments.dynamic.study import metrics as dynamic_metrics
-from skinny_mj.experiments.mismatch.switch import LEARNERS, run_switch
+from skinny_mj.experiments.mismatch import switch
 
 from skinny_mj.engine.study import Quick, Row, Shape, Study, Test
 from skinny_mj.plant import body
@@ -169,12 +169,12 @@ ESN_SHAPE = Shape(esn_metrics, tests=esn_tests, failure=esn_failure)
 def _switch_rows() -> tuple[Row, ...]:
     """The payload switched on mid-movement (:mod:`skinny_mj.experiments.mismatch.switch`)."""
     out = []
-    for learner in LEARNERS:
+    for learner in switch.LEARNERS:
         keys = ESN if learner.startswith("esn") else CONTROLLERS[learner]
         keys = {k: v for k, v in keys.items() if k != "test.washout_cycles"}
         out.append(Row(f"2d-ymca-switch-{learner}", {"movement.trajectory": "ymca",
                                                       "plant.dof": 4, **keys},
-                       group="switch", params={"learner": learner}, run_batch=run_switch,
+                       group="switch", params={"learner": learner}, shape=switch.shape(learner),
                        quick={"method.epochs": QUICK_EPOCHS} if learner.startswith("esn")
                        else {}))
     return tuple(out)

@@ -66,6 +66,7 @@ from skinny_mj.training.parts import (  # noqa: F401  (re-exported)
     run_streams,
     true_commands_of,
 )
+from skinny_mj.training.perform import Perform, perform
 from skinny_mj.training.result import (  # noqa: F401  (re-exported)
     STANDARD,
     Observer,
@@ -268,10 +269,12 @@ def train(cfg: TrainConfig, seed: int = 0,
 @single_threaded
 def train_batch(cfg: TrainConfig, seeds: Sequence[int],
                 progress: Callable[[int, int], None] | None = None,
-                tests: Sequence[Test] = STANDARD,
+                tests: Sequence[Test | Perform] = STANDARD,
                 observe: Callable[[Run], Observer] | None = None) -> list[RunResult]:
     """Train R = len(seeds) runs of ``cfg`` in lockstep, then take ``tests`` in order
-    (default: the standard test, one repetition of the training movement); run r equals
+    (default: the standard test, one repetition of the training movement; a
+    :class:`~skinny_mj.training.perform.Perform`: a performance with the plant changed
+    mid-run, its outcome a :class:`~skinny_mj.training.perform.Performance`); run r equals
     ``train_batch(cfg, [seeds[r]], tests=tests)``. ``observe(run)``: an
     :class:`~skinny_mj.training.result.Observer` that watches the training (what it saw of
     run r: that result's ``observed``).
@@ -290,7 +293,8 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
     observer = None if observe is None else observe(run)
     trained = train_run(run, progress, observe=observer)
     train_wall = (time.perf_counter() - start) / len(seeds)
-    taken = {t.name: take_test(run, t) for t in tests}
+    taken = {t.name: perform(run, t, trained) if isinstance(t, Perform) else take_test(run, t)
+             for t in tests}
     standard = taken.get("")
     if len(seeds) > 1 and standard is not None and physics_warnings(run, standard[0]):
         # the lockstep runs share one MjData, which MuJoCo resets whole when one run

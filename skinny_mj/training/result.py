@@ -163,7 +163,8 @@ class RolloutFigures:
 class RunResult:
     """Everything one run of :func:`~skinny_mj.training.loop.train_batch` produced.
 
-    ``tests``: the tests it took, by name (``""``: the standard test); ``failed`` /
+    ``tests``: the tests it took, by name (``""``: the standard test; a
+    :class:`~skinny_mj.training.perform.Perform`'s outcome: a ``Performance``); ``failed`` /
     ``fail_reason`` / ``fail_epoch``: the run's failure (the training's, then the standard
     test's, then the torque body's MuJoCo warnings: ``fail_stage`` says which);
     ``trajectory``: one repetition of the training movement; ``esn``: the trained network
