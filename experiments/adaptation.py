@@ -63,8 +63,11 @@ from skinny_mj.experiments.claims import claim_lines
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plant import body
+from skinny_mj.plant.perturb import PerturbedPlant, forearm_rows
 from skinny_mj.plots import learning_curve_png
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.loop import PhysicsBatchError, build_run, train_run
+from skinny_mj.training.parts import load_trajectory
 
 NAME = "adaptation"
 CHANGES = ("gain", "offset", "forearm", "payload", "mass")
@@ -110,9 +113,6 @@ def _row(change: str, learner: str) -> Row:
 def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Train the row's networks in lockstep, then perform cycle after cycle (pre,
     changed, undone) with the row's learner."""
-    from skinny_mj.plant.perturb import PerturbedPlant
-    from skinny_mj.training.loop import PhysicsBatchError, build_run, train_run
-
     p = row.params
     change, learner = p["change"], p["learner"]
     run = build_run(config, seeds)
@@ -180,9 +180,6 @@ def forearm_floor(config: TrainConfig, forearm: float) -> float:
     """Position NRMSE of the arm whose forearm is ``forearm`` x as long moving exactly
     along the desired angles of ``config``'s movement: the part of the ``forearm`` rows'
     error that no joint motion can remove."""
-    from skinny_mj.plant.perturb import forearm_rows
-    from skinny_mj.training.parts import load_trajectory
-
     dof, signals = config.plant.dof, config.plant.signals
     desired = load_trajectory(config)[0].position_signals(signals)
     reached = desired.copy()

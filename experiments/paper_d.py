@@ -48,6 +48,7 @@ from skinny_mj.plant import body
 from skinny_mj.plots import boxplot_png, pyplot, save_figure
 from skinny_mj.recording import record_test
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.loop import train
 
 if TYPE_CHECKING:  # the training loop is imported where it runs: `--help` needs no MuJoCo
     from skinny_mj.training.result import RunResult
@@ -167,8 +168,6 @@ def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
     (config, seed)); also writes each one's ``.rrd``. Rows: experiments; columns:
     elbow, wrist (x, y, z each). ``reproduced`` collects, per re-trained run, whether
     it reproduced the run file's TT test position NRMSE exactly."""
-    from skinny_mj.training.loop import train
-
     reproduced = [] if reproduced is None else reproduced
     picked = []
     for row_id in (p.row.id for p in plan.rows if p.row.id in row_ids):

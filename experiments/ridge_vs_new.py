@@ -33,6 +33,7 @@ from skinny_mj.engine.results import STANDARD_METRICS, test_figures
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plots import boxplot_png
 from skinny_mj.recording import record_test
+from skinny_mj.training.loop import train
 from skinny_mj.trajectories import sample_clip
 
 NAME = "ridge-vs-new"
@@ -118,8 +119,6 @@ def report(results, plan, out_dir: Path) -> str:
 
 def _recordings(out_dir: Path, results, plan, mv: str) -> list[str]:
     """The median run of ``<mv>-ridge1`` and ``<mv>-5`` re-trained and recorded."""
-    from skinny_mj.training.loop import train
-
     lines = []
     for row_id in (f"{mv}-ridge1", f"{mv}-5"):
         ok = sorted(results.runs(row_id), key=lambda r: r["metrics"]["position_nrmse"])

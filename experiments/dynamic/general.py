@@ -28,7 +28,9 @@ from skinny_mj.experiments.claims import values
 
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.floor import torque_floor
 from skinny_mj.training.imitation import TORQUE_METRICS
+from skinny_mj.training.loop import build_run, evaluate, test_robot_metrics, train_run
 from skinny_mj.trajectories import load_movement
 
 #: Fastest speed (a factor of the clip's own, on a 0.01 grid from 0.6 down) at and below
@@ -62,8 +64,6 @@ def load_test(column: str, dof: int):
 def run_batch(config: TrainConfig, row, seeds: list[int]) -> list:
     """Train the row's R networks once in lockstep (nothing for a controller alone), then
     test them on every column of ``row.params["tests"]``."""
-    from skinny_mj.training.loop import build_run, evaluate, test_robot_metrics, train_run
-
     start = time.perf_counter()
     dof = config.plant.dof
     run = build_run(config, seeds)
@@ -98,8 +98,6 @@ def floor_batch(config: TrainConfig, row, seeds: list[int]) -> list:
     """The torque-limited floor (:func:`skinny_mj.training.floor.torque_floor`: iLQR with
     the true model, the whole movement known, commands within the limits) on every column
     of ``row.params["tests"]``. Deterministic: every seed gets the same figures."""
-    from skinny_mj.training.floor import torque_floor
-
     dof, out = config.plant.dof, {}
     start = time.perf_counter()
     for col in row.params["tests"]:

@@ -64,6 +64,7 @@ from skinny_mj.experiments.dynamic import general
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.presets import preset_fields
+from skinny_mj.training.torque import joint_nrmse
 
 if TYPE_CHECKING:
     from skinny_mj.training.result import RunResult
@@ -264,8 +265,6 @@ def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
 def metrics(result: RunResult) -> dict[str, Any]:
     """One run's metrics: the test's NRMSEs, joint-angle NRMSE and robot figures, the
     learning curves, the torque figures."""
-    from skinny_mj.training.torque import joint_nrmse
-
     test, train = result.test, result.train
     metrics = {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse,
                "train_wall_s": result.wall_s, "joint_nrmse": joint_nrmse(result)}

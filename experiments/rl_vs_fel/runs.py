@@ -32,7 +32,9 @@ from typing import Any
 import numpy as np
 
 from skinny_mj.errors import SkinnyInputError
+from skinny_mj.training import loop as training
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.parts import full_scale_speeds, load_trajectory, run_streams
 
 RL_EXTRA = "rl-vs-fel needs the rl extra: pip install -e '.[rl]'"
 
@@ -84,8 +86,6 @@ def test_steps(budget: int, first: int = 1000) -> list[int]:
 
 # -- ESN + FEL ----------------------------------------------------------------------------
 def _fel_tests(run, columns: Mapping[str, Any], gain: float | None = None) -> dict:
-    from skinny_mj.training import loop as training
-
     if gain is not None:  # the same networks tested with another K
         import dataclasses
 
@@ -104,8 +104,6 @@ def fel_curve(tc: TrainConfig, seed: int, columns: Mapping[str, Any]) -> tuple[l
     """ESN + FEL's curve (tested before training and after every epoch on ``columns``:
     id -> trajectory, None for the training movement's one repetition) and facts:
     ``failed`` (diverged in training), ``steps_per_epoch``."""
-    from skinny_mj.training import loop as training
-
     run = training.build_run(tc, [seed])
     steps_per_epoch = (tc.learning_cycles + 2) * (len(run.desired) - 1)
     last_cycle = tc.learning_cycles + 1
@@ -140,8 +138,6 @@ def rl_segment(learner: str, gain: float, tc: TrainConfig, seed: int,
     from skinny_mj.experiments.rl_vs_fel import agents
     from skinny_mj.experiments.rl_vs_fel.tracking import TrackingEnv, score
     from stable_baselines3.common.callbacks import BaseCallback
-
-    from skinny_mj.training.parts import full_scale_speeds, load_trajectory, run_streams
 
     torch.set_num_threads(1)
     start, end = span
