@@ -195,13 +195,13 @@ def _rows() -> tuple[Row, ...]:
 
 
 def _general_row(row_id: str, overrides: dict, seeds_of: str | None = None) -> Row:
-    """A row tested on the unseen clips (:func:`general.run_batch`), joint-angle signals."""
+    """A row tested on the unseen clips (:data:`general.SHAPE`), joint-angle signals."""
     learns = _learns(overrides) or "method" not in overrides
     row = _row(row_id, {"plant.signals": "joint", **overrides},
                overrides.get("method.epochs", ARM_EPOCHS) if learns else None)
     return Row(row.id, row.overrides, seeds_of=seeds_of, params={"tests": tuple(general.TESTS)},
                quick={**row.quick, "tests": ("md_02-feasible", "ymca")},
-               run_batch=general.run_batch)
+               shape=general.SHAPE)
 
 
 def _general_rows() -> tuple[Row, ...]:
