@@ -33,7 +33,6 @@ from skinny_mj.experiments.claims import values
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.engine.study import Quick, Row, Study, Test
 from skinny_mj.io import atomic_path
-from skinny_mj.plant.bimanual import arm_dofs, phase_lag_deg
 from skinny_mj.plant.body import CONTROL_DT_S
 from skinny_mj.plots import boxplot_png, pyplot
 from skinny_mj.training.config import TrainConfig
@@ -105,6 +104,8 @@ def failure(result: RunResult) -> str | None:
 def metrics(result: RunResult) -> dict:
     """One run's training error and, at every leader speed, the lagging arm's errors,
     its timing (phase lag) and its traces (degrees)."""
+    from skinny_mj.plant.bimanual import arm_dofs, phase_lag_deg  # MuJoCo: not at --help
+
     config = result.config
     lead_side, dof = config.plant.leading_arm, config.plant.dof
     lag_side = "left" if lead_side == "right" else "right"

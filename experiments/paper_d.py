@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from skinny_mj.experiments.claims import claim_lines, values
 
+from skinny_mj import training
 from skinny_mj.engine.results import (
     no_failure,
     test_figures,
@@ -48,7 +49,6 @@ from skinny_mj.plant import body
 from skinny_mj.plots import boxplot_png, pyplot, save_figure
 from skinny_mj.recording import record_test
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.loop import train
 
 if TYPE_CHECKING:  # the training loop is imported where it runs: `--help` needs no MuJoCo
     from skinny_mj.training.result import RunResult
@@ -173,7 +173,7 @@ def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
     for row_id in (p.row.id for p in plan.rows if p.row.id in row_ids):
         run = _average_run(out_dir, row_id)
         if run is not None:
-            outcome = train(plan.trainings(row_id)["tt"], int(run["seed"]))
+            outcome = training.train(plan.trainings(row_id)["tt"], int(run["seed"]))
             if not outcome.failed:
                 picked.append((row_id, outcome))
                 _record(out_dir / f"exp{row_id}_tt_average_run.rrd", outcome, row_id)

@@ -29,11 +29,11 @@ import numpy as np
 from skinny_mj.experiments.claims import claim_lines
 from skinny_mj.experiments.paper_e import study as paper_e
 
+from skinny_mj import training
 from skinny_mj.engine.results import STANDARD_METRICS, test_figures
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plots import boxplot_png
 from skinny_mj.recording import record_test
-from skinny_mj.training.loop import train
 from skinny_mj.trajectories import sample_clip
 
 NAME = "ridge-vs-new"
@@ -127,7 +127,7 @@ def _recordings(out_dir: Path, results, plan, mv: str) -> list[str]:
         run = ok[(len(ok) - 1) // 2]
         path = out_dir / f"{row_id}_median_seed{run['seed']}.rrd"
         if not path.is_file():
-            outcome = train(plan.config(row_id), int(run["seed"]))
+            outcome = training.train(plan.config(row_id), int(run["seed"]))
             record_test(path, outcome, f"{NAME} {row_id}, median run", {"row": row_id},
                         figures=test_figures(outcome))
         lines.append(f"recording: {path.name} (test position NRMSE "

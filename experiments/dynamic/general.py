@@ -26,10 +26,10 @@ import time
 
 from skinny_mj.experiments.claims import values
 
+from skinny_mj import training
 from skinny_mj.engine.results import train_failure
 from skinny_mj.engine.study import Shape, Test
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.floor import torque_floor
 from skinny_mj.training.imitation import TORQUE_METRICS
 from skinny_mj.training.result import RunResult
 from skinny_mj.trajectories import load_movement
@@ -109,7 +109,7 @@ def floor_batch(config: TrainConfig, row, seeds: list[int]) -> list:
     start = time.perf_counter()
     for col in row.params["tests"]:
         movement = load_test(col, dof)
-        floor = torque_floor(movement, dof, iterations=row.params["iterations"],
+        floor = training.floor.torque_floor(movement, dof, iterations=row.params["iterations"],
                              tolerance=1e-5)
         figures = floor.metrics(movement.angles, dof, movement.dt)
         out[f"{col}__position_nrmse"] = floor.joint_nrmse

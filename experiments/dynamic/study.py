@@ -61,10 +61,10 @@ from typing import TYPE_CHECKING, Any
 
 from skinny_mj.experiments.dynamic import general
 
+from skinny_mj import training
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.presets import preset_fields
-from skinny_mj.training.torque import joint_nrmse
 
 if TYPE_CHECKING:
     from skinny_mj.training.result import RunResult
@@ -267,7 +267,7 @@ def metrics(result: RunResult) -> dict[str, Any]:
     learning curves, the torque figures."""
     test, train = result.test, result.train
     metrics = {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse,
-               "train_wall_s": result.wall_s, "joint_nrmse": joint_nrmse(result)}
+               "train_wall_s": result.wall_s, "joint_nrmse": training.torque.joint_nrmse(result)}
     if train.kind != "none":  # learning curves, per epoch (kept in the run file)
         metrics["curve_position_nrmse"] = train.position_nrmse
     for key in ("feedback_share", "error_signal_share"):

@@ -38,9 +38,9 @@ from skinny_mj.controllers.forward_model import rollout_prediction_error
 from skinny_mj.controllers.rollout import Rollout
 from skinny_mj.experiments import paper_a
 
+from skinny_mj import training
 from skinny_mj.engine.results import no_failure
 from skinny_mj.engine.study import Quick, Row, Study
-from skinny_mj.training.loop import evaluate
 from skinny_mj.training.result import RunResult, feedback_share
 
 NAME = "fidelity-a"
@@ -109,7 +109,7 @@ def _cycle_metrics(ro, desired: np.ndarray, prefix: str) -> dict[str, np.ndarray
 
 def _test_metrics(run) -> dict[str, np.ndarray]:
     """The K = 0 test of ``run``'s networks as they are, on a fresh plant, (R,) each."""
-    tests = evaluate(run)
+    tests = training.evaluate(run)
     ro = _stack_rollouts([t.rollout for t in tests])
     out = _cycle_metrics(ro, run.desired, "test")
     failed = np.array([t.failed for t in tests], float)

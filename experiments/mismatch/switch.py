@@ -4,7 +4,7 @@ Rows ``2d-ymca-switch-<learner>`` (the mismatch study's group ``switch``): the p
 nominal arm for ``PRE`` cycles of YMCA; halfway through the next cycle 1 kg appears at the
 right hand's centre of mass (:func:`skinny_mj.plant.perturb.mass_change`, in the running
 model) and stays for ``POST`` more cycles: a test the rows declare
-(:class:`skinny_mj.training.perform.Perform`). The controllers keep the nominal model:
+(:class:`skinny_mj.training.result.Perform`). The controllers keep the nominal model:
 
 - ``esn-rls``: the ESN + FEL of the mismatch study's ``none`` row (trained on the nominal
   arm), its teacher on at K = ``GAIN``, its readout updated every control step by
@@ -27,8 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinny_mj.engine.study import Shape
-from skinny_mj.training.perform import Perform
-from skinny_mj.training.result import RunResult
+from skinny_mj.training.result import Perform, RunResult
 
 PRE, POST, PAYLOAD_KG, GAIN, FORGETTING = 2, 8, 1.0, 0.5, 0.999
 LEARNERS = ("esn-rls", "esn-frozen", "ct-adaptive", "ct-nominal", "esn-rls-0.99")

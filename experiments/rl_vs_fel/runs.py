@@ -31,10 +31,9 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj import training  # the training loop loads on first use
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.training import loop as training
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.parts import full_scale_speeds, load_trajectory, run_streams
 
 RL_EXTRA = "rl-vs-fel needs the rl extra: pip install -e '.[rl]'"
 
@@ -141,11 +140,11 @@ def rl_segment(learner: str, gain: float, tc: TrainConfig, seed: int,
 
     torch.set_num_threads(1)
     start, end = span
-    trajectory, _ = load_trajectory(tc)
-    training = trajectory.repeat(tc.movement.reps) if tc.movement.reps > 1 else trajectory
-    v_max = full_scale_speeds(tc, trajectory)
-    plant_seed = run_streams(seed).plant_seed  # FEL's training and test plants' seed
-    env = TrackingEnv(tc, training, v_max, plant_seed, gain)
+    trajectory, _ = training.load_trajectory(tc)
+    repeated = trajectory.repeat(tc.movement.reps) if tc.movement.reps > 1 else trajectory
+    v_max = training.full_scale_speeds(tc, trajectory)
+    plant_seed = training.run_streams(seed).plant_seed  # FEL's training and test plants' seed
+    env = TrackingEnv(tc, repeated, v_max, plant_seed, gain)
     kwargs, norm = agents.settings(learner, dict(changes or {}), quick)
     venv = agents.vec_env(env, learner, norm, kwargs.get("gamma", 0.99))
     segment_seed = int(np.random.SeedSequence([seed, start]).generate_state(1)[0] >> 1)

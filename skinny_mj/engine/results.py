@@ -16,9 +16,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from skinny_mj import training  # the training loop loads on first use (a study's --help runs none)
 from skinny_mj.engine.sweep import RunFailed
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.loop import train_batch
 from skinny_mj.training.result import STANDARD, Observer, RunResult, Test, TrainFigures
 
 __all__ = ["Metric", "Metrics", "Shape", "run_metrics", "test_figures", "read_metric",
@@ -195,8 +195,8 @@ def default_run(config: TrainConfig, row: Any, seeds: list[int], shape: Shape) -
     metrics, failure = shape.metrics, shape.failure
     if shape.trainings is None:
         return [_picked(r, metrics, failure)
-                for r in train_batch(config, seeds, tests=taken, observe=watch)]
-    per = {name: train_batch(c, seeds, tests=taken, observe=watch)
+                for r in training.train_batch(config, seeds, tests=taken, observe=watch)]
+    per = {name: training.train_batch(c, seeds, tests=taken, observe=watch)
            for name, c in shape.trainings(config, row).items()}
     return [_picked({name: runs[k] for name, runs in per.items()}, metrics, failure)
             for k in range(len(seeds))]

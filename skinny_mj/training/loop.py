@@ -66,10 +66,11 @@ from skinny_mj.training.parts import (  # noqa: F401  (re-exported)
     run_streams,
     true_commands_of,
 )
-from skinny_mj.training.perform import Perform, perform
+from skinny_mj.training.perform import perform
 from skinny_mj.training.result import (  # noqa: F401  (re-exported)
     STANDARD,
     Observer,
+    Perform,
     RolloutFigures,
     RunResult,
     Test,
@@ -273,8 +274,8 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
                 observe: Callable[[Run], Observer] | None = None) -> list[RunResult]:
     """Train R = len(seeds) runs of ``cfg`` in lockstep, then take ``tests`` in order
     (default: the standard test, one repetition of the training movement; a
-    :class:`~skinny_mj.training.perform.Perform`: a performance with the plant changed
-    mid-run, its outcome a :class:`~skinny_mj.training.perform.Performance`); run r equals
+    :class:`~skinny_mj.training.result.Perform`: a performance with the plant changed
+    mid-run, its outcome a :class:`~skinny_mj.training.result.Performance`); run r equals
     ``train_batch(cfg, [seeds[r]], tests=tests)``. ``observe(run)``: an
     :class:`~skinny_mj.training.result.Observer` that watches the training (what it saw of
     run r: that result's ``observed``).

@@ -1,21 +1,21 @@
 """A performance after training, with the plant changed mid-run: a test a study declares.
 
-:class:`Perform` is one of the tests a run takes (beside :class:`~skinny_mj.training.result.
-Test`): after training, the training movement is performed ``cycles`` times on the
-training plant, the feedback controller on at gain ``gain`` (its model the nominal arm),
-reservoir noise off; halfway through cycle ``switch_cycle`` (counted from 0) the plant
-changes (``payload_kg`` at the right hand's centre of mass, every arm link's mass and
-inertia x ``mass_scale``: :func:`skinny_mj.plant.perturb.mass_change`, in the running
-model) and stays changed to the end. The readout stays as trained, or (``rls_forgetting``)
-learns every control step by recursive least squares
-(:class:`skinny_mj.controllers.online.OnlineRLS`, P_0 from the last training cycle's
-states with ridge ``rls_lambda``). Its outcome, per run a :class:`Performance` (the
-per-cycle curves), is the run's test of that name (``RunResult.tests[name]``).
+A :class:`~skinny_mj.training.result.Perform` is one of the tests a run takes (beside a
+:class:`~skinny_mj.training.result.Test`): after training, the training movement is
+performed ``cycles`` times on the training plant, the feedback controller on at gain
+``gain`` (its model the nominal arm), reservoir noise off; halfway through cycle
+``switch_cycle`` (counted from 0) the plant changes (``payload_kg`` at the right hand's
+centre of mass, every arm link's mass and inertia x ``mass_scale``:
+:func:`skinny_mj.plant.perturb.mass_change`, in the running model) and stays changed to
+the end. The readout stays as trained, or (``rls_forgetting``) learns every control step
+by recursive least squares (:class:`skinny_mj.controllers.online.OnlineRLS`, P_0 from the
+last training cycle's states with ridge ``rls_lambda``). Its outcome, per run a
+:class:`~skinny_mj.training.result.Performance` (the per-cycle curves), is the run's test
+of that name (``RunResult.tests[name]``). :func:`perform` takes it.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -26,39 +26,9 @@ from skinny_mj.controllers.online import OnlineRLS
 from skinny_mj.plant import body
 from skinny_mj.plant.perturb import mass_change
 from skinny_mj.training import torque
+from skinny_mj.training.result import Perform, Performance
 
-__all__ = ["Perform", "Performance", "SwitchHook", "perform"]
-
-
-@dataclass(frozen=True)
-class Perform:
-    """A performance with the plant changed mid-run (see the module docstring); ``name``:
-    its key in the run's tests (never ``""``, the standard test's)."""
-
-    name: str
-    cycles: int
-    gain: float
-    switch_cycle: int
-    payload_kg: float = 0.0
-    mass_scale: float = 1.0
-    rls_forgetting: float | None = None
-    rls_lambda: float = 1.0
-
-    def __post_init__(self) -> None:
-        if not self.name or not 0 <= self.switch_cycle < self.cycles:
-            raise ValueError(f"perform {self.name!r}: needs a name and a switch cycle in "
-                             f"0..{self.cycles - 1}, got {self.switch_cycle}")
-
-
-@dataclass
-class Performance:
-    """One run's performance: per cycle the position NRMSE and the joint-angle NRMSE
-    (normalized angles; NaN from the cycle the run diverged in, or all of them when its
-    training had), and whether it diverged while performing (or in training)."""
-
-    position_nrmse: np.ndarray = field(repr=False)
-    angle_nrmse: np.ndarray = field(repr=False)
-    failed: bool
+__all__ = ["SwitchHook", "perform"]
 
 
 class SwitchHook:

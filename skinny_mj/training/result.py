@@ -1,7 +1,8 @@
 """What one run produced, as types: :class:`RunResult` (the training's figures, the last
 training rollout's figures, a test per movement, the torque figures, the failure, what an
-observer saw), the :class:`Test` a run is asked to take and the :class:`Observer` that
-watches a training while it runs.
+observer saw), the tests a run is asked to take (:class:`Test`; :class:`Perform`, a
+performance with the plant changed mid-run) and the :class:`Observer` that watches a
+training while it runs.
 
 :func:`skinny_mj.training.loop.train_batch` returns one :class:`RunResult` per seed; the
 engine (:mod:`skinny_mj.engine.results`) writes it into a run file, and a study reads its
@@ -21,8 +22,8 @@ from skinny_mj.controllers.rollout import Rollout, run_mean
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import ROBOT_METRICS, TORQUE_METRICS, robot_metrics
 
-__all__ = ["Test", "STANDARD", "Observer", "TestOutcome", "TrainFigures", "RolloutFigures",
-           "RunResult", "mean_abs_error", "feedback_share"]
+__all__ = ["Test", "STANDARD", "Perform", "Performance", "Observer", "TestOutcome",
+           "TrainFigures", "RolloutFigures", "RunResult", "mean_abs_error", "feedback_share"]
 
 
 @dataclass(frozen=True)
@@ -52,6 +53,38 @@ class Test:
 
 #: The standard test alone: one repetition of the training movement on a fresh plant.
 STANDARD = (Test(),)
+
+
+@dataclass(frozen=True)
+class Perform:
+    """A test: after training, a performance with the plant changed mid-run
+    (:mod:`skinny_mj.training.perform`); ``name``: its key in the run's tests (never
+    ``""``, the standard test's)."""
+
+    name: str
+    cycles: int
+    gain: float
+    switch_cycle: int
+    payload_kg: float = 0.0
+    mass_scale: float = 1.0
+    rls_forgetting: float | None = None
+    rls_lambda: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not self.name or not 0 <= self.switch_cycle < self.cycles:
+            raise ValueError(f"perform {self.name!r}: needs a name and a switch cycle in "
+                             f"0..{self.cycles - 1}, got {self.switch_cycle}")
+
+
+@dataclass
+class Performance:
+    """One run's performance: per cycle the position NRMSE and the joint-angle NRMSE
+    (normalized angles; NaN from the cycle the run diverged in, or all of them when its
+    training had), and whether it diverged while performing (or in training)."""
+
+    position_nrmse: np.ndarray = field(repr=False)
+    angle_nrmse: np.ndarray = field(repr=False)
+    failed: bool
 
 
 class Observer(Protocol):
@@ -164,7 +197,7 @@ class RunResult:
     """Everything one run of :func:`~skinny_mj.training.loop.train_batch` produced.
 
     ``tests``: the tests it took, by name (``""``: the standard test; a
-    :class:`~skinny_mj.training.perform.Perform`'s outcome: a ``Performance``); ``failed`` /
+    :class:`Perform`'s outcome: a :class:`Performance`); ``failed`` /
     ``fail_reason`` / ``fail_epoch``: the run's failure (the training's, then the standard
     test's, then the torque body's MuJoCo warnings: ``fail_stage`` says which);
     ``trajectory``: one repetition of the training movement; ``esn``: the trained network
