@@ -260,8 +260,8 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
                                       if overrides.canonical(config, k) in have})
         params = {**_study_params(study, quick), **r.params}
         if r.of is not None:  # another study's row: that study's planned row runs
-            body = {"body": config.plant.dof, "signals": config.plant.signals} \
-                if r.of.on_body else {}
+            body = {"body": config.plant.body, "signals": config.plant.signals} \
+                if r.of.on_body else {}  # by name: its MJCF (and MuJoCo) stays unread
             key = (id(r.of.study), tuple(body.values()))
             if key not in others:
                 others[key] = plan(r.of.study, quick=quick, tiny=tiny, **body)

@@ -87,7 +87,7 @@ class Of:
     """Another study's row, run as that study runs it (its configuration, shape and
     parameters, ``--quick``'s when this sweep is quick): row ``row`` of ``study``, on
     that study's own body, or (``on_body``) on the body of this row's configuration (its
-    ``plant.dof`` and ``plant.signals``, as ``--dof --signals`` would give them)."""
+    ``plant.body`` and ``plant.signals``, as ``--body --signals`` would give them)."""
 
     study: Study
     row: str
