@@ -151,3 +151,14 @@ def test_report_makes_the_figure_and_each_papers_own_report_per_body(tmp_path, t
     for dim in ("2d", "3d"):
         assert (tmp_path / "papers" / f"a-{dim}" / "fig4_error.png").is_file()
         assert "## Claims" in (tmp_path / "papers" / f"a-{dim}" / "claims.md").read_text()
+
+
+def test_a_sweep_on_a_row_quick_does_not_keep_is_the_papers_row_under_its_quick_shrink():
+    from skinny_mj.engine.grid import grid_study
+
+    sweep = grid_study(["esn.spectral_radius=0.5,0.9"], study=three_d.STUDY,
+                       row="a-3d-inverse-d10", quick=True).build()
+    config = sweep.config.config(sweep.rows[1].row_id)
+    own = paper_a.STUDY.config("inverse-d10", body=8, signals="cartesian")
+    assert config == own.override({**paper_a.STUDY.quick.overrides,
+                                   "esn.spectral_radius": 0.9})

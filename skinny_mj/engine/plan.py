@@ -263,8 +263,10 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
             body = {"body": config.plant.body, "signals": config.plant.signals} \
                 if r.of.on_body else {}  # by name: its MJCF (and MuJoCo) stays unread
             key = (id(r.of.study), tuple(body.values()))
-            if key not in others:
-                others[key] = plan(r.of.study, quick=quick, tiny=tiny, **body)
+            if key not in others:  # its --quick shrink on every row, not only those it keeps
+                every = dataclasses.replace(r.of.study, quick=dataclasses.replace(
+                    r.of.study.quick, rows=None))
+                others[key] = plan(every, quick=quick, tiny=tiny, **body)
             other = others[key].row(r.of.row)
             planned.append(PlannedRow(r, params, other.config, other.runs_as, other.custom,
                                       other.shape))
