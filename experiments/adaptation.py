@@ -60,6 +60,7 @@ from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.controllers.online import OnlineRLS
 from skinny_mj.experiments.claims import claim_lines
 
+from skinny_mj import training
 from skinny_mj.engine.experiment import RunFailed
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plant import body
@@ -110,13 +111,12 @@ def _row(change: str, learner: str) -> Row:
 def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
     """Train the row's networks in lockstep, then perform cycle after cycle (pre,
     changed, undone) with the row's learner."""
-    from skinny_mj.plant.perturb import PerturbedPlant
-    from skinny_mj.training.loop import PhysicsBatchError, build_run, train_run
+    from skinny_mj.plant.perturb import PerturbedPlant  # MuJoCo: not at --help
 
     p = row.params
     change, learner = p["change"], p["learner"]
-    run = build_run(config, seeds)
-    trained = train_run(run).fel
+    run = training.build_run(config, seeds)
+    trained = training.train_run(run).fel
     esn, plant = run.esn, PerturbedPlant(run.plant)
     hook = run.actuation.hook(run.training, run.max_speed_rad_s)
     desired_angles = run.training.position_signals("joint")
@@ -148,7 +148,8 @@ def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
                     runs=alive)
     warnings = run.actuation.train_warnings(run) or 0  # the torque twin's, training and performance
     if warnings and len(seeds) > 1:  # one shared MjData: run the seeds alone
-        raise PhysicsBatchError(f"MuJoCo warnings in a lockstep batch of {len(seeds)} runs")
+        raise training.PhysicsBatchError(
+            f"MuJoCo warnings in a lockstep batch of {len(seeds)} runs")
     out: list = []
     for r in range(len(seeds)):
         if not alive[r] or warnings:
@@ -180,11 +181,10 @@ def forearm_floor(config: TrainConfig, forearm: float) -> float:
     """Position NRMSE of the arm whose forearm is ``forearm`` x as long moving exactly
     along the desired angles of ``config``'s movement: the part of the ``forearm`` rows'
     error that no joint motion can remove."""
-    from skinny_mj.plant.perturb import forearm_rows
-    from skinny_mj.training.parts import load_trajectory
+    from skinny_mj.plant.perturb import forearm_rows  # MuJoCo: not at --help
 
     dof, signals = config.plant.dof, config.plant.signals
-    desired = load_trajectory(config)[0].position_signals(signals)
+    desired = training.load_trajectory(config)[0].position_signals(signals)
     reached = desired.copy()
     reached[:, forearm_rows(dof, signals)] *= forearm
     return float(position_nrmse(reached, desired))

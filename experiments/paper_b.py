@@ -104,7 +104,7 @@ def failure(result: RunResult) -> str | None:
 def metrics(result: RunResult) -> dict:
     """One run's training error and, at every leader speed, the lagging arm's errors,
     its timing (phase lag) and its traces (degrees)."""
-    from skinny_mj.plant.bimanual import arm_dofs, phase_lag_deg
+    from skinny_mj.plant.bimanual import arm_dofs, phase_lag_deg  # MuJoCo: not at --help
 
     config = result.config
     lead_side, dof = config.plant.leading_arm, config.plant.dof

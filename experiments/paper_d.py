@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from skinny_mj.experiments.claims import claim_lines, values
 
+from skinny_mj import training
 from skinny_mj.engine.results import (
     no_failure,
     test_figures,
@@ -167,14 +168,12 @@ def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
     (config, seed)); also writes each one's ``.rrd``. Rows: experiments; columns:
     elbow, wrist (x, y, z each). ``reproduced`` collects, per re-trained run, whether
     it reproduced the run file's TT test position NRMSE exactly."""
-    from skinny_mj.training.loop import train
-
     reproduced = [] if reproduced is None else reproduced
     picked = []
     for row_id in (p.row.id for p in plan.rows if p.row.id in row_ids):
         run = _average_run(out_dir, row_id)
         if run is not None:
-            outcome = train(plan.trainings(row_id)["tt"], int(run["seed"]))
+            outcome = training.train(plan.trainings(row_id)["tt"], int(run["seed"]))
             if not outcome.failed:
                 picked.append((row_id, outcome))
                 _record(out_dir / f"exp{row_id}_tt_average_run.rrd", outcome, row_id)

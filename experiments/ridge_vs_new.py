@@ -29,6 +29,7 @@ import numpy as np
 from skinny_mj.experiments.claims import claim_lines
 from skinny_mj.experiments.paper_e import study as paper_e
 
+from skinny_mj import training
 from skinny_mj.engine.results import STANDARD_METRICS, test_figures
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.plots import boxplot_png
@@ -118,8 +119,6 @@ def report(results, plan, out_dir: Path) -> str:
 
 def _recordings(out_dir: Path, results, plan, mv: str) -> list[str]:
     """The median run of ``<mv>-ridge1`` and ``<mv>-5`` re-trained and recorded."""
-    from skinny_mj.training.loop import train
-
     lines = []
     for row_id in (f"{mv}-ridge1", f"{mv}-5"):
         ok = sorted(results.runs(row_id), key=lambda r: r["metrics"]["position_nrmse"])
@@ -128,7 +127,7 @@ def _recordings(out_dir: Path, results, plan, mv: str) -> list[str]:
         run = ok[(len(ok) - 1) // 2]
         path = out_dir / f"{row_id}_median_seed{run['seed']}.rrd"
         if not path.is_file():
-            outcome = train(plan.config(row_id), int(run["seed"]))
+            outcome = training.train(plan.config(row_id), int(run["seed"]))
             record_test(path, outcome, f"{NAME} {row_id}, median run", {"row": row_id},
                         figures=test_figures(outcome))
         lines.append(f"recording: {path.name} (test position NRMSE "

@@ -36,12 +36,12 @@ def test_feasible_speeds_fit_the_limits_and_full_speed_does_not(dof):
 def test_computed_torque_floor_is_lower_on_the_feasible_clip():
     import dataclasses
 
-    from skinny_mj.experiments.dynamic import general
+    from skinny_mj.experiments.dynamic import study as dynamic
 
     cfg, row = _row("2d-general-arm-ct")
     assert cfg.method.kind == "none" and cfg.torque.feedback == "ct"
     row = dataclasses.replace(row, params={"tests": ("md_03", "md_03-feasible")})
-    (out,) = general.run_batch(cfg, row, [0])
+    (out,) = dynamic.STUDY.run(cfg, row, [0])
     assert out["n_test_failed"] == 0 and "train_position_nrmse" not in out
     # the same controller: the slowed clip, within the limits, is tracked far better
     assert out["md_03-feasible__position_nrmse"] < 0.2 * out["md_03__position_nrmse"]
@@ -56,13 +56,13 @@ def test_computed_torque_floor_is_lower_on_the_feasible_clip():
 def test_a_learned_row_trains_once_and_tests_every_column():
     import dataclasses
 
-    from skinny_mj.experiments.dynamic import general
+    from skinny_mj.experiments.dynamic import study as dynamic
 
     cfg, row = _row("2d-general-first")
     cfg = cfg.override({"method.epochs": 1, "method.cycles": 1, "esn.n_reservoir": 20,
                         "movement.trajectory": "babble:seed=0,duration=1,vmin=0.5,vmax=4"})
     row = dataclasses.replace(row, params={"tests": ("md_03-feasible", "ymca")})
-    outs = general.run_batch(cfg, row, [0, 1])
+    outs = dynamic.STUDY.run(cfg, row, [0, 1])
     assert len(outs) == 2
     for out in outs:
         assert math.isfinite(out["train_position_nrmse"])

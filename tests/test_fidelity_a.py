@@ -25,7 +25,7 @@ def _run(arch: str, delay: int, epochs: int, seeds: list[int],
     """fidelity-a's run of the row, on :data:`TINY`, with checkpoints 1 and 2."""
     row = fidelity_a.plan_row(arch, forward_input, delay, epochs)
     config = paper_a.MODEL.override({**row.overrides, **TINY})
-    return fidelity_a.run_batch(config, Row(row.id, params={"checkpoints": (1, 2)}), seeds)
+    return fidelity_a.STUDY.run(config, Row(row.id, params={"checkpoints": (1, 2)}), seeds)
 
 
 def _numbers(out: dict, suffix: str) -> dict:

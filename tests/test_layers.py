@@ -5,7 +5,8 @@ imports ``experiments`` (it finds them through the ``skinny_mj.experiments`` ent
 points), the parts import only their own modules and the parts of lower :data:`LEVELS`
 (read from every import statement, those inside functions and under ``if TYPE_CHECKING:``
 included), no modules import each other in a circle of any length, no module reads
-another module's private attributes, and the wheel carries every package folder, the
+another module's private attributes, few imports of the project's modules sit inside
+functions (:data:`MAX_FUNCTION_IMPORTS`), and the wheel carries every package folder, the
 MJCF and the CMU sample clips.
 """
 
@@ -349,6 +350,49 @@ def test_no_import_circles():
     assert not circles, "import circles:\n" + "\n".join(
         f"{len(c)} modules:\n" + "\n".join(f"  {m} -> {sorted(graph[m] & set(c))}" for m in c)
         for c in circles)
+
+
+#: The most imports of the project's own modules inside functions (imports belong at the
+#: top of a module unless a measured start-up cost says otherwise).
+MAX_FUNCTION_IMPORTS = 30
+
+
+def function_imports(root: Path = ROOT) -> list[str]:
+    """``path:line module`` of every import of the project's own modules (the three
+    folders, relative imports too) made inside a function or method."""
+    own = ("skinny_mj", *BARE)
+    found: list[str] = []
+
+    def visit(node, path: Path, inside: bool) -> None:
+        for child in ast.iter_child_nodes(node):
+            if inside and isinstance(child, ast.Import | ast.ImportFrom):
+                names = [a.name for a in child.names] if isinstance(child, ast.Import) \
+                    else ["." if child.level else child.module or ""]
+                for name in names:
+                    if name == "." or _under(name, own):
+                        found.append(f"{path.relative_to(root).as_posix()}:{child.lineno} "
+                                     f"{name}")
+            visit(child, path, inside or isinstance(
+                child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda))
+
+    for layer in LAYERS:
+        for path in sorted((root / layer).rglob("*.py")):
+            visit(ast.parse(path.read_text(), filename=str(path)), path, False)
+    return found
+
+
+def test_the_function_import_count_reads_functions_and_methods_only(tmp_path):
+    a = _plant(tmp_path, "skinny_mj.a", "import skinny_mj.b\nimport numpy\n"
+               "def f():\n    import numpy\n    from . import b\n"
+               "class C:\n    def m(self):\n        from skinny_mj.controllers import esn\n"
+               "        def g():\n            import experiments.x\n")
+    assert function_imports(tmp_path) == [f"{a}:5 .", f"{a}:8 skinny_mj.controllers",
+                                          f"{a}:10 experiments.x"]
+
+
+def test_imports_of_the_project_sit_at_the_top_of_modules():
+    found = function_imports()
+    assert len(found) <= MAX_FUNCTION_IMPORTS, "\n".join(found)
 
 
 def _private(name: str) -> bool:

@@ -1,8 +1,9 @@
 """The mismatch study's runs: one training tested on several plants, the payload switch."""
 
-from skinny_mj.experiments.mismatch import study, switch
+from skinny_mj.experiments.mismatch import study
 
 from skinny_mj.engine.study import Row
+from skinny_mj.training.perform import SwitchHook
 
 
 class _Hook:
@@ -18,7 +19,7 @@ class _Hook:
 
 def test_switch_hook_changes_the_plant_once_at_its_cycle_and_step():
     inner, fired = _Hook(), []
-    hook = switch.SwitchHook(inner, cycle=1, step=2, change=lambda: fired.append(len(inner.calls)))
+    hook = SwitchHook(inner, cycle=1, step=2, change=lambda: fired.append(len(inner.calls)))
     for _ in range(3):
         hook.begin(None, 4)
         for t in range(3):
@@ -30,8 +31,8 @@ def test_switch_hook_changes_the_plant_once_at_its_cycle_and_step():
 def test_one_esn_training_is_tested_at_k0_k1_and_on_changed_plants():
     config = study.STUDY.base.override({**study.ESN, "plant.dof": 4, "movement.trajectory": "y",
                                         "method.epochs": 1})
-    row = Row("t", {}, params={"also": ("payload1", "delay")})
-    (out,) = study.run_esn(config, row, [0])
+    row = Row("t", {}, params={"also": ("payload1", "delay")}, shape=study.ESN_SHAPE)
+    (out,) = study.STUDY.run(config, row, [0])
     for key in ("position_nrmse", "position_nrmse_k1", "position_nrmse_on_payload1",
                 "position_nrmse_on_delay"):
         assert 0 < out[key] < 10

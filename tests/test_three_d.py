@@ -82,12 +82,14 @@ def tiny_paper_a(monkeypatch):
     real = registry.get
     monkeypatch.setattr(registry, "get", lambda name: tiny if name == "paper-a" else real(name))
     three_d.paper_experiment.cache_clear()
-    yield
+    yield replace(three_d.STUDY, rows=tuple(  # its paper-A rows run the tiny paper A
+        replace(r, of=replace(r.of, study=tiny)) if r.params["paper"] == "a" else r
+        for r in three_d.STUDY.rows))
     three_d.paper_experiment.cache_clear()
 
 
 def test_quick_pair_end_to_end_2d_is_the_papers_own_run(tmp_path, tiny_paper_a):
-    exp = three_d.STUDY.build(quick=True)
+    exp = tiny_paper_a.build(quick=True)
     results = run_sweep(exp, tmp_path, rows=["a-2d-inverse-d0", "a-3d-inverse-d0"], runs=1,
                         workers=1, progress=False)
     assert results["n_ok"] == 2
@@ -141,7 +143,7 @@ def test_angle_nrmse_is_the_joint_angle_error_on_either_body():
 
 @pytest.mark.slow
 def test_report_makes_the_figure_and_each_papers_own_report_per_body(tmp_path, tiny_paper_a):
-    exp = three_d.STUDY.build(quick=True)
+    exp = tiny_paper_a.build(quick=True)
     results = run_sweep(exp, tmp_path, rows="a-2d-inverse-d0,a-3d-inverse-d0", runs=1,
                         workers=1, progress=False)
     exp.report(results, tmp_path)
@@ -149,3 +151,14 @@ def test_report_makes_the_figure_and_each_papers_own_report_per_body(tmp_path, t
     for dim in ("2d", "3d"):
         assert (tmp_path / "papers" / f"a-{dim}" / "fig4_error.png").is_file()
         assert "## Claims" in (tmp_path / "papers" / f"a-{dim}" / "claims.md").read_text()
+
+
+def test_a_sweep_on_a_row_quick_does_not_keep_is_the_papers_row_under_its_quick_shrink():
+    from skinny_mj.engine.grid import grid_study
+
+    sweep = grid_study(["esn.spectral_radius=0.5,0.9"], study=three_d.STUDY,
+                       row="a-3d-inverse-d10", quick=True).build()
+    config = sweep.config.config(sweep.rows[1].row_id)
+    own = paper_a.STUDY.config("inverse-d10", body=8, signals="cartesian")
+    assert config == own.override({**paper_a.STUDY.quick.overrides,
+                                   "esn.spectral_radius": 0.9})

@@ -1,9 +1,9 @@
 """The torque twin's ``general`` preset: trained once, tested on movements it never saw.
 
 A row of :mod:`skinny_mj.experiments.dynamic.study` whose ``params["tests"]`` names test
-columns (:data:`TESTS`) runs :func:`run_batch`: it trains the row's seeds in lockstep
-(nothing, for a controller alone such as computed torque, ``arm-ct``), then tests them at
-the row's K on every column. A ``floor`` row (:func:`floor_batch`) computes the least error
+columns (:data:`TESTS`) runs as :data:`SHAPE` says: the engine trains the row's seeds in
+lockstep (nothing, for a controller alone such as computed torque, ``arm-ct``), then tests
+them at the row's K on every column. A ``floor`` row (:func:`floor_batch`) computes the least error
 the torque limits allow on each column (iLQR knowing the true model and the whole
 movement): what no controller can beat, the bound a learned one is measured against.
 The shipped CMU clips need more torque than the motors have at full speed
@@ -26,9 +26,12 @@ import time
 
 from skinny_mj.experiments.claims import values
 
-from skinny_mj.engine.experiment import RunFailed
+from skinny_mj import training
+from skinny_mj.engine.results import train_failure
+from skinny_mj.engine.study import Shape, Test
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import TORQUE_METRICS
+from skinny_mj.training.result import RunResult
 from skinny_mj.trajectories import load_movement
 
 #: Fastest speed (a factor of the clip's own, on a 0.01 grid from 0.6 down) at and below
@@ -59,52 +62,54 @@ def load_test(column: str, dof: int):
     return load_movement(TESTS[column][0], dof, speed=speed_of(column, dof))[0]
 
 
-def run_batch(config: TrainConfig, row, seeds: list[int]) -> list:
-    """Train the row's R networks once in lockstep (nothing for a controller alone), then
-    test them on every column of ``row.params["tests"]``."""
-    from skinny_mj.training.loop import build_run, evaluate, test_robot_metrics, train_run
+def _movement(column: str, config: TrainConfig):
+    return load_test(column, config.plant.dof)
 
-    start = time.perf_counter()
-    dof = config.plant.dof
-    run = build_run(config, seeds)
-    result = train_run(run).fel
-    train_wall = (time.perf_counter() - start) / len(seeds)
-    outs: list = [{"train_wall_s": train_wall, "n_test_failed": 0,
-                   **({} if result is None else
-                      {"train_position_nrmse": float(result.position_nrmse[r, -1])})}
-                  for r in range(len(seeds))]
-    for col in row.params["tests"]:
-        for out, test in zip(outs, evaluate(run, load_test(col, dof)), strict=True):
-            if test.failed:
-                out["n_test_failed"] += 1
-                continue
-            tq = test.torque["metrics"]
-            out.update({f"{col}__position_nrmse": test.position_nrmse,
-                        f"{col}__max_torque_ratio": max(tq["max_commanded_ratio"],
-                                                         tq["max_applied_ratio"]),
-                        f"{col}__limit_overshoot_rad": tq["limit_overshoot_rad"]})
-            # joint error (deg), hand error (cm), lag (s), RMS torque (N m), |work| (J)
-            robot = {**test_robot_metrics(run, test), **{k: tq[k] for k in TORQUE_METRICS}}
-            out.update({f"{col}__{k}": v for k, v in robot.items()})
-    wall = (time.perf_counter() - start) / len(seeds)
-    for r, out in enumerate(outs):
-        out["wall_s"] = wall
-        if result is not None and result.failed[r]:
-            outs[r] = RunFailed(f"epoch {result.fail_epoch[r]}: {result.fail_reason[r]}")
-    return outs
+
+def tests(config: TrainConfig, row) -> tuple[Test, ...]:
+    """A test on every column of ``row.params["tests"]`` (the row's K, a fresh plant)."""
+    return tuple(Test(col, movement=functools.partial(_movement, col))
+                 for col in row.params["tests"])
+
+
+def metrics(result: RunResult) -> dict:
+    """One run's file: the training's last epoch (a learned row), per column its figures
+    (a column whose test diverged counts in ``n_test_failed``), the wall times."""
+    train = result.train
+    out: dict = {"train_wall_s": result.train_wall_s, "n_test_failed": 0,
+                 **({} if train.kind == "none" else
+                    {"train_position_nrmse": train.last_position_nrmse})}
+    for col, test in result.tests.items():
+        if test.failed:
+            out["n_test_failed"] += 1
+            continue
+        tq = test.torque["metrics"]
+        out.update({f"{col}__position_nrmse": test.position_nrmse,
+                    f"{col}__max_torque_ratio": max(tq["max_commanded_ratio"],
+                                                     tq["max_applied_ratio"]),
+                    f"{col}__limit_overshoot_rad": tq["limit_overshoot_rad"]})
+        # joint error (deg), hand error (cm), lag (s), RMS torque (N m), |work| (J)
+        robot = {**test.robot_metrics(result.config.plant.body),
+                 **{k: tq[k] for k in TORQUE_METRICS}}
+        out.update({f"{col}__{k}": v for k, v in robot.items()})
+    out["wall_s"] = result.wall_s
+    return out
+
+
+#: A general row's run: trained once in lockstep (nothing for a controller alone), then
+#: tested on every column; a diverged training fails the run, a diverged test is counted.
+SHAPE = Shape(metrics, tests=tests, failure=train_failure)
 
 
 def floor_batch(config: TrainConfig, row, seeds: list[int]) -> list:
     """The torque-limited floor (:func:`skinny_mj.training.floor.torque_floor`: iLQR with
     the true model, the whole movement known, commands within the limits) on every column
     of ``row.params["tests"]``. Deterministic: every seed gets the same figures."""
-    from skinny_mj.training.floor import torque_floor
-
     dof, out = config.plant.dof, {}
     start = time.perf_counter()
     for col in row.params["tests"]:
         movement = load_test(col, dof)
-        floor = torque_floor(movement, dof, iterations=row.params["iterations"],
+        floor = training.floor.torque_floor(movement, dof, iterations=row.params["iterations"],
                              tolerance=1e-5)
         figures = floor.metrics(movement.angles, dof, movement.dt)
         out[f"{col}__position_nrmse"] = floor.joint_nrmse

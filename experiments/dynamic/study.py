@@ -61,6 +61,7 @@ from typing import TYPE_CHECKING, Any
 
 from skinny_mj.experiments.dynamic import general
 
+from skinny_mj import training
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.presets import preset_fields
@@ -194,13 +195,13 @@ def _rows() -> tuple[Row, ...]:
 
 
 def _general_row(row_id: str, overrides: dict, seeds_of: str | None = None) -> Row:
-    """A row tested on the unseen clips (:func:`general.run_batch`), joint-angle signals."""
+    """A row tested on the unseen clips (:data:`general.SHAPE`), joint-angle signals."""
     learns = _learns(overrides) or "method" not in overrides
     row = _row(row_id, {"plant.signals": "joint", **overrides},
                overrides.get("method.epochs", ARM_EPOCHS) if learns else None)
     return Row(row.id, row.overrides, seeds_of=seeds_of, params={"tests": tuple(general.TESTS)},
                quick={**row.quick, "tests": ("md_02-feasible", "ymca")},
-               run_batch=general.run_batch)
+               shape=general.SHAPE)
 
 
 def _general_rows() -> tuple[Row, ...]:
@@ -264,11 +265,9 @@ def _groups(rows: tuple[Row, ...]) -> dict[str, tuple[str, ...]]:
 def metrics(result: RunResult) -> dict[str, Any]:
     """One run's metrics: the test's NRMSEs, joint-angle NRMSE and robot figures, the
     learning curves, the torque figures."""
-    from skinny_mj.training.torque import joint_nrmse
-
     test, train = result.test, result.train
     metrics = {"position_nrmse": test.position_nrmse, "motor_nrmse": test.motor_nrmse,
-               "train_wall_s": result.wall_s, "joint_nrmse": joint_nrmse(result)}
+               "train_wall_s": result.wall_s, "joint_nrmse": training.torque.joint_nrmse(result)}
     if train.kind != "none":  # learning curves, per epoch (kept in the run file)
         metrics["curve_position_nrmse"] = train.position_nrmse
     for key in ("feedback_share", "error_signal_share"):

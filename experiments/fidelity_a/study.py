@@ -38,9 +38,10 @@ from skinny_mj.controllers.forward_model import rollout_prediction_error
 from skinny_mj.controllers.rollout import Rollout
 from skinny_mj.experiments import paper_a
 
+from skinny_mj import training
+from skinny_mj.engine.results import no_failure
 from skinny_mj.engine.study import Quick, Row, Study
-from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.result import feedback_share
+from skinny_mj.training.result import RunResult, feedback_share
 
 NAME = "fidelity-a"
 #: Epochs at which a run's metrics are recorded (those <= the row's epochs, and its last).
@@ -108,9 +109,7 @@ def _cycle_metrics(ro, desired: np.ndarray, prefix: str) -> dict[str, np.ndarray
 
 def _test_metrics(run) -> dict[str, np.ndarray]:
     """The K = 0 test of ``run``'s networks as they are, on a fresh plant, (R,) each."""
-    from skinny_mj.training.loop import evaluate
-
-    tests = evaluate(run)
+    tests = training.evaluate(run)
     ro = _stack_rollouts([t.rollout for t in tests])
     out = _cycle_metrics(ro, run.desired, "test")
     failed = np.array([t.failed for t in tests], float)
@@ -128,41 +127,51 @@ def _stack_rollouts(ros: list):
                       for f in dataclasses.fields(Rollout)})
 
 
-def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """Train one row for its epochs, recording every checkpoint (see the module doc)."""
-    from skinny_mj.training.loop import build_run, train_run
+class Checkpoints:
+    """The study's observer (:class:`~skinny_mj.training.result.Observer`): at every
+    checkpoint epoch's evaluation cycle, that cycle's figures and a K = 0 test of the
+    networks as they are (see the module docstring). Run r's observation: the checkpoint
+    epochs and per checkpoint its figures."""
 
-    run = build_run(config, seeds)
-    checks = checkpoints_of(row.params["checkpoints"], run.cfg.method.epochs)
-    last_cycle = run.cfg.learning_cycles + 1
-    recorded: dict[int, dict[str, np.ndarray]] = {}
+    def __init__(self, run, checks: tuple[int, ...]) -> None:
+        self.run, self.checks = run, checks
+        self.last_cycle = run.cfg.learning_cycles + 1
+        self.recorded: dict[int, dict[str, np.ndarray]] = {}
 
-    def observe(epoch: int, cycle: int, ro, y_used) -> None:
-        if cycle == last_cycle and epoch + 1 in checks:  # the epoch's evaluation cycle
-            rec = _cycle_metrics(ro, run.desired, "train")
-            rec.update(_test_metrics(run))
-            recorded[epoch + 1] = rec
+    def __call__(self, epoch: int, cycle: int, ro, y_used) -> None:
+        if cycle == self.last_cycle and epoch + 1 in self.checks:  # the evaluation cycle
+            rec = _cycle_metrics(ro, self.run.desired, "train")
+            rec.update(_test_metrics(self.run))
+            self.recorded[epoch + 1] = rec
 
-    trained = train_run(run, observe=observe)
-    result = trained.fel
-    outs: list = []
-    for r in range(len(seeds)):
-        ok_epochs = run.cfg.method.epochs if not result.failed[r] else int(result.fail_epoch[r])
-        out: dict = {"epochs_ok": float(ok_epochs)}
-        for c in checks:
-            alive = c <= ok_epochs  # the run had not diverged by the end of epoch c
-            out[f"train_failed_e{c}"] = 0.0 if alive else 1.0
-            out[f"train_nrmse_e{c}"] = float(result.position_nrmse[r, c - 1]) if alive \
-                else float("nan")
-            for name, values in recorded[c].items():
-                keep = alive or name == "test_failed"
-                out[f"{name}_e{c}"] = float(values[r]) if keep else float("nan")
-        if trained.pretrain_prediction_nrmse is not None:
-            out["pretrain_prediction_nrmse"] = float(trained.pretrain_prediction_nrmse[r])
-        out["curve_train_nrmse"] = [None if not np.isfinite(v) else float(v)
-                                    for v in result.position_nrmse[r]]
-        outs.append(out)
-    return outs
+    def observed(self, r: int) -> dict:
+        return {"checks": self.checks,
+                "at": {c: {k: v[r] for k, v in rec.items()} for c, rec in self.recorded.items()}}
+
+
+def checkpoints(run, row: Row) -> Checkpoints:
+    """A row's observer: the study's checkpoints up to the row's epochs, and its last."""
+    return Checkpoints(run, checkpoints_of(row.params["checkpoints"], run.cfg.method.epochs))
+
+
+def metrics(result: RunResult) -> dict:
+    """One run's file: per checkpoint c its figures (NaN once the run had diverged by the
+    end of epoch c), the epochs it trained, its training curve."""
+    seen, train = result.observed, result.train
+    ok_epochs = result.config.method.epochs if not train.failed else int(train.fail_epoch)
+    out: dict = {"epochs_ok": float(ok_epochs)}
+    for c in seen["checks"]:
+        alive = c <= ok_epochs  # the run had not diverged by the end of epoch c
+        out[f"train_failed_e{c}"] = 0.0 if alive else 1.0
+        nrmse = train.position_nrmse[c - 1]
+        out[f"train_nrmse_e{c}"] = float("nan") if not alive or nrmse is None else nrmse
+        for name, value in seen["at"][c].items():
+            keep = alive or name == "test_failed"
+            out[f"{name}_e{c}"] = float(value) if keep else float("nan")
+    if result.pretrain_prediction_nrmse is not None:
+        out["pretrain_prediction_nrmse"] = result.pretrain_prediction_nrmse
+    out["curve_train_nrmse"] = list(train.position_nrmse)
+    return out
 
 
 def _columns(epochs: int) -> tuple[str, ...]:
@@ -171,7 +180,9 @@ def _columns(epochs: int) -> tuple[str, ...]:
 
 
 STUDY = Study(
-    name=NAME, description=__doc__, base=paper_a.MODEL, runs=5, run_batch=run_batch,
+    name=NAME, description=__doc__, base=paper_a.MODEL, runs=5,
+    # train once, watched at its checkpoints; no test after; a diverged run is data
+    observe=checkpoints, metrics=metrics, tests=(), failure=no_failure,
     rows=tuple(plan_row(*p) for p in PLAN), params={"checkpoints": CHECKPOINTS},
     columns=_columns(TABLE_EPOCHS[0]),
     # a smoke test (N = 100 / 50, 2 cycles, 2–3 epochs, 2 runs), not a result

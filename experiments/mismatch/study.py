@@ -42,16 +42,15 @@ mismatches and two switch rows, two epochs, one adaptation cycle).
 
 from __future__ import annotations
 
-import dataclasses
-
-import numpy as np
+from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.experiments.dynamic.study import ARM_GOALS, TABLE_COLUMNS
 from skinny_mj.experiments.dynamic.study import metrics as dynamic_metrics
-from skinny_mj.experiments.mismatch.switch import LEARNERS, run_switch
+from skinny_mj.experiments.mismatch import switch
 
-from skinny_mj.engine.experiment import RunFailed
-from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.engine.study import Quick, Row, Shape, Study, Test
+from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.result import RunResult
 
 NAME = "mismatch"
 #: mismatch id -> the plant as it is (TrainConfig overrides)
@@ -115,70 +114,67 @@ def _rows() -> tuple[Row, ...]:
                 params = {"also": tuple(k for k in MISMATCHES if k != "none")} \
                     if ctl == "esn" and m == "none" else {}
                 out.append(Row(row_id(bd, m, ctl), over, group=bd, quick=quick,
-                               params=params, run_batch=run_esn if ctl == "esn" else None))
+                               params=params, shape=ESN_SHAPE if ctl == "esn" else None))
     return tuple(out)
 
 
-def _figures(run, test, label: str) -> dict:
-    """One test's metrics, each key + ``label``."""
-    from skinny_mj.controllers.metrics import position_nrmse
-
-    from skinny_mj.plant import body
-    from skinny_mj.training.loop import test_robot_metrics
-
+def _figures(result: RunResult, label: str) -> dict:
+    """Test ``label``'s metrics, each key + ``label``."""
+    test = result.tests[label]
     if test.failed:
         return {f"position_nrmse{label}": None}
-    dof = run.cfg.plant.dof
-    angles = test.rollout.angles[:, :, :dof]
-    joint = float(position_nrmse(body.body_of(dof).normalize_angles(angles),
-                                 body.body_of(dof).normalize_angles(test.trajectory.angles))[0])
+    plant = result.config.plant
+    shape = body.body_of(plant.dof)
+    angles = test.rollout.angles[:, :, :plant.dof]
+    joint = float(position_nrmse(shape.normalize_angles(angles),
+                                 shape.normalize_angles(test.trajectory.angles))[0])
     tq = test.torque["metrics"]
     out = {"position_nrmse": test.position_nrmse, "joint_nrmse": joint,
-           **test_robot_metrics(run, test),
+           **test.robot_metrics(plant.body),
            "max_torque_ratio": max(tq["max_commanded_ratio"], tq["max_applied_ratio"]),
            "warnings": tq["warnings"]}
     return {f"{k}{label}": v for k, v in out.items()}
 
 
-def run_esn(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """ESN + FEL trained once per seed on the plant as it is, then tested at K = 0, at
-    K = 1 and (the ``none`` row) on each changed plant of ``row.params["also"]``."""
-    import time
+def esn_tests(config: TrainConfig, row: Row) -> tuple[Test, ...]:
+    """An ESN row's tests: at K = 0 (the standard test), at K = 1 (``_k1``) and (the
+    ``none`` row) on each changed plant of ``row.params["also"]`` (``_on_<mismatch>``)."""
+    return (Test(), Test("_k1", overrides={"test.gain": 1.0}),
+            *(Test(f"_on_{m}", overrides=MISMATCHES[m]) for m in row.params.get("also", ())))
 
-    from skinny_mj.training.loop import build_run, evaluate, train_run
 
-    start = time.perf_counter()
-    run = build_run(config, seeds)
-    trained = train_run(run)
-    tests = {"": {}, "_k1": {"test.gain": 1.0},
-             **{f"_on_{m}": MISMATCHES[m] for m in row.params.get("also", ())}}
-    out = [{} for _ in seeds]
-    for label, changes in tests.items():
-        tested = dataclasses.replace(run, cfg=config.override(changes)) if changes else run
-        for r, test in enumerate(evaluate(tested)):
-            out[r].update(_figures(tested, test, label))
-    wall = (time.perf_counter() - start) / len(seeds)
-    results = []
-    for r, metrics in enumerate(out):
-        if trained.fel.failed[r] or metrics.get("position_nrmse") is None:
-            results.append(RunFailed(trained.fel.fail_reason[r] or "test diverged"))
-            continue
-        metrics["curve_position_nrmse"] = [float(v) for v in
-                                           np.asarray(trained.fel.position_nrmse)[r]]
-        metrics["train_wall_s"] = wall
-        results.append(metrics)
-    return results
+def esn_metrics(result: RunResult) -> dict:
+    """Every test's figures (:func:`_figures`), the training curve and wall time."""
+    out: dict = {}
+    for label in result.tests:
+        out.update(_figures(result, label))
+    out["curve_position_nrmse"] = [float("nan") if v is None else float(v)
+                                   for v in result.train.position_nrmse]
+    out["train_wall_s"] = result.wall_s
+    return out
+
+
+def esn_failure(result: RunResult) -> str | None:
+    """A diverged training or K = 0 test fails the run (the other tests' are data)."""
+    if result.train.failed or result.test.failed:
+        return result.train.fail_reason or "test diverged"
+    return None
+
+
+#: ESN + FEL trained once per seed on the plant as it is, then tested on each of
+#: :func:`esn_tests`.
+ESN_SHAPE = Shape(esn_metrics, tests=esn_tests, failure=esn_failure)
 
 
 def _switch_rows() -> tuple[Row, ...]:
     """The payload switched on mid-movement (:mod:`skinny_mj.experiments.mismatch.switch`)."""
     out = []
-    for learner in LEARNERS:
+    for learner in switch.LEARNERS:
         keys = ESN if learner.startswith("esn") else CONTROLLERS[learner]
         keys = {k: v for k, v in keys.items() if k != "test.washout_cycles"}
         out.append(Row(f"2d-ymca-switch-{learner}", {"movement.trajectory": "ymca",
                                                       "plant.dof": 4, **keys},
-                       group="switch", params={"learner": learner}, run_batch=run_switch,
+                       group="switch", params={"learner": learner}, shape=switch.shape(learner),
                        quick={"method.epochs": QUICK_EPOCHS} if learner.startswith("esn")
                        else {}))
     return tuple(out)

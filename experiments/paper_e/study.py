@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 from skinny_mj.controllers.true_target import convergence_curve
 
+from skinny_mj import training
 from skinny_mj.engine.results import STANDARD_METRICS, train_position_nrmse
 from skinny_mj.engine.study import Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
@@ -70,9 +71,7 @@ def run_convergence(config: TrainConfig, row: Row, seeds: list[int]) -> list[dic
     """Fig. 3: NRMSE(y_used^i, y_true) over ``cycles`` cycles with perfect targets
     and teacher forcing (true commands at full scale 2 x the fastest speed), for
     several seeds in lockstep."""
-    from skinny_mj.training.loop import build_run
-
-    run = build_run(config, seeds)
+    run = training.build_run(config, seeds)
     curves = convergence_curve(run.esn, run.desired, run.true_commands, config.method.beta,
                                int(row.params["cycles"]))
     return [{"cycles_to_converge": cycles_to_converge(curve, row.params["tolerance"]),

@@ -36,9 +36,10 @@ from skinny_mj.controllers.rollout import Rollout
 from skinny_mj.experiments.paper_e import study as paper_e
 
 from skinny_mj.engine.experiment import run_seed
+from skinny_mj.engine.results import no_failure
 from skinny_mj.engine.stats import to_jsonable
 from skinny_mj.engine.study import Quick, Row, Study
-from skinny_mj.training.config import TrainConfig
+from skinny_mj.training.result import RunResult
 
 NAME = "paper-e-explain"
 EXPS = ("1", "2", "5")  # paper E §5.1: original 1 rep, original 5 reps, new β = 0.1
@@ -63,9 +64,10 @@ def roughness(y: np.ndarray) -> np.ndarray:
 
 
 class EpochDiagnostics:
-    """``observe`` callback for :func:`skinny_mj.controllers.fel.train`: per run, epoch and learning
-    cycle the NRMSE (vs the true commands) and roughness of y_est, y_used and y_ESN, the
-    teacher-forcing position NRMSE, and the first repetition's signals of some epochs.
+    """The study's observer (:class:`~skinny_mj.training.result.Observer`): per run, epoch
+    and learning cycle the NRMSE (vs the true commands) and roughness of y_est, y_used and
+    y_ESN, the teacher-forcing position NRMSE, and the first repetition's signals of some
+    epochs.
 
     true_commands : (T-1, n_dof) of the training sequence; desired : (T, n_sig);
     one_rep : steps of one repetition (the series kept); n_runs, epochs, cycles."""
@@ -107,62 +109,82 @@ class EpochDiagnostics:
             s["y_est"], s["y_used"] = ro.y_est[:, : n - 1].copy(), y_used[:, : n - 1].copy()
             s["positions"] = ro.true_signals[:, :n].copy()
 
+    def observed(self, r: int) -> dict:
+        """Run ``r``'s series (learning cycles (E, C), evaluation cycles (E,)), its kept
+        epochs' signals and the true commands' roughness."""
+        return {"learn": {k: v[r] for k, v in self.learn.items()},
+                "eval": {k: v[r] for k, v in self.eval.items()},
+                "keep": self.keep,
+                "series": {e: {k: a[r] for k, a in s.items()} for e, s in self.series.items()},
+                "initial_output": None if self.initial_output is None
+                else self.initial_output[r],
+                "true_rough": float(roughness(self.true_commands))}
+
     def metrics(self, r: int, fail_epoch: int | None, with_series: bool = True) -> dict:
-        """Run ``r``'s JSON-ready diagnostics (None from its failing epoch on); with
-        ``with_series`` also the kept epochs' signals (one repetition)."""
-        def clean(a: np.ndarray) -> list:
-            a = np.round(np.array(a, float), 6)
-            if fail_epoch is not None:
-                a[fail_epoch:] = np.nan
-            return to_jsonable(a)  # NaN -> None
+        """Run ``r``'s JSON-ready diagnostics (:func:`diagnostics`)."""
+        return diagnostics(self.observed(r), fail_epoch, with_series)
 
-        def rounded(a: np.ndarray) -> list:
-            return np.round(a, 4).tolist()
 
-        out: dict = {f"{k}_per_cycle": clean(v[r]) for k, v in self.learn.items()}
-        out.update({k: clean(v[r, :, -1]) for k, v in self.learn.items()})  # last cycle
-        out.update({k: clean(v[r]) for k, v in self.eval.items()})
-        for k in (*self.learn, *self.eval):  # scalar columns for the engine's table
-            for e in (1, 5, len(out[k])):
-                v = out[k][e - 1] if e <= len(out[k]) else None
-                out[f"{k}_e{e}"] = v
-        out["true_rough"] = float(roughness(self.true_commands))
-        if not with_series:
-            return out
-        alive = [e for e in self.keep if fail_epoch is None or e < fail_epoch]
-        out["series"] = {"epochs": [e + 1 for e in alive],
-                         **{k: [rounded(self.series[e][k][r]) for e in alive]
-                            for k in ("y_est", "y_used", "y_esn", "positions")},
-                         "initial_output": rounded(self.initial_output[r])}
+def diagnostics(seen: dict, fail_epoch: int | None, with_series: bool = True) -> dict:
+    """One run's JSON-ready diagnostics (``seen``: :meth:`EpochDiagnostics.observed`; None
+    from its failing epoch on); with ``with_series`` also the kept epochs' signals (one
+    repetition)."""
+    def clean(a: np.ndarray) -> list:
+        a = np.round(np.array(a, float), 6)
+        if fail_epoch is not None:
+            a[fail_epoch:] = np.nan
+        return to_jsonable(a)  # NaN -> None
+
+    def rounded(a: np.ndarray) -> list:
+        return np.round(a, 4).tolist()
+
+    learn, evaluation = seen["learn"], seen["eval"]
+    out: dict = {f"{k}_per_cycle": clean(v) for k, v in learn.items()}
+    out.update({k: clean(v[:, -1]) for k, v in learn.items()})  # last cycle
+    out.update({k: clean(v) for k, v in evaluation.items()})
+    for k in (*learn, *evaluation):  # scalar columns for the engine's table
+        for e in (1, 5, len(out[k])):
+            v = out[k][e - 1] if e <= len(out[k]) else None
+            out[f"{k}_e{e}"] = v
+    out["true_rough"] = seen["true_rough"]
+    if not with_series:
         return out
-
-
-def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """Seeds of one row in lockstep (row ``1``'s seeds in every row: ``seeds_of``)."""
-    from skinny_mj.training.loop import build_run, evaluate, train_run
-
-    shared = list(seeds)
-    keep = {run_seed(BASE_SEED, EXPS[0], k) for k in range(SERIES_RUNS)}  # the kept signals
-    run = build_run(config, shared)
-    diag = EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory),
-                            len(shared), run.cfg.method.epochs, run.cfg.learning_cycles)
-    trained = train_run(run, observe=diag).fel
-    tests = evaluate(run)
-    out = []
-    for r, test in enumerate(tests):
-        failed = bool(trained.failed[r] or test.failed)
-        out.append({
-            "network_seed": shared[r], "diverged": int(failed),
-            "fail_reason": trained.fail_reason[r] or (test.fail_reason if failed else None),
-            "position_nrmse": None if failed else test.position_nrmse,
-            "motor_nrmse": None if failed else test.motor_nrmse,
-            **diag.metrics(r, trained.fail_epoch[r], with_series=shared[r] in keep),
-        })
+    alive = [e for e in seen["keep"] if fail_epoch is None or e < fail_epoch]
+    series = seen["series"]
+    out["series"] = {"epochs": [e + 1 for e in alive],
+                     **{k: [rounded(series[e][k]) for e in alive]
+                        for k in ("y_est", "y_used", "y_esn", "positions")},
+                     "initial_output": rounded(seen["initial_output"])}
     return out
 
 
+def epoch_diagnostics(run, row: Row) -> EpochDiagnostics:
+    """The study's observer of a lockstep training's runs."""
+    return EpochDiagnostics(run.true_commands, run.desired, len(run.trajectory),
+                            len(run.seeds), run.cfg.method.epochs, run.cfg.learning_cycles)
+
+
+#: The seeds whose signals the run files keep: row ``1``'s first runs (every row takes them).
+KEEP = frozenset(run_seed(BASE_SEED, EXPS[0], k) for k in range(SERIES_RUNS))
+
+
+def metrics(result: RunResult) -> dict:
+    """One run's file: its test, its divergence (data: the run stays ``ok``) and the
+    diagnostics of every epoch (row ``1``'s first runs: with their signals)."""
+    train, test = result.train, result.test
+    failed = bool(train.failed or test.failed)
+    return {
+        "network_seed": result.seed, "diverged": int(failed),
+        "fail_reason": train.fail_reason or (test.fail_reason if failed else None),
+        "position_nrmse": None if failed else test.position_nrmse,
+        "motor_nrmse": None if failed else test.motor_nrmse,
+        **diagnostics(result.observed, train.fail_epoch, with_series=result.seed in KEEP),
+    }
+
+
 STUDY = Study(
-    name=NAME, description=__doc__, runs=20, base_seed=BASE_SEED, run_batch=run_batch,
+    name=NAME, description=__doc__, runs=20, base_seed=BASE_SEED,
+    observe=epoch_diagnostics, metrics=metrics, failure=no_failure,
     rows=tuple(Row(e, paper_e.STUDY.row(e).overrides, paper_e.STUDY.row(e).paper,
                    seeds_of=None if e == EXPS[0] else EXPS[0]) for e in EXPS),
     columns=("est_rough_e1", "used_rough_e5", "esn_rough_e5", "tf_position_nrmse_e5",

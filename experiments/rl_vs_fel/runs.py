@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from skinny_mj import training  # the training loop loads on first use
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
 
@@ -84,8 +85,6 @@ def test_steps(budget: int, first: int = 1000) -> list[int]:
 
 # -- ESN + FEL ----------------------------------------------------------------------------
 def _fel_tests(run, columns: Mapping[str, Any], gain: float | None = None) -> dict:
-    from skinny_mj.training import loop as training
-
     if gain is not None:  # the same networks tested with another K
         import dataclasses
 
@@ -104,8 +103,6 @@ def fel_curve(tc: TrainConfig, seed: int, columns: Mapping[str, Any]) -> tuple[l
     """ESN + FEL's curve (tested before training and after every epoch on ``columns``:
     id -> trajectory, None for the training movement's one repetition) and facts:
     ``failed`` (diverged in training), ``steps_per_epoch``."""
-    from skinny_mj.training import loop as training
-
     run = training.build_run(tc, [seed])
     steps_per_epoch = (tc.learning_cycles + 2) * (len(run.desired) - 1)
     last_cycle = tc.learning_cycles + 1
@@ -141,15 +138,13 @@ def rl_segment(learner: str, gain: float, tc: TrainConfig, seed: int,
     from skinny_mj.experiments.rl_vs_fel.tracking import TrackingEnv, score
     from stable_baselines3.common.callbacks import BaseCallback
 
-    from skinny_mj.training.parts import full_scale_speeds, load_trajectory, run_streams
-
     torch.set_num_threads(1)
     start, end = span
-    trajectory, _ = load_trajectory(tc)
-    training = trajectory.repeat(tc.movement.reps) if tc.movement.reps > 1 else trajectory
-    v_max = full_scale_speeds(tc, trajectory)
-    plant_seed = run_streams(seed).plant_seed  # FEL's training and test plants' seed
-    env = TrackingEnv(tc, training, v_max, plant_seed, gain)
+    trajectory, _ = training.load_trajectory(tc)
+    repeated = trajectory.repeat(tc.movement.reps) if tc.movement.reps > 1 else trajectory
+    v_max = training.full_scale_speeds(tc, trajectory)
+    plant_seed = training.run_streams(seed).plant_seed  # FEL's training and test plants' seed
+    env = TrackingEnv(tc, repeated, v_max, plant_seed, gain)
     kwargs, norm = agents.settings(learner, dict(changes or {}), quick)
     venv = agents.vec_env(env, learner, norm, kwargs.get("gamma", 0.99))
     segment_seed = int(np.random.SeedSequence([seed, start]).generate_state(1)[0] >> 1)

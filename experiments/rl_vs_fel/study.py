@@ -73,6 +73,7 @@ from skinny_mj.plant import body
 from skinny_mj.preflight import Estimate
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.presets import preset_fields
+from skinny_mj.trajectories import load_movement
 
 NAME = "rl-vs-fel"
 THRESHOLDS = (0.05, 0.02, 0.01)
@@ -177,8 +178,6 @@ PARAMS = {"checkpoints": "results/rl-vs-fel/checkpoints", "thresholds": THRESHOL
 
 
 def _columns_of(tc: TrainConfig, tests: Mapping[str, Any]) -> dict[str, Any]:
-    from skinny_mj.trajectories import load_movement
-
     return {col: None if spec is None else load_movement(spec[0], tc.plant.dof,
                                                          speed=spec[1])[0]
             for col, spec in tests.items()}

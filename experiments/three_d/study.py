@@ -2,11 +2,12 @@
 their own 2D joint-angle setting, in one sweep with the same seeds.
 
 Rows ``<paper>-<dim>-<paper row>`` (``a-2d-serial-d4``, ``b-3d-phase90``,
-``c-3d-mirror-left``): each is the paper's own row, run by the paper's own sweep as
-``skinny experiment <paper> [--dof ... --signals ...]`` builds it, so no recipe is
-copied here: the row's configuration only says the body (``plant.dof`` and
-``plant.signals``). ``2d`` is the paper's setting (4 DOF, joint angles); ``3d`` is
-``dof=8, signals="cartesian"`` (``--dof`` / ``--signals`` replace it). A 3D row takes its
+``c-3d-mirror-left``): each is the paper's own row, run as the paper's own sweep runs it
+when ``skinny experiment <paper> [--dof ... --signals ...]`` builds it
+(:class:`skinny_mj.engine.study.Of`), so no recipe is copied here: the row's
+configuration only says the body (``plant.dof`` and ``plant.signals``). ``2d`` is the
+paper's setting (4 DOF, joint angles); ``3d`` is ``dof=8, signals="cartesian"``
+(``--dof`` / ``--signals`` replace it). A 3D row takes its
 2D twin's seeds (:attr:`skinny_mj.engine.study.Row.seeds_of`): run k of both starts from the
 same seed. :mod:`skinny_mj.experiments.three_d.report` writes the table (2D vs 3D, mean ± sd,
 failed / n), each paper's own figures and claims on each body, and the claims side by side.
@@ -48,8 +49,7 @@ import functools
 from skinny_mj.engine import registry
 from skinny_mj.engine.experiment import Experiment
 from skinny_mj.engine.experiment import Row as EngineRow
-from skinny_mj.engine.memory import row_configs
-from skinny_mj.engine.study import Quick, Row, Study
+from skinny_mj.engine.study import Of, Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
 
 NAME = "three-d"
@@ -92,19 +92,6 @@ def paper_of(config: TrainConfig, row: Row) -> tuple[Experiment, EngineRow]:
     return exp, next(r for r in exp.rows if r.row_id == p["row"])
 
 
-def run_batch(config: TrainConfig, row: Row, seeds: list[int]) -> list:
-    """The paper's own run of the paper's row on this row's body."""
-    exp, paper_row = paper_of(config, row)
-    return exp.run_batch(paper_row, seeds)
-
-
-def trainings(config: TrainConfig, row: Row) -> dict[str, TrainConfig]:
-    """The TrainConfigs the paper's own row trains, for the sweep's memory estimate."""
-    exp, paper_row = paper_of(config, row)
-    found = row_configs(registry.get(PAPERS[row.params["paper"]]), exp, paper_row)
-    return {str(i): c for i, c in enumerate(found)}
-
-
 #: One run's CPU seconds on the 2D body, idle core, lockstep batches of 10 (measured;
 #: only the schedule uses it, to start the costliest batches first), and the 3D factor.
 SECONDS_2D = {"a": 3.0, "b": 5.0, "c": 25.0}
@@ -132,23 +119,25 @@ def _paper_numbers(paper: str, paper_row: str) -> dict[str, float]:
 
 
 def _row(paper: str, dim: str, paper_row: str) -> Row:
-    """Paper ``paper``'s row on ``dim``'s body; a 3D row takes its 2D twin's seeds."""
+    """Paper ``paper``'s row, run as its own sweep runs it: in 2D the paper's own
+    setting, in 3D on this row's body; a 3D row takes its 2D twin's seeds."""
     full, quick = paper_row in SUBSET[paper], paper_row in QUICK_SUBSET[paper]
     return Row(row_id(paper, dim, paper_row), BODY_2D if dim == "2d" else {},
                _paper_numbers(paper, paper_row) if full else {},
                seeds_of=None if dim == "2d" else row_id(paper, "2d", paper_row),
                group=f"{paper}-{dim}", params={"paper": paper, "dim": dim, "row": paper_row},
-               quick_only=quick and not full)
+               quick_only=quick and not full,
+               of=Of(registry.get(PAPERS[paper]), paper_row, on_body=dim == "3d"))
 
 
 ROWS = tuple(_row(p, dim, r) for dim in DIMS for p, ids in ORDER.items() for r in ids)
 
 
 STUDY = Study(
-    name=NAME, description=__doc__, rows=ROWS, run_batch=run_batch, runs=10,
+    name=NAME, description=__doc__, rows=ROWS, runs=10,
     # the 3D body; the 2D rows' overrides set each paper's own (--dof/--signals: the 3D one)
     base=TrainConfig().override({"plant.dof": 8, "plant.signals": "cartesian"}),
-    params={"quick": False}, trainings=trainings, cost=cost,
+    params={"quick": False}, cost=cost,
     groups={**{p: [row_id(p, d, r) for d in DIMS for r in ORDER[p]] for p in PAPERS},
             **{d: [row_id(p, d, r) for p in PAPERS for r in ORDER[p]] for d in DIMS},
             "core": [row_id(p, d, r) for d in DIMS for p, ids in CORE.items() for r in ids]},

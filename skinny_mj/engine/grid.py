@@ -66,17 +66,17 @@ def _row_id(pairs: Sequence[tuple[str, str]]) -> str:
     return "+".join(_UNSAFE.sub("_", f"{k}={t}") for k, t in pairs)
 
 
-def _study_row(study: Study, row: str, quick: bool) -> tuple[TrainConfig, Row, dict, int]:
-    """A study's row as the base: its config, its row as its run gets it, the study's
-    params (``quick``: as the study's ``--quick`` has them) and the runs per row (10, or
-    the study's ``--quick`` runs)."""
+def _study_row(study: Study, row: str, quick: bool) -> tuple[TrainConfig, Any, dict, int]:
+    """A study's row as the base: its config, its planned row (the row its run gets and
+    how it runs), the study's params (``quick``: as the study's ``--quick`` has them) and
+    the runs per row (10, or the study's ``--quick`` runs)."""
     study.row(row)  # an unknown row: one line naming the study's rows
     if quick:  # every row, not only those --quick keeps
         study = dataclasses.replace(study, quick=dataclasses.replace(study.quick, rows=None))
     planned = plan(study, quick=quick)
     if study.unavailable is not None and row in (gone := study.unavailable()):
         raise SkinnyInputError(f"study {study.name!r}: row {row!r} {gone[row]}")
-    return (planned.config(row), planned.run_row(row), dict(planned.params),
+    return (planned.config(row), planned.row(row), dict(planned.params),
             study.quick.runs if quick else 10)
 
 
@@ -130,9 +130,9 @@ def grid_study(items: Sequence[str], *, study: Study | None = None, row: str | N
         return Study(name=NAME, description=f"skinny sweep {what}", base=base, rows=tuple(rows),
                      metrics=METRICS, runs=runs, takes=())
     return Study(name=NAME, description=f"skinny sweep {what}", base=base,
-                 rows=tuple(Row(r.id, r.overrides, params=base_row.params,
-                                run_batch=base_row.run_batch) for r in rows),
+                 rows=tuple(Row(r.id, r.overrides, params=base_row.runs_as.params,
+                                run_batch=base_row.custom, shape=base_row.shape)
+                            for r in rows),
                  metrics=study.metrics, columns=study.columns, runs=runs, takes=(),
-                 tests=study.tests, failure=study.failure,
-                 params=params, run_batch=study.run_batch, trainings=study.trainings,
-                 cost=study.cost, memory=study.memory)
+                 params=params, trainings=study.trainings, cost=study.cost,
+                 memory=study.memory)

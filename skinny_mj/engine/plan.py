@@ -12,6 +12,9 @@ study ``takes``, any other refused in one line), the row's overrides (and, under
 quick sweep keeps ``Quick.rows`` (default: every row) in the study's order, a full sweep
 every row but the ``quick_only`` ones, and a run's seed is
 ``run_seed(base_seed, row_id, run_index)``: the row's id, not its place, fixes its seeds.
+A row that is another study's row (``Row.of``) runs that study's planned row (its
+configuration, shape, parameters, ``--quick``'s and ``tiny``'s with this sweep's) under
+its own id and seeds.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import importlib
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -27,7 +30,7 @@ from typing import Any
 from skinny_mj.engine.experiment import Experiment
 from skinny_mj.engine.experiment import Row as EngineRow
 from skinny_mj.engine.options import movement_changes
-from skinny_mj.engine.results import STANDARD, Metrics, default_run, read_metric
+from skinny_mj.engine.results import Metrics, Shape, default_run, read_metric
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.engine.sweep import one_of_batch
 from skinny_mj.errors import SkinnyInputError
@@ -44,26 +47,22 @@ __all__ = ["Plan", "Results", "plan", "train_metrics", "read_metric"]
 def train_metrics(config: TrainConfig, seeds: list[int], metrics: Metrics) -> list[Any]:
     """The default run of a row on its config alone, the standard test, ``metrics``
     read off each result (:func:`skinny_mj.engine.results.default_run`)."""
-    return default_run(config, None, seeds, metrics)
+    return default_run(config, None, seeds, Shape(metrics))
 
 
 @dataclass(frozen=True)
 class _Runner:
     """The Experiment's ``run_batch`` (shipped to worker processes): per row id its
-    config, its row (params with the study's) and its custom run, if any."""
+    config, the row its run gets (params with the study's) and its custom run or its
+    shape."""
 
-    metrics: Metrics
-    rows: Mapping[str, tuple[TrainConfig, Row, RunBatch | None]]
-    tests: Any = STANDARD
-    failure: Callable[[Any], str | None] | None = None
-    trainings: Callable[[TrainConfig, Row], Mapping[str, TrainConfig]] | None = None
+    rows: Mapping[str, tuple[TrainConfig, Row, RunBatch | None, Shape | None]]
 
     def __call__(self, row: EngineRow, seeds: list[int]) -> list[Any]:
-        config, study_row, custom = self.rows[row.row_id]
+        config, study_row, custom, shape = self.rows[row.row_id]
         if custom is not None:
             return list(custom(config, study_row, list(seeds)))
-        return default_run(config, study_row, list(seeds), self.metrics, tests=self.tests,
-                           failure=self.failure, trainings=self.trainings)
+        return default_run(config, study_row, list(seeds), shape)
 
 
 def _cost(plan: Plan, costs: dict[str, float], row: EngineRow) -> float:
@@ -97,11 +96,16 @@ class Results(dict):
 
 @dataclass(frozen=True)
 class PlannedRow:
-    """A kept row (``--quick`` applied), its params (with the study's) and its config."""
+    """A kept row (``--quick`` applied), its params (with the study's), the config its
+    runs train, the row its run gets (itself with its params, or the other study's row
+    of ``Row.of``) and how it runs: a custom ``run_batch`` or the default run's ``shape``."""
 
     row: Row
     params: Mapping[str, Any]
     config: TrainConfig
+    runs_as: Row
+    custom: RunBatch | None
+    shape: Shape | None
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,11 +136,13 @@ class Plan:
         return _study_params(self.study, self.quick)
 
     def trainings(self, row_id: str) -> dict[str, TrainConfig]:
-        """What one run of the row trains: ``study.trainings`` or the row's config."""
+        """What one run of the row trains: its shape's ``trainings`` (a custom run: the
+        study's) or the row's config."""
         p = self.row(row_id)
-        if self.study.trainings is None:
+        trainings = self.study.trainings if p.shape is None else p.shape.trainings
+        if trainings is None:
             return {"run": p.config}
-        return dict(self.study.trainings(p.config, self.run_row(row_id)))
+        return dict(trainings(p.config, p.runs_as))
 
     def to_dict(self) -> dict[str, Any]:
         """What ``config.json`` records as ``config`` (``--resume`` needs it the same)."""
@@ -157,7 +163,9 @@ class Plan:
         return {g: tuple(m) for g, m in out.items() if m}
 
     def run_row(self, row_id: str) -> Row:
-        """Row ``row_id`` as its run gets it: its params with the study's."""
+        """Row ``row_id`` with its params and the study's (what the study's ``cost`` and
+        ``memory`` get; a row's own run gets the same, a row ``of`` another study that
+        study's row: :attr:`PlannedRow.runs_as`)."""
         p = self.row(row_id)
         return dataclasses.replace(p.row, params=p.params, quick={})
 
@@ -173,9 +181,8 @@ class Plan:
         engine_rows = tuple(
             EngineRow(p.row.id, {**p.row.overrides, **p.row.params}, p.row.paper,
                       row_runs(p.row), p.row.seeds_of) for p in self.rows)
-        runner = _Runner(study.metrics if callable(study.metrics) else dict(study.metrics), {
-            p.row.id: (p.config, self.run_row(p.row.id), p.row.run_batch or study.run_batch)
-            for p in self.rows}, study.tests, study.failure, study.trainings)
+        runner = _Runner({p.row.id: (p.config, p.runs_as, p.custom, p.shape)
+                          for p in self.rows})
         columns = quick.columns if self.quick and quick.columns is not None else \
             study.columns if study.columns is not None else \
             () if callable(study.metrics) else tuple(study.metrics)
@@ -243,7 +250,7 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
     if quick and study.quick.rows is not None:
         chosen = _expand(study, study.quick.rows)
         kept = [r for r in study.rows if r.id in chosen]
-    planned = []
+    planned, others = [], {}
     for r in kept:
         r = r.shrunk() if quick else r
         config = base.override({**r.overrides, **after})
@@ -251,5 +258,21 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
             have = set(overrides.keys(config))
             config = config.override({k: v for k, v in study.tiny.items()
                                       if overrides.canonical(config, k) in have})
-        planned.append(PlannedRow(r, {**_study_params(study, quick), **r.params}, config))
+        params = {**_study_params(study, quick), **r.params}
+        if r.of is not None:  # another study's row: that study's planned row runs
+            body = {"body": config.plant.body, "signals": config.plant.signals} \
+                if r.of.on_body else {}  # by name: its MJCF (and MuJoCo) stays unread
+            key = (id(r.of.study), tuple(body.values()))
+            if key not in others:  # its --quick shrink on every row, not only those it keeps
+                every = dataclasses.replace(r.of.study, quick=dataclasses.replace(
+                    r.of.study.quick, rows=None))
+                others[key] = plan(every, quick=quick, tiny=tiny, **body)
+            other = others[key].row(r.of.row)
+            planned.append(PlannedRow(r, params, other.config, other.runs_as, other.custom,
+                                      other.shape))
+            continue
+        custom = r.run_batch or study.run_batch
+        run_row = dataclasses.replace(r, params=params, quick={})
+        planned.append(PlannedRow(r, params, config, run_row, custom,
+                                  None if custom is not None else r.shape or study.shape))
     return Plan(study, base, after, quick, tuple(planned))

@@ -3,22 +3,25 @@ engine's default run of a study's row.
 
 :func:`run_metrics` is the one serialization of a result (``skinny train``'s
 ``metrics.json``; a study's dotted metric paths read it). :func:`default_run` is the run
-of a row without a run function of its own: train the row's seeds in lockstep (each of
-the study's ``trainings``, if it names several), take its ``tests``, and per seed either
-a :class:`~skinny_mj.engine.sweep.RunFailed` (the study's ``failure`` of the result says
-why) or the study's ``metrics`` of the result.
+of a row without a run function of its own, taken as its :class:`Shape` says: train the
+row's seeds in lockstep (each of the ``trainings``, if it names several) with its
+``observe``-r watching, take its ``tests``, and per seed either a
+:class:`~skinny_mj.engine.sweep.RunFailed` (``failure`` of the result says why) or the
+``metrics`` of the result.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
+from skinny_mj import training  # the training loop loads on first use (a study's --help runs none)
 from skinny_mj.engine.sweep import RunFailed
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.result import STANDARD, RunResult, Test, TrainFigures
+from skinny_mj.training.result import STANDARD, Observer, RunResult, Test, TrainFigures
 
-__all__ = ["Metric", "Metrics", "run_metrics", "test_figures", "read_metric",
+__all__ = ["Metric", "Metrics", "Shape", "run_metrics", "test_figures", "read_metric",
            "default_failure", "no_failure", "train_failure", "default_run", "test_position_nrmse",
            "test_motor_nrmse", "wall_s", "train_position_nrmse", "STANDARD_METRICS"]
 
@@ -30,6 +33,28 @@ Metric = str | Callable[[Any], Any]
 #: figures in a roboticist's units the study does not name), or one function of the
 #: result giving every metric of the run file.
 Metrics = Mapping[str, Metric] | Callable[[Any], Mapping[str, Any]]
+Tests = Sequence[Test] | Callable[[TrainConfig, Any], Sequence[Test]]
+
+
+@dataclass(frozen=True)
+class Shape:
+    """How the engine's default run takes a row and reads it.
+
+    ``metrics``: name -> a function of the result (or a dotted path into
+    :func:`run_metrics`), or one function of the result giving every metric; ``tests``:
+    the tests a run takes after training (or a function ``(config, row)`` giving them);
+    ``failure(result) -> str | None``: why a run failed (None: :func:`default_failure`);
+    ``trainings(config, row) -> {name: TrainConfig}``: several configurations trained
+    from the same seeds (the metrics then read a mapping name -> RunResult); ``observe(run,
+    row) -> Observer``: watches the training while it runs (what it saw of a run: its
+    result's ``observed``).
+    """
+
+    metrics: Metrics
+    tests: Tests = STANDARD
+    failure: Callable[[Any], str | None] | None = None
+    trainings: Callable[[TrainConfig, Any], Mapping[str, TrainConfig]] | None = None
+    observe: Callable[[Any, Any], Observer] | None = None
 
 
 def test_position_nrmse(result: RunResult) -> float | None:
@@ -160,20 +185,18 @@ def _picked(result: Any, metrics: Metrics,
     return {**picked, **{k: v for k, v in extra.items() if k not in picked}}
 
 
-def default_run(config: TrainConfig, row: Any, seeds: list[int], metrics: Metrics, *,
-                tests: Sequence[Test] | Callable[[TrainConfig, Any], Sequence[Test]] = STANDARD,
-                failure: Callable[[Any], str | None] | None = None,
-                trainings: Callable[[TrainConfig, Any], Mapping[str, TrainConfig]] | None = None
-                ) -> list[Any]:
-    """The default run of a row (see the module docstring): per seed its metrics dict or
-    a :class:`RunFailed`. ``trainings``: the configurations one run trains (each from the
-    same seeds; the metrics then read a mapping name -> RunResult)."""
-    from skinny_mj.training.loop import train_batch
-
+def default_run(config: TrainConfig, row: Any, seeds: list[int], shape: Shape) -> list[Any]:
+    """The default run of a row taken as ``shape`` says (see the module docstring): per
+    seed its metrics dict or a :class:`RunFailed`."""
+    tests = shape.tests
     taken = tuple(tests(config, row) if callable(tests) else tests)
-    if trainings is None:
-        return [_picked(r, metrics, failure) for r in train_batch(config, seeds, tests=taken)]
-    per = {name: train_batch(c, seeds, tests=taken)
-           for name, c in trainings(config, row).items()}
+    observe = shape.observe
+    watch = None if observe is None else lambda run: observe(run, row)
+    metrics, failure = shape.metrics, shape.failure
+    if shape.trainings is None:
+        return [_picked(r, metrics, failure)
+                for r in training.train_batch(config, seeds, tests=taken, observe=watch)]
+    per = {name: training.train_batch(c, seeds, tests=taken, observe=watch)
+           for name, c in shape.trainings(config, row).items()}
     return [_picked({name: runs[k] for name, runs in per.items()}, metrics, failure)
             for k in range(len(seeds))]

@@ -17,11 +17,15 @@ and its table.
 The lockstep run (:func:`skinny_mj.engine.results.default_run`) trains the row's seeds
 with :func:`skinny_mj.training.loop.train_batch` and reads ``metrics`` off each
 :class:`~skinny_mj.training.result.RunResult`; a diverged run is a failed run. A study
-shapes it as data: ``tests`` (train once, then test on each movement:
+shapes it as data: ``tests`` (train once, then test on each movement or plant variant:
 :class:`~skinny_mj.training.result.Test`), ``trainings`` (several configurations trained
-from the same seeds, the metrics then read a mapping name -> RunResult), ``failure`` (a
-function of the result: why the run failed, None if it did not) and ``metrics`` (name ->
-function of the result, or one function giving every metric).
+from the same seeds, the metrics then read a mapping name -> RunResult), ``observe``
+(an :class:`~skinny_mj.training.result.Observer` watching the training while it runs:
+what it saw lands in the result's ``observed``), ``failure`` (a function of the result:
+why the run failed, None if it did not) and ``metrics`` (name -> function of the result,
+or one function giving every metric). A row taken another way has its own
+:class:`Shape` (:attr:`Row.shape`); a row that is another study's row, run as that study
+runs it, says so (:attr:`Row.of`, an :class:`Of`).
 
 A row's run that is none of these supplies ``run_batch(config, row, seeds) -> list``
 (per seed a metrics dict, or a :class:`~skinny_mj.engine.experiment.RunFailed`), for the
@@ -47,21 +51,22 @@ and sets none of that option's config keys.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from skinny_mj.engine.options import OPTION_KEYS
 from skinny_mj.engine.plan import Plan, Results, plan
-from skinny_mj.engine.results import Metrics, default_run
+from skinny_mj.engine.results import Metrics, Shape, Tests, default_run
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
-from skinny_mj.training.result import STANDARD, Test
+from skinny_mj.training.result import STANDARD, Observer, Test
 
 if TYPE_CHECKING:
     from pathlib import Path
 
-__all__ = ["Study", "Row", "Quick", "Test", "OPTIONS", "TINY"]
+__all__ = ["Study", "Row", "Of", "Shape", "Quick", "Test", "OPTIONS", "TINY"]
 
 #: ``skinny experiment``'s options a study may take (the config keys each sets:
 #: :data:`skinny_mj.engine.options.OPTION_KEYS`).
@@ -78,14 +83,27 @@ def _frozen(mapping: Mapping[str, Any] | None) -> dict[str, Any]:
 
 
 @dataclass(frozen=True)
+class Of:
+    """Another study's row, run as that study runs it (its configuration, shape and
+    parameters, ``--quick``'s when this sweep is quick): row ``row`` of ``study``, on
+    that study's own body, or (``on_body``) on the body of this row's configuration (its
+    ``plant.body`` and ``plant.signals``, as ``--body --signals`` would give them)."""
+
+    study: Study
+    row: str
+    on_body: bool = False
+
+
+@dataclass(frozen=True)
 class Row:
     """One row: its id (a plain file-name word), the config keys it changes, the paper's
     numbers (``<metric>`` and ``<metric>_var``), optionally its own run count
     (``runs``), the row whose seeds it takes (``seeds_of``, a paired comparison), its
     group (``--rows GROUP``), study-specific ``params`` (read by a custom run), what
-    ``--quick`` changes of this row (``quick``: overrides or params keys), and its own
-    ``run_batch``; ``quick_only``: a row only ``--quick`` sweeps have (a smoke test's
-    smaller grid)."""
+    ``--quick`` changes of this row (``quick``: overrides or params keys), its own
+    ``run_batch``, its own ``shape`` (None: the study's) or the other study's row it runs
+    (``of``); ``quick_only``: a row only ``--quick`` sweeps have (a smoke test's smaller
+    grid)."""
 
     id: str
     overrides: Mapping[str, Any] = field(default_factory=dict)
@@ -97,6 +115,8 @@ class Row:
     quick: Mapping[str, Any] = field(default_factory=dict)
     run_batch: RunBatch | None = None
     quick_only: bool = False
+    shape: Shape | None = None
+    of: Of | None = None
 
     def __post_init__(self) -> None:
         for name in ("overrides", "paper", "params", "quick"):
@@ -110,8 +130,7 @@ class Row:
         params = {**self.params, **{k: v for k, v in self.quick.items() if k in self.params}}
         over = {**self.overrides, **{k: v for k, v in self.quick.items()
                                      if k not in self.params}}
-        return Row(self.id, over, self.paper, self.runs, self.seeds_of, self.group, params,
-                   {}, self.run_batch, self.quick_only)
+        return dataclasses.replace(self, overrides=over, params=params, quick={})
 
 
 @dataclass(frozen=True)
@@ -136,6 +155,8 @@ class Study:
     the run file's every metric; ``tests``: the tests a run takes (or a function
     ``(config, row)`` giving them; default the standard test); ``failure(result) -> str |
     None``: why a run failed (default: its training's or its standard test's divergence);
+    ``observe(run, row) -> Observer``: watches each training while it runs (what it saw
+    of a run: the result's ``observed``); these five are the study's :attr:`shape`;
     ``columns``: the table's metric columns (names, or name -> header; default every
     metric); ``groups``: extra groups (name -> row ids or groups) beside the rows' own;
     ``params``: study-wide parameters of a custom run (a row's ``params`` add to them);
@@ -158,8 +179,9 @@ class Study:
     description: str = ""
     base: TrainConfig = field(default_factory=TrainConfig)
     metrics: Metrics = field(default_factory=dict)
-    tests: Sequence[Test] | Callable[[TrainConfig, Row], Sequence[Test]] = STANDARD
+    tests: Tests = STANDARD
     failure: Callable[[Any], str | None] | None = None
+    observe: Callable[[Any, Row], Observer] | None = None
     columns: Sequence[str] | Mapping[str, str] | None = None
     runs: int = 10
     quick: Quick = field(default_factory=Quick)
@@ -189,9 +211,15 @@ class Study:
                                    f"{', '.join(OPTIONS)}")
         if bad := sorted(set(self.own_options) - set(self.takes)):
             raise SkinnyInputError(f"study {self.name!r}: own_options {bad} it does not take")
-        if not self.metrics and self.run_batch is None \
-                and any(r.run_batch is None for r in self.rows):
+        if not self.metrics and self.run_batch is None and any(
+                r.run_batch is None and r.shape is None and r.of is None for r in self.rows):
             raise SkinnyInputError(f"study {self.name!r} declares no metrics and no run_batch")
+
+    @property
+    def shape(self) -> Shape:
+        """How the engine's default run takes a row without a shape of its own."""
+        return Shape(self.metrics if callable(self.metrics) else dict(self.metrics),
+                     self.tests, self.failure, self.trainings, self.observe)
 
     def row(self, row_id: str) -> Row:
         """The row ``row_id`` (a SkinnyInputError naming the ids if there is none)."""
@@ -208,13 +236,12 @@ class Study:
 
     def run(self, config: TrainConfig, row: Row, seeds: list[int]) -> list[Any]:
         """Row ``row``'s lockstep run of ``seeds`` on ``config``: its own ``run_batch``, or
-        the engine's default run of the study's shapes (``tests``, ``trainings``,
-        ``failure``, ``metrics``); per seed a metrics dict or a ``RunFailed``."""
+        the engine's default run of its shape (its own, else the study's); per seed a
+        metrics dict or a ``RunFailed``."""
         custom = row.run_batch or self.run_batch
         if custom is not None:
             return list(custom(config, row, list(seeds)))
-        return default_run(config, row, list(seeds), self.metrics, tests=self.tests,
-                           failure=self.failure, trainings=self.trainings)
+        return default_run(config, row, list(seeds), row.shape or self.shape)
 
     # -- what `skinny experiment`, the memory check and the study help call --
     def build(self, quick: bool = False, movement: str | None = None, asf: Any = None,

@@ -66,8 +66,11 @@ from skinny_mj.training.parts import (  # noqa: F401  (re-exported)
     run_streams,
     true_commands_of,
 )
+from skinny_mj.training.perform import perform
 from skinny_mj.training.result import (  # noqa: F401  (re-exported)
     STANDARD,
+    Observer,
+    Perform,
     RolloutFigures,
     RunResult,
     Test,
@@ -267,10 +270,15 @@ def train(cfg: TrainConfig, seed: int = 0,
 @single_threaded
 def train_batch(cfg: TrainConfig, seeds: Sequence[int],
                 progress: Callable[[int, int], None] | None = None,
-                tests: Sequence[Test] = STANDARD) -> list[RunResult]:
+                tests: Sequence[Test | Perform] = STANDARD,
+                observe: Callable[[Run], Observer] | None = None) -> list[RunResult]:
     """Train R = len(seeds) runs of ``cfg`` in lockstep, then take ``tests`` in order
-    (default: the standard test, one repetition of the training movement); run r equals
-    ``train_batch(cfg, [seeds[r]], tests=tests)``.
+    (default: the standard test, one repetition of the training movement; a
+    :class:`~skinny_mj.training.result.Perform`: a performance with the plant changed
+    mid-run, its outcome a :class:`~skinny_mj.training.result.Performance`); run r equals
+    ``train_batch(cfg, [seeds[r]], tests=tests)``. ``observe(run)``: an
+    :class:`~skinny_mj.training.result.Observer` that watches the training (what it saw of
+    run r: that result's ``observed``).
 
     A result's ``wall_s`` is the batch's wall time divided by R (``lockstep_runs`` = R).
     With ``plant.backend == "env"`` (dm_control, one run per environment) the runs are
@@ -278,14 +286,16 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
     """
     seeds = [int(s) for s in seeds]
     if cfg.plant.backend == "env" and len(seeds) > 1:
-        return [o for s in seeds for o in train_batch(cfg, [s], progress, tests)]
+        return [o for s in seeds for o in train_batch(cfg, [s], progress, tests, observe)]
     if not seeds:
         return []
     start = time.perf_counter()
     run = build_run(cfg, seeds)
-    trained = train_run(run, progress)
+    observer = None if observe is None else observe(run)
+    trained = train_run(run, progress, observe=observer)
     train_wall = (time.perf_counter() - start) / len(seeds)
-    taken = {t.name: take_test(run, t) for t in tests}
+    taken = {t.name: perform(run, t, trained) if isinstance(t, Perform) else take_test(run, t)
+             for t in tests}
     standard = taken.get("")
     if len(seeds) > 1 and standard is not None and physics_warnings(run, standard[0]):
         # the lockstep runs share one MjData, which MuJoCo resets whole when one run
@@ -294,7 +304,8 @@ def train_batch(cfg: TrainConfig, seeds: Sequence[int],
     wall = (time.perf_counter() - start) / len(seeds)
     figures = _rollout_figures(run, trained)
     return [_result(run, trained, r, {name: t[r] for name, t in taken.items()},
-                    None if figures is None else figures[r], wall, train_wall)
+                    None if figures is None else figures[r], wall, train_wall,
+                    None if observer is None else observer.observed(r))
             for r in range(len(seeds))]
 
 
@@ -344,7 +355,7 @@ def _train_figures(run: Run, trained: Training, r: int) -> TrainFigures:
 
 def _result(run: Run, trained: Training, r: int, tests: dict[str, TestOutcome],
             figures: RolloutFigures | None, wall_share: float,
-            train_wall_share: float) -> RunResult:
+            train_wall_share: float, observed: Any = None) -> RunResult:
     """Run r's :class:`RunResult`: fails with its training, then its standard test, then
     (torque body) MuJoCo's warnings."""
     train = _train_figures(run, trained, r)
@@ -370,7 +381,7 @@ def _result(run: Run, trained: Training, r: int, tests: dict[str, TestOutcome],
         train_warnings=warnings, steps_per_cycle=len(run.desired),
         max_speed_rad_s=run.max_speed_rad_s, clipped_samples=int(run.report.clipped_samples),
         wall_s=wall_share, train_wall_s=train_wall_share, lockstep_runs=len(run.seeds),
-        trajectory=run.trajectory, esn=esn_run(run.esn, r))
+        trajectory=run.trajectory, esn=esn_run(run.esn, r), observed=observed)
 
 
 def test_robot_metrics(run: Run, test: TestOutcome) -> dict[str, float]:

@@ -1,6 +1,8 @@
 """What one run produced, as types: :class:`RunResult` (the training's figures, the last
-training rollout's figures, a test per movement, the torque figures, the failure) and the
-:class:`Test` a run is asked to take.
+training rollout's figures, a test per movement, the torque figures, the failure, what an
+observer saw), the tests a run is asked to take (:class:`Test`; :class:`Perform`, a
+performance with the plant changed mid-run) and the :class:`Observer` that watches a
+training while it runs.
 
 :func:`skinny_mj.training.loop.train_batch` returns one :class:`RunResult` per seed; the
 engine (:mod:`skinny_mj.engine.results`) writes it into a run file, and a study reads its
@@ -11,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -20,8 +22,8 @@ from skinny_mj.controllers.rollout import Rollout, run_mean
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import ROBOT_METRICS, TORQUE_METRICS, robot_metrics
 
-__all__ = ["Test", "STANDARD", "TestOutcome", "TrainFigures", "RolloutFigures", "RunResult",
-           "mean_abs_error", "feedback_share"]
+__all__ = ["Test", "STANDARD", "Perform", "Performance", "Observer", "TestOutcome",
+           "TrainFigures", "RolloutFigures", "RunResult", "mean_abs_error", "feedback_share"]
 
 
 @dataclass(frozen=True)
@@ -51,6 +53,51 @@ class Test:
 
 #: The standard test alone: one repetition of the training movement on a fresh plant.
 STANDARD = (Test(),)
+
+
+@dataclass(frozen=True)
+class Perform:
+    """A test: after training, a performance with the plant changed mid-run
+    (:mod:`skinny_mj.training.perform`); ``name``: its key in the run's tests (never
+    ``""``, the standard test's)."""
+
+    name: str
+    cycles: int
+    gain: float
+    switch_cycle: int
+    payload_kg: float = 0.0
+    mass_scale: float = 1.0
+    rls_forgetting: float | None = None
+    rls_lambda: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not self.name or not 0 <= self.switch_cycle < self.cycles:
+            raise ValueError(f"perform {self.name!r}: needs a name and a switch cycle in "
+                             f"0..{self.cycles - 1}, got {self.switch_cycle}")
+
+
+@dataclass
+class Performance:
+    """One run's performance: per cycle the position NRMSE and the joint-angle NRMSE
+    (normalized angles; NaN from the cycle the run diverged in, or all of them when its
+    training had), and whether it diverged while performing (or in training)."""
+
+    position_nrmse: np.ndarray = field(repr=False)
+    angle_nrmse: np.ndarray = field(repr=False)
+    failed: bool
+
+
+class Observer(Protocol):
+    """Watches R lockstep runs train: FEL calls it after every cycle (cycle 0 the washout,
+    1..C the learning cycles with ``y_used`` the fitted target, C + 1 the epoch's
+    evaluation cycle with ``y_used`` None); ``observed(r)`` is what it saw of run r, kept
+    in :attr:`RunResult.observed`. A study declares how to make one from the run's parts
+    (``observe(run, row) -> Observer``); the true-target fit calls no observer."""
+
+    def __call__(self, epoch: int, cycle: int, ro: Rollout, y_used: np.ndarray | None
+                 ) -> None: ...
+
+    def observed(self, r: int) -> Any: ...
 
 
 @dataclass
@@ -149,12 +196,14 @@ class RolloutFigures:
 class RunResult:
     """Everything one run of :func:`~skinny_mj.training.loop.train_batch` produced.
 
-    ``tests``: the tests it took, by name (``""``: the standard test); ``failed`` /
+    ``tests``: the tests it took, by name (``""``: the standard test; a
+    :class:`Perform`'s outcome: a :class:`Performance`); ``failed`` /
     ``fail_reason`` / ``fail_epoch``: the run's failure (the training's, then the standard
     test's, then the torque body's MuJoCo warnings: ``fail_stage`` says which);
     ``trajectory``: one repetition of the training movement; ``esn``: the trained network
     (one run); ``wall_s``: the lockstep batch's wall time / R, ``train_wall_s`` its
-    training's share.
+    training's share; ``observed``: what the study's :class:`Observer` saw of this run
+    (None without one).
     """
 
     config: TrainConfig
@@ -175,6 +224,7 @@ class RunResult:
     lockstep_runs: int = 1
     trajectory: Any = field(default=None, repr=False)
     esn: ESN | None = field(default=None, repr=False)
+    observed: Any = field(default=None, repr=False)
 
     @property
     def test(self) -> TestOutcome:
