@@ -240,8 +240,7 @@ class ESN:
                 pre += self._noise_buf[self._noise_pos]
                 self._noise_pos += 1
             self.x = ext[:, :n_res] = pre
-            self.extended, self.y = ext, y
-            np.matmul(w_out, ext[..., None], out=y[..., None])
+            self.extended, self.y = ext, np.matmul(w_out, ext[..., None], out=y[..., None])[..., 0]
             if tanh_out:
                 np.tanh(y, out=y)
 

@@ -164,10 +164,10 @@ def rollout(
             sensed_in[t] = sensed[max(t - delay_steps, 0)]
             esn_step(states[t], y_esn[t])
             error(t, desired[t], sensed[t], u_error[t])
-            command = commands[t]  # clip(y_esn + K u_error), in place
-            np.add(np.multiply(gain, u_error[t], out=command), y_esn[t], out=command)
-            np.minimum(np.maximum(command, -1.0, out=command), 1.0, out=command)
-            advance(command, sensed[t + 1], true[t + 1], angles[t + 1])
+            # the command clip(y_esn + K u_error), in place
+            np.add(np.multiply(gain, u_error[t], out=commands[t]), y_esn[t], out=commands[t])
+            np.minimum(np.maximum(commands[t], -1.0, out=commands[t]), 1.0, out=commands[t])
+            advance(commands[t], sensed[t + 1], true[t + 1], angles[t + 1])
     else:  # the same steps with every part
         for t in range(n_steps - 1):
             sensed_in[t] = sensed[max(t - delay_steps, 0)]

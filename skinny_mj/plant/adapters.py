@@ -11,6 +11,7 @@ ctrl, ``mj_step2``, ``mj_step1``) and run r's sensor noise from its own
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from typing import Any
 
@@ -153,6 +154,8 @@ class BatchPlant:
         self.max_speed_rad_s = self.setup.max_speed_rad_s
         self.signals = signals
         self._signal_set = signal_set(signals)
+        self._joint_signals = self._signal_set.base == "joint"
+        self._appended = self._signal_set.appended is not None
         self.n_substeps = int(round(self.dt / self.model.opt.timestep))
         self._rk4 = self.model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4
         self._init_views(one)
@@ -176,8 +179,9 @@ class BatchPlant:
         self._noise_buf = np.zeros((0, self.n_runs, self.n_signals))
         self._noise_pos = 0
         self._signals: np.ndarray | None = None
-        # the servo's speed, target bounds and step, once
-        self._servo = (self.max_speed_rad_s, *servo_targets(lay.range_rad), self.dt)
+        low_rad, high_rad = servo_targets(lay.range_rad)  # servo_ctrl's bounds, once
+        self._servo = functools.partial(servo_velocity, max_speed_rad_s=self.max_speed_rad_s,
+                                        low_rad=low_rad, high_rad=high_rad, dt=self.dt)
         self._jacobian = segment_jacobian_of(lay.segment_pairs, lay.segment_lengths,
                                              lay.components, lay.dof_adr, lay.site_ids)
 
@@ -243,13 +247,15 @@ class BatchPlant:
         self._signals = None
 
     def step(self, command: np.ndarray) -> np.ndarray:
-        self._actuate(command)
+        self._actuate(np.asarray(command, dtype=float).reshape(self.n_runs, self.n_dof))
+        self._signals = None
         return self._sensed()
 
     def step_into(self, command: np.ndarray, sensed: np.ndarray, true: np.ndarray,
                   angles: np.ndarray) -> None:
-        """:meth:`step`, writing the new state's sensed and true signals (R, n_sig) and
-        joint angles (R, n_dof) into the given arrays: the same numbers, no copies."""
+        """:meth:`step` for a ``command`` (R, n_dof) of floats, writing the new state's
+        sensed and true signals (R, n_sig) and joint angles (R, n_dof) into the given
+        arrays: the same numbers, no copies."""
         self._actuate(command)
         q = self._qpos[:, self._qpos_sel]
         true[...] = self._signals = self._signals_of(q)
@@ -258,13 +264,12 @@ class BatchPlant:
         angles[...] = q
 
     def _actuate(self, command: np.ndarray) -> None:
-        """Ctrl from ``command`` (R, n_dof), then one control step of physics."""
-        command = np.asarray(command, dtype=float).reshape(self.n_runs, self.n_dof)
+        """Ctrl from ``command`` (R, n_dof) floats, then one control step of physics (the
+        kinematics it leaves are the new state's: the caller drops its cached signals)."""
         if self._torque:
-            ctrl = np.clip(command, -1.0, 1.0)
+            self._ctrl[:, self._act_sel] = np.clip(command, -1.0, 1.0)
         else:
-            ctrl = servo_velocity(command, self._qpos[:, self._qpos_sel], *self._servo)
-        self._ctrl[:, self._act_sel] = ctrl
+            self._ctrl[:, self._act_sel] = self._servo(command, self._qpos[:, self._qpos_sel])
         # dm_control's legacy step: finish the step, keep kinematics in sync with qpos
         # (mj_step2 integrates with Euler, so RK4, the torque twin's, steps whole)
         if self._rk4:
@@ -274,7 +279,6 @@ class BatchPlant:
             if self.n_substeps > 1:
                 mujoco.mj_step(self.model, self.data, self.n_substeps - 1)
         mujoco.mj_step1(self.model, self.data)
-        self._signals = None
 
     def true_signals(self) -> np.ndarray:
         return self._true().copy()
@@ -286,26 +290,24 @@ class BatchPlant:
 
     def _signals_of(self, q: np.ndarray) -> np.ndarray:
         """(R, n_sig) noise-free signals of the current state, whose angles are q."""
-        sig = self._signal_set
-        if sig.base == "joint":
-            return sig.extend(self.body.normalize_angles(q), q, self.body)
+        if self._joint_signals:
+            return self._signal_set.extend(self.body.normalize_angles(q), q, self.body)
         points = self._site_xpos[:, self._site_sel].reshape(self.n_runs, 2, 3, 3)
         base = segment_signals(points, self.layout.arm_lengths, self._comp_sel)
-        return base if sig.appended is None else sig.extend(base, q, self.body)
+        return self._signal_set.extend(base, q, self.body) if self._appended else base
 
     def joint_angles(self) -> np.ndarray:
         return self._qpos[:, self._qpos_sel].copy()
 
     def command_jacobian(self) -> np.ndarray:
-        sig = self._signal_set
-        if sig.base == "joint":
+        if self._joint_signals:
             lo, hi = self.layout.range_rad.T
             jac = np.broadcast_to(np.diag(2.0 / (hi - lo)), (self.n_runs, self.n_dof,
                                                              self.n_dof))
         else:
             jac = self._jacobian(self._cdof, self._site_xpos)
-        if sig.appended is not None:
-            jac = sig.extend_jacobian(jac, self.body)
+        if self._appended:
+            jac = self._signal_set.extend_jacobian(jac, self.body)
         return jac * (self.max_speed_rad_s * self.dt)  # as EnvPlant.command_jacobian
 
 
