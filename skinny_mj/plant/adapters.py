@@ -169,7 +169,7 @@ class BatchPlant:
         self._qvel = d.qvel.reshape(r, one.nv)
         self._ctrl = d.ctrl.reshape(r, one.nu)
         self._site_xpos = d.site_xpos.reshape(r, one.nsite, 3)
-        self._cdof = d.cdof.reshape(r, one.nv, 6)
+        self._cdof_flat, self._sites_flat = d.cdof.reshape(r, -1), d.site_xpos.reshape(r, -1)
         sites = lay.site_ids.reshape(-1)  # (6,) arm-major, shoulder/elbow/wrist
         self._comp_sel = _as_slice(np.array(lay.components))  # views, not gathers, if possible
         self._site_sel = _as_slice(sites)
@@ -305,7 +305,7 @@ class BatchPlant:
             jac = np.broadcast_to(np.diag(2.0 / (hi - lo)), (self.n_runs, self.n_dof,
                                                              self.n_dof))
         else:
-            jac = self._jacobian(self._cdof, self._site_xpos)
+            jac = self._jacobian(self._cdof_flat, self._sites_flat)
         if self._appended:
             jac = self._signal_set.extend_jacobian(jac, self.body)
         return jac * (self.max_speed_rad_s * self.dt)  # as EnvPlant.command_jacobian

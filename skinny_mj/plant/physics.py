@@ -110,7 +110,7 @@ def segment_jacobian(
     n, n_dof = axes.shape[0], axes.shape[1]
     jacobian = _identity_jacobian(tuple(comps), pairs[0].tobytes(), pairs[1].tobytes(),
                                   np.asarray(lengths, float).tobytes(), n_dof)
-    return jacobian(axes, points.reshape(n, 6, 3))
+    return jacobian(axes.reshape(n, -1), points.reshape(n, -1))
 
 
 @functools.lru_cache(maxsize=32)
@@ -118,33 +118,35 @@ def _identity_jacobian(comps: tuple[int, ...], seg: bytes, dof: bytes, lengths: 
                        n_dof: int) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
     pairs = (np.frombuffer(seg, np.intp), np.frombuffer(dof, np.intp))
     return segment_jacobian_of(pairs, np.frombuffer(lengths), list(comps), np.arange(n_dof),
-                               np.arange(6))
+                               np.arange(6), axis_columns=3)
 
 
 def segment_jacobian_of(
     pairs: tuple[np.ndarray, np.ndarray], lengths: np.ndarray, comps: list[int],
-    dof_adr: np.ndarray, site_ids: np.ndarray,
+    dof_adr: np.ndarray, site_ids: np.ndarray, axis_columns: int = 6,
 ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
     """:func:`segment_jacobian` built once for a model's indices: a callable of ``cdof``
-    (R, nv, 6) and ``site_xpos`` (R, n_sites, 3) (each robot's rows of ``MjData``) that
-    reads the joint axes at ``dof_adr`` (n_dof,) and the points at ``site_ids`` (2 arms,
-    3 points) itself. Per call, only the turning pairs' components i then j of each
-    signal component k (i = k + 1, j = k + 2, mod 3) are gathered, (R, P, 2 comp), each
-    once: on tiny arrays NumPy pays per call and per innermost run."""
+    (R, nv * ``axis_columns``) and ``site_xpos`` (R, n_sites * 3), each robot's rows of
+    ``MjData`` flattened, that reads the joint axes (the first 3 columns) at ``dof_adr``
+    (n_dof,) and the points at ``site_ids`` (2 arms, 3 points) itself. Per call, only the
+    turning pairs' components i then j of each signal component k (i = k + 1, j = k + 2,
+    mod 3) are gathered, (R, P, 2 comp), each once and by ``take``: on tiny arrays NumPy
+    pays per call and per innermost run."""
     seg, dof = (np.asarray(i, np.intp) for i in pairs)
     k, n_dof = np.asarray(comps), len(dof_adr)
     c = len(k)
     ij = np.concatenate([(k + 1) % 3, (k + 2) % 3])[None, :]
     points = np.asarray(site_ids).reshape(2, 3)
-    start = points[:, :-1].reshape(-1)[seg][:, None]  # segments arm-major
-    end = points[:, 1:].reshape(-1)[seg][:, None]
-    axis_dof = np.asarray(dof_adr)[dof][:, None]
-    length = np.asarray(lengths, float)[seg][:, None]
+    start = (points[:, :-1].reshape(-1)[seg][:, None] * 3 + ij).reshape(-1)  # arm-major
+    end = (points[:, 1:].reshape(-1)[seg][:, None] * 3 + ij).reshape(-1)
+    axis = (np.asarray(dof_adr)[dof][:, None] * axis_columns + ij).reshape(-1)
+    length = np.repeat(np.asarray(lengths, float)[seg], 2 * c)
     flat = ((seg[:, None] * c + np.arange(c)) * n_dof + dof[:, None]).reshape(-1)
+    shape = (-1, len(seg), 2 * c)
 
-    def jacobian(cdof: np.ndarray, site_xpos: np.ndarray) -> np.ndarray:
-        a = cdof[:, axis_dof, ij]
-        e = (site_xpos[:, end, ij] - site_xpos[:, start, ij]) / length  # e = v / L
+    def jacobian(cdof: np.ndarray, sites: np.ndarray) -> np.ndarray:
+        a = cdof.take(axis, axis=1).reshape(shape)
+        e = ((sites.take(end, axis=1) - sites.take(start, axis=1)) / length).reshape(shape)
         # mju_cross, every component at once: (a x e)_k = a_i e_j - a_j e_i, (R, P, comp)
         cross = (a[..., :c] * e[..., c:] - a[..., c:] * e[..., :c]).reshape(len(a), -1)
         out = np.zeros((len(a), 4 * c, n_dof))  # each (pair, comp) to its (segment, comp, DOF)
