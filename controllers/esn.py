@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import copy
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -203,6 +203,48 @@ class ESN:
         y = np.matmul(self.W_out, ext[..., None])[..., 0]
         self.y = np.tanh(y, out=y) if cfg.readout_activation == "tanh" else y
         return self.y
+
+    def inputs_of(self, extended: np.ndarray) -> np.ndarray:
+        """The inputs u (..., n_in) inside extended states ``extended`` (..., D), a view,
+        with each state's bias entry set: what a caller fills before :meth:`stepper`'s
+        step advances on that state."""
+        extended[..., -1] = self.cfg.bias
+        return extended[..., self.cfg.n_reservoir:-1]
+
+    def stepper(self, noise: bool = True) -> Callable[[np.ndarray, np.ndarray], None]:
+        """:meth:`step` built once for a loop: ``step(ext, y)`` advances one step on
+        ``ext`` (R, D), a C-contiguous extended-state row whose inputs and bias are
+        already in place (:meth:`inputs_of`), writes the new state into it and the output
+        into ``y`` (R, n_out, C-contiguous). The same numbers as :meth:`step` with
+        ``out_extended=ext``; :attr:`y` is then ``y`` itself. Without a sparse reservoir,
+        with output feedback, a leak or float32 states it is :meth:`step` (the common
+        loop is what it speeds up)."""
+        cfg, n_res, matvec = self.cfg, self.cfg.n_reservoir, getattr(self, "_matvec", None)
+        if matvec is None or cfg.output_feedback or cfg.leak_rate != 1.0 \
+                or self.dtype != np.float64:
+            def plain(ext: np.ndarray, y: np.ndarray) -> None:
+                y[...] = self.step(ext[:, n_res:-1], noise=noise, out_extended=ext)
+            return plain
+        args, w_in, w_out = self._kernel_args, self.W_in, self.W_out
+        shape, add_noise = (self.n_runs, n_res), noise and cfg.noise_level > 0
+        tanh_out = cfg.readout_activation == "tanh"
+
+        def step(ext: np.ndarray, y: np.ndarray) -> None:
+            pre = np.zeros(shape, self.dtype)  # W x summed from zero, then + W_in [u; 1]
+            matvec(*args, np.ascontiguousarray(self.x, self.dtype), pre)
+            pre += np.matmul(w_in, ext[:, n_res:, None])[..., 0]
+            np.tanh(pre, out=pre)
+            if add_noise:  # self._noise(), inline
+                if self._noise_pos >= _NOISE_BLOCK:
+                    self._draw_noise_block()
+                pre += self._noise_buf[self._noise_pos]
+                self._noise_pos += 1
+            self.x = ext[:, :n_res] = pre
+            self.extended, self.y = ext, np.matmul(w_out, ext[..., None], out=y[..., None])[..., 0]
+            if tanh_out:
+                np.tanh(y, out=y)
+
+        return step
 
     def run(
         self,

@@ -16,6 +16,7 @@ gimbal alignment), where it keeps u_error bounded instead of exploding.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,6 +104,30 @@ class FeedbackController:
         else:
             out = jacobian_error(desired, sensed, plant.command_jacobian(), self.damping)
         return out if self.gain == 1.0 else self.gain * out
+
+
+    def stepper(self, plant) -> Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]:
+        """:meth:`u_error` built once for ``plant``'s loop: ``error(t, desired, sensed,
+        out)`` writes u_error (R, n_dof) of state t into ``out``, the same numbers (t is
+        the loop's step, which an actuation's own error may need; this one does not)."""
+        gain = self.gain  # a product by 1.0 changes no bit: no branch per step
+        if self.mode == "joint":
+            # the divisor of joint_space_error, multiplied in the same order, once
+            per_command = np.asarray(self.signal_per_rad) * plant.max_speed_rad_s * plant.dt
+
+            def joint(t: int, desired: np.ndarray, sensed: np.ndarray,
+                      out: np.ndarray) -> None:
+                np.multiply(gain, np.subtract(desired, sensed) / per_command, out=out)
+            return joint
+        jacobian, solve = plant.command_jacobian, np.linalg.solve
+        damping = _damping_matrix(plant.n_dof, self.damping)
+
+        def damped(t: int, desired: np.ndarray, sensed: np.ndarray, out: np.ndarray) -> None:
+            jac = np.asarray(jacobian(), float)  # jacobian_error's steps, the same numbers
+            jt = np.swapaxes(jac, -1, -2)
+            gram, err = np.add(jt @ jac, damping), np.subtract(desired, sensed)[..., None]
+            np.multiply(gain, solve(gram, jt @ err)[..., 0], out=out)
+        return damped
 
 
 def linear_gain(epochs: int) -> np.ndarray:

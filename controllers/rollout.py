@@ -11,6 +11,7 @@ loop's parts are a :class:`~skinny_mj.controllers.loop.Loop`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -142,46 +143,93 @@ def rollout(
     # chained: the forward model's own p(t) stands in for the delayed s_in
     chained = forward is not None and delay_steps > 0 and forward.chained
     n_hook = 0 if hook is None else hook.n_inputs
-    u_in = np.empty((n_runs, n_des + n_sig * (1 if forward is None else 2) + n_hook))
     ff = None if hook is None else array("feedforward", (n_steps - 1, n_runs, n_dof))
     if hook is not None:
         hook.begin(plant, n_steps)
-    for t in range(n_steps - 1):
-        s_in = sensed[max(t - delay_steps, 0)]
-        if n_des:
-            u_in[:, :n_des] = desired[t + 1]  # the ESN's input [d(t+1); s(t); p(t)]
-        u_in[:, n_des:n_des + n_sig] = s_in
-        if forward is not None:
-            u_in[:, n_des + n_sig:u_in.shape[1] - n_hook] = predictions[t]
-        if n_hook:
-            u_in[:, -n_hook:] = hook.inputs(t, plant)
-        y_esn[t] = esn.step(u_in, noise=noise, out_extended=states[t])
-        u_error[t] = feedback.u_error(desired[t], sensed[t], plant) if hook is None \
-            else hook.u_error(t, desired[t], sensed[t], plant)
-        if online is not None and t > 0:  # y_est(t-1) needs u_error(t): one step late
-            y_est = commands[t - 1] + u_error[t]  # less a hook's feed-forward, as Rollout.y_est
-            online.update(states[t - 1], y_esn[t - 1], y_est if ff is None else y_est - ff[t - 1])
-        command = commands[t]  # clip(y_esn + K u_error), in place
-        np.multiply(gain, u_error[t], out=command)
-        command += y_esn[t]
-        if ff is not None:
-            ff[t] = hook.feedforward(t, plant)
-            command += ff[t]
-        np.maximum(command, -1.0, out=command)  # np.clip, without its Python wrapper
-        np.minimum(command, 1.0, out=command)
-        if forward is not None:
-            predictions[t + 1] = forward.step(predictions[t] if chained else s_in, command,
-                                              noise=noise)
-            fm_states[t] = forward.esn.extended
-        sensed[t + 1] = plant.step(command)
-        if hook is not None:
-            hook.after_step(t, plant)
-        true[t + 1] = plant.true_signals()
-        angles[t + 1] = plant.joint_angles()
-    u_error[-1] = feedback.u_error(desired[-1], sensed[-1], plant) if hook is None \
-        else hook.u_error(n_steps - 1, desired[-1], sensed[-1], plant)
+    # Built once: the ESN input [d(t+1); s_in(t); p(t); hook] is written straight into
+    # the state record (the desired part of every step at once), and each part's step is
+    # a callable bound to its arrays.
+    u_in = esn.inputs_of(states)  # (T-1, R, n_in) views
+    if u_in.shape[2] != n_des + n_sig * (1 if forward is None else 2) + n_hook:
+        raise ValueError(f"the network takes {u_in.shape[2]} inputs, the loop makes "
+                         f"{n_des + n_sig * (1 if forward is None else 2) + n_hook}")
+    if n_des:
+        u_in[:, :, :n_des] = desired[1:, None]
+    sensed_in = u_in[:, :, n_des:n_des + n_sig]
+    esn_step = esn.stepper(noise)
+    error = feedback.stepper(plant) if hook is None else _hook_error(hook, plant)
+    advance = _advance(plant)
+    if hook is None and forward is None and online is None:  # the plain loop, lean
+        for t in range(n_steps - 1):
+            sensed_in[t] = sensed[max(t - delay_steps, 0)]
+            esn_step(states[t], y_esn[t])
+            error(t, desired[t], sensed[t], u_error[t])
+            # the command clip(y_esn + K u_error), in place
+            np.add(np.multiply(gain, u_error[t], out=commands[t]), y_esn[t], out=commands[t])
+            np.minimum(np.maximum(commands[t], -1.0, out=commands[t]), 1.0, out=commands[t])
+            advance(commands[t], sensed[t + 1], true[t + 1], angles[t + 1])
+    else:  # the same steps with every part
+        for t in range(n_steps - 1):
+            sensed_in[t] = sensed[max(t - delay_steps, 0)]
+            _extra_inputs(t, u_in[t, :, n_des + n_sig:], predictions, hook, plant)
+            esn_step(states[t], y_esn[t])
+            error(t, desired[t], sensed[t], u_error[t])
+            if online is not None and t > 0:  # y_est(t-1) needs u_error(t): one step late
+                y_est = commands[t - 1] + u_error[t]  # less a hook's feed-forward (Rollout)
+                if ff is not None:
+                    y_est -= ff[t - 1]
+                online.update(states[t - 1], y_esn[t - 1], y_est)
+            command = commands[t]  # clip(y_esn + K u_error), in place
+            np.multiply(gain, u_error[t], out=command)
+            command += y_esn[t]
+            if ff is not None:
+                ff[t] = hook.feedforward(t, plant)
+                command += ff[t]
+            np.maximum(command, -1.0, out=command)  # np.clip, without its Python wrapper
+            np.minimum(command, 1.0, out=command)
+            if forward is not None:
+                predictions[t + 1] = forward.step(predictions[t] if chained else
+                                                  sensed[max(t - delay_steps, 0)], command,
+                                                  noise=noise)
+                fm_states[t] = forward.esn.extended
+            advance(command, sensed[t + 1], true[t + 1], angles[t + 1])
+            if hook is not None:  # after the plant's signals are recorded (it only reads)
+                hook.after_step(t, plant)
+    error(n_steps - 1, desired[-1], sensed[-1], u_error[-1])
     if online is not None:
         y_est = commands[-1] + u_error[-1]
         online.update(states[-1], y_esn[-1], y_est if ff is None else y_est - ff[-1])
     return Rollout(*(None if a is None else np.swapaxes(a, 0, 1) for a in (
         commands, y_esn, u_error, sensed, true, angles, states, fm_states, predictions, ff)))
+
+
+def _extra_inputs(t: int, out: np.ndarray, predictions: np.ndarray | None, hook, plant
+                  ) -> None:
+    """The ESN inputs after [d(t+1); s_in(t)]: the forward model's p(t), then the hook's."""
+    n_fm = 0 if predictions is None else predictions.shape[2]
+    if n_fm:
+        out[:, :n_fm] = predictions[t]
+    if hook is not None and hook.n_inputs:
+        out[:, n_fm:] = hook.inputs(t, plant)
+
+
+def _hook_error(hook, plant) -> Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]:
+    """A hook's motor error at state t, into ``out``."""
+    def error(t: int, desired: np.ndarray, sensed: np.ndarray, out: np.ndarray) -> None:
+        out[...] = hook.u_error(t, desired, sensed, plant)
+    return error
+
+
+def _advance(plant) -> Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], None]:
+    """``advance(command, sensed, true, angles)``: step the plant and write the new state's
+    sensed and true signals and joint angles; the plant's own ``step_into`` if it has one."""
+    fused = getattr(plant, "step_into", None)
+    if fused is not None:
+        return fused
+
+    def advance(command: np.ndarray, sensed: np.ndarray, true: np.ndarray,
+                angles: np.ndarray) -> None:
+        sensed[...] = plant.step(command)
+        true[...] = plant.true_signals()
+        angles[...] = plant.joint_angles()
+    return advance

@@ -5,7 +5,13 @@ import pytest
 from scipy.sparse._sparsetools import csc_matvec, csr_matvec
 from skinny_mj.controllers.esn import ESN, ESNConfig
 
-from skinny_mj.cli.bench_floor import esn_state_floor, floor_lines, sparse_tanh_loop
+from skinny_mj.cli.bench_floor import (
+    control_step_floor,
+    esn_state_floor,
+    floor_lines,
+    package_lines_per_step,
+    sparse_tanh_loop,
+)
 
 
 def _esn_and_inputs(n_res: int, connectivity=None):
@@ -40,3 +46,26 @@ def test_no_floor_for_a_dense_reservoir_and_no_line_without_one():
     lines = floor_lines([{"N": 200, "reservoirpy_over_floor": 4.5},
                          {"N": 1000, "reservoirpy_over_floor": float("nan")}, {"skipped": "x"}])
     assert len(lines) == 1 and "N=200" in lines[0] and "4.5" in lines[0]
+
+
+def test_control_step_floor_runs_the_physics_once_and_none_when_dense():
+    calls = []
+    esn = ESN(ESNConfig(n_inputs=3, n_outputs=2, n_reservoir=50), n_runs=3, seed=1)
+    floor = control_step_floor(esn, lambda: calls.append(1), 300)  # crosses a noise block
+    floor()
+    assert calls == [1]
+    dense, _ = _esn_and_inputs(20, connectivity=0.5)
+    assert control_step_floor(dense, lambda: None, 5) is None
+
+
+def test_package_lines_per_step_counts_only_the_package_per_step():
+    assert package_lines_per_step(lambda k: sum(range(k)), 10) == 0.0  # no package code
+    esn = ESN(ESNConfig(n_inputs=3, n_outputs=2, n_reservoir=20), seed=1)
+    u = np.zeros((1, 3))
+
+    def steps(k: int) -> None:
+        for _ in range(k):
+            esn.step(u, noise=False)
+
+    per_step = package_lines_per_step(steps, 5)
+    assert per_step > 5 and per_step == package_lines_per_step(steps, 9)  # the same each step

@@ -338,3 +338,22 @@ def test_pinv_factors_reused_equal_fresh_fits():
     np.testing.assert_allclose(esn.W_out, fresh.W_out, rtol=0, atol=1e-10)
     with pytest.raises(ValueError):
         esn.fit(x[:, 10:], targets[:, 10:], factors=factors)
+
+
+@pytest.mark.parametrize("readout", ["tanh", "identity"])
+@pytest.mark.parametrize("noise", [True, False])
+def test_stepper_gives_the_steps_numbers_bit_for_bit(readout, noise):
+    cfg = ESNConfig(3, 2, n_reservoir=40, readout_activation=readout)
+    a, b = ESN(cfg, n_runs=3, seed=4), ESN(cfg, n_runs=3, seed=4)
+    a.W_out[:] = b.W_out[:] = np.random.default_rng(1).normal(0, 0.3, a.W_out.shape)
+    u = np.random.default_rng(0).uniform(-1, 1, (300, 3, 3))  # crosses a noise block
+    record, ys = np.zeros((300, 3, cfg.n_extended)), np.zeros((300, 3, 2))
+    b.inputs_of(record)[:] = u
+    step = b.stepper(noise)
+    for t in range(300):
+        want = a.step(u[t], noise=noise)
+        step(record[t], ys[t])
+        np.testing.assert_array_equal(ys[t], want)
+        np.testing.assert_array_equal(record[t], a.extended)
+    np.testing.assert_array_equal(a.x, b.x)
+    assert a._noise_pos == b._noise_pos

@@ -89,6 +89,22 @@ def test_batch_plant_noise_blocks_cross_their_boundary_like_env():
                                   np.concatenate([e.command_jacobian() for e in envs]))
 
 
+@pytest.mark.parametrize("signals", ["cartesian", "cartesian-elbow", "joint"])
+def test_batch_plant_step_into_writes_what_step_and_the_reads_return(signals):
+    from skinny_mj.trajectories import get
+
+    traj = get("ymca", 4)
+    a, b = (BatchPlant(4, signals, traj, n_runs=2, seeds=[3, 4]) for _ in range(2))
+    np.testing.assert_array_equal(a.reset(), b.reset())
+    sensed, true, angles = np.zeros((2, a.n_signals)), np.zeros((2, a.n_signals)), np.zeros((2, 4))
+    for command in np.random.default_rng(1).uniform(-1.2, 1.2, (140, 2, 4)):  # > a noise block
+        b.step_into(command, sensed, true, angles)
+        np.testing.assert_array_equal(sensed, a.step(command))
+        np.testing.assert_array_equal(true, a.true_signals())
+        np.testing.assert_array_equal(angles, a.joint_angles())
+        np.testing.assert_array_equal(b.command_jacobian(), a.command_jacobian())
+
+
 def test_float32_state_loop_and_closed_loop_within_tolerance():
     """float32 (stated tolerance): reservoir states within 1e-5 of float64 over 300
     steps; after one readout fit, the closed-loop position NRMSE within 10 % (the pinv
@@ -247,6 +263,10 @@ def test_bench_control_step_figure_runs_and_reports_both_floors():
     assert fig["ratio"] == pytest.approx(fig["control_step_us"] / fig["physics_step_us"])
     assert fig["ratio_vs_batch_physics"] == pytest.approx(
         fig["control_step_us"] / fig["batch_physics_step_us"])
+    assert np.isfinite(fig["floor_step_us"]) and fig["floor_step_us"] > 0
+    assert fig["floor_vs_batch_physics"] == pytest.approx(
+        fig["floor_step_us"] / fig["batch_physics_step_us"])
+    assert fig["python_lines_per_step"] > 10  # the loop runs the package's code every step
 
 
 def test_rollout_buffers_are_reused_and_change_nothing():
@@ -261,3 +281,23 @@ def test_rollout_buffers_are_reused_and_change_nothing():
             np.testing.assert_array_equal(getattr(plain, name), getattr(reused, name))
     assert np.shares_memory(reused.states, loop.buffers["states"])
     assert reused.states.shape == (3, len(desired) - 1, esn.cfg.n_extended)
+
+
+class _Idle:
+    """An online learner that learns nothing: it only sends the rollout down its loop
+    with every part."""
+
+    def update(self, state, y_esn, y_est) -> None:
+        pass
+
+
+def test_lean_loop_equals_the_loop_with_every_part():
+    _, _, desired, esn, plant = bench._lockstep_parts(3, 40)
+    _, _, _, esn_b, plant_b = bench._lockstep_parts(3, 40)  # the same, seed by seed
+    for delay in (0, 2):
+        lean = fel.rollout(esn, plant, desired, 0.5, fel.Loop(delay_steps=delay))
+        every = fel.rollout(esn_b, plant_b, desired, 0.5,
+                            fel.Loop(delay_steps=delay, online=_Idle()))
+        for name in ("commands", "y_esn", "u_error", "sensed", "true_signals", "angles",
+                     "states"):
+            np.testing.assert_array_equal(getattr(lean, name), getattr(every, name))

@@ -77,3 +77,17 @@ def test_gain_schedules():
     np.testing.assert_allclose(fixed_gain(4, 0.65), [0.65] * 4)
     with pytest.raises(ValueError, match="epochs"):
         linear_gain(0)
+
+
+@pytest.mark.parametrize("mode", ["joint", "jacobian"])
+@pytest.mark.parametrize("gain", [1.0, 0.7])
+def test_stepper_gives_u_errors_numbers_bit_for_bit(mode, gain):
+    plant = _plant()
+    fb = FeedbackController(mode=mode, signal_per_rad=tuple(2.0 / LIMITS[:, 1]), gain=gain)
+    rng = np.random.default_rng(3)
+    error, out = fb.stepper(plant), np.zeros((2, 4))
+    for _ in range(5):
+        plant.step(rng.uniform(-1, 1, (2, 4)))
+        desired, sensed = rng.uniform(-1, 1, (2, 4)), plant.true_signals()
+        error(0, desired, sensed, out)
+        np.testing.assert_array_equal(out, fb.u_error(desired, sensed, plant))

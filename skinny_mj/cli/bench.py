@@ -32,7 +32,12 @@ from typing import Any
 
 import numpy as np
 
-from skinny_mj.cli.bench_floor import esn_state_floor, separate_robots
+from skinny_mj.cli.bench_floor import (
+    control_step_floor,
+    esn_state_floor,
+    package_lines_per_step,
+    separate_robots,
+)
 from skinny_mj.cli.bench_mackey_glass import mackey_glass
 from skinny_mj.cli.bench_summary import BENCH_EXTRA, GOALS, summary, table
 from skinny_mj.cli.bench_timing import interleaved
@@ -129,7 +134,10 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
       (:func:`skinny_mj.plant.model.load_batch_model`), cheaper per robot, so a stricter floor.
 
     Both start at the movement's first pose and hold it (zero servo ctrl; no joint
-    limit is active, as in the control loop)."""
+    limit is active, as in the control loop). Timed in the same rounds: the step's floor
+    (:func:`skinny_mj.cli.bench_floor.control_step_floor`: the batch physics, then per step
+    the sparse product, tanh and reservoir noise of every run). Also counted: the
+    package's Python lines per control step (``python_lines_per_step``)."""
     import mujoco
     from mujoco import rollout as mj_rollout
 
@@ -143,20 +151,31 @@ def control_step_over_physics(n_steps: int, repeats: int) -> dict:
     mujoco.mj_getState(batch, plant.data, batch_state[0], spec)
     runner = mj_rollout.Rollout(nthread=0)
     loop = fel.Loop().with_buffers()  # the rollout arrays, reused as fel.train does
+
+    def batch_physics() -> None:
+        runner.rollout([batch], batch_data, batch_state, np.zeros((1, steps, batch.nu)),
+                       nstep=steps)
+
+    floor = control_step_floor(esn, batch_physics, len(desired) - 1)
     best = interleaved({
         "control": lambda: fel.rollout(esn, plant, desired, 0.5, loop, noise=True),
         "physics": lambda: runner.rollout([one] * N_RUNS, single_data, single_state,
                                           np.zeros((N_RUNS, steps, one.nu)), nstep=steps),
-        "batch_physics": lambda: runner.rollout([batch], batch_data, batch_state,
-                                                np.zeros((1, steps, batch.nu)), nstep=steps),
-    }, repeats)
+        "batch_physics": batch_physics,
+    } | ({} if floor is None else {"floor": floor}), repeats)
     runner.close()
     per = {k: v / (len(desired) - 1) for k, v in best.items()}
+    lines = package_lines_per_step(
+        lambda k: fel.rollout(esn, plant, desired[:k + 1], 0.5, loop, noise=True),
+        len(desired) - 1)
     return {"R": N_RUNS, "substeps": plant.n_substeps, "control_step_us": per["control"] * 1e6,
             "physics_step_us": per["physics"] * 1e6,
             "batch_physics_step_us": per["batch_physics"] * 1e6,
+            "floor_step_us": per.get("floor", np.nan) * 1e6,
             "ratio": per["control"] / per["physics"],
-            "ratio_vs_batch_physics": per["control"] / per["batch_physics"]}
+            "ratio_vs_batch_physics": per["control"] / per["batch_physics"],
+            "floor_vs_batch_physics": per.get("floor", np.nan) / per["batch_physics"],
+            "python_lines_per_step": lines}
 
 
 def lockstep_speedup(epochs: int, repeats: int) -> dict:

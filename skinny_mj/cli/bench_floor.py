@@ -5,12 +5,16 @@ The floor of an ESN state loop is the least any loop built on SciPy's sparse pro
 reservoirpy's time over the floor (the largest speed-up over reservoirpy that any loop on
 the same product and NumPy's tanh can reach) is measured in the same run as the ratio
 itself; ``benchmarks/esn_floor.py`` times it beside other products. The floor of a control
-step starts from the bare physics of R separate robots (:func:`separate_robots`).
+step starts from the bare physics of R separate robots (:func:`separate_robots`); its full
+floor (:func:`control_step_floor`) adds the reservoir's own per-step work to the physics.
+:func:`package_lines_per_step` counts the package's Python lines a control step runs.
 """
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
@@ -88,3 +92,70 @@ def separate_robots(plant) -> tuple:
     for r in range(plant.n_runs):
         mujoco.mj_getState(one, data, states[r], spec)
     return one, data, states
+
+
+def control_step_floor(esn, physics: Callable[[], object], n_steps: int
+                       ) -> Callable[[], None] | None:
+    """The least a control step of ``esn``'s R runs pays: ``physics()`` (the bare physics
+    of the ``n_steps`` steps, in C), then per step the sparse product W x of every run
+    (SciPy's kernel on the block-diagonal CSR matrix), an in-place tanh and the reservoir
+    noise added, the noise drawn in blocks as ``ESN`` draws it. No input product, no
+    readout, no feedback, no bookkeeping. None when the ESN's W is dense."""
+    a = esn.sparse_reservoir
+    if a is None:
+        return None
+    from scipy.sparse._sparsetools import csr_matvec
+
+    args = (a.shape[0], a.shape[1], a.indptr, a.indices, a.data)
+    block, n_res = 256, esn.cfg.n_reservoir
+    rngs = [np.random.default_rng(r) for r in range(esn.n_runs)]
+    noise = np.empty((block, esn.n_runs, n_res))
+    drawn = np.empty((block, n_res))
+
+    def loop() -> None:
+        physics()
+        x = np.zeros(a.shape[0])
+        for t in range(n_steps):
+            if t % block == 0:
+                for r, g in enumerate(rngs):
+                    g.random(out=drawn)
+                    np.subtract(drawn, 0.5, out=drawn)
+                    np.multiply(drawn, esn.cfg.noise_level, out=noise[:, r])
+            row = np.zeros(a.shape[0])
+            csr_matvec(*args, x, row)
+            np.tanh(row, out=row)
+            row += noise[t % block].reshape(-1)
+            x = row
+
+    return loop
+
+
+def package_lines_per_step(run_steps: Callable[[int], object], n_steps: int) -> float:
+    """Lines of the package's own Python (``skinny_mj`` and its controllers) executed per
+    step by ``run_steps(k)`` (a control loop of k steps): the lines of ``n_steps`` steps less
+    those of one step, over ``n_steps - 1``, so set-up and clean-up do not count."""
+    import skinny_mj
+    import skinny_mj.controllers
+
+    roots = tuple(str(Path(m.__file__).parent) + "/" for m in (skinny_mj, skinny_mj.controllers))
+    counts = [0]
+
+    def tracer(frame, event, arg):
+        if not frame.f_code.co_filename.startswith(roots):
+            return None
+        if event == "line":
+            counts[0] += 1
+        return tracer
+
+    def lines(k: int) -> int:
+        counts[0] = 0
+        previous = sys.gettrace()
+        sys.settrace(tracer)
+        try:
+            run_steps(k)
+        finally:
+            sys.settrace(previous)
+        return counts[0]
+
+    one = lines(1)
+    return (lines(n_steps) - one) / (n_steps - 1)

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from skinny_mj.cli.bench_floor import floor_lines
 
 __all__ = ["BENCH_EXTRA", "GOALS", "shown", "summary", "table"]
@@ -97,6 +99,15 @@ def table(figures: dict) -> str:
     if strict is not None:
         lines.append(f"{'  same, over batch-model physics':<30} {strict:>{width}.3g} {'-':>8}  "
                      "(the R-robot model the fast path steps: a stricter floor)")
+        step = figures["control_step_over_physics"]
+        floor = step.get("floor_vs_batch_physics")
+        if floor is not None and np.isfinite(floor):
+            lines.append(f"{'  floor, over batch physics':<30} {floor:>{width}.3g} {'-':>8}  "
+                         "(physics + sparse product + tanh + noise)")
+        if "python_lines_per_step" in step:
+            lines.append(f"{'  Python lines per step':<30} "
+                         f"{step['python_lines_per_step']:>{width}.4g} {'-':>8}  "
+                         "(the package's own)")
     lines += floor_lines(figures.get("esn_run_vs_reservoirpy", []))
     if figures.get("quick"):
         lines.append("--quick: short timings, few trials; torque_over_kinematic times one "

@@ -11,6 +11,7 @@ ctrl, ``mj_step2``, ``mj_step1``) and run r's sensor noise from its own
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from typing import Any
 
@@ -21,7 +22,13 @@ import numpy as np
 from skinny_mj.controllers.plant import Plant as _Plant
 from skinny_mj.plant.body import BodyLike, signal_set
 from skinny_mj.plant.model import BATCH_PREFIX, load_batch_model, load_model
-from skinny_mj.plant.physics import Layout, segment_jacobian, segment_signals, servo_ctrl
+from skinny_mj.plant.physics import (
+    Layout,
+    segment_jacobian_of,
+    segment_signals,
+    servo_targets,
+    servo_velocity,
+)
 from skinny_mj.plant.task import Setup, prepare, widen_ctrlrange
 
 _NOISE_BLOCK = 128  # sensor-noise vectors drawn per run at once
@@ -147,6 +154,8 @@ class BatchPlant:
         self.max_speed_rad_s = self.setup.max_speed_rad_s
         self.signals = signals
         self._signal_set = signal_set(signals)
+        self._joint_signals = self._signal_set.base == "joint"
+        self._appended = self._signal_set.appended is not None
         self.n_substeps = int(round(self.dt / self.model.opt.timestep))
         self._rk4 = self.model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4
         self._init_views(one)
@@ -160,7 +169,7 @@ class BatchPlant:
         self._qvel = d.qvel.reshape(r, one.nv)
         self._ctrl = d.ctrl.reshape(r, one.nu)
         self._site_xpos = d.site_xpos.reshape(r, one.nsite, 3)
-        self._cdof = d.cdof.reshape(r, one.nv, 6)
+        self._cdof_flat, self._sites_flat = d.cdof.reshape(r, -1), d.site_xpos.reshape(r, -1)
         sites = lay.site_ids.reshape(-1)  # (6,) arm-major, shoulder/elbow/wrist
         self._comp_sel = _as_slice(np.array(lay.components))  # views, not gathers, if possible
         self._site_sel = _as_slice(sites)
@@ -170,6 +179,11 @@ class BatchPlant:
         self._noise_buf = np.zeros((0, self.n_runs, self.n_signals))
         self._noise_pos = 0
         self._signals: np.ndarray | None = None
+        low_rad, high_rad = servo_targets(lay.range_rad)  # servo_ctrl's bounds, once
+        self._servo = functools.partial(servo_velocity, max_speed_rad_s=self.max_speed_rad_s,
+                                        low_rad=low_rad, high_rad=high_rad, dt=self.dt)
+        self._jacobian = segment_jacobian_of(lay.segment_pairs, lay.segment_lengths,
+                                             lay.components, lay.dof_adr, lay.site_ids)
 
     def _forward_without_actuation(self) -> None:
         # as dm_control's Physics.reset / after_reset
@@ -189,8 +203,8 @@ class BatchPlant:
         self._noise_pos += 1
         return self._noise_buf[self._noise_pos - 1]
 
-    def _sensed(self) -> np.ndarray:
-        out = self._draw_noise() * self.setup.sensor_noise
+    def _sensed(self, out: np.ndarray | None = None) -> np.ndarray:
+        out = np.multiply(self._draw_noise(), self.setup.sensor_noise, out=out)
         out += self._true()  # true + noise, as the task adds them
         return out
 
@@ -233,13 +247,29 @@ class BatchPlant:
         self._signals = None
 
     def step(self, command: np.ndarray) -> np.ndarray:
-        command = np.asarray(command, dtype=float).reshape(self.n_runs, self.n_dof)
+        self._actuate(np.asarray(command, dtype=float).reshape(self.n_runs, self.n_dof))
+        self._signals = None
+        return self._sensed()
+
+    def step_into(self, command: np.ndarray, sensed: np.ndarray, true: np.ndarray,
+                  angles: np.ndarray) -> None:
+        """:meth:`step` for a ``command`` (R, n_dof) of floats, writing the new state's
+        sensed and true signals (R, n_sig) and joint angles (R, n_dof) into the given
+        arrays: the same numbers, no copies."""
+        self._actuate(command)
+        q = self._qpos[:, self._qpos_sel]
+        true[...] = self._signals = self._signals_of(q)
+        np.multiply(self._draw_noise(), self.setup.sensor_noise, out=sensed)
+        sensed += true  # true + noise, as the task adds them
+        angles[...] = q
+
+    def _actuate(self, command: np.ndarray) -> None:
+        """Ctrl from ``command`` (R, n_dof) floats, then one control step of physics (the
+        kinematics it leaves are the new state's: the caller drops its cached signals)."""
         if self._torque:
-            ctrl = np.clip(command, -1.0, 1.0)
+            self._ctrl[:, self._act_sel] = np.clip(command, -1.0, 1.0)
         else:
-            ctrl = servo_ctrl(command, self.joint_angles(), self.max_speed_rad_s,
-                              self.layout.range_rad, self.dt)
-        self._ctrl[:, self._act_sel] = ctrl
+            self._ctrl[:, self._act_sel] = self._servo(command, self._qpos[:, self._qpos_sel])
         # dm_control's legacy step: finish the step, keep kinematics in sync with qpos
         # (mj_step2 integrates with Euler, so RK4, the torque twin's, steps whole)
         if self._rk4:
@@ -249,38 +279,36 @@ class BatchPlant:
             if self.n_substeps > 1:
                 mujoco.mj_step(self.model, self.data, self.n_substeps - 1)
         mujoco.mj_step1(self.model, self.data)
-        self._signals = None
-        return self._sensed()
 
     def true_signals(self) -> np.ndarray:
         return self._true().copy()
 
     def _true(self) -> np.ndarray:
         if self._signals is None:
-            sig, q = self._signal_set, self.joint_angles()
-            if sig.base == "joint":
-                base = self.body.normalize_angles(q)
-            else:
-                pts = self._site_xpos[:, self._site_sel].reshape(self.n_runs, 2, 3, 3)
-                base = segment_signals(pts, self.layout.arm_lengths, self._comp_sel)
-            self._signals = sig.extend(base, q, self.body)
+            self._signals = self._signals_of(self._qpos[:, self._qpos_sel])
         return self._signals
+
+    def _signals_of(self, q: np.ndarray) -> np.ndarray:
+        """(R, n_sig) noise-free signals of the current state, whose angles are q."""
+        if self._joint_signals:
+            return self._signal_set.extend(self.body.normalize_angles(q), q, self.body)
+        points = self._site_xpos[:, self._site_sel].reshape(self.n_runs, 2, 3, 3)
+        base = segment_signals(points, self.layout.arm_lengths, self._comp_sel)
+        return self._signal_set.extend(base, q, self.body) if self._appended else base
 
     def joint_angles(self) -> np.ndarray:
         return self._qpos[:, self._qpos_sel].copy()
 
     def command_jacobian(self) -> np.ndarray:
-        n, sig = self.n_runs, self._signal_set
-        if sig.base == "joint":
+        if self._joint_signals:
             lo, hi = self.layout.range_rad.T
-            jac = np.broadcast_to(np.diag(2.0 / (hi - lo)), (n, self.n_dof, self.n_dof))
+            jac = np.broadcast_to(np.diag(2.0 / (hi - lo)), (self.n_runs, self.n_dof,
+                                                             self.n_dof))
         else:
-            axes = self._cdof[:, self._dof_sel, :3]
-            points = self._site_xpos[:, self._site_sel].reshape(n, 2, 3, 3)
-            jac = segment_jacobian(axes, points, self.layout.segment_pairs,
-                                   self.layout.segment_lengths, self.layout.components)
-        jac = sig.extend_jacobian(jac, self.body) * (self.max_speed_rad_s * self.dt)
-        return jac  # as EnvPlant.command_jacobian
+            jac = self._jacobian(self._cdof_flat, self._sites_flat)
+        if self._appended:
+            jac = self._signal_set.extend_jacobian(jac, self.body)
+        return jac * (self.max_speed_rad_s * self.dt)  # as EnvPlant.command_jacobian
 
 
 def _as_slice(index: np.ndarray) -> slice | np.ndarray:

@@ -11,6 +11,7 @@ stays inside its range.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -50,24 +51,33 @@ def servo_ctrl(
     -------
     (..., n_dof) joint velocity command, rad/s.
     """
+    return servo_velocity(command, q, max_speed_rad_s, *servo_targets(range_rad, margin_rad),
+                          dt)
+
+
+def servo_targets(range_rad: np.ndarray, margin_rad: float = LIMIT_MARGIN_RAD
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest and highest angle (n_dof,) rad a servo command may target: each joint's
+    range less ``margin_rad`` at both ends (:func:`servo_ctrl`)."""
+    return range_rad[:, 0] + margin_rad, range_rad[:, 1] - margin_rad
+
+
+def servo_velocity(command: np.ndarray, q: np.ndarray, max_speed_rad_s: np.ndarray,
+                   low_rad: np.ndarray, high_rad: np.ndarray, dt: float) -> np.ndarray:
+    """:func:`servo_ctrl` with the targets' bounds (:func:`servo_targets`) given."""
     vel = np.maximum(np.asarray(command, float), -1.0)  # clip to [-1, 1], in place
     np.minimum(vel, 1.0, out=vel)
     vel *= max_speed_rad_s
-    lo = range_rad[:, 0] + margin_rad - q
-    lo /= dt
-    hi = range_rad[:, 1] - margin_rad - q
-    hi /= dt
-    np.maximum(vel, lo, out=vel)
-    return np.minimum(vel, hi, out=vel)
+    np.maximum(vel, (low_rad - q) / dt, out=vel)
+    return np.minimum(vel, (high_rad - q) / dt, out=vel)
 
 
 def segment_signals(points: np.ndarray, lengths: np.ndarray, comps) -> np.ndarray:
     """(R, 4 * n_comps) Cartesian signals: the ``comps`` components of each segment's unit
     direction (shoulder to elbow, elbow to wrist, arm-major), from ``points`` (R, 2 arms,
     3, 3). :class:`Layout` and :class:`skinny_mj.plant.adapters.BatchPlant` both call it."""
-    n = points.shape[0]
     seg = (points[:, :, 1:] - points[:, :, :-1])[..., comps]  # (R, arm, segment, comp)
-    return (seg / lengths.reshape(2, 1)).reshape(n, -1)
+    return (seg / lengths.reshape(2, 1)).reshape(points.shape[0], -1)
 
 
 def segment_jacobian(
@@ -80,8 +90,9 @@ def segment_jacobian(
     v = p_b - p_a (shoulder to elbow, elbow to wrist). A hinge upstream of p_a turns v
     about its axis: d e / d q = axis x e; a hinge between p_a and p_b turns p_b about
     an axis through p_b itself: 0. So this is ``mj_jacSite(b) - mj_jacSite(a)`` over L
-    up to rounding (~1e-16), at a fraction of its cost. :class:`Layout` (the dm_control
-    path) and :class:`skinny_mj.plant.adapters.BatchPlant` both call it: both get the same bits.
+    up to rounding (~1e-16), at a fraction of its cost. It is :func:`segment_jacobian_of`
+    on gathered axes and points, which :class:`Layout` (the dm_control path) and
+    :class:`skinny_mj.plant.adapters.BatchPlant` call: all get the same bits.
 
     Parameters
     ----------
@@ -97,34 +108,52 @@ def segment_jacobian(
     (R, 4 * len(comps), n_dof), rows in :meth:`Body.signal_names` order.
     """
     n, n_dof = axes.shape[0], axes.shape[1]
-    seg, dof = pairs
-    dof_ij, seg_ij, ij, flat = _cross_indices(tuple(comps), seg.tobytes(), dof.tobytes(), n_dof)
-    c = len(comps)
-    # Only the turning pairs' components i then j of each signal component k (i = k + 1,
-    # j = k + 2, mod 3), (R, P, 2 comp), each gathered once: on tiny arrays NumPy pays
-    # per call and per innermost run, so nothing is broadcast.
-    a = axes[:, dof_ij, ij]
-    e = ((points[:, :, 1:] - points[:, :, :-1]).reshape(n, 4, 3) / lengths[:, None])[
-        :, seg_ij, ij]
-    # mju_cross, every component at once: (a x e)_k = a_i e_j - a_j e_i, (R, P, comp)
-    cross = a[..., :c] * e[..., c:] - a[..., c:] * e[..., :c]
-    out = np.zeros((n, 4 * c * n_dof))
-    out[:, flat] = cross.reshape(n, -1)  # each (pair, comp) to its (segment, comp, DOF)
-    return out.reshape(n, 4 * len(comps), n_dof)
+    jacobian = _identity_jacobian(tuple(comps), pairs[0].tobytes(), pairs[1].tobytes(),
+                                  np.asarray(lengths, float).tobytes(), n_dof)
+    return jacobian(axes.reshape(n, -1), points.reshape(n, -1))
 
 
 @functools.lru_cache(maxsize=32)
-def _cross_indices(comps: tuple[int, ...], seg: bytes, dof: bytes, n_dof: int
-                   ) -> tuple[np.ndarray, ...]:
-    """For :func:`segment_jacobian`: index arrays (P, 2 comp) of the pairs' DOFs, of
-    their segments and of the components i then j of each signal component k
-    (i = k + 1, j = k + 2, mod 3); and the flat position in a (4, comp, n_dof) block of
-    each (pair, comp), pairs major."""
-    k = np.asarray(comps)
-    s, d = np.frombuffer(seg, np.intp), np.frombuffer(dof, np.intp)
+def _identity_jacobian(comps: tuple[int, ...], seg: bytes, dof: bytes, lengths: bytes,
+                       n_dof: int) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    pairs = (np.frombuffer(seg, np.intp), np.frombuffer(dof, np.intp))
+    return segment_jacobian_of(pairs, np.frombuffer(lengths), list(comps), np.arange(n_dof),
+                               np.arange(6), axis_columns=3)
+
+
+def segment_jacobian_of(
+    pairs: tuple[np.ndarray, np.ndarray], lengths: np.ndarray, comps: list[int],
+    dof_adr: np.ndarray, site_ids: np.ndarray, axis_columns: int = 6,
+) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """:func:`segment_jacobian` built once for a model's indices: a callable of ``cdof``
+    (R, nv * ``axis_columns``) and ``site_xpos`` (R, n_sites * 3), each robot's rows of
+    ``MjData`` flattened, that reads the joint axes (the first 3 columns) at ``dof_adr``
+    (n_dof,) and the points at ``site_ids`` (2 arms, 3 points) itself. Per call, only the
+    turning pairs' components i then j of each signal component k (i = k + 1, j = k + 2,
+    mod 3) are gathered, (R, P, 2 comp), each once and by ``take``: on tiny arrays NumPy
+    pays per call and per innermost run."""
+    seg, dof = (np.asarray(i, np.intp) for i in pairs)
+    k, n_dof = np.asarray(comps), len(dof_adr)
+    c = len(k)
     ij = np.concatenate([(k + 1) % 3, (k + 2) % 3])[None, :]
-    flat = (s[:, None] * len(comps) + np.arange(len(comps))) * n_dof + d[:, None]
-    return d[:, None], s[:, None], ij, flat.reshape(-1)
+    points = np.asarray(site_ids).reshape(2, 3)
+    start = (points[:, :-1].reshape(-1)[seg][:, None] * 3 + ij).reshape(-1)  # arm-major
+    end = (points[:, 1:].reshape(-1)[seg][:, None] * 3 + ij).reshape(-1)
+    axis = (np.asarray(dof_adr)[dof][:, None] * axis_columns + ij).reshape(-1)
+    length = np.repeat(np.asarray(lengths, float)[seg], 2 * c)
+    flat = ((seg[:, None] * c + np.arange(c)) * n_dof + dof[:, None]).reshape(-1)
+    shape = (-1, len(seg), 2 * c)
+
+    def jacobian(cdof: np.ndarray, sites: np.ndarray) -> np.ndarray:
+        a = cdof.take(axis, axis=1).reshape(shape)
+        e = ((sites.take(end, axis=1) - sites.take(start, axis=1)) / length).reshape(shape)
+        # mju_cross, every component at once: (a x e)_k = a_i e_j - a_j e_i, (R, P, comp)
+        cross = (a[..., :c] * e[..., c:] - a[..., c:] * e[..., :c]).reshape(len(a), -1)
+        out = np.zeros((len(a), 4 * c, n_dof))  # each (pair, comp) to its (segment, comp, DOF)
+        out.reshape(len(a), -1)[:, flat] = cross
+        return out
+
+    return jacobian
 
 
 def _segment_pairs(model: mujoco.MjModel, site_ids: np.ndarray,
