@@ -13,6 +13,13 @@ the sensed one:
   zero at the first step, where the arm starts at rest (the first difference at the
   second); optionally low-passed by a first-order filter of cut-off
   ``velocity_filter_hz``: v(t) = a v(t-1) + (1 - a) fd(t), a = exp(-2 pi f_c dt);
+  ``velocity="observer"``: a state observer driven by the torque the motors were
+  commanded (an alpha-beta filter with the controllers' model as its prediction; no
+  low-pass): the loop hands it the model's prediction (q^-, v^-) of the step just taken,
+  from the observer's last estimate (q^, v^) (:attr:`estimate`) under the torque applied
+  in the step, and it corrects with the encoder's residual r = q_s(t) - q^-:
+  q^ = q^- + alpha r, v^ = v^- + beta r / dt (``observer_gains`` = (alpha, beta)); the
+  angles the controllers see stay the encoder's;
   ``velocity="oracle"`` reads the true joint velocities instead;
 - delay: what the controllers see at step t is the sensed state of step t - ``delay_steps``
   (the first state repeated until the history fills).
@@ -28,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 #: How the joint velocities are sensed.
-VELOCITIES = ("finite-difference", "finite-difference-2", "oracle")
+VELOCITIES = ("finite-difference", "finite-difference-2", "observer", "oracle")
 
 
 @dataclass
@@ -41,6 +48,7 @@ class JointSensing:
     delay_steps : control steps by which the sensed state lags the true one.
     dt : control step, s.
     rngs : one Generator per run (R).
+    observer_gains : (alpha, beta) of the ``"observer"`` velocity's correction.
     """
 
     encoder_noise_rad: float
@@ -49,6 +57,7 @@ class JointSensing:
     delay_steps: int
     dt: float
     rngs: list = field(repr=False)
+    observer_gains: tuple[float, float] = (1.0, 1.0)
 
     def __post_init__(self) -> None:
         if self.velocity not in VELOCITIES:
@@ -57,9 +66,15 @@ class JointSensing:
             raise ValueError(f"encoder noise must be >= 0 rad, got {self.encoder_noise_rad}")
         if self.delay_steps < 0 or self.dt <= 0:
             raise ValueError("need delay_steps >= 0 and dt > 0")
+        alpha, beta = self.observer_gains
+        if not (0 < alpha <= 1 and 0 < beta <= 2):
+            raise ValueError(f"observer gains need 0 < alpha <= 1, 0 < beta <= 2, got "
+                             f"{self.observer_gains}")
         fc = self.velocity_filter_hz
         if fc is not None and not (np.isfinite(fc) and fc > 0):
             raise ValueError(f"velocity filter cut-off must be > 0 Hz, got {fc}")
+        if fc is not None and self.velocity == "observer":
+            raise ValueError("the observer velocity takes no low-pass (its gains filter it)")
         self._a = 0.0 if fc is None else float(np.exp(-2.0 * np.pi * fc * self.dt))
         self._history: deque = deque(maxlen=self.delay_steps + 1)
 
@@ -76,15 +91,38 @@ class JointSensing:
         self._qd = np.asarray(qd_true, float).copy() if self.velocity == "oracle" \
             else np.zeros_like(self._q)
         self._q_prev = None
+        self._q_hat = self._q.copy()  # the observer's own angle estimate
         self._history.clear()
         for _ in range(self.delay_steps + 1):
             self._history.append((self._q, self._qd))
 
-    def update(self, q_true: np.ndarray, qd_true: np.ndarray) -> None:
-        """The next control step's true state (R, n)."""
+    @property
+    def needs_prediction(self) -> bool:
+        """Does :meth:`update` need the model's prediction of the step just taken?"""
+        return self.velocity == "observer"
+
+    @property
+    def estimate(self) -> tuple[np.ndarray, np.ndarray]:
+        """(q^, v^), each (R, n): the latest (undelayed) angle and velocity estimates, rad
+        and rad/s, the state the model's next prediction starts from."""
+        return self._q_hat, self._qd
+
+    def update(self, q_true: np.ndarray, qd_true: np.ndarray,
+               prediction: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+        """The next control step's true state (R, n); ``prediction``: the model's (q^-,
+        v^-) (R, n) each, rad and rad/s, of the step just taken from :attr:`estimate` (the
+        ``"observer"`` velocity's input; ignored otherwise)."""
         q = self._read(q_true)
         if self.velocity == "oracle":
             qd = np.asarray(qd_true, float).copy()
+        elif self.velocity == "observer":
+            if prediction is None:
+                raise ValueError("the observer velocity needs the model's prediction")
+            alpha, beta = self.observer_gains
+            q_pred, qd_pred = (np.asarray(x, float) for x in prediction)
+            r = q - q_pred
+            self._q_hat = q_pred + alpha * r
+            qd = qd_pred + (beta / self.dt) * r
         else:
             qd = (q - self._q) / self.dt
             if self.velocity == "finite-difference-2" and self._q_prev is not None:

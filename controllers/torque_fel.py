@@ -24,6 +24,7 @@ Pure NumPy: the plant supplies ``joint_velocities()`` (R, n_dof) rad/s,
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -52,6 +53,9 @@ class TorqueLoop:
     sensing : the joints' sensing (:class:`skinny_mj.controllers.sensing.JointSensing`),
         kept up to date each step; given, the ESN's velocity inputs and the teacher's
         velocity are its sensed velocities (None: the plant's true ones).
+    predict : plant side, ``predict(q, qd, tau_nm) -> (q, qd)``: the controllers' model
+        of the arm stepped one control step (each (R, n_dof), rad, rad/s, N m); the
+        sensing's observer velocity needs it (None: no model).
     """
 
     controller: TorqueFeedbackController
@@ -61,6 +65,7 @@ class TorqueLoop:
     gravity_feedforward: bool = False
     inverse_dynamics: np.ndarray | None = None
     sensing: JointSensing | None = None
+    predict: Callable | None = None
     #: (T-1, R, n_dof) applied torque (N m) and (T, R, n_dof) joint velocity (rad/s) and
     #: bias torque (N m) of the last cycle, time-major
     applied_nm: np.ndarray = field(default=None, repr=False)  # type: ignore[assignment]
@@ -125,7 +130,16 @@ class TorqueLoop:
         self.applied_nm[t] = plant.actuator_force_nm()
         self._record(t + 1, plant)
         if self.sensing is not None:
-            self.sensing.update(plant.joint_angles(), self.velocity_rad_s[t + 1])
+            pred = self.model_prediction(t) if self.sensing.needs_prediction else None
+            self.sensing.update(plant.joint_angles(), self.velocity_rad_s[t + 1], pred)
+
+    def model_prediction(self, t: int) -> tuple[np.ndarray, np.ndarray]:
+        """``predict(q^, v^, tau)``: the model's step from the sensing's estimate under the
+        torque applied in step t (the command, clipped to the limits), ((R, n_dof) rad,
+        (R, n_dof) rad/s): the observer velocity's input."""
+        if self.predict is None:
+            raise ValueError("the observer velocity needs a model of the arm (predict)")
+        return self.predict(*self.sensing.estimate, self.applied_nm[t])
 
     def metrics(self, commands: np.ndarray, dt: float) -> dict[str, np.ndarray]:
         """Per-run torque figures (each (R,)) of the last cycle, for commands (R, T-1, n_dof)

@@ -226,3 +226,34 @@ def test_body_flags_name_a_body_and_dof_is_its_alias(tmp_path, capsys):
     assert first["config"]["plant.body"] == "2d-torque" and first["test"] == second["test"]
     with np.load(out / "model.npz", allow_pickle=False) as model:
         assert json.loads(str(model["metadata"]))["body"] == "2d-torque"
+
+
+def test_a_torque_body_trains_its_own_defaults_unless_a_preset_is_given(tmp_path):
+    """``skinny train --actuation torque`` (or a torque body) with no --preset starts from
+    the torque body's defaults (:data:`TORQUE_DEFAULTS`, per body), under --config and the
+    flags; the velocity body, the presets and TrainConfig() keep theirs."""
+    from skinny_mj.cli.config_files import train_config
+    from skinny_mj.cli.parser import build_parser
+    from skinny_mj.training.config import TrainConfig
+    from skinny_mj.training.presets import preset_fields, torque_defaults
+
+    def config(*argv):
+        return train_config(build_parser().parse_args(["train", *argv]))[0]
+
+    two, three = (TrainConfig().override(torque_defaults(d)) for d in (4, 8))
+    assert config("--actuation", "torque") == config("--body", "2d-torque") == two
+    assert config("--body", "3d", "--actuation", "torque") == config("--dof", "8",
+                                                                     "--actuation", "torque") \
+        == config("--body", "3d-torque") == three
+    assert (two.torque.feedback, two.torque.sensing.velocity, two.method.beta) == \
+        ("inertia-pd", "observer", 1.0)
+    assert (three.esn.n_reservoir, three.torque.omega) == (500, 20.0)
+    given = config("--actuation", "torque", "--feedback", "pd", "--epochs", "3")
+    assert given == two.override({"actuation.feedback": "pd", "method.epochs": 3})
+    assert config() == TrainConfig()
+    assert TrainConfig().override({"actuation": "torque"}).torque.feedback == "pd"
+    assert config("--preset", "general", "--actuation", "torque") == \
+        TrainConfig().override(preset_fields("general", "torque"))
+    bare = tmp_path / "bare.json"
+    bare.write_text(json.dumps({"actuation": "torque", "method.epochs": 2}))
+    assert config("--config", str(bare)) == two.override({"method.epochs": 2})

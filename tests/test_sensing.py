@@ -78,3 +78,73 @@ def test_the_second_order_difference_has_no_lag_on_a_parabola():
     for k in range(1, 5):
         s.update(np.array([[(0.02 * k) ** 2]]), np.zeros((1, 1)))
     assert s.qd[0, 0] == pytest.approx(2 * 0.08)  # d/dt t^2 at t = 0.08 s
+
+
+
+def _observed(model_accel: float, gains=(1.0, 1.0), noise=0.0, accel=3.0, steps=50):
+    """An observer on an arm accelerating at ``accel`` rad/s^2 from rest, whose model
+    predicts ``model_accel``; returns the sensing and the true velocity at the end."""
+    s = _sensing(velocity="observer", observer_gains=gains, encoder_noise_rad=noise,
+                 rngs=[np.random.default_rng(3)])
+    s.reset(np.zeros((1, 1)), np.zeros((1, 1)))
+    dt, out = 0.02, []
+    for k in range(1, steps + 1):
+        q_hat, v_hat = s.estimate
+        pred = (q_hat + dt * v_hat + 0.5 * dt * dt * model_accel, v_hat + dt * model_accel)
+        s.update(np.array([[0.5 * accel * (dt * k) ** 2]]), np.zeros((1, 1)), pred)
+        out.append(s.qd[0, 0])
+    return s, accel * dt * steps, np.array(out)
+
+
+def test_the_observer_with_an_exact_model_reads_the_true_velocity():
+    for gains in ((1.0, 1.0), (0.5, 0.2)):
+        s, v, _ = _observed(3.0, gains)
+        assert s.qd[0, 0] == pytest.approx(v)
+        assert s.q[0, 0] == pytest.approx(0.5 * 3.0 * 1.0 ** 2)  # the angles: the encoder's
+
+
+def test_the_observer_corrects_a_wrong_model_through_the_encoders():
+    # the model knows no acceleration: the residual keeps the estimate near the truth
+    s, v, _ = _observed(0.0, (1.0, 1.0))
+    assert s.qd[0, 0] == pytest.approx(v - 0.5 * 3.0 * 0.02)  # the first-order difference
+    s, v, _ = _observed(0.0, (0.75, 0.5))
+    assert abs(s.qd[0, 0] - v) < 0.1 * v
+
+
+def test_lower_observer_gains_pass_less_encoder_noise():
+    _, _, fast = _observed(0.0, (1.0, 1.0), noise=1e-3, accel=0.0, steps=2000)
+    _, _, slow = _observed(0.0, (0.36, 0.08), noise=1e-3, accel=0.0, steps=2000)
+    assert fast.std() == pytest.approx(np.sqrt(2) * 1e-3 / 0.02, rel=0.1)
+    assert slow.std() < 0.5 * fast.std()
+
+
+def test_the_observer_needs_a_prediction_and_takes_no_low_pass():
+    s = _sensing(velocity="observer")
+    s.reset(np.zeros((1, 1)), np.zeros((1, 1)))
+    with pytest.raises(ValueError, match="prediction"):
+        s.update(np.zeros((1, 1)), np.zeros((1, 1)))
+    with pytest.raises(ValueError, match="low-pass"):
+        _sensing(velocity="observer", velocity_filter_hz=5.0)
+
+
+def test_the_observer_on_the_nominal_arm_reads_what_a_tachometer_reads():
+    """Noise-free encoders on the arm the model describes: the model's prediction of
+    each step is the plant's own, so the observer's velocity is the true one (what the
+    controllers do is the same as with the true velocity)."""
+    base = TrainConfig().override({"actuation": "torque", "movement.trajectory": "y",
+                                   "method": "none", "test.gain": 1.0,
+                                   "actuation.sensing.encoder_noise": 0.0})
+    for feedback in ("ct", "computed-torque"):  # an arm law's loop, and the plain one
+        cfg = base.override({"actuation.feedback": feedback})
+        true = train(cfg.override({"actuation.sensing.velocity": "oracle"}), seed=0)
+        observed = train(cfg.override({"actuation.sensing.velocity": "observer"}), seed=0)
+        fd = train(cfg.override({"actuation.sensing.velocity": "finite-difference"}), seed=0)
+        assert joint_nrmse(observed) == pytest.approx(joint_nrmse(true), rel=1e-6)
+        assert joint_nrmse(fd) != pytest.approx(joint_nrmse(true), rel=1e-3)
+
+
+def test_the_observer_needs_the_lockstep_plant():
+    from skinny_mj.errors import SkinnyInputError
+    with pytest.raises(SkinnyInputError, match="observer"):
+        TrainConfig().override({"actuation": "torque", "plant.backend": "env",
+                                "actuation.sensing.velocity": "observer"})

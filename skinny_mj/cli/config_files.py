@@ -33,7 +33,7 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import DERIVED, TrainConfig
 from skinny_mj.training.legacy import is_legacy
 from skinny_mj.training.overrides import renamed
-from skinny_mj.training.presets import preset_fields
+from skinny_mj.training.presets import preset_fields, torque_defaults
 from skinny_mj.trajectories.library import check_asf
 
 _log = logging.getLogger(__name__)
@@ -128,13 +128,45 @@ def _make(fields: dict[str, Any], path: Path | None, base: TrainConfig | None = 
 def train_config(args: argparse.Namespace) -> tuple[TrainConfig, int]:
     """The run ``skinny train`` was asked for, and its seed: ``TrainConfig()``, then
     ``--preset``'s keys, then ``--config FILE``'s (and its seed), then the flags and
-    ``KEY=VALUE`` overrides given (:mod:`skinny_mj.cli.config_flags`)."""
+    ``KEY=VALUE`` overrides given (:mod:`skinny_mj.cli.config_flags`). A run on a torque
+    body without ``--preset`` starts from the torque body's defaults instead of
+    ``TrainConfig()``: :func:`skinny_mj.training.presets.torque_defaults`."""
     flags = given(args, TRAIN_FLAGS)
     keyed = renamed(TrainConfig(), pairs(getattr(args, "overrides", None) or []))
     check_no_conflict(flags, keyed, flag_names(TRAIN_FLAGS))
     texts = {**flags, **keyed}
     names = {k: f for k, f in flag_names(TRAIN_FLAGS).items() if k in flags and k not in keyed}
-    cfg, seed = TrainConfig(), None
+    base = TrainConfig()
+    if getattr(args, "preset", None) is None:
+        body = _body_asked(args, texts, names)
+        if body.torque is not None:  # the torque body's own defaults
+            base = base.override({**torque_defaults(body.plant.dof),
+                                  "plant.body": body.plant.body})
+    return _settings(args, texts, keyed, names, base)
+
+
+#: the keys that choose the body and its actuation
+_BODY_KEYS = ("plant.body", "actuation", "plant.dof")
+
+
+def _body_asked(args: argparse.Namespace, texts: dict[str, Any], names: dict[str, str]
+                ) -> TrainConfig:
+    """TrainConfig() on the body (and actuation) the run asks for: ``--config FILE``'s,
+    then the flags'."""
+    cfg = TrainConfig()
+    if getattr(args, "config", None) is not None:
+        path = Path(args.config)
+        fields, _ = read_train_file(path)
+        if not is_legacy(fields):
+            cfg = _make({k: fields[k] for k in _BODY_KEYS if k in fields}, path, cfg)
+    asked = {k: texts[k] for k in _BODY_KEYS if k in texts}
+    return cfg.override(changes(cfg, asked, {k: v for k, v in names.items() if k in asked}))
+
+
+def _settings(args: argparse.Namespace, texts: dict[str, Any], keyed: dict[str, Any],
+              names: dict[str, str], cfg: TrainConfig) -> tuple[TrainConfig, int]:
+    """``cfg``, then ``--preset``'s keys, then ``--config FILE``'s, then the flags."""
+    texts, names, seed = dict(texts), dict(names), None
     preset = getattr(args, "preset", None)
     if preset is not None:
         fields = preset_fields(preset, str(texts.get("actuation", "velocity")),

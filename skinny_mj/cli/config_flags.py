@@ -95,7 +95,8 @@ TRAIN_FLAGS: dict[str, list[Flag]] = {
              "with mass and gravity (ESN inverse dynamics, PD teacher)", ACTUATIONS),
         Flag("--feedback", "actuation.feedback", "torque: FEL's teacher, the PD scaled by "
              "the torque limits ('pd') or placed in the arm's own inertia-scaled coordinates "
-             "('inertia-pd'); the others run alone (--method none)", FEEDBACKS),
+             "('inertia-pd', a torque body's default without --preset); the others run "
+             "alone (--method none)", FEEDBACKS),
         Flag("--gravity-feedforward", "actuation.gravity_feedforward", "torque: add the "
              "gravity (bias) torque to the command, not learned", switch=True),
     ],

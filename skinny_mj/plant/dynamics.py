@@ -216,6 +216,7 @@ class BatchArmState:
             np.asarray(constant_mass, float), (plant.n_runs, len(self.adr), len(self.adr)))
         lo, hi = plant.body.joint_ranges().T
         self._per_rad = 2.0 / (hi - lo)
+        self._predictor = None  # MjData of predict()
 
     def sensed_angles(self, sensed: np.ndarray) -> np.ndarray:
         """(R, n) joint angles as the position sensors see them, rad."""
@@ -262,6 +263,28 @@ class BatchArmState:
         mujoco.mj_fwdPosition(m, sd)
         mujoco.mj_fwdVelocity(m, sd)
         return sd.qfrc_bias.reshape(self.n_runs, -1)[:, self.adr].copy()
+
+    def predict(self, q: np.ndarray, qd: np.ndarray, tau_nm: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """The model's prediction of one control step: from the arms at (R, n) angles
+        ``q`` (rad) and velocities ``qd`` (rad/s), under the torque ``tau_nm`` (R, n) N m
+        held over the step, the angles and velocities (R, n) at its end (the model
+        stepped as the plant steps, its joint limits included)."""
+        m, plant = self.model, self.plant
+        d = self._predictor
+        if d is None:
+            d = self._predictor = mujoco.MjData(m)
+            self._substeps = int(round(plant.dt / m.opt.timestep))
+        d.qpos[:] = plant.data.qpos
+        d.qvel[:] = plant.data.qvel
+        d.qpos.reshape(self.n_runs, self.nq1)[:, self.qadr] = q
+        d.qvel.reshape(self.n_runs, self.nv1)[:, self.adr] = qd
+        d.ctrl[:] = 0.0
+        d.qfrc_applied[:] = 0.0
+        d.qfrc_applied.reshape(self.n_runs, self.nv1)[:, self.adr] = tau_nm
+        mujoco.mj_step(m, d, self._substeps)
+        return (d.qpos.reshape(self.n_runs, self.nq1)[:, self.qadr].copy(),
+                d.qvel.reshape(self.n_runs, self.nv1)[:, self.adr].copy())
 
     def __call__(self, sensed: np.ndarray):
         plant, d = self.plant, self._data()

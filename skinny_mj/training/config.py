@@ -83,7 +83,7 @@ FEEDBACKS = ("pd", "computed-torque", *ARM_LAWS, "adaptive-ct")
 #: what the torque controllers' model is (``actuation.model``)
 MODELS = ("nominal", "true")
 #: how joint velocities are sensed (``actuation.sensing.velocity``)
-VELOCITY_SENSING = ("finite-difference", "finite-difference-2", "oracle")
+VELOCITY_SENSING = ("finite-difference", "finite-difference-2", "observer", "oracle")
 FORWARD_INPUTS = ("sensed", "chained")
 FORWARD_SHARING = ("none", "predictions", "commands")
 ARMS = ("right", "left")
@@ -151,14 +151,22 @@ class Encoders:
     backward difference of the encoder angles at the 50 Hz control rate
     (``velocity="finite-difference-2"``; ``"finite-difference"``: the first-order one,
     which lags by half a step; optionally low-passed at ``velocity_filter_hz``;
-    ``"oracle"``: the true velocities), and ``delay`` control steps of latency (also on
-    the ESN's position inputs)."""
+    ``"observer"``: an alpha-beta filter on the encoder angles whose prediction is the
+    controllers' model of the arm (nominal unless ``actuation.model=true``) stepped under
+    the torque commanded, gains ``observer_alpha``, ``observer_beta``; ``"oracle"``: the
+    true velocities), and ``delay`` control steps of
+    latency (also on the ESN's position inputs)."""
 
     kind: str = "encoders"
     encoder_noise: float = 5e-4
     velocity: str = "finite-difference-2"
     velocity_filter_hz: float | None = None
     delay: int = 0
+    #: the observer's gains: the steady-state alpha-beta (Kalman) gains for a tracking
+    #: index of 1; chosen among (1, 1), these and (0.36, 0.08) (index 0.1) on the ESN's
+    #: YMCA test error, 2D and 3D, 3 seeds
+    observer_alpha: float = 0.75
+    observer_beta: float = 0.5
 
     def __post_init__(self) -> None:
         _check([
@@ -171,6 +179,12 @@ class Encoders:
              f"velocity filter must be none or > 0 Hz, got {self.velocity_filter_hz}"),
             (isinstance(self.delay, int) and self.delay in (0, 1, 2),
              f"sensing delay must be 0, 1 or 2 steps, got {self.delay}"),
+            (_at_least(self.observer_alpha, 0) and 0 < self.observer_alpha <= 1
+             and _at_least(self.observer_beta, 0) and 0 < self.observer_beta <= 2,
+             "observer gains need 0 < alpha <= 1 and 0 < beta <= 2, got "
+             f"{self.observer_alpha}, {self.observer_beta}"),
+            (self.velocity != "observer" or self.velocity_filter_hz is None,
+             "the observer velocity takes no low-pass (its gains filter it)"),
         ])
 
 
@@ -223,6 +237,7 @@ class Torque:
              f"damping must be >= 0 N m s/rad, got {self.damping_nm_s_rad}"),
             (self.feedback in FEEDBACKS, f"feedback must be one of {FEEDBACKS}, "
                                          f"got {self.feedback!r}"),
+
             (self.omega is None or _at_least(self.omega, 0),
              f"feedback omega must be >= 0 rad/s, got {self.omega}"),
             (_at_least(self.zeta, 0), f"feedback zeta must be >= 0, got {self.zeta}"),
@@ -495,6 +510,12 @@ class TrainConfig:
                     ),
                     "the torque body runs without a forward model, delay, leading arm or "
                     "sensed-only inputs",
+                ),
+                (
+                    self.plant.backend != "env" or torque is None
+                    or getattr(torque.sensing, "velocity", None) != "observer",
+                    "the observer velocity (actuation.sensing.velocity=observer) steps the "
+                    "controllers' model beside the lockstep plant: use plant.backend=batch",
                 ),
                 (
                     self.plant.backend != "env"

@@ -32,8 +32,9 @@ from typing import Any
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant.body import body_of
 
-__all__ = ["GENERAL", "PRESETS", "TORQUE_GENERAL", "TORQUE_PRESETS", "SHIPPED",
-           "preset_fields", "describe", "model_name", "model_path"]
+__all__ = ["GENERAL", "PRESETS", "TORQUE_GENERAL", "TORQUE_PRESETS", "TORQUE_DEFAULTS",
+           "SHIPPED", "preset_fields", "torque_defaults", "describe", "model_name",
+           "model_path"]
 
 _LIMITS30 = "babble:seed=0,duration=30,limits=0.5,holds=0.2"
 #: The joint-angle presets' keys (2D and 3D alike).
@@ -115,6 +116,39 @@ TORQUE_GENERAL: dict[int, tuple[str, dict[str, Any]]] = {
 }
 #: The same names for the torque bodies (``general``: the 2D body's).
 TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {"general": TORQUE_GENERAL[4]}
+
+
+#: What ``skinny train`` runs on a torque body without ``--preset``, per number of hinges:
+#: (one-line reason, the dotted TrainConfig keys): ESN + FEL on the movement (YMCA unless
+#: told) with the inertia-scaled PD teacher on the nominal model, beta = 1, 15 epochs of K
+#: 1 -> 0, readout on the normal equations with forgetting, tested alone (K = 0), under the
+#: robot's sensing with velocities from the model-based observer (the mismatch study's
+#: ``esn`` rows, whose settings these are; the observer chosen on 3 seeds' YMCA test error
+#: of both bodies). Under the flags and ``--config``; TrainConfig() itself keeps its
+#: defaults.
+_TORQUE_RECIPE = {"actuation": "torque", "actuation.feedback": "inertia-pd",
+                  "actuation.sensing.velocity": "observer", "method": "new",
+                  "method.beta": 1.0, "method.cycles": 3, "method.epochs": 15,
+                  "method.fit": "forgetting", "test.gain": 0.0}
+TORQUE_DEFAULTS: dict[int, tuple[str, dict[str, Any]]] = {
+    4: ("torque twin, 2D: ESN + FEL with the inertia-scaled PD teacher on the nominal "
+        "model (poles at 5 rad/s), beta = 1, 3 cycles x 15 epochs, readout on the normal "
+        "equations with forgetting 0.8, velocities from the model-based observer",
+        {"plant.body": "2d-torque", **_TORQUE_RECIPE}),
+    8: ("torque twin, 3D: as 2D with 500 units, 6 cycles an epoch, the teacher's poles at "
+        "20 rad/s and forgetting 0.9",
+        {"plant.body": "3d-torque", **_TORQUE_RECIPE, "esn.n_reservoir": 500,
+         "method.cycles": 6, "actuation.omega": 20.0, "method.fit.forgetting": 0.9}),
+}
+
+
+def torque_defaults(dof: int) -> dict[str, Any]:
+    """A copy of the dotted keys ``skinny train`` sets first on the torque body of ``dof``
+    hinges (:data:`TORQUE_DEFAULTS`; a body without its own: the 2D body's keys, on the
+    body asked for)."""
+    if dof in TORQUE_DEFAULTS:
+        return dict(TORQUE_DEFAULTS[dof][1])
+    return {k: v for k, v in TORQUE_DEFAULTS[4][1].items() if k != "plant.body"}
 
 
 def _table(actuation: str) -> dict[str, tuple[str, dict[str, Any]]]:

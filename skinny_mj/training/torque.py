@@ -143,7 +143,8 @@ def sensing_of(act: Torque, plant, dt: float) -> JointSensing | None:
         return None
     seeds = getattr(plant, "seeds", None) or range(plant.n_runs)
     return JointSensing(s.encoder_noise, s.velocity, s.velocity_filter_hz, s.delay, dt,
-                        [np.random.default_rng([int(x), SENSING_STREAM]) for x in seeds])
+                        [np.random.default_rng([int(x), SENSING_STREAM]) for x in seeds],
+                        observer_gains=(s.observer_alpha, s.observer_beta))
 
 
 def sensing_delay(act: Torque | None) -> int:
@@ -183,7 +184,8 @@ def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
                       gravity_feedforward=act.gravity_feedforward, law=law,
                       gains=arm_gains(act),
                       motion=desired_motion(which, trajectory, law == "id-pd"),
-                      state_of=state_of, dt=trajectory.dt, sensing=sensing)
+                      state_of=state_of, dt=trajectory.dt, sensing=sensing,
+                      predict=_predictor(sensing, state_of))
         args = (controller(which, signals),
                 desired_velocities_rad_s(trajectory.angles, trajectory.dt),
                 np.asarray(max_speed_rad_s, float))
@@ -191,12 +193,22 @@ def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
             return adaptive.loop(which, *args, **common)
         return ArmLoop(*args, **common)
     ff = true_torques(which, trajectory) if act.feedback == "computed-torque" else None
+    predict = None
+    if sensing is not None and sensing.needs_prediction:
+        model = BatchArmState(plant, nominal=nominal_model(act) if nominal is None
+                              else nominal, sensing=sensing)
+        predict = model.predict
     return TorqueLoop(controller(which, signals),
                       desired_velocities_rad_s(trajectory.angles, trajectory.dt),
                       np.asarray(max_speed_rad_s, float),
                       velocity_inputs=act.velocity_inputs,
                       gravity_feedforward=act.gravity_feedforward, inverse_dynamics=ff,
-                      sensing=sensing)
+                      sensing=sensing, predict=predict)
+
+
+def _predictor(sensing: JointSensing | None, state: BatchArmState):
+    """The model's one-step prediction the sensing's observer needs (None: none)."""
+    return state.predict if sensing is not None and sensing.needs_prediction else None
 
 
 def nominal_model(act: Torque) -> bool:
