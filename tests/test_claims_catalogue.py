@@ -120,3 +120,11 @@ def test_counted_columns_use_the_thesis_supported_readings():
     assert cat.BY_ID["A3"].counted_column() == ("recorded", "mean-abs-difference")
     assert cat.BY_ID["B8"].counted_column() == ("b-noise-free",)
     assert cat.BY_ID["E15"].counted_column() == ("default",)
+
+
+def test_paper_bs_selection_row_is_read_by_no_claim():
+    sel = claims_rules.B_SELECTION
+    assert sel.row in _study_rows(sel.study)
+    read = {row for check in cat.CATALOGUE if check.study == sel.study
+            for comp in check.comparisons for row in _rows_read(comp)}
+    assert read and sel.row not in read
