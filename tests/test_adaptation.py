@@ -93,7 +93,7 @@ def test_defaults_pass_through_bit_for_bit_and_the_old_rows_keep_their_seeds():
     study = adaptation.STUDY
     exp = study.build()
     old = [f"{c}-{lr}" for c in ("gain", "offset") for lr in ("frozen", "fel", "rls")]
-    assert [r.row_id for r in exp.rows[:6]] == old  # row index -> seed: unchanged
+    assert [r.id for r in exp.rows[:6]] == old  # row index -> seed: unchanged
     p = exp.config.params
     assert (p["gain"], p["pre_cycles"], p["change_cycles"], p["post_cycles"],
             p["actuator_gain"], p["offset"], study.runs) == (0.5, 2, 8, 4, 0.7, 0.1, 10)

@@ -37,7 +37,7 @@ def _lines() -> list[str]:
 
 @cache
 def _study_rows(name: str) -> frozenset[str]:
-    return frozenset(r.row_id for r in registry.get(name).build().rows)
+    return frozenset(r.id for r in registry.get(name).build().rows)
 
 
 def _rows_read(comp: cat.Comparison) -> list[str]:

@@ -31,7 +31,7 @@ def test_stiff_rows_are_their_base_with_the_stiffer_teacher_on_its_seeds():
         want = dynamic.STIFF if "fel" in row_id else {"actuation.omega": 20.0}
         assert _changed(p, row_id, base_id) == want
     # paired: the engine gives a row with seeds_of its twin's seeds (tests/test_three_d.py)
-    seeds_of = {r.row_id: r.seeds_of for r in p.experiment().rows}
+    seeds_of = {r.id: r.seeds_of for r in p.experiment().rows}
     assert [seeds_of[r] for r in pairs] == ["3d-rec-fel-arm", "3d-ymca-fel-arm", "3d-rec-fel-arm"]
 
 

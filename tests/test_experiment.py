@@ -30,7 +30,7 @@ def make_run_one(marker_dir: Path | None = None):
 
     def run_one(row: Row, seed: int) -> dict:
         if marker_dir is not None:
-            (marker_dir / f"{row.row_id}-{seed}-{uuid.uuid4().hex}").touch()
+            (marker_dir / f"{row.id}-{seed}-{uuid.uuid4().hex}").touch()
         if row.params.get("fail"):
             raise RunFailed("diverged on purpose")
         rng = np.random.default_rng(seed)

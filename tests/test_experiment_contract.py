@@ -49,7 +49,7 @@ def run_one(row: Row, seed: int) -> dict:
 
 def counting_run_one(log: Path, row: Row, seed: int) -> dict:
     with log.open("a") as f:
-        f.write(f"{row.row_id}-{seed}\n")
+        f.write(f"{row.id}-{seed}\n")
     return run_one(row, seed)
 
 
@@ -107,8 +107,8 @@ def test_unknown_row_is_an_input_error_naming_ids_and_groups(tmp_path):
 
 def test_groups_select_their_rows_in_experiment_order():
     exp = fake(groups={"pair": ("b", "a"), "last": ("c",)})
-    assert [r.row_id for r in select_rows(exp, ["pair"])] == ["a", "b"]
-    assert [r.row_id for r in select_rows(exp, "last, a")] == ["a", "c"]
+    assert [r.id for r in select_rows(exp, ["pair"])] == ["a", "b"]
+    assert [r.id for r in select_rows(exp, "last, a")] == ["a", "c"]
     assert select_rows(exp, None) == exp.rows
     for bad in ({"a": ("b",)}, {"g": ("zz",)}, {"g": ()}):
         with pytest.raises(SkinnyInputError, match="group"):
@@ -254,7 +254,7 @@ def _fake_module(calls: list, rows: tuple[Row, ...]) -> types.ModuleType:
     def build(*, quick, movement, asf, body, signals):
         calls.append({"quick": quick, "movement": movement, "asf": asf, "body": body,
                       "signals": signals})
-        return dataclasses.replace(fake(rows=rows, groups={"both": ("ok", rows[1].row_id)}),
+        return dataclasses.replace(fake(rows=rows, groups={"both": ("ok", rows[1].id)}),
                                    report=lambda results, out: f"- {results['n_error']} errored")
 
     module.build = build  # type: ignore[attr-defined]

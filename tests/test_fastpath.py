@@ -204,7 +204,7 @@ def test_costliest_batches_start_first_and_files_do_not_change(tmp_path):
     started = []
 
     def recording(row, seeds):
-        started.append(row.row_id)
+        started.append(row.id)
         return _toy_batch(row, seeds)
 
     plain = run_sweep(_toy(_toy_batch), tmp_path / "plain", workers=1, progress=False)

@@ -20,7 +20,7 @@ def test_registered_rows_and_groups():
     assert grid == fidelity_d.Grid()
     assert len(exp.rows) == len(grid.movements) * len(grid.reservoirs) \
         * len(grid.input_noises) * 5
-    ids = {r.row_id for r in exp.rows}
+    ids = {r.id for r in exp.rows}
     assert "recorded-n200-i0.03-e3b" in ids and "smooth-n400-i0-e4" in ids
     assert not any("-n20-" in i for i in ids)  # the quick grid's rows are quick only
     assert {r.split("-e")[-1] for r in exp.groups["stage1"]} == {"1", "2"}
@@ -30,7 +30,7 @@ def test_registered_rows_and_groups():
     for cell in fidelity_d.STAGE_2_CELLS:  # stage 2 = all five exps at each picked cell
         assert set(exp.groups[cell]) <= set(exp.groups["stage2"])
     quick = fidelity_d.STUDY.build(quick=True)
-    assert set(quick.groups["stage2"]) == {r.row_id for r in quick.rows}
+    assert set(quick.groups["stage2"]) == {r.id for r in quick.rows}
     assert fidelity_d.grid_of(quick.config) == fidelity_d.QUICK_GRID
 
 

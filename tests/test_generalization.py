@@ -110,19 +110,19 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
     from skinny_mj.experiments.generalization import study as g
 
     exp = g.STUDY.build(quick=True)
-    assert {r.row_id for r in exp.rows} == {f"j2-{s}" for s in g.QUICK_SETS}
+    assert {r.id for r in exp.rows} == {f"j2-{s}" for s in g.QUICK_SETS}
     full = g.STUDY.build()
     late_rows = (*g.EXTRA_ROWS, *g.GENERAL_ROWS, *g.CARTESIAN_ROWS)
     assert len(full.rows) == len(g.TRAIN_SETS) + 2 * len(g.CORE_SETS) + len(late_rows)
     assert set(full.groups) == {*g.REPRESENTATIONS, "extra", "general", "cartesian"}
-    late = [r.row_id for r in full.rows[-len(late_rows):]]
+    late = [r.id for r in full.rows[-len(late_rows):]]
     assert late == [*full.groups["extra"], *full.groups["general"],  # earlier rows keep seeds
                     *full.groups["cartesian"]]
     # a Cartesian candidate is its base row with one change, on the base row's seeds
     base, elbow = (full.config.config(r) for r in ("c3-babble15+ymca", "c3-babble15+ymca+elbow"))
     assert elbow == base.override({"plant.signals": "cartesian-elbow"})
     assert full.config.config("c2-general+damp0.3").method.u_error_damping == 0.3
-    seeds = {r.row_id: r.seeds_of for r in full.rows}
+    seeds = {r.id: r.seeds_of for r in full.rows}
     assert seeds["c2-general+forward"] == "c2-general" and seeds["c2-general"] is None
     c3 = full.config.config("c3-md_03")
     assert (c3.plant.dof, c3.plant.signals, c3.movement.trajectory, c3.esn.n_reservoir) == \

@@ -100,7 +100,7 @@ def test_delay_hurts_the_inverse_only_architecture():
 
 def _fake(metrics_by_row: dict[str, list[dict]]):
     def run_one(row, seed):
-        return metrics_by_row[row.row_id][seed % len(metrics_by_row[row.row_id])]
+        return metrics_by_row[row.id][seed % len(metrics_by_row[row.id])]
     return run_one
 
 
@@ -111,7 +111,7 @@ def test_claims_hold_and_fail_on_synthetic_runs(tmp_path):
     for row in _rows((0, 4)):
         arch, d = row.params["architecture"], row.params["delay"]
         err, share = good[arch] if d else (0.01, 0.3)
-        metrics[row.row_id] = [{"performance_nrmse": err + k * 0.001, "correction_ratio": share,
+        metrics[row.id] = [{"performance_nrmse": err + k * 0.001, "correction_ratio": share,
                                 "pretrain_prediction_nrmse": 0.08} for k in range(3)]
     exp = Experiment("fake-a", _rows((0, 4)), _fake(metrics), runs=3)
     run_sweep(exp, tmp_path / "good", workers=1, progress=False)
@@ -132,14 +132,14 @@ def test_serial_best_counts_a_tie_within_the_spread_and_not_a_clear_loss(tmp_pat
     spread = (0.0, 0.01, -0.01)
 
     def sweep(name, serial_offset):
-        metrics = {r.row_id: [{"performance_nrmse": 0.08 + s + (serial_offset if
+        metrics = {r.id: [{"performance_nrmse": 0.08 + s + (serial_offset if
                                 r.params["architecture"] == "serial" else 0.0),
                                "correction_ratio": 0.5} for s in spread] for r in rows}
         calls: dict[str, int] = {}
 
         def run_one(row, seed):  # the k-th run of a row gets spread[k], whatever its seed
-            calls[row.row_id] = calls.get(row.row_id, -1) + 1
-            return metrics[row.row_id][calls[row.row_id]]
+            calls[row.id] = calls.get(row.id, -1) + 1
+            return metrics[row.id][calls[row.id]]
 
         run_sweep(Experiment(name, rows, run_one, runs=3), tmp_path / name,
                   workers=1, progress=False)
@@ -183,5 +183,5 @@ def test_full_config_matches_the_paper():
 
 def test_dof_8_builds_a_3d_sweep():
     exp = paper_a.STUDY.build(quick=True, body=8, signals="cartesian")
-    assert {(exp.config.config(r.row_id).plant.dof, exp.config.config(r.row_id).plant.signals)
+    assert {(exp.config.config(r.id).plant.dof, exp.config.config(r.id).plant.signals)
             for r in exp.rows} == {(8, "cartesian")}

@@ -133,7 +133,7 @@ def test_quick_sweep_end_to_end(tmp_path, workers):
 
     study = get("paper-b")
     exp = study.build(quick=True)
-    assert [r.row_id for r in exp.rows] == list(pt.PATTERNS)
+    assert [r.id for r in exp.rows] == list(pt.PATTERNS)
     results = run_sweep(exp, tmp_path, workers=workers, progress=False)
     assert all(r["n_ok"] == 1 for r in results["rows"])
     run = json.loads(next((tmp_path / "runs").glob("phase0-*.json")).read_text())

@@ -82,7 +82,7 @@ def test_untrained_network_leaves_the_arm_still_at_test():
 
 def test_rows_and_the_movement_option():
     full = paper_c.STUDY.build()
-    assert [r.row_id for r in full.rows] == list(paper_c.MOVEMENTS) and full.runs == 10
+    assert [r.id for r in full.rows] == list(paper_c.MOVEMENTS) and full.runs == 10
     assert paper_c.columns(full.config.params)[paper_c.REAL_ID].endswith("md_02.amc")
     quick = plan(paper_c.STUDY, quick=True)
     assert [p.row.id for p in quick.rows] == list(paper_c.QUICK_TRAIN)

@@ -26,8 +26,8 @@ def test_shared_full_scale_is_the_fastest_joints_for_every_joint():
 def test_paper_c_3d_is_paper_c_on_the_3d_body_with_one_full_scale_and_200_units():
     study = registry.get("paper-c-3d")
     exp, two_d = study.build(), paper_c.STUDY.build()
-    assert exp.name == "paper-c-3d" and [r.row_id for r in exp.rows] == \
-        [r.row_id for r in two_d.rows] and exp.runs == two_d.runs
+    assert exp.name == "paper-c-3d" and [r.id for r in exp.rows] == \
+        [r.id for r in two_d.rows] and exp.runs == two_d.runs
     config = study.config("ymca")
     assert (config.plant.dof, config.plant.signals, config.movement.full_scale,
             config.esn.n_reservoir) == (8, "joint", "shared", 200)
@@ -35,7 +35,7 @@ def test_paper_c_3d_is_paper_c_on_the_3d_body_with_one_full_scale_and_200_units(
                             "esn.n_reservoir": 1000}) == \
         paper_c.STUDY.config("ymca")  # nothing else differs from paper C
     moved = study.build(quick=True, movement="md_03.amc")  # paper C's real movement
-    assert moved.rows[-1].row_id == paper_c.REAL_ID
+    assert moved.rows[-1].id == paper_c.REAL_ID
     assert moved.config.config(paper_c.REAL_ID).plant.dof == 8
     for option, value in (("body", 4), ("signals", "cartesian")):
         with pytest.raises(SkinnyInputError, match=f"takes no --{option}"):

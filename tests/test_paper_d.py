@@ -129,7 +129,7 @@ def test_run_one_is_reproducible_from_its_seed():
 
 def test_lockstep_batch_equals_one_run_at_a_time():
     exp = paper_d.STUDY.build(quick=True)
-    row = next(r for r in exp.rows if r.row_id == "2")
+    row = next(r for r in exp.rows if r.id == "2")
     single = [exp.run_one(row, seed) for seed in (11, 12)]
     batch = exp.run_batch(row, [11, 12])
     for one, many in zip(single, batch, strict=True):

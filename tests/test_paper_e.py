@@ -31,7 +31,7 @@ def quick_sweep(tmp_path_factory):
 
 def test_quick_sweep_is_complete(quick_sweep):
     exp, out, results, _ = quick_sweep
-    ids = [r.row_id for r in exp.rows]
+    ids = [r.id for r in exp.rows]
     assert [r["row"] for r in results["rows"]] == ids  # Table rows first, then the figures
     assert ids[:6] == ["1", "2", "3", "4", "5", "6"]
     assert set(exp.groups) == {"table", "fig3", "fig4", "fig5a", "fig5b", "fig5"}
@@ -108,9 +108,9 @@ def test_row_groups_and_run_counts():
     fig5 = groups["fig5"]
     assert fig5[0] == "fig5a-nu0" and fig5[-1] == "fig5b-nu0.5" and len(fig5) == 18
     chosen = select_rows(exp, ["5", "fig4-n200"])
-    assert [r.row_id for r in chosen] == ["5", "fig4-n200"]
-    assert {r.runs for r in every if r.row_id in paper_e.TABLE_1} == {None}  # 20 (Config.runs)
-    assert {r.runs for r in every if r.row_id not in paper_e.TABLE_1} == {10}
+    assert [r.id for r in chosen] == ["5", "fig4-n200"]
+    assert {r.runs for r in every if r.id in paper_e.TABLE_1} == {None}  # 20 (Config.runs)
+    assert {r.runs for r in every if r.id not in paper_e.TABLE_1} == {10}
     with pytest.raises(SkinnyInputError, match="fig9"):
         select_rows(exp, ["fig9"])
 
@@ -171,7 +171,7 @@ def test_sweep_on_a_movement_excerpt(tmp_path):
     exp = paper_e.STUDY.build(quick=True, movement=movement)
     assert exp.name == "paper-e"  # the movement is recorded in config.json
     assert exp.config.base.movement.trajectory == movement
-    assert {exp.config.config(r.row_id).movement.trajectory for r in exp.rows} == {movement}
+    assert {exp.config.config(r.id).movement.trajectory for r in exp.rows} == {movement}
     results = run_sweep(exp, tmp_path, rows=["5", "fig3-b0.3"], runs=1, workers=1,
                         progress=False)
     text = exp.report(results, tmp_path)

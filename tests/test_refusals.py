@@ -198,7 +198,7 @@ def test_every_study_estimates_every_row_quick_and_full(monkeypatch):
         module = registry.get(name)
         for quick in (True, False):
             exp = module.build(quick=quick, movement=None, asf=None, body=None, signals=None)
-            ests = {r.row_id: row_estimate(module, exp, r, exp.runs, cache)
+            ests = {r.id: row_estimate(module, exp, r, exp.runs, cache)
                     for r in exp.rows}
             missing = [rid for rid, est in ests.items() if est is None]
             assert not missing, f"{name} says nothing of these rows' memory: {missing}"

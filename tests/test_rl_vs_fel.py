@@ -91,15 +91,15 @@ def test_fel_curve_ends_at_the_test_of_train():
 
 def test_curves_are_chains_of_segments_tested_on_a_log_grid():
     exp = study.STUDY.build()
-    rows = {r.row_id: r for r in exp.rows}
+    rows = {r.id: r for r in exp.rows}
     chain = [r for r in exp.rows if r.params.get("curve") == "ppo-ymca"]
     spans = [tuple(r.params["span"]) for r in chain]
     assert spans[0][0] == 0 and all(a[1] == b[0] for a, b in zip(spans, spans[1:], strict=False))
     assert spans[-1][1] == study.EXTENDED["ppo"] >= 2 * study.BUDGET["ppo"]
-    assert {r.seeds_of for r in chain[1:]} == {chain[0].row_id}
+    assert {r.seeds_of for r in chain[1:]} == {chain[0].id}
     costs = [exp.cost(r) for r in chain]
     assert costs == sorted(costs, reverse=True) and len(set(costs)) == len(costs)
-    assert max(study.cost(exp.config.config(r.row_id), rows[r.row_id]) for r in exp.rows
+    assert max(study.cost(exp.config.config(r.id), rows[r.id]) for r in exp.rows
                if r.params["learner"] != "fel") < 3600  # every RL run within an hour
     budget = set(exp.groups["budget"])
     assert "ppo-general-1000000" in budget and "sac-ymca-100000" in budget
@@ -113,8 +113,8 @@ def test_curves_are_chains_of_segments_tested_on_a_log_grid():
 def test_without_the_rl_extra_the_rl_rows_are_refused_in_one_line(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "stable_baselines3", None)  # import raises ImportError
     exp = study.STUDY.build(quick=True)
-    assert sorted(exp.unavailable) == sorted(r.row_id for r in exp.rows
-                                             if not r.row_id.startswith("fel-"))
+    assert sorted(exp.unavailable) == sorted(r.id for r in exp.rows
+                                             if not r.id.startswith("fel-"))
     with pytest.raises(SkinnyInputError) as err:
         run_sweep(exp, tmp_path, rows=["ppo-ymca-250000"], workers=1, progress=False)
     assert str(err.value) == ("experiment 'rl-vs-fel': row 'ppo-ymca-250000' needs the rl "

@@ -24,7 +24,7 @@ from skinny_mj.errors import SkinnyInputError
 
 def _cheapest(exp):
     """The cheapest row this machine can run (an optional extra's rows left out)."""
-    rows = [r for r in exp.rows if r.row_id not in exp.unavailable]
+    rows = [r for r in exp.rows if r.id not in exp.unavailable]
     if exp.cost is None:
         return rows[0]
     return min(rows, key=exp.cost)
@@ -47,22 +47,22 @@ def test_study_builds_plans_runs_one_tiny_run_and_writes_its_table(name, tmp_pat
     assert full.name == quick.name == name
     assert quick.rows and quick.runs <= full.runs  # --quick may run another, smaller grid
     exp = plan(study, quick=True, tiny=True).experiment()
-    assert [r.row_id for r in exp.rows] == [r.row_id for r in quick.rows]  # same seeds
+    assert [r.id for r in exp.rows] == [r.id for r in quick.rows]  # same seeds
     if "movement" in study.takes:  # it changes the runs, never moves a row (or its seeds);
         moved = study.build(quick=True, movement="ymca@0.5")  # paper C adds one after
-        assert [r.row_id for r in moved.rows][:len(quick.rows)] == \
-            [r.row_id for r in quick.rows]
+        assert [r.id for r in moved.rows][:len(quick.rows)] == \
+            [r.id for r in quick.rows]
     row = _cheapest(exp)
-    results = run_sweep(exp, tmp_path, rows=[row.row_id], runs=1, workers=1, progress=False)
+    results = run_sweep(exp, tmp_path, rows=[row.id], runs=1, workers=1, progress=False)
     (run,) = load_runs(tmp_path)
     assert run["status"] in ("ok", "failed"), run.get("traceback")  # an error is a bug
     assert results["n_ok"] + results["n_failed"] == 1
     if run["status"] == "ok":
         assert run["metrics"], f"{name}: a run without metrics"
     table = (tmp_path / "table.md").read_text()
-    assert f"| {row.row_id} |" in table
+    assert f"| {row.id} |" in table
     config = json.loads((tmp_path / "config.json").read_text())
-    assert config["experiment"] == name and config["selection"]["rows"] == [row.row_id]
+    assert config["experiment"] == name and config["selection"]["rows"] == [row.id]
     if name in REPORT_FAILS_ON_ONE_ROW:
         with pytest.raises(Exception):  # noqa: B017 (when it passes, remove it from the list)
             exp.report(results, tmp_path)

@@ -59,7 +59,7 @@ def test_rows_configs_params_groups_and_quick_are_derived():
 def test_options_are_overrides_of_the_base_and_refused_when_not_taken():
     exp = toy().build(movement="md_02.amc", asf=None, body=8, signals="joint")
     assert {(c.movement.trajectory, c.plant.dof, c.plant.signals) for c in
-            (exp.config.config(r.row_id) for r in exp.rows)} == {("md_02.amc", 8, "joint")}
+            (exp.config.config(r.id) for r in exp.rows)} == {("md_02.amc", 8, "joint")}
     with pytest.raises(SkinnyInputError, match="takes no --body"):
         toy(takes=("movement",)).build(body=8)
     with pytest.raises(SkinnyInputError, match="unknown config key"):
@@ -129,7 +129,7 @@ def test_quick_params_columns_and_the_studys_cost_memory_and_unavailable_hooks(t
     assert json.loads(json.dumps(quick.config.to_dict()))["params"]["tol"] == 0.5
     assert [full.cost(r) for r in full.rows] == [31.0, 42.0, 204.0]
     assert full.unavailable == {"c": "needs a package"}  # of the rows this sweep has
-    rows = {r.row_id: r for r in full.rows}
+    rows = {r.id: r for r in full.rows}
     assert row_estimate(study, full, rows["b"], 3).parts == {"x": 120}
     # no estimate of its own: the row's training configuration's
     assert row_estimate(study, full, rows["a"], 3).total > 0

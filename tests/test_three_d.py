@@ -40,16 +40,16 @@ def test_a_row_with_seeds_of_takes_its_twins_seeds_and_config_records_it(tmp_pat
 
 def test_rows_are_the_papers_own_on_both_bodies_the_3d_twin_on_the_2d_seeds():
     exp = three_d.STUDY.build()
-    ids = [r.row_id for r in exp.rows]
+    ids = [r.id for r in exp.rows]
     n = sum(len(v) for v in three_d.SUBSET.values())
     assert len(ids) == 2 * n and exp.runs == 10
     for row in exp.rows:
         p, dim, rid = row.params["paper"], row.params["dim"], row.params["row"]
-        assert row.row_id == f"{p}-{dim}-{rid}" and rid in three_d.SUBSET[p]
+        assert row.id == f"{p}-{dim}-{rid}" and rid in three_d.SUBSET[p]
         assert row.seeds_of == (None if dim == "2d" else f"{p}-2d-{rid}")
-        config = exp.config.config(row.row_id)
-        own, paper_row = three_d.paper_of(config, exp.config.run_row(row.row_id))
-        assert paper_row.row_id == rid and own.name == three_d.PAPERS[p]
+        config = exp.config.config(row.id)
+        own, paper_row = three_d.paper_of(config, exp.config.run_row(row.id))
+        assert paper_row.id == rid and own.name == three_d.PAPERS[p]
         assert dict(row.paper) == dict(paper_row.paper)  # the paper's numbers, if any
         if p == "a":  # paper A's own row on the row's body
             trained = own.config.config(rid)
@@ -59,7 +59,7 @@ def test_rows_are_the_papers_own_on_both_bodies_the_3d_twin_on_the_2d_seeds():
                 "body": 8, "signals": "cartesian"})).config.config(rid)
     assert set(exp.groups["3d"]) == {i for i in ids if "-3d-" in i}
     quick = three_d.STUDY.build(quick=True)
-    assert [r.row_id for r in quick.rows[:6]] == [
+    assert [r.id for r in quick.rows[:6]] == [
         "a-2d-inverse-d0", "a-2d-serial-d4", "b-2d-phase0", "b-2d-phase90", "c-2d-ymca",
         "c-2d-mirror-left"]  # each sweep's own order: its seeds
     body = three_d.STUDY.build(body=8, signals="joint").config
@@ -97,7 +97,7 @@ def test_quick_pair_end_to_end_2d_is_the_papers_own_run(tmp_path, tiny_paper_a):
     two, three = runs["a-2d-inverse-d0"], runs["a-3d-inverse-d0"]
     assert two["seed"] == three["seed"]
     pa = registry.get("paper-a").build(quick=True)
-    (own,) = pa.run_batch(next(r for r in pa.rows if r.row_id == "inverse-d0"), [two["seed"]])
+    (own,) = pa.run_batch(next(r for r in pa.rows if r.id == "inverse-d0"), [two["seed"]])
     assert own["performance_nrmse"] == two["metrics"]["performance_nrmse"]
     assert two["metrics"]["performance_nrmse"] != three["metrics"]["performance_nrmse"]
     text = three_d_report.write_report(results, tmp_path, True, 8, "cartesian",
@@ -158,7 +158,7 @@ def test_a_sweep_on_a_row_quick_does_not_keep_is_the_papers_row_under_its_quick_
 
     sweep = grid_study(["esn.spectral_radius=0.5,0.9"], study=three_d.STUDY,
                        row="a-3d-inverse-d10", quick=True).build()
-    config = sweep.config.config(sweep.rows[1].row_id)
+    config = sweep.config.config(sweep.rows[1].id)
     own = paper_a.STUDY.config("inverse-d10", body=8, signals="cartesian")
     assert config == own.override({**paper_a.STUDY.quick.overrides,
                                    "esn.spectral_radius": 0.9})

@@ -89,7 +89,7 @@ def write_views(out_dir: Path, runs: list[dict], quick: bool, dof: int,
     for p in PAPERS:
         for dim in DIMS:
             exp = paper_experiment(p, dim, quick, dof, signals)
-            index = {r.row_id: i for i, r in enumerate(exp.rows)}
+            index = {r.id: i for i, r in enumerate(exp.rows)}
             view = out_dir / "papers" / f"{p}-{dim}"
             shutil.rmtree(view / "runs", ignore_errors=True)
             (view / "runs").mkdir(parents=True)

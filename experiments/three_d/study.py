@@ -89,7 +89,7 @@ def paper_of(config: TrainConfig, row: Row) -> tuple[Experiment, EngineRow]:
     p = row.params
     exp = paper_experiment(p["paper"], p["dim"], p["quick"], config.plant.dof,
                            config.plant.signals)
-    return exp, next(r for r in exp.rows if r.row_id == p["row"])
+    return exp, next(r for r in exp.rows if r.id == p["row"])
 
 
 #: One run's CPU seconds on the 2D body, idle core, lockstep batches of 10 (measured;
@@ -103,7 +103,7 @@ def cost(config: TrainConfig, row: Row) -> float:
     by the paper's mean over the sweep's subset (paper costs are in different units)."""
     exp, paper_row = paper_of(config, row)
     p = row.params["paper"]
-    own = [exp.cost(r) for r in exp.rows if r.row_id in subset(row.params["quick"])[p]]
+    own = [exp.cost(r) for r in exp.rows if r.id in subset(row.params["quick"])[p]]
     scale = SECONDS_2D[p] * (FACTOR_3D if row.params["dim"] == "3d" else 1.0)
     return scale * exp.cost(paper_row) / (sum(own) / len(own))
 

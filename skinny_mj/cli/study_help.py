@@ -65,7 +65,7 @@ def _config(exp: Any) -> Any:
     from skinny_mj.engine.stats import to_jsonable
 
     return to_jsonable({"config": recorded_config(exp.config),
-                        "rows": [(r.row_id, dict(r.params), r.runs) for r in exp.rows]})
+                        "rows": [(r.id, dict(r.params), r.runs) for r in exp.rows]})
 
 
 def option_effects(module: Any, base: Any) -> dict[str, str]:
@@ -117,7 +117,7 @@ def _group(name: str, members: tuple[str, ...], groups: dict[str, tuple[str, ...
 def _runs_per_row(exp: Any) -> str:
     by_count: dict[int, list[str]] = {}
     for r in exp.rows:
-        by_count.setdefault(r.runs or exp.runs, []).append(r.row_id)
+        by_count.setdefault(r.runs or exp.runs, []).append(r.id)
     if len(by_count) == 1:
         text = f"{exp.runs} in every row"
     else:
@@ -165,7 +165,7 @@ def study_help(name: str) -> str:
     n_quick = sum(r.runs or quick.runs for r in quick.rows)
     parts = [f"skinny experiment {name}", "", textwrap.dedent(doc), "",
              _wrap(f"Rows ({len(exp.rows)}, --rows ID,...)",
-                   ", ".join(r.row_id for r in exp.rows))]
+                   ", ".join(r.id for r in exp.rows))]
     if exp.groups:
         parts.append(_wrap("Groups (--rows GROUP)", "; ".join(
             _group(g, m, exp.groups) for g, m in exp.groups.items())))

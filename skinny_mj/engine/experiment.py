@@ -153,10 +153,10 @@ class Experiment:
     def __post_init__(self) -> None:
         if not SAFE_NAME.match(self.name):
             raise SkinnyInputError(f"experiment name {self.name!r} must be a plain word")
-        ids = [r.row_id for r in self.rows]
+        ids = [r.id for r in self.rows]
         if not ids or len(set(ids)) != len(ids):
             raise SkinnyInputError(f"experiment {self.name!r} needs unique row ids, got {ids}")
-        if bad := [r.row_id for r in self.rows if r.seeds_of not in (None, *ids)]:
+        if bad := [r.id for r in self.rows if r.seeds_of not in (None, *ids)]:
             raise SkinnyInputError(f"experiment {self.name!r}: rows {bad}: seeds_of no row")
         groups = {str(g): (m,) if isinstance(m, str) else tuple(m)
                   for g, m in self.groups.items()}
@@ -180,9 +180,9 @@ def select_rows(experiment: Experiment, rows: Sequence[str] | str | None = None
     """The rows named by ``rows`` (row ids and group names; a string is split at commas),
     in experiment order; None selects every row."""
     if rows is None:
-        return tuple(r for r in experiment.rows if r.row_id not in experiment.unavailable)
+        return tuple(r for r in experiment.rows if r.id not in experiment.unavailable)
     entries = _entries(rows)
-    ids = [r.row_id for r in experiment.rows]
+    ids = [r.id for r in experiment.rows]
     unknown = [e for e in entries if e not in ids and e not in experiment.groups]
     if unknown or not entries:
         what = f"no row or group {', '.join(map(repr, unknown))}" if unknown else "no rows"
@@ -194,7 +194,7 @@ def select_rows(experiment: Experiment, rows: Sequence[str] | str | None = None
     if missing:
         raise SkinnyInputError(f"experiment {experiment.name!r}: row {missing[0]!r} "
                                f"{experiment.unavailable[missing[0]]}")
-    return tuple(r for r in experiment.rows if r.row_id in chosen)
+    return tuple(r for r in experiment.rows if r.id in chosen)
 
 
 def default_workers(workers: int | None = None) -> int:
@@ -220,7 +220,7 @@ def _batches(specs: list[RunSpec], size: int) -> list[list[RunSpec]]:
     """Group specs by row, then cut each row's seeds into chunks of at most ``size``."""
     by_row: dict[str, list[RunSpec]] = {}
     for spec in specs:
-        by_row.setdefault(spec.row.row_id, []).append(spec)
+        by_row.setdefault(spec.row.id, []).append(spec)
     return [group[i:i + size] for group in by_row.values() for i in range(0, len(group), size)]
 
 
@@ -235,10 +235,10 @@ def _key(job: RunSpec | list[RunSpec]) -> str:
 
 
 def _run_specs(experiment: Experiment, runs: int, selected: Sequence[Row]) -> list[RunSpec]:
-    chosen = {r.row_id for r in selected}
-    return [RunSpec(row, i, k, run_seed(experiment.base_seed, row.seeds_of or row.row_id, k))
+    chosen = {r.id for r in selected}
+    return [RunSpec(row, i, k, run_seed(experiment.base_seed, row.seeds_of or row.id, k))
             for k in range(runs) for i, row in enumerate(experiment.rows)
-            if row.row_id in chosen and (row.runs is None or k < row.runs)]
+            if row.id in chosen and (row.runs is None or k < row.runs)]
 
 
 def _report(records: list[dict[str, Any]]) -> None:
@@ -302,7 +302,7 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     out_dir = Path(out_dir)
     invocation = {"runs": runs, "options": dict(options or {}), "selection": {
         "requested": None if rows is None else _entries(rows),
-        "rows": [r.row_id for r in selected]}}
+        "rows": [r.id for r in selected]}}
     with sweep_lock(out_dir):  # one sweep at a time in a folder
         prepare_out_dir(experiment, out_dir, runs, resume, invocation)
         results = _sweep(experiment, out_dir, selected, runs, workers, resume, scheduler,

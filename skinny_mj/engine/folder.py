@@ -53,7 +53,7 @@ def config_dict(experiment: Any, runs: int) -> dict[str, Any]:
     return to_jsonable({
         "experiment": experiment.name,
         "config": recorded_config(experiment.config),
-        "rows": [{"row": r.row_id, "params": dict(r.params), "paper": dict(r.paper),
+        "rows": [{"row": r.id, "params": dict(r.params), "paper": dict(r.paper),
                   **{k: getattr(r, k) for k in ("runs", "seeds_of") if getattr(r, k) is not None}}
                  for r in experiment.rows],
         "groups": {g: list(m) for g, m in experiment.groups.items()},

@@ -60,7 +60,7 @@ def sweep_estimate(module: Any, experiment: Any, rows: Sequence[Any], runs: int,
     for row in rows:
         est = row_estimate(module, experiment, row, lockstep, cache)
         if est is not None and (best is None or est.total > best[0].total):
-            best = (est, row.row_id)
+            best = (est, row.id)
     if best is None:
         return None
     jobs = max(1, min(workers, len(rows) * runs))

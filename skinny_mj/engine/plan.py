@@ -59,7 +59,7 @@ class _Runner:
     rows: Mapping[str, tuple[TrainConfig, Row, RunBatch | None, Shape | None]]
 
     def __call__(self, row: EngineRow, seeds: list[int]) -> list[Any]:
-        config, study_row, custom, shape = self.rows[row.row_id]
+        config, study_row, custom, shape = self.rows[row.id]
         if custom is not None:
             return list(custom(config, study_row, list(seeds)))
         return default_run(config, study_row, list(seeds), shape)
@@ -68,11 +68,11 @@ class _Runner:
 def _cost(plan: Plan, costs: dict[str, float], row: EngineRow) -> float:
     """Row ``row``'s relative cost, worked out when the schedule first asks (a study's
     own cost may load a movement: a study's ``--help`` builds the sweep but runs none)."""
-    if row.row_id not in costs:
-        p, cost = plan.row(row.row_id), plan.study.cost
-        costs[row.row_id] = relative_cost(p.config) if cost is None \
-            else cost(p.config, plan.run_row(row.row_id))
-    return costs[row.row_id]
+    if row.id not in costs:
+        p, cost = plan.row(row.id), plan.study.cost
+        costs[row.id] = relative_cost(p.config) if cost is None \
+            else cost(p.config, plan.run_row(row.id))
+    return costs[row.id]
 
 
 class Results(dict):

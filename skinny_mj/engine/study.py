@@ -253,12 +253,12 @@ class Study:
     def train_configs(self, config: Any, row: Any) -> dict[str, TrainConfig]:
         """The training configurations one run of ``row`` trains (for the memory check):
         ``config`` is the built Experiment's config (its :class:`Plan`)."""
-        return config.trainings(row.row_id)
+        return config.trainings(row.id)
 
     def estimate_bytes(self, config: Any, row: Any, runs: int) -> Any:
         """The memory check's estimate of ``runs`` lockstep runs of ``row`` (``config``:
         the built Experiment's :class:`Plan`): the study's ``memory``, None without one."""
         if self.memory is None:
             return None
-        p = config.row(row.row_id)
-        return self.memory(p.config, config.run_row(row.row_id), runs)
+        p = config.row(row.id)
+        return self.memory(p.config, config.run_row(row.id), runs)

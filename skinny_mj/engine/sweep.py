@@ -67,17 +67,17 @@ class Row:
     ``seeds_of``: a row whose seeds this row takes (a paired comparison), None its own.
     """
 
-    row_id: str
+    id: str
     params: Mapping[str, Any] = field(default_factory=dict)
     paper: Mapping[str, float] = field(default_factory=dict)
     runs: int | None = None
     seeds_of: str | None = None
 
     def __post_init__(self) -> None:
-        if not SAFE_NAME.match(self.row_id):
-            raise SkinnyInputError(f"row id {self.row_id!r} must be a plain file-name word")
+        if not SAFE_NAME.match(self.id):
+            raise SkinnyInputError(f"row id {self.id!r} must be a plain file-name word")
         if self.runs is not None and self.runs < 1:
-            raise SkinnyInputError(f"row {self.row_id!r}: runs must be >= 1, got {self.runs}")
+            raise SkinnyInputError(f"row {self.id!r}: runs must be >= 1, got {self.runs}")
 
 
 @dataclass(frozen=True)
@@ -92,7 +92,7 @@ class RunSpec:
 
     @property
     def filename(self) -> str:
-        return f"{self.row.row_id}-{self.seed}.json"
+        return f"{self.row.id}-{self.seed}.json"
 
 
 class RunFailed(RuntimeError):
@@ -113,7 +113,7 @@ def one_of_batch(run_batch: Callable[[Row, list[int]], list[Any]], row: Row,
 
 def _record(spec: RunSpec, experiment_name: str) -> dict[str, Any]:
     return {
-        "experiment": experiment_name, "row": spec.row.row_id, "row_index": spec.row_index,
+        "experiment": experiment_name, "row": spec.row.id, "row_index": spec.row_index,
         "run_index": spec.run_index, "seed": spec.seed, "params": to_jsonable(spec.row.params),
         "paper": to_jsonable(spec.row.paper), "status": None, "metrics": {},
         "fail_reason": None, "error": None,
@@ -181,7 +181,7 @@ def execute_batch(run_batch: Callable[[Row, list[int]], list[Any]],
     batch itself raises, its seeds are run one by one with ``run_one`` instead, so a
     single bad seed cannot lose the others, and each record says so in ``fallback``.
     """
-    rows = {spec.row.row_id for spec in specs}
+    rows = {spec.row.id for spec in specs}
     if len(rows) != 1:
         raise ValueError(f"a batch holds one row, got {sorted(rows)}")
     start = time.perf_counter()
