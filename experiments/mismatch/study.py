@@ -42,13 +42,12 @@ mismatches and two switch rows, two epochs, one adaptation cycle).
 
 from __future__ import annotations
 
-from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.experiments.dynamic.study import ARM_GOALS, TABLE_COLUMNS
 from skinny_mj.experiments.dynamic.study import metrics as dynamic_metrics
 from skinny_mj.experiments.mismatch import switch
 
+from skinny_mj import training
 from skinny_mj.engine.study import Quick, Row, Shape, Study, Test
-from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.result import RunResult
 
@@ -124,12 +123,9 @@ def _figures(result: RunResult, label: str) -> dict:
     if test.failed:
         return {f"position_nrmse{label}": None}
     plant = result.config.plant
-    shape = body.body_of(plant.dof)
-    angles = test.rollout.angles[:, :, :plant.dof]
-    joint = float(position_nrmse(shape.normalize_angles(angles),
-                                 shape.normalize_angles(test.trajectory.angles))[0])
     tq = test.torque["metrics"]
-    out = {"position_nrmse": test.position_nrmse, "joint_nrmse": joint,
+    out = {"position_nrmse": test.position_nrmse,
+           "joint_nrmse": training.torque.joint_nrmse(result, label),
            **test.robot_metrics(plant.body),
            "max_torque_ratio": max(tq["max_commanded_ratio"], tq["max_applied_ratio"]),
            "warnings": tq["warnings"]}

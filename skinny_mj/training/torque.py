@@ -341,10 +341,12 @@ class ShareRecorder:
                 "limit_overshoot_rad": float(self.limit_overshoot_rad[r])}
 
 
-def joint_nrmse(outcome) -> float:
+def joint_nrmse(outcome, label: str = "") -> float:
     """Test joint-angle NRMSE (each angle normalized to [-1, 1] over its range) of a
-    :class:`skinny_mj.training.result.RunResult` against its movement's angles."""
+    :class:`skinny_mj.training.result.RunResult` against its movement's angles: its
+    standard test (``label`` ""), or its test ``label``."""
     skinny = body_of(outcome.config.plant.body)
-    angles = outcome.test.rollout.angles[:, :, :skinny.dof]
+    test = outcome.tests[label]
+    angles = test.rollout.angles[:, :, :skinny.dof]
     return float(position_nrmse(skinny.normalize_angles(angles),
-                                skinny.normalize_angles(outcome.test.trajectory.angles))[0])
+                                skinny.normalize_angles(test.trajectory.angles))[0])
