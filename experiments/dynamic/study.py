@@ -213,7 +213,7 @@ def _general_rows() -> tuple[Row, ...]:
            for bd, dof in BODIES.items()]
     out += [Row(f"{bd}-general-floor", {"plant.dof": dof, "plant.signals": "joint",
                                         "method": "none", "test.gain": 1.0},
-                runs=1, params={"tests": tuple(general.TESTS), "iterations": 150},
+                runs=1, params={"tests": general.FLOOR_TESTS, "iterations": 150},
                 quick={"tests": ("ymca",), "iterations": 1},
                 run_batch=general.floor_batch)
             for bd, dof in BODIES.items()]
