@@ -80,6 +80,10 @@ def goals(records: list[dict], bd: str) -> list[str]:
     base = mean(records, bd, "none", "esn")
     out = [f"- ESN + FEL, nominal teacher, realistic sensing, K = 0, no mismatch: "
            f"{base:.4f} (goal <= {GOAL_K0[bd]})"]
+    fd2 = values(records, row_id(bd, "none", "esn") + "-fd2", "position_nrmse")
+    if fd2:
+        out.append(f"- the same with velocities by the second-order difference instead of "
+                   f"the observer: {np.mean(fd2):.4f} ± {np.std(fd2):.4f}")
     for m in MISMATCHES:
         if m == "none":
             continue
