@@ -21,22 +21,16 @@ from skinny_mj.engine import registry
 from skinny_mj.errors import SkinnyInputError
 
 WIDTH = 88
-#: Whole sweeps timed in the docs (runs, wall time, workers, machine, date, page).
+#: Whole sweeps timed in the docs (runs, CPU time, workers, machine, page).
 DOCUMENTED_WALL = {
-    "paper-e": "410 runs in 44 min 11 s with --workers 2 on a shared 2-core machine under "
-               "load 21-34 (612 s of CPU time), 2026-12-02 (docs/RESULTS.md)",
-    "paper-a": "440 runs in 10 min 28 s with --workers 2 on a shared 2-core machine, "
-               "2026-12-01 (docs/RESULTS.md)",
-    "paper-b": "80 runs in 3 min 35 s with --workers 2 on a shared 2-core machine, "
-               "2026-12-01 (docs/RESULTS.md)",
+    "paper-a": "440 runs in 1164 s of CPU time with --workers 1 on a shared 2-core machine "
+               "(docs/compute.md)",
+    "paper-b": "80 runs in 268 s of CPU time with --workers 1 on an idle 2-core machine "
+               "(docs/compute.md)",
     "paper-c": "80 runs in 36 min 33 s with --workers 1 on a shared 2-core machine (2046 s "
-               "of CPU time), 2026-12-02 (docs/compute.md)",
-    "paper-d": "250 runs in 3 min 01 s with --workers 2 on a shared 2-core machine, "
-               "2026-12-01 (docs/RESULTS.md)",
-    "dynamic": "340 runs (the 34 rows it had then) in 28 min 22 s with --workers 1 on a shared "
-               "2-core machine (load 4-8), 2026-12-01 (docs/results/dynamic.md)",
-    "generalization": "240 runs (its first 24 rows) in 21.5 min with --workers 1 on a "
-                      "shared 2-core machine (docs/results/generalization.md)",
+               "of CPU time; docs/compute.md)",
+    "paper-e": "410 runs in 612 s of CPU time with --workers 1 on a shared 2-core machine "
+               "(docs/compute.md)",
 }
 _PROBES = (("movement", ("y",)), ("body", ("2d", "3d")), ("signals", ("joint", "cartesian")))
 
