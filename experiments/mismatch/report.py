@@ -9,12 +9,14 @@ from pathlib import Path
 import numpy as np
 from skinny_mj.experiments.mismatch.study import (
     BODIES,
+    CLIP_BODIES,
     CONTROLLERS,
     GOAL_K0,
     GOAL_RATIO,
     GOAL_VS_CT,
     MISMATCHES,
     MODEL_ERROR,
+    MOVEMENTS,
     row_id,
 )
 from skinny_mj.experiments.mismatch.switch import LEARNERS, PRE
@@ -46,28 +48,30 @@ def _cell(vals: list[float], degrees: list[float]) -> str:
     return f"{text} ({np.mean(degrees):.2f}°)" if degrees else text
 
 
-def _lookup(records, bd: str, m: str, ctl: str, suffix: str, metric: str) -> list[float]:
+def _lookup(records, bd: str, m: str, ctl: str, suffix: str, metric: str,
+            mv: str = "ymca") -> list[float]:
     if suffix == "_on":
         if m == "none":
-            return values(records, row_id(bd, "none", "esn"), metric)
-        return values(records, row_id(bd, "none", "esn"), f"{metric}_on_{m}")
-    return values(records, row_id(bd, m, ctl), metric + suffix)
+            return values(records, row_id(bd, "none", "esn", mv), metric)
+        return values(records, row_id(bd, "none", "esn", mv), f"{metric}_on_{m}")
+    return values(records, row_id(bd, m, ctl, mv), metric + suffix)
 
 
-def mean(records, bd, m, ctl, suffix="", metric="position_nrmse") -> float:
-    vals = _lookup(records, bd, m, ctl, suffix, metric)
+def mean(records, bd, m, ctl, suffix="", metric="position_nrmse", mv="ymca") -> float:
+    vals = _lookup(records, bd, m, ctl, suffix, metric, mv)
     return float(np.mean(vals)) if vals else float("nan")
 
 
-def table(records: list[dict], bd: str) -> list[str]:
+def table(records: list[dict], bd: str, mv: str = "ymca") -> list[str]:
     """Markdown: one line per mismatch, position NRMSE mean ± sd (RMS joint error, °)."""
     lines = ["| mismatch | " + " | ".join(h for h, _, _ in COLUMNS) + " |",
              "|---|" + "---|" * len(COLUMNS)]
     for m in MISMATCHES:
-        cells = [_cell(_lookup(records, bd, m, c, s, "position_nrmse"),
-                       _lookup(records, bd, m, c, s, "rms_error_deg")) for _, c, s in COLUMNS]
+        cells = [_cell(_lookup(records, bd, m, c, s, "position_nrmse", mv),
+                       _lookup(records, bd, m, c, s, "rms_error_deg", mv))
+                 for _, c, s in COLUMNS]
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
-    n = sorted({len(values(records, row_id(bd, m, c), "position_nrmse"))
+    n = sorted({len(values(records, row_id(bd, m, c, mv), "position_nrmse"))
                 for m in MISMATCHES for c in CONTROLLERS} - {0})
     lines.append("")
     lines.append(f"Position NRMSE, mean ± sd over {'/'.join(map(str, n))} ok runs per row "
@@ -75,26 +79,27 @@ def table(records: list[dict], bd: str) -> list[str]:
     return lines
 
 
-def goals(records: list[dict], bd: str) -> list[str]:
+def goals(records: list[dict], bd: str, mv: str = "ymca") -> list[str]:
     """The goals against what was measured."""
-    base = mean(records, bd, "none", "esn")
+    base = mean(records, bd, "none", "esn", mv=mv)
     out = [f"- ESN + FEL, nominal teacher, realistic sensing, K = 0, no mismatch: "
            f"{base:.4f} (goal <= {GOAL_K0[bd]})"]
-    fd2 = values(records, row_id(bd, "none", "esn") + "-fd2", "position_nrmse")
+    fd2 = values(records, row_id(bd, "none", "esn", mv) + "-fd2", "position_nrmse")
     if fd2:
         out.append(f"- the same with velocities by the second-order difference instead of "
                    f"the observer: {np.mean(fd2):.4f} ± {np.std(fd2):.4f}")
     for m in MISMATCHES:
         if m == "none":
             continue
-        v = mean(records, bd, m, "esn")
+        v = mean(records, bd, m, "esn", mv=mv)
         if np.isnan(v):  # that row was not swept
             continue
         out.append(f"- {m}: ESN K = 0 {v:.4f} = {v / base:.2f}x its no-mismatch error "
                    f"(goal <= {GOAL_RATIO}x)")
     for m in MODEL_ERROR:
-        k1, ct = mean(records, bd, m, "esn", "_k1"), mean(records, bd, m, "ct-nominal")
-        ad = mean(records, bd, m, "ct-adaptive")
+        k1, ct = mean(records, bd, m, "esn", "_k1", mv=mv), mean(records, bd, m, "ct-nominal",
+                                                                  mv=mv)
+        ad = mean(records, bd, m, "ct-adaptive", mv=mv)
         if np.isnan(k1) or np.isnan(ct):  # those rows were not swept
             continue
         out.append(f"- {m}: ESN K = 1 {k1:.4f}, nominal CT {ct:.4f} ({ct / k1:.2f}x; goal >= "
@@ -124,10 +129,13 @@ def report(results: dict, plan, out_dir: Path) -> str:
     """The table and the goals of each body with runs, and the payload switch."""
     records = load_runs(Path(out_dir))
     lines: list[str] = []
-    for bd in BODIES:
-        if not any(r["row"].startswith(bd) and "-switch-" not in r["row"] for r in records):
-            continue
-        lines += [f"## {bd}", "", *table(records, bd), "", *goals(records, bd), ""]
+    for mv, movement in MOVEMENTS.items():
+        for bd in BODIES if mv == "ymca" else CLIP_BODIES:
+            if not any(r["row"].startswith(f"{bd}-{mv}-") and "-switch-" not in r["row"]
+                       for r in records):
+                continue
+            lines += [f"## {bd}, {movement}", "", *table(records, bd, mv), "",
+                      *goals(records, bd, mv), ""]
     if any("-switch-" in r["row"] for r in records):
         lines += ["## Payload switched on mid-movement", "", *switch_table(records), ""]
     return "\n".join(lines) if lines else "no runs"

@@ -33,7 +33,8 @@ Controllers (all on the same sensed state):
   ``none`` row's ESN (trained on the nominal arm) is also tested on every changed plant
   (``*_on_<mismatch>``): the network trained on the nominal arm, tested on the changed one.
 
-Groups: ``2d`` and ``3d`` (the 3D body: the dynamic study's 3D recipe for the ESN, 500
+Groups: ``clips`` (2D, the shipped clips re-timed to the torque limits, MOVEMENTS),
+``2d`` and ``3d`` (the 3D body: the dynamic study's 3D recipe for the ESN, 500
 units, 6 learning cycles per epoch, the teacher at 20 rad/s, forgetting 0.9), and
 ``switch``: a 1 kg payload switched on mid-movement
 (:mod:`skinny_mj.experiments.mismatch.switch`).
@@ -95,16 +96,25 @@ COLUMNS = {**{k: TABLE_COLUMNS[k] for k in ("position_nrmse", "joint_nrmse", "rm
            **{k: TABLE_COLUMNS[k] for k in ("max_torque_ratio", "train_wall_s")}}
 
 
-def row_id(bd: str, mismatch: str, controller: str) -> str:
-    return f"{bd}-ymca-{mismatch}-{controller}"
+#: The movements trained and tested on: YMCA (both bodies), and in 2D the shipped CMU
+#: clips re-timed locally to the nominal arm's torque limits (``NAME@feasible``: TOPP-RA,
+#: slower only where a torque would pass 0.9 of its limit), group ``clips``.
+MOVEMENTS = {"ymca": "ymca", "md02": "md_02.amc@feasible", "md03": "md_03.amc@feasible"}
+CLIP_BODIES = ("2d",)
 
 
-def _rows() -> tuple[Row, ...]:
+def row_id(bd: str, mismatch: str, controller: str, movement: str = "ymca") -> str:
+    return f"{bd}-{movement}-{mismatch}-{controller}"
+
+
+def _rows(movement: str = "ymca") -> tuple[Row, ...]:
     out = []
     for bd, body_keys in BODIES.items():
+        if movement != "ymca" and bd not in CLIP_BODIES:
+            continue
         for m, changes in MISMATCHES.items():
             for ctl, keys in CONTROLLERS.items():
-                over = {"movement.trajectory": "ymca", **keys, **changes}
+                over = {"movement.trajectory": MOVEMENTS[movement], **keys, **changes}
                 over.update({k: v for k, v in body_keys.items()
                              if ctl == "esn" or k == "plant.dof"})
                 if bd == "3d" and ctl != "esn" and "actuation.omega" in body_keys \
@@ -114,7 +124,8 @@ def _rows() -> tuple[Row, ...]:
                     {"test.washout_cycles": QUICK_ADAPT_CYCLES} if ctl == "ct-adaptive" else {}
                 params = {"also": tuple(k for k in MISMATCHES if k != "none")} \
                     if ctl == "esn" and m == "none" else {}
-                out.append(Row(row_id(bd, m, ctl), over, group=bd, quick=quick,
+                out.append(Row(row_id(bd, m, ctl, movement), over,
+                               group=bd if movement == "ymca" else "clips", quick=quick,
                                params=params, shape=ESN_SHAPE if ctl == "esn" else None))
     return tuple(out)
 
@@ -187,7 +198,8 @@ def _fd2_rows() -> tuple[Row, ...]:
                  for row in _rows() if row.id.endswith("-ymca-none-esn"))
 
 
-ROWS = (*_rows(), *_fd2_rows(), *_switch_rows())
+ROWS = (*_rows(), *_fd2_rows(), *_switch_rows(),
+        *(r for mv in MOVEMENTS if mv != "ymca" for r in _rows(mv)))
 QUICK_ROWS = (*(row_id("2d", m, c) for m in ("none", "payload1", "delay")
                 for c in CONTROLLERS), "2d-ymca-switch-esn-rls", "2d-ymca-switch-ct-adaptive")
 STUDY = Study(
