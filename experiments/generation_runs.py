@@ -151,7 +151,7 @@ def report(results, plan, out_dir: Path, kind: str, extra: list[str] | None = No
     claims."""
     out_dir = Path(out_dir)
     runs = load_runs(out_dir)
-    ids = [p.row.id for p in plan.rows]
+    ids = [r.id for r in plan.rows]
     lines = []
     for metric, label in (("horizon", "free-run horizon (steps)"),
                           ("free_nrmse", "free-run NRMSE")):

@@ -170,7 +170,7 @@ def figure_4(out_dir: Path, plan: Any, row_ids: tuple[str, ...] = FIGURE_4_ROWS,
     it reproduced the run file's TT test position NRMSE exactly."""
     reproduced = [] if reproduced is None else reproduced
     picked = []
-    for row_id in (p.row.id for p in plan.rows if p.row.id in row_ids):
+    for row_id in (r.id for r in plan.rows if r.id in row_ids):
         run = _average_run(out_dir, row_id)
         if run is not None:
             outcome = training.train(plan.trainings(row_id)["tt"], int(run["seed"]))

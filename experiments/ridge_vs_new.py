@@ -103,7 +103,7 @@ def report(results, plan, out_dir: Path) -> str:
     movement of the median ridge1 and row-5 runs."""
     lines = []
     for mv in ("ymca", "md02"):
-        rows = [p.row for p in plan.rows if p.row.group == mv]
+        rows = [r for r in plan.rows if r.group == mv]
         data = {r.id.removeprefix(f"{mv}-"): results.values(r.id, "position_nrmse")
                 for r in rows}
         if not any(data.values()):

@@ -94,13 +94,13 @@ def test_defaults_pass_through_bit_for_bit_and_the_old_rows_keep_their_seeds():
     exp = study.build()
     old = [f"{c}-{lr}" for c in ("gain", "offset") for lr in ("frozen", "fel", "rls")]
     assert [r.id for r in exp.rows[:6]] == old  # row index -> seed: unchanged
-    p = exp.config.params
+    p = exp.params
     assert (p["gain"], p["pre_cycles"], p["change_cycles"], p["post_cycles"],
             p["actuator_gain"], p["offset"], study.runs) == (0.5, 2, 8, 4, 0.7, 0.1, 10)
     assert study.config("gain-fel") == adaptation.TrainConfig().override({"method.epochs": 10})
     assert study.config("payload-fel").actuation.kind == "torque"
     assert 0 < adaptation.forearm_floor(study.base, p["forearm"]) < 0.1
-    quick = study.build(quick=True).config
+    quick = study.build(quick=True)
     assert (quick.params["change_cycles"], quick.config("mass-rls").method.epochs) == (2, 2)
     # the batch model without an edit is the one it always was
     from skinny_mj.plant.model import load_batch_model

@@ -65,7 +65,7 @@ def test_the_lagging_arm_gets_delayed_state_its_prediction_and_what_the_leader_s
 def test_each_arms_forward_model_learns_its_own_next_position():
     from skinny_mj.training.loop import build_run, train_run
 
-    cfg = bd.STUDY.build(quick=True).config.config("phase0-share-predictions-d4").override(
+    cfg = bd.STUDY.build(quick=True).config("phase0-share-predictions-d4").override(
         {"method.epochs": 1, "method.cycles": 1, "movement.speed": 2.0})
     run = build_run(cfg, [7])
     assert isinstance(run.forward, ArmForwardModels) and run.esn.cfg.n_inputs == 8
@@ -110,14 +110,14 @@ def test_lockstep_batch_equals_each_seed_alone():
 def test_rows_cover_patterns_architectures_and_delays():
     exp = bd.STUDY.build()
     assert len(exp.rows) == len(bd.PATTERNS) * len(bd.ARCHITECTURES) * len(bd.DELAYS)
-    cfg = exp.config.config("phase180-share-commands-d6")
+    cfg = exp.config("phase180-share-commands-d6")
     assert (cfg.plant.delay, cfg.forward.kind, cfg.forward.sharing,
             cfg.movement.trajectory) == (6, "parallel", "commands", "bimanual-phase180")
-    inverse = exp.config.config("phase0-inverse-d2")
+    inverse = exp.config("phase0-inverse-d2")
     assert (inverse.forward.kind, inverse.plant.leading_arm) == ("none", "right")
     assert exp.groups["share-predictions"] == tuple(
         f"{p}-share-predictions-d{d}" for p in bd.PATTERNS for d in bd.DELAYS)
-    assert bd.STUDY.build(body=8).config.config("phase0-forward-d4").plant.dof == 8
+    assert bd.STUDY.build(body=8).config("phase0-forward-d4").plant.dof == 8
     for option in ({"movement": "ymca"}, {"signals": "cartesian"}):
         with pytest.raises(SkinnyInputError):
             bd.STUDY.build(**option)
@@ -149,7 +149,7 @@ def test_quick_sweep_end_to_end(tmp_path):
     exp = bd.STUDY.build(quick=True)
     results = run_sweep(exp, tmp_path, workers=1, progress=False)
     assert all(r["n_ok"] == 1 for r in results["rows"])
-    text = bd.report(results, exp.config, tmp_path)
+    text = bd.report(results, exp, tmp_path)
     assert text.count("| phase0 |") == len(exp.rows)
     assert (tmp_path / "delay_sweep.png").stat().st_size > 0
     assert (tmp_path / "traces_d4.png").stat().st_size > 0

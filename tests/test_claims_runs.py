@@ -44,7 +44,7 @@ def test_each_command_makes_its_readings_runs(key):
     study, ran = key
     for point, args in enumerate(runs.PLAN[key]):
         planned = _planned(args)
-        row = planned.rows[0].row.id
+        row = planned.rows[0].id
         config = planned.config(row)
         recorded = "recorded" in ran.split("+")
         assert (config.movement.trajectory == "ymca-recorded") == recorded, args
@@ -72,7 +72,7 @@ def test_paper_es_thesis_protocol_is_the_recorded_data_at_gain_2(study):
     thesis = _planned((study, "--protocol", "thesis"))
     same = _planned((study, "--movement", "ymca-recorded", "--protocol", "gain-2"))
     for row in thesis.rows:
-        assert thesis.config(row.row.id) == same.config(row.row.id)
+        assert thesis.config(row.id) == same.config(row.id)
     assert thesis.params == same.params
 
 

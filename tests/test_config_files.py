@@ -9,10 +9,11 @@ from functools import partial
 from pathlib import Path
 
 import pytest
+import toy as toys
 
 from skinny_mj.cli.parser import main
 from skinny_mj.engine import registry
-from skinny_mj.engine.experiment import Experiment, Row
+from skinny_mj.engine.experiment import Row
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant.body import body_of
 
@@ -169,18 +170,18 @@ def _toy_run(quick: bool, dof: int, row: Row, seed: int) -> dict:
 
 
 def _toy_module() -> types.ModuleType:
-    toy = types.ModuleType("toy_experiment")
-    toy.NAME = "toy"
+    module = types.ModuleType("toy_experiment")
+    module.NAME = "toy"
 
     def build(*, quick=False, movement=None, asf=None, body=None, signals=None):
         dof = 4 if body is None else body_of(body).dof
-        return Experiment(name="toy", rows=tuple(Row(str(k), {"k": k}) for k in (1, 2, 3)),
-                          run_one=partial(_toy_run, quick, dof), runs=3,
-                          config={"quick": quick, "dof": dof}, groups={"odd": ("1", "3")},
-                          report=lambda results, out_dir: "no claims")
+        return toys.toy("toy", tuple(Row(str(k), params={"k": k}) for k in (1, 2, 3)),
+                        partial(_toy_run, quick, dof), runs=3,
+                        params={"quick": quick, "dof": dof}, groups={"odd": ("1", "3")},
+                        report=lambda results, plan, out_dir: "no claims")
 
-    toy.build = build
-    return toy
+    module.build = build
+    return module
 
 
 @pytest.fixture

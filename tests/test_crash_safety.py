@@ -28,19 +28,21 @@ _ENV = {**os.environ, "MUJOCO_GL": "disabled", "OMP_NUM_THREADS": "1",
 _FAKE = r"""
 import sys, time
 import numpy as np
-from skinny_mj.engine.experiment import Experiment, Row, RunFailed, run_sweep
+from skinny_mj.engine.experiment import RunFailed, run_sweep
+from skinny_mj.engine.study import Row, Study
 
 def run_one(row, seed):
     time.sleep(0.03)
     if row.params["fail"] and seed % 3 == 0:
-        raise RunFailed("diverged on purpose")
+        return RunFailed("diverged on purpose")
     rng = np.random.default_rng(seed)
     return {"m": float(rng.normal(row.params["mu"])), "curve": rng.normal(size=4)}
 
-rows = tuple(Row(f"r{i}", {"mu": float(i), "fail": i == 2}) for i in range(4))
-exp = Experiment("crash", rows, run_one, runs=8)
+rows = tuple(Row(f"r{i}", params={"mu": float(i), "fail": i == 2}) for i in range(4))
+exp = Study("crash", rows, run_batch=lambda config, row, seeds: [run_one(row, s) for s in seeds],
+            runs=8).build()
 run_sweep(exp, sys.argv[1], workers=int(sys.argv[3]), resume=sys.argv[2] == "resume",
-          progress=False)
+          progress=False, batch_size=0)
 """
 
 

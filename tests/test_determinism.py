@@ -17,8 +17,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from toy import toy
 
-from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import Row, run_sweep
 
 _CLOCK = ("wall_s", "finished_at")
 
@@ -42,7 +43,7 @@ def _noisy(row: Row, seed: int) -> dict:
 
 
 def test_run_files_are_identical_across_worker_counts(tmp_path):
-    exp = Experiment("det", (Row("a", {"mu": 0.0}), Row("b", {"mu": 2.0})), _noisy, runs=4)
+    exp = toy("det", (Row("a", params={"mu": 0.0}), Row("b", params={"mu": 2.0})), _noisy, runs=4)
     run_sweep(exp, tmp_path / "w1", workers=1, progress=False)
     run_sweep(exp, tmp_path / "w2", workers=2, progress=False)
     assert _files(tmp_path / "w1") == _files(tmp_path / "w2") and len(_files(tmp_path / "w1")) == 8

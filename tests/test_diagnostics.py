@@ -15,10 +15,11 @@ import types
 from pathlib import Path
 
 import numpy as np
+from toy import toy
 
 from skinny_mj.cli.parser import main
 from skinny_mj.engine import folder, registry
-from skinny_mj.engine.experiment import Experiment, Row
+from skinny_mj.engine.experiment import Row
 
 
 def _stale_lock(out: Path) -> int:
@@ -79,8 +80,8 @@ def _fake_study(monkeypatch) -> None:
         return {"value": float(np.random.default_rng(seed).normal())}
 
     module = types.ModuleType("fake_study")
-    module.build = lambda **options: Experiment(  # type: ignore[attr-defined]
-        "fake", (Row("a"), Row("b")), run_one, runs=2, table_columns=("value",))
+    module.build = lambda **options: toy(  # type: ignore[attr-defined]
+        "fake", (Row("a"), Row("b")), run_one, runs=2, columns=("value",))
     monkeypatch.setattr(registry, "get", lambda name: module)
 
 

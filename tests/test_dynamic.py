@@ -103,10 +103,10 @@ def test_dynamic_experiment_rows():
     from skinny_mj.engine.plan import plan
 
     quick = plan(dynamic.STUDY, quick=True)
-    ids = {p.row.id for p in quick.rows}
+    ids = {p.id for p in quick.rows}
     assert {"2d-ymca-pd", "3d-md02-tt", "2d-ymca-payload1-fel-new-gff-k1",
             "2d-ymca-kinematic"} <= ids
-    groups = quick.groups()
+    groups = quick.groups
     assert set(groups["table"]) == {i for i in ids if "kinematic" not in i
                                     and not any(p in i for p in dynamic.PERTURBATIONS)}
     assert set(groups["2d"]) | set(groups["3d"]) == ids

@@ -14,7 +14,7 @@ def _row(row_id, **tests):
     from skinny_mj.engine.plan import plan
 
     p = plan(dynamic.STUDY)
-    row = next(r.row for r in p.rows if r.row.id == row_id)
+    row = p.row(row_id)
     return p.config(row_id), row
 
 

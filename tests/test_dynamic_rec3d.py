@@ -22,7 +22,7 @@ def _changed(p, row_id: str, base_id: str) -> dict:
 
 def test_stiff_rows_are_their_base_with_the_stiffer_teacher_on_its_seeds():
     dynamic, p = _plan()
-    group = p.groups()["omega20"]
+    group = p.groups["omega20"]
     pairs = {"3d-rec-fel-arm-omega20+forget0.9": "3d-rec-fel-arm",
              "3d-ymca-fel-arm-omega20+forget0.9": "3d-ymca-fel-arm",
              "3d-rec-arm-pd-omega20": "3d-rec-arm-pd"}
@@ -31,15 +31,15 @@ def test_stiff_rows_are_their_base_with_the_stiffer_teacher_on_its_seeds():
         want = dynamic.STIFF if "fel" in row_id else {"actuation.omega": 20.0}
         assert _changed(p, row_id, base_id) == want
     # paired: the engine gives a row with seeds_of its twin's seeds (tests/test_three_d.py)
-    seeds_of = {r.id: r.seeds_of for r in p.experiment().rows}
+    seeds_of = {r.id: r.seeds_of for r in p.rows}
     assert [seeds_of[r] for r in pairs] == ["3d-rec-fel-arm", "3d-ymca-fel-arm", "3d-rec-fel-arm"]
 
 
 def test_quick_leaves_out_the_stiff_rows_and_the_3d_preset():
     dynamic, p = _plan()
-    quick = {r.row.id for r in _plan(quick=True)[1].rows}
+    quick = {r.id for r in _plan(quick=True)[1].rows}
     assert set(dynamic.QUICK_ROWS) == quick
-    assert {r.row.id for r in p.rows} - quick == {*p.groups()["omega20"], "3d-general"}
+    assert {r.id for r in p.rows} - quick == {*p.groups["omega20"], "3d-general"}
 
 
 def test_the_stiffer_poles_make_the_teacher_alone_track_the_recorded_ymca_closer():

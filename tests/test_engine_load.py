@@ -16,17 +16,20 @@ import sys
 _CHILD = r"""
 import json, resource, sys
 import numpy as np
-from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import run_sweep
+from skinny_mj.engine.study import Row, Study
 
-def run_one(row, seed):
-    return {"x": float(seed % 97), "trace": np.random.default_rng(seed).normal(size=400)}
+def run_batch(config, row, seeds):
+    return [{"x": float(seed % 97), "trace": np.random.default_rng(seed).normal(size=400)}
+            for seed in seeds]
 
-exp = Experiment("load", tuple(Row(f"r{i}") for i in range(5)), run_one, runs=160)
+rows = tuple(Row(f"r{i}") for i in range(5))
+exp = Study("load", rows, run_batch=run_batch, runs=160).build()
 rss = lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-warm = Experiment("load", exp.rows, run_one, runs=2)  # imports, first writes; a peak
-run_sweep(warm, sys.argv[1], workers=1, progress=False)  # this small leaves room to grow
+warm = Study("load", rows, run_batch=run_batch, runs=2).build()  # imports, first writes
+run_sweep(warm, sys.argv[1], workers=1, progress=False, batch_size=0)  # room to grow
 base = rss()
-results = run_sweep(exp, sys.argv[2], workers=1, progress=False)
+results = run_sweep(exp, sys.argv[2], workers=1, progress=False, batch_size=0)
 print(json.dumps({"growth_mb": rss() - base, "n_ok": results["n_ok"]}))
 """
 

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from toy import toy
 
 from skinny_mj.engine.experiment import (
-    Experiment,
     Row,
     RunFailed,
     aggregate,
@@ -18,6 +18,7 @@ from skinny_mj.engine.experiment import (
     run_seed,
     run_sweep,
 )
+from skinny_mj.engine.plan import Experiment
 from skinny_mj.engine.stats import load_runs, summarize
 from skinny_mj.errors import SkinnyInputError
 
@@ -45,14 +46,13 @@ def make_run_one(marker_dir: Path | None = None):
 
 
 def make_experiment(marker_dir: Path | None = None, *, fail: bool = False,
-                    base_seed: int = 7, mu2: float = 1.0) -> Experiment:
-    rows = [Row("exp1", {"mu": 0.5}, {"error": 0.4, "error_var": 0.0024}),
-            Row("exp2", {"mu": mu2}, {"error": 0.1})]
+                    base_seed: int = 7, mu2: float = 1.0, **study) -> Experiment:
+    rows = [Row("exp1", params={"mu": 0.5}, paper={"error": 0.4, "error_var": 0.0024}),
+            Row("exp2", params={"mu": mu2}, paper={"error": 0.1})]
     if fail:
-        rows.append(Row("bad", {"mu": 0.0, "fail": True}, {}))
-    return Experiment(name="fake", rows=tuple(rows), run_one=make_run_one(marker_dir),
-                      config={"n": 200}, runs=3, base_seed=base_seed,
-                      table_columns=("error", "spread"))
+        rows.append(Row("bad", params={"mu": 0.0, "fail": True}))
+    return toy("fake", rows, make_run_one(marker_dir), params={"n": 200}, runs=3,
+               base_seed=base_seed, columns=("error", "spread"), **study)
 
 
 def _without_wall(results: dict) -> dict:
@@ -74,8 +74,8 @@ def test_a_rows_seeds_follow_its_id_not_its_place(tmp_path):
     def seed_of(row, seed):
         return {"seed": float(seed)}
 
-    ab = Experiment("ab", (Row("a"), Row("b")), seed_of, runs=2)
-    ba = Experiment("ab", (Row("x"), Row("b"), Row("a")), seed_of, runs=2)
+    ab = toy("ab", (Row("a"), Row("b")), seed_of, runs=2)
+    ba = toy("ab", (Row("x"), Row("b"), Row("a")), seed_of, runs=2)
     run_sweep(ab, tmp_path / "ab", workers=1, progress=False)
     run_sweep(ba, tmp_path / "ba", workers=1, progress=False)
     names = [sorted(p.name for p in (tmp_path / d / "runs").glob("[ab]-*.json"))
@@ -118,7 +118,7 @@ def test_a_diverged_run_is_recorded_as_failed_data(tmp_path):
 
 
 def test_nonfinite_metric_is_stored_as_null(tmp_path):
-    exp = Experiment("fake", (Row("n", {"mu": 0.0, "nan": True}),), make_run_one(), runs=2)
+    exp = toy("fake", (Row("n", params={"mu": 0.0, "nan": True}),), make_run_one(), runs=2)
     results = run_sweep(exp, tmp_path, workers=1, progress=False)
     rec = load_runs(tmp_path)[0]
     assert rec["status"] == "ok" and rec["metrics"]["spread"] is None
@@ -174,7 +174,7 @@ def test_bad_arguments_are_input_errors(tmp_path):
     with pytest.raises(SkinnyInputError):
         Row("has space")
     with pytest.raises(SkinnyInputError):
-        Experiment("fake", (Row("a"), Row("a")), make_run_one())
+        toy("fake", (Row("a"), Row("a")), make_run_one())
     with pytest.raises(SkinnyInputError):
         run_sweep(make_experiment(), tmp_path, runs=0, progress=False)
     with pytest.raises(SkinnyInputError):
@@ -194,10 +194,8 @@ def test_summarize_and_markdown_table():
 
 
 def test_an_unavailable_row_is_left_out_of_a_full_sweep_and_refused_by_name(tmp_path, caplog):
-    import dataclasses
-
     full = make_experiment()
-    exp = dataclasses.replace(full, unavailable={"exp1": "needs a package"})
+    exp = make_experiment(unavailable=lambda: {"exp1": "needs a package"})
     run_sweep(exp, tmp_path / "s", workers=1, progress=False)
     assert "row exp1 left out: it needs a package" in caplog.text  # a logging warning
     runs = load_runs(tmp_path / "s")

@@ -6,7 +6,6 @@ errored runs."""
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import functools
 import json
 import sys
@@ -16,9 +15,9 @@ from pathlib import Path
 import cloudpickle
 import numpy as np
 import pytest
+from toy import toy
 
 from skinny_mj.engine.experiment import (
-    Experiment,
     Row,
     RunFailed,
     markdown_table,
@@ -26,6 +25,7 @@ from skinny_mj.engine.experiment import (
     run_sweep,
     select_rows,
 )
+from skinny_mj.engine.plan import Experiment
 from skinny_mj.engine.stats import MEANS_NOTE, load_runs
 from skinny_mj.errors import SkinnyInputError
 
@@ -53,7 +53,7 @@ def counting_run_one(log: Path, row: Row, seed: int) -> dict:
     return run_one(row, seed)
 
 
-def run_batch(row: Row, seeds: list[int]) -> list:
+def run_batch(config, row: Row, seeds: list[int]) -> list:
     out: list = []
     for seed in seeds:
         try:
@@ -63,15 +63,18 @@ def run_batch(row: Row, seeds: list[int]) -> list:
     return out
 
 
-def raising_batch(row: Row, seeds: list[int]) -> list:
-    raise MemoryError("lockstep batch too big")
+def raising_batch(config, row: Row, seeds: list[int]) -> list:
+    if len(seeds) > 1:
+        raise MemoryError("lockstep batch too big")
+    return run_batch(config, row, seeds)
 
 
-def fake(*, rows: tuple[Row, ...] | None = None, one=run_one, batch=None, runs: int = 3,
-         groups=None) -> Experiment:
-    rows = rows or (Row("a", {"mu": 0.0}), Row("b", {"mu": 1.0}), Row("c", {"mu": 2.0}))
-    return Experiment("fake", rows, one, config={"k": 1}, runs=runs, base_seed=3,
-                      run_batch=batch, table_columns=("value",), groups=groups or {})
+def fake(*, rows: tuple[Row, ...] | None = None, one=run_one, runs: int = 3, groups=None,
+         **study) -> Experiment:
+    rows = rows or tuple(Row(i, params={"mu": mu})
+                         for i, mu in zip("abc", (0.0, 1.0, 2.0), strict=True))
+    return toy("fake", rows, one, params={"k": 1}, runs=runs, base_seed=3,
+               columns=("value",), groups=groups or {}, **study)
 
 
 def _files(out: Path) -> dict[str, dict]:
@@ -110,7 +113,7 @@ def test_groups_select_their_rows_in_experiment_order():
     assert [r.id for r in select_rows(exp, ["pair"])] == ["a", "b"]
     assert [r.id for r in select_rows(exp, "last, a")] == ["a", "c"]
     assert select_rows(exp, None) == exp.rows
-    for bad in ({"a": ("b",)}, {"g": ("zz",)}, {"g": ()}):
+    for bad in ({"a": ("b",)}, {"g": ("zz",)}):
         with pytest.raises(SkinnyInputError, match="group"):
             fake(groups=bad)
 
@@ -133,7 +136,8 @@ def test_resume_with_another_selection_adds_rows_and_aggregates_the_disk(tmp_pat
 # -- failed is data, error is a bug --------------------------------------------------------
 @WORKERS
 def test_an_exception_is_an_error_record_and_the_other_runs_finish(tmp_path, workers, caplog):
-    rows = (Row("ok", {"mu": 0.0}), Row("bug", {"bug": True}), Row("div", {"diverge": True}))
+    rows = (Row("ok", params={"mu": 0.0}), Row("bug", params={"bug": True}),
+            Row("div", params={"diverge": True}))
     results = run_sweep(fake(rows=rows), tmp_path, workers=workers, progress=False)
     by_row = {r["row"]: r for r in results["rows"]}
     assert by_row["ok"]["n_ok"] == 3 and by_row["bug"]["n_error"] == 3
@@ -156,9 +160,10 @@ def test_an_exception_is_an_error_record_and_the_other_runs_finish(tmp_path, wor
 
 
 def test_run_batch_results_map_to_ok_failed_and_error(tmp_path):
-    rows = (Row("bug", {"bug": True}), Row("div", {"diverge": True}))
-    run_sweep(fake(rows=rows, batch=run_batch), tmp_path / "batch", workers=1, progress=False)
-    run_sweep(fake(rows=rows), tmp_path / "single", workers=1, progress=False)
+    rows = (Row("bug", params={"bug": True}), Row("div", params={"diverge": True}))
+    run_sweep(fake(rows=rows, run_batch=run_batch), tmp_path / "batch", workers=1,
+              progress=False)
+    run_sweep(fake(rows=rows), tmp_path / "single", workers=1, progress=False, batch_size=0)
     batch, single = _files(tmp_path / "batch"), _files(tmp_path / "single")
     assert sorted(batch) == sorted(single)
     for name, rec in batch.items():
@@ -170,26 +175,28 @@ def test_run_batch_results_map_to_ok_failed_and_error(tmp_path):
 
 @WORKERS
 def test_a_raising_batch_falls_back_to_single_runs_and_says_so(tmp_path, workers, caplog):
-    run_sweep(fake(batch=raising_batch), tmp_path / "fb", workers=workers, progress=False,
+    run_sweep(fake(run_batch=raising_batch), tmp_path / "fb", workers=workers, progress=False,
               batch_size=2)
     run_sweep(fake(), tmp_path / "single", workers=1, progress=False)
     fb, single = _files(tmp_path / "fb"), _files(tmp_path / "single")
     assert sorted(fb) == sorted(single)
-    for name, rec in fb.items():
-        size = 2 if rec["run_index"] < 2 else 1
-        assert rec["fallback"] == f"MemoryError: lockstep batch too big (batch of {size} seeds)"
-        assert "raising_batch" in rec["fallback_traceback"]
+    for name, rec in fb.items():  # a batch of 2 seeds raises, one of 1 runs
+        if rec["run_index"] < 2:
+            assert rec["fallback"] == "MemoryError: lockstep batch too big (batch of 2 seeds)"
+            assert "raising_batch" in rec["fallback_traceback"]
+        else:
+            assert "fallback" not in rec
         assert {k: v for k, v in rec.items() if not k.startswith("fallback")} == single[name]
     results = json.loads((tmp_path / "fb" / "results.json").read_text())
-    assert all(r["n_fallback"] == 3 and r["n_ok"] == 3 for r in results["rows"])
+    assert all(r["n_fallback"] == 2 and r["n_ok"] == 3 for r in results["rows"])
     assert "ran its seeds one by one" in caplog.text  # a warning of skinny_mj's logger
 
 
 def test_resume_reruns_errored_runs_only(tmp_path):
     flag, log = tmp_path / "bug-present", tmp_path / "calls.txt"
     flag.touch()
-    rows = (Row("ok", {"mu": 0.0}), Row("bug", {"bug": str(flag)}),
-            Row("div", {"diverge": True}))
+    rows = (Row("ok", params={"mu": 0.0}), Row("bug", params={"bug": str(flag)}),
+            Row("div", params={"diverge": True}))
     exp = fake(rows=rows, one=functools.partial(counting_run_one, log))
     first = run_sweep(exp, tmp_path / "out", workers=1, progress=False)
     assert first["n_error"] == 3
@@ -207,7 +214,8 @@ def test_resume_reruns_errored_runs_only(tmp_path):
 
 # -- tables and run files ------------------------------------------------------------------
 def test_table_shows_failed_over_n_with_errors_and_says_means_exclude_failures(tmp_path):
-    rows = (Row("div", {"diverge": True}, {"value": 0.5}), Row("bug", {"bug": True}))
+    rows = (Row("div", params={"diverge": True}, paper={"value": 0.5}),
+            Row("bug", params={"bug": True}))
     results = run_sweep(fake(rows=rows, runs=4), tmp_path, workers=1, progress=False)
     table = (tmp_path / "table.md").read_text()
     div = results["rows"][0]
@@ -254,8 +262,8 @@ def _fake_module(calls: list, rows: tuple[Row, ...]) -> types.ModuleType:
     def build(*, quick, movement, asf, body, signals):
         calls.append({"quick": quick, "movement": movement, "asf": asf, "body": body,
                       "signals": signals})
-        return dataclasses.replace(fake(rows=rows, groups={"both": ("ok", rows[1].id)}),
-                                   report=lambda results, out: f"- {results['n_error']} errored")
+        return fake(rows=rows, groups={"both": ("ok", rows[1].id)},
+                    report=lambda results, plan, out: f"- {results['n_error']} errored")
 
     module.build = build  # type: ignore[attr-defined]
     return module
@@ -272,7 +280,7 @@ def _cli(monkeypatch, module: types.ModuleType, *argv: str) -> int:
 def test_cli_exits_1_when_a_run_errored_and_still_writes_everything(tmp_path, monkeypatch,
                                                                      capsys):
     calls: list = []
-    module = _fake_module(calls, (Row("ok", {"mu": 0.0}), Row("bug", {"bug": True})))
+    module = _fake_module(calls, (Row("ok", params={"mu": 0.0}), Row("bug", params={"bug": True})))
     out = tmp_path / "out"
     code = _cli(monkeypatch, module, "--out", str(out), "--movement", "ym", "--dof", "8",
                 "--signals", "joint", "--rows", "both")
@@ -289,7 +297,7 @@ def test_cli_exits_1_when_a_run_errored_and_still_writes_everything(tmp_path, mo
 
 
 def test_cli_exits_0_with_failed_runs_and_2_on_an_unknown_row(tmp_path, monkeypatch, capsys):
-    module = _fake_module([], (Row("ok", {"mu": 0.0}), Row("div", {"diverge": True})))
+    module = _fake_module([], (Row("ok", params={"mu": 0.0}), Row("div", params={"diverge": True})))
     assert _cli(monkeypatch, module, "--out", str(tmp_path / "a"), "--quick") == 0
     assert "run(s) errored" not in capsys.readouterr().out
     assert _cli(monkeypatch, module, "--out", str(tmp_path / "b"), "--rows", "ok,nope") == 2

@@ -10,6 +10,7 @@ No test here asserts on time: timings live in ``skinny bench``.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 
 import numpy as np
@@ -17,9 +18,11 @@ import pytest
 from skinny_mj.controllers import fel
 from skinny_mj.controllers.esn import ESN
 from skinny_mj.controllers.metrics import position_nrmse
+from toy import toy
 
 from skinny_mj.cli import bench
-from skinny_mj.engine.experiment import Experiment, Row, RunFailed, execute_batch, run_sweep
+from skinny_mj.engine.experiment import Row, RunFailed, execute_batch, run_sweep
+from skinny_mj.engine.plan import Experiment
 from skinny_mj.plant.adapters import BatchPlant, EnvPlant
 from skinny_mj.plant.task import load
 from skinny_mj.training.loop import TrainConfig, train, train_batch
@@ -134,7 +137,7 @@ def _toy_one(row: Row, seed: int) -> dict:
     return {"value": float(rng.random() + row.params["shift"])}
 
 
-def _toy_batch(row: Row, seeds: list[int]) -> list:
+def _toy_batch(config, row: Row, seeds: list[int]) -> list:
     out: list = []
     for seed in seeds:
         try:
@@ -144,9 +147,9 @@ def _toy_batch(row: Row, seeds: list[int]) -> list:
     return out
 
 
-def _toy(run_batch) -> Experiment:
-    rows = (Row("a", {"shift": 0.0}), Row("b", {"shift": 1.0}))
-    return Experiment("toy", rows, _toy_one, runs=7, run_batch=run_batch)
+def _toy(run_batch, **study) -> Experiment:
+    rows = (Row("a", params={"shift": 0.0}), Row("b", params={"shift": 1.0}))
+    return toy("toy", rows, _toy_one, runs=7, run_batch=run_batch, **study)
 
 
 def _run_files(out) -> dict:
@@ -159,7 +162,8 @@ def _run_files(out) -> dict:
 
 @pytest.mark.parametrize("batch_size", [None, 3])
 def test_engine_batches_write_the_same_run_files(tmp_path, batch_size):
-    single = run_sweep(_toy(None), tmp_path / "single", workers=1, progress=False)
+    single = run_sweep(_toy(None), tmp_path / "single", workers=1, progress=False,
+                       batch_size=0)
     batched = run_sweep(_toy(_toy_batch), tmp_path / "batch", workers=1, progress=False,
                         batch_size=batch_size)
     assert _run_files(tmp_path / "single") == _run_files(tmp_path / "batch")
@@ -170,8 +174,10 @@ def test_engine_batches_write_the_same_run_files(tmp_path, batch_size):
 
 
 def test_engine_batch_resume_and_raising_batch_falls_back(tmp_path):
-    def broken(row, seeds):
-        raise MemoryError("too big")
+    def broken(config, row, seeds):
+        if len(seeds) > 1:
+            raise MemoryError("too big")
+        return _toy_batch(config, row, seeds)
 
     out = tmp_path / "sweep"
     run_sweep(_toy(broken), out, workers=1, progress=False, batch_size=4)
@@ -181,9 +187,9 @@ def test_engine_batch_resume_and_raising_batch_falls_back(tmp_path):
     removed.unlink()
     calls = []
 
-    def counting(row, seeds):
+    def counting(config, row, seeds):
         calls.append(list(seeds))
-        return _toy_batch(row, seeds)
+        return _toy_batch(config, row, seeds)
 
     run_sweep(_toy(counting), out, workers=1, progress=False, resume=True)
     assert sum(len(c) for c in calls) == 1
@@ -203,12 +209,12 @@ def test_default_batch_size_gives_every_worker_the_same_number_of_jobs():
 def test_costliest_batches_start_first_and_files_do_not_change(tmp_path):
     started = []
 
-    def recording(row, seeds):
+    def recording(config, row, seeds):
         started.append(row.id)
-        return _toy_batch(row, seeds)
+        return _toy_batch(config, row, seeds)
 
     plain = run_sweep(_toy(_toy_batch), tmp_path / "plain", workers=1, progress=False)
-    exp = dataclasses.replace(_toy(recording), cost=lambda row: 1.0 + row.params["shift"])
+    exp = _toy(recording, cost=lambda config, row: 1.0 + row.params["shift"])
     costed = run_sweep(exp, tmp_path / "costed", workers=1, progress=False, batch_size=7)
     assert started == ["b", "a"]  # row b costs 2, row a 1
     assert _run_files(tmp_path / "plain") == _run_files(tmp_path / "costed")
@@ -220,7 +226,7 @@ def test_execute_batch_refuses_mixed_rows():
 
     specs = [RunSpec(Row("a"), 0, 0, 1), RunSpec(Row("b"), 1, 0, 2)]
     with pytest.raises(ValueError):
-        execute_batch(_toy_batch, _toy_one, specs, "toy")
+        execute_batch(functools.partial(_toy_batch, None), _toy_one, specs, "toy")
 
 
 # -- bench plumbing (no timing asserted) ----------------------------------------------------

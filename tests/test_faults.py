@@ -15,9 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 import skinny_mj.controllers._io
+from toy import toy
 
 from skinny_mj.cli.parser import main
-from skinny_mj.engine.experiment import Experiment, Row, RunFailed, run_sweep
+from skinny_mj.engine.experiment import Row, RunFailed, run_sweep
 from skinny_mj.errors import SkinnyEnvironmentError
 
 
@@ -128,12 +129,12 @@ def test_a_killed_worker_is_reported_and_resume_recovers(tmp_path):
 
     victim = run_seed(0, "b", 3)
     rows = (Row("a"), Row("b"))
-    exp = Experiment("kill", rows, _dies_on(victim), runs=6)
+    exp = toy("kill", rows, _dies_on(victim), runs=6)
     with pytest.raises(SkinnyEnvironmentError, match="worker process died.*--resume"):
         run_sweep(exp, tmp_path, workers=2, progress=False)
     kept = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "runs").glob("*.json")}
     assert f"b-{victim}.json" not in kept
-    healed = Experiment("kill", rows, _dies_on(None), runs=6)
+    healed = toy("kill", rows, _dies_on(None), runs=6)
     results = run_sweep(healed, tmp_path, workers=2, resume=True, progress=False)
     assert results["n_ok"] == 12
     assert all((tmp_path / "runs" / n).stat().st_mtime_ns == t for n, t in kept.items())
@@ -144,7 +145,7 @@ def test_unreachable_dask_scheduler_is_one_line_exit_1(tmp_path, monkeypatch, ca
     import skinny_mj.engine.sweep
 
     monkeypatch.setattr(skinny_mj.engine.sweep, "DASK_CONNECT_TIMEOUT_S", 1)
-    exp = Experiment("dask", (Row("a"),), _dies_on(None), runs=1)
+    exp = toy("dask", (Row("a"),), _dies_on(None), runs=1)
     with pytest.raises(SkinnyEnvironmentError, match="cannot reach the Dask scheduler"):
         run_sweep(exp, tmp_path, workers=1, scheduler="tcp://127.0.0.1:1", progress=False)
     assert not list((tmp_path / "runs").iterdir())
@@ -156,10 +157,10 @@ def _train_row(row: Row, seed: int) -> dict:
     from skinny_mj.training.config import TrainConfig
     from skinny_mj.training.loop import train
 
-    fel = row.params.get("method", "new") in ("original", "new")
+    fel = row.overrides.get("method", "new") in ("original", "new")
     outcome = train(TrainConfig().override({"esn.n_reservoir": 20, "movement.trajectory": "y",
                                             **({"method.epochs": 1} if fel else {}),
-                                            **row.params}), seed)
+                                            **row.overrides}), seed)
     if outcome.failed:
         raise RunFailed(outcome.fail_reason)
     return {"position_nrmse": outcome.test.position_nrmse}
@@ -170,7 +171,7 @@ def test_diverging_runs_are_failed_with_reasons_and_the_sweep_goes_on(tmp_path):
             Row("huge-radius", {"esn.spectral_radius": 1e6}),
             Row("huge-noise", {"esn.noise_level": 1e308}),  # inf states
             Row("singular-fit", {"method": "true-target", "esn.noise_level": 1e308}))  # NaN solve
-    results = run_sweep(Experiment("numfaults", rows, _train_row, runs=1), tmp_path,
+    results = run_sweep(toy("numfaults", rows, _train_row, runs=1), tmp_path,
                         workers=1, progress=False)
     by_row = {r["row"]: r for r in results["rows"]}
     assert by_row["ok"]["n_ok"] == 1 and results["n_error"] == 0
@@ -223,7 +224,7 @@ def test_names_from_files_and_configs_cannot_leave_the_output_folder(name, tmp_p
     with pytest.raises(SkinnyInputError):
         Row(name)
     with pytest.raises(SkinnyInputError):
-        Experiment(name, (Row("a"),), _dies_on(None))
+        toy(name, (Row("a"),), _dies_on(None))
     movement = tmp_path / "in" / "m.npz"
     Trajectory(ymca(4).angles[:30], name=name).save(movement)
     out = tmp_path / "deep" / "out"
@@ -239,17 +240,18 @@ _SLOW_SWEEP = """
 import os, sys, time
 from pathlib import Path
 from skinny_mj.cli.parser import _on_sigterm, _terminate
-from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import run_sweep
+from skinny_mj.engine.study import Row, Study
 
-def run_one(row, seed):
+def run_batch(config, row, seeds):
     Path(sys.argv[1], f"worker-{os.getpid()}").touch()
     time.sleep(120)
-    return {"m": 0.0}
+    return [{"m": 0.0} for _ in seeds]
 
 if __name__ == "__main__":
     _on_sigterm(_terminate)  # as `skinny` does
-    run_sweep(Experiment("slow", (Row("a"),), run_one, runs=2), Path(sys.argv[1]) / "out",
-              workers=2, progress=False)
+    slow = Study("slow", (Row("a"),), run_batch=run_batch, runs=2).build()
+    run_sweep(slow, Path(sys.argv[1]) / "out", workers=2, progress=False, batch_size=1)
 """
 
 

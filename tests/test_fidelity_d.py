@@ -16,7 +16,7 @@ from skinny_mj.training.loop import build_run, train_run
 def test_registered_rows_and_groups():
     assert experiments.get("fidelity-d") is fidelity_d.STUDY
     exp = fidelity_d.STUDY.build()
-    grid = fidelity_d.grid_of(exp.config)
+    grid = fidelity_d.grid_of(exp)
     assert grid == fidelity_d.Grid()
     assert len(exp.rows) == len(grid.movements) * len(grid.reservoirs) \
         * len(grid.input_noises) * 5
@@ -31,24 +31,24 @@ def test_registered_rows_and_groups():
         assert set(exp.groups[cell]) <= set(exp.groups["stage2"])
     quick = fidelity_d.STUDY.build(quick=True)
     assert set(quick.groups["stage2"]) == {r.id for r in quick.rows}
-    assert fidelity_d.grid_of(quick.config) == fidelity_d.QUICK_GRID
+    assert fidelity_d.grid_of(quick) == fidelity_d.QUICK_GRID
 
 
 def test_rows_are_paper_d_true_target_configs_plus_the_grid():
-    plan = fidelity_d.STUDY.build().config
-    for p in plan.rows:
-        if p.params["movement"] != "smooth" or p.params["reservoir"] != 200 \
-                or p.params["input_noise"]:
+    plan = fidelity_d.STUDY.build()
+    for r in plan.rows:
+        p = plan.run_row(r.id).params
+        if p["movement"] != "smooth" or p["reservoir"] != 200 or p["input_noise"]:
             continue
-        exp = p.params["exp"]
-        want = paper_d.STUDY.build().config.trainings(exp)["tt"]
-        assert plan.trainings(p.row.id)["tt"] == \
+        exp = p["exp"]
+        want = paper_d.STUDY.build().trainings(exp)["tt"]
+        assert plan.trainings(r.id)["tt"] == \
             want.override({"movement.trajectory": "ymca-smooth"})
-        assert p.row.paper["tt_position_test"] == paper_d.PAPER_TABLE_1[exp][2][0]
+        assert r.paper["tt_position_test"] == paper_d.PAPER_TABLE_1[exp][2][0]
 
 
 def test_input_noise_raises_the_training_error():
-    plan = fidelity_d.STUDY.build(quick=True).config
+    plan = fidelity_d.STUDY.build(quick=True)
     errors = {}
     for noise in ("0", "0.05"):  # the same seed: the same reservoir, only the inputs differ
         tt = train_run(build_run(plan.trainings(f"smooth-n20-i{noise}-e1")["tt"],
@@ -73,7 +73,7 @@ def test_quick_stage_1_runs_and_reports(quick_sweep):
         if row["n_ok"]:
             assert {"tt_position_train", "tt_position_test", "tt_motor_test"} <= set(
                 row["metrics"])
-    text = fidelity_d_report.report(Results(results, out), exp.config, out)
+    text = fidelity_d_report.report(Results(results, out), exp, out)
     assert "Stage 1" in text and "Stage 2" not in text  # stage 2 not run yet
     assert (out / "fig_train_error.png").stat().st_size > 0
     assert (out / "fig_test_error.png").stat().st_size > 0

@@ -255,12 +255,14 @@ def test_fuzz_run_file_is_valid_or_a_clear_error(value, key, raw, tmp_path_facto
 def test_fuzz_resume_config_json(content, tmp_path_factory):
     """--resume reads the folder's config.json: anything there is the same sweep (runs
     it) or one SkinnyInputError; the file is never half-rewritten."""
-    from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+    from toy import toy
+
+    from skinny_mj.engine.experiment import Row, run_sweep
 
     out = tmp_path_factory.mktemp("sweep")
     (out / "runs").mkdir()
     (out / "config.json").write_bytes(content)
-    exp = Experiment("fz", (Row("a"),), lambda row, seed: {"m": 1.0}, runs=1)
+    exp = toy("fz", (Row("a"),), lambda row, seed: {"m": 1.0}, runs=1)
     try:
         run_sweep(exp, out, workers=1, resume=True, progress=False)
     except SkinnyInputError as err:

@@ -119,18 +119,18 @@ def test_generalization_experiment_runs_a_tiny_matrix(tmp_path):
     assert late == [*full.groups["extra"], *full.groups["general"],  # earlier rows keep seeds
                     *full.groups["cartesian"]]
     # a Cartesian candidate is its base row with one change, on the base row's seeds
-    base, elbow = (full.config.config(r) for r in ("c3-babble15+ymca", "c3-babble15+ymca+elbow"))
+    base, elbow = (full.config(r) for r in ("c3-babble15+ymca", "c3-babble15+ymca+elbow"))
     assert elbow == base.override({"plant.signals": "cartesian-elbow"})
-    assert full.config.config("c2-general+damp0.3").method.u_error_damping == 0.3
+    assert full.config("c2-general+damp0.3").method.u_error_damping == 0.3
     seeds = {r.id: r.seeds_of for r in full.rows}
     assert seeds["c2-general+forward"] == "c2-general" and seeds["c2-general"] is None
-    c3 = full.config.config("c3-md_03")
+    c3 = full.config("c3-md_03")
     assert (c3.plant.dof, c3.plant.signals, c3.movement.trajectory, c3.esn.n_reservoir) == \
         (8, "cartesian", "md_03.amc", 200)
-    assert full.config.config("j2-babble15-N400").esn.n_reservoir == 400
+    assert full.config("j2-babble15-N400").esn.n_reservoir == 400
     with pytest.raises(SkinnyInputError):
         g.STUDY.build(movement="ymca")
-    config = full.config.config("j2-md_02-head").override(
+    config = full.config("j2-md_02-head").override(
         {"esn.n_reservoir": 20, "method.epochs": 1})
     row = dataclasses.replace(g.STUDY.row("j2-md_02-head"),
                               params={"tests": ("y-pure", "md_03-tail")})

@@ -166,4 +166,4 @@ def test_each_general_preset_is_a_row_of_the_generalization_study():
     for rep, row in g.GENERAL_OF.items():
         dof, signals = g.REPRESENTATIONS[rep]
         want = TrainConfig().override(preset_fields("general", dof=dof, signals=signals))
-        assert full.config.config(row) == want, rep
+        assert full.config(row) == want, rep

@@ -14,11 +14,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from toy import toy
 
 from skinny_mj import preflight
 from skinny_mj.cli.parser import main
-from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import Row, run_sweep
 from skinny_mj.engine.folder import LOCK_NAME
+from skinny_mj.engine.plan import Experiment
 
 TINY = ["--reservoir", "20", "--cycles", "1", "--epochs", "1", "--quiet"]
 MODEL = "general-2d-joint"  # a shipped model: `skinny test` needs no training first
@@ -206,7 +208,7 @@ def _fake() -> Experiment:
     def run_one(row: Row, seed: int) -> dict:
         return {"value": float(np.random.default_rng(seed).normal())}
 
-    return Experiment("fake", (Row("a"),), run_one, runs=1, table_columns=("value",))
+    return toy("fake", (Row("a"),), run_one, runs=1, columns=("value",))
 
 
 def test_two_default_sweeps_in_the_same_second_get_two_folders(tmp_path, monkeypatch,

@@ -9,8 +9,9 @@ from skinny_mj.controllers.fel import Rollout
 from skinny_mj.controllers.forward_model import ForwardModel
 from skinny_mj.controllers.metrics import nrmse
 from skinny_mj.experiments import get, paper_a
+from toy import toy
 
-from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import Row, run_sweep
 
 
 def _tiny(arch: str, delay: int):
@@ -27,7 +28,7 @@ def _run(arch: str, delay: int, seeds: list[int], config=None) -> list:
 
 def _rows(delays: tuple[int, ...]) -> tuple[Row, ...]:
     """The engine's rows of paper A's ids for ``delays`` (the claims read only ids)."""
-    return tuple(Row(paper_a.row_id(a, d), {"architecture": a, "delay": d})
+    return tuple(Row(paper_a.row_id(a, d), params={"architecture": a, "delay": d})
                  for a in paper_a.ARCHITECTURES for d in delays)
 
 
@@ -92,7 +93,7 @@ def test_lockstep_batch_equals_each_seed_alone(arch):
 
 
 def test_delay_hurts_the_inverse_only_architecture():
-    quick = paper_a.STUDY.build(quick=True).config  # the --quick sweep's plan
+    quick = paper_a.STUDY.build(quick=True)  # the --quick sweep
     d0 = _run("inverse", 0, [1], quick.config("inverse-d0"))[0]["performance_nrmse"]
     d4 = _run("inverse", 4, [1], quick.config("inverse-d4"))[0]["performance_nrmse"]
     assert d4 > 2 * d0
@@ -113,7 +114,7 @@ def test_claims_hold_and_fail_on_synthetic_runs(tmp_path):
         err, share = good[arch] if d else (0.01, 0.3)
         metrics[row.id] = [{"performance_nrmse": err + k * 0.001, "correction_ratio": share,
                                 "pretrain_prediction_nrmse": 0.08} for k in range(3)]
-    exp = Experiment("fake-a", _rows((0, 4)), _fake(metrics), runs=3)
+    exp = toy("fake-a", _rows((0, 4)), _fake(metrics), runs=3)
     run_sweep(exp, tmp_path / "good", workers=1, progress=False)
     lines = paper_a.claims(tmp_path / "good")
     assert len(lines) == 8
@@ -141,7 +142,7 @@ def test_serial_best_counts_a_tie_within_the_spread_and_not_a_clear_loss(tmp_pat
             calls[row.id] = calls.get(row.id, -1) + 1
             return metrics[row.id][calls[row.id]]
 
-        run_sweep(Experiment(name, rows, run_one, runs=3), tmp_path / name,
+        run_sweep(toy(name, rows, run_one, runs=3), tmp_path / name,
                   workers=1, progress=False)
         return next(x for x in paper_a.claims(tmp_path / name) if "serial has the" in x)
 
@@ -175,7 +176,7 @@ def test_full_config_matches_the_paper():
     tcfg = study.config("hybrid-d3")
     assert (tcfg.plant.delay, tcfg.forward.kind, tcfg.forward.reservoir) == (3, "hybrid", 100)
     assert study.config("inverse-d3").forward.kind == "none"
-    quick = study.build(quick=True).config
+    quick = study.build(quick=True)
     assert quick.config("serial-d4").forward.reservoir == 50
     assert (quick.config("inverse-d4").esn.n_reservoir, quick.config("inverse-d4").method.epochs) \
         == (100, 2)
@@ -183,5 +184,5 @@ def test_full_config_matches_the_paper():
 
 def test_dof_8_builds_a_3d_sweep():
     exp = paper_a.STUDY.build(quick=True, body=8, signals="cartesian")
-    assert {(exp.config.config(r.id).plant.dof, exp.config.config(r.id).plant.signals)
+    assert {(exp.config(r.id).plant.dof, exp.config(r.id).plant.signals)
             for r in exp.rows} == {(8, "cartesian")}

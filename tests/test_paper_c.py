@@ -83,15 +83,15 @@ def test_untrained_network_leaves_the_arm_still_at_test():
 def test_rows_and_the_movement_option():
     full = paper_c.STUDY.build()
     assert [r.id for r in full.rows] == list(paper_c.MOVEMENTS) and full.runs == 10
-    assert paper_c.columns(full.config.params)[paper_c.REAL_ID].endswith("md_02.amc")
+    assert paper_c.columns(full.params)[paper_c.REAL_ID].endswith("md_02.amc")
     quick = plan(paper_c.STUDY, quick=True)
-    assert [p.row.id for p in quick.rows] == list(paper_c.QUICK_TRAIN)
+    assert [p.id for p in quick.rows] == list(paper_c.QUICK_TRAIN)
     assert quick.config("ymca").esn.n_reservoir == 100
     assert list(paper_c.columns(quick.params)) == [*paper_c.QUICK_TESTS, paper_c.REAL_ID]
     # --movement: a row training on it (kept by --quick, after the others: their seeds
     # stay), and the test column ``real`` in place of md_02; no other row changes
     moved = plan(paper_c.STUDY, quick=True, movement="ymca@0.5", asf="x.asf")
-    assert [p.row.id for p in moved.rows] == [*paper_c.QUICK_TRAIN, paper_c.REAL_ID]
+    assert [p.id for p in moved.rows] == [*paper_c.QUICK_TRAIN, paper_c.REAL_ID]
     assert paper_c.columns(moved.params)[paper_c.REAL_ID] == "ymca@0.5"
     real = moved.config(paper_c.REAL_ID).movement
     assert (real.trajectory, real.asf) == ("ymca@0.5", None)  # an .asf is for .amc clips
@@ -111,14 +111,14 @@ def test_quick_sweep_end_to_end(tmp_path):
     assert all(r["n_failed"] == 0 for r in results["rows"])
     runs = [json.loads(p.read_text()) for p in sorted((tmp_path / "runs").glob("*.json"))]
     assert len(runs) == len(paper_c.QUICK_TRAIN) * exp.runs
-    cols = list(paper_c.columns(exp.config.params))
+    cols = list(paper_c.columns(exp.params))
     for run in runs:
         m = run["metrics"]
         for col in cols:
             assert np.isfinite(m[f"{col}__position_nrmse"]) and 0 <= m[f"{col}__position_nrmse"]
             assert abs(m[f"{col}__lag_steps"]) <= paper_c.MAX_LAG_STEPS  # every pair's timing
         assert np.asarray(m["angles__ymca"]).shape == (len(get("ymca")), 4)
-        assert len(m["train_curve_position_nrmse"]) == exp.config.config(run["row"]).method.epochs
+        assert len(m["train_curve_position_nrmse"]) == exp.config(run["row"]).method.epochs
         assert 0 < m["peak_rss_mb"] < 2048
     text = exp.report(results, tmp_path)
     for name in ("matrix_position_nrmse.png", "matrix.md", "train_curves.png", "fig3_ymca.png",

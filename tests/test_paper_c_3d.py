@@ -36,7 +36,7 @@ def test_paper_c_3d_is_paper_c_on_the_3d_body_with_one_full_scale_and_200_units(
         paper_c.STUDY.config("ymca")  # nothing else differs from paper C
     moved = study.build(quick=True, movement="md_03.amc")  # paper C's real movement
     assert moved.rows[-1].id == paper_c.REAL_ID
-    assert moved.config.config(paper_c.REAL_ID).plant.dof == 8
+    assert moved.config(paper_c.REAL_ID).plant.dof == 8
     for option, value in (("body", 4), ("signals", "cartesian")):
         with pytest.raises(SkinnyInputError, match=f"takes no --{option}"):
             study.build(**{option: value})

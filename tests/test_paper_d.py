@@ -24,7 +24,7 @@ def test_rows_follow_the_papers_design():
     assert (cfg.plant.dof, cfg.plant.signals, cfg.esn.spectral_radius, cfg.plant.sensor_noise,
             study.runs) == (
         8, "cartesian", 0.5, 0.01, 50)
-    plan = study.build().config
+    plan = study.build()
     got = {}
     for row in study.rows:
         c = plan.trainings(row.id)
@@ -49,12 +49,12 @@ def test_rows_follow_the_papers_design():
 
 def test_build_options():
     exp = paper_d.STUDY.build(quick=True, movement="y")
-    tt = exp.config.trainings("2")["tt"]
-    fel = exp.config.trainings("2")["fel"]
+    tt = exp.trainings("2")["tt"]
+    fel = exp.trainings("2")["fel"]
     assert exp.runs == 2 and fel.method.epochs == 2 and tt.method.cycles == 3
     assert tt.movement.trajectory == "y" and len(exp.rows) == 5
     assert exp.name == paper_d.STUDY.build().name == "paper-d"  # the movement is in the config
-    two_d = paper_d.STUDY.build(body=4, signals="joint").config.config("1")
+    two_d = paper_d.STUDY.build(body=4, signals="joint").config("1")
     assert (two_d.plant.dof, two_d.plant.signals) == (4, "joint")
     assert set(paper_d.COLUMNS) <= set(exp.table_columns)
 
@@ -119,7 +119,7 @@ def test_report_writes_figures_and_claims(quick_sweep):
 
 def test_run_one_is_reproducible_from_its_seed():
     exp = paper_d.STUDY.build(quick=True)
-    cfg = exp.config.config("2").override({"esn.n_reservoir": 30})
+    cfg = exp.config("2").override({"esn.n_reservoir": 30})
     a, b = (paper_d.STUDY.run(cfg, paper_d.STUDY.row("2"), [7])[0] for _ in range(2))
     c = paper_d.STUDY.run(cfg, paper_d.STUDY.row("2"), [8])[0]
     keys = [*paper_d.COLUMNS]

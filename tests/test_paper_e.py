@@ -9,8 +9,9 @@ import math
 import numpy as np
 import pytest
 from skinny_mj.experiments.paper_e import study as paper_e
+from toy import toy
 
-from skinny_mj.engine.experiment import Experiment, Row, aggregate, run_sweep, select_rows
+from skinny_mj.engine.experiment import Row, aggregate, run_sweep, select_rows
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.trajectories import load_movement, sample_clip, ymca
@@ -117,7 +118,7 @@ def test_row_groups_and_run_counts():
 
 def test_row_runs_cap_the_sweep(tmp_path):
     """Engine: a row's own run count (Figs. 4/5: 10 beside the Table's 20)."""
-    exp = Experiment("rowruns", (Row("a"), Row("b", runs=1)), lambda row, seed: {"x": 1.0},
+    exp = toy("rowruns", (Row("a"), Row("b", runs=1)), lambda row, seed: {"x": 1.0},
                      runs=3)
     results = run_sweep(exp, tmp_path, workers=1, progress=False)
     assert [r["n_ok"] for r in results["rows"]] == [3, 1]
@@ -170,8 +171,8 @@ def test_sweep_on_a_movement_excerpt(tmp_path):
     movement = f"{MD02}@start=3,duration=6.26"
     exp = paper_e.STUDY.build(quick=True, movement=movement)
     assert exp.name == "paper-e"  # the movement is recorded in config.json
-    assert exp.config.base.movement.trajectory == movement
-    assert {exp.config.config(r.id).movement.trajectory for r in exp.rows} == {movement}
+    assert exp.base.movement.trajectory == movement
+    assert {exp.config(r.id).movement.trajectory for r in exp.rows} == {movement}
     results = run_sweep(exp, tmp_path, rows=["5", "fig3-b0.3"], runs=1, workers=1,
                         progress=False)
     text = exp.report(results, tmp_path)

@@ -9,8 +9,9 @@ import dataclasses
 import numpy as np
 import pytest
 from skinny_mj.experiments.paper_e_explain import study as pee
+from toy import toy
 
-from skinny_mj.engine.experiment import Experiment, run_seed, run_sweep
+from skinny_mj.engine.experiment import run_seed, run_sweep
 from skinny_mj.engine.study import Quick
 from skinny_mj.training.loop import build_run, evaluate, train_batch, train_run
 
@@ -53,7 +54,7 @@ def _load(results: dict, out_dir) -> list[dict]:
 
 
 def test_the_three_exps_of_a_run_start_from_one_network(tmp_path):
-    seeds = Experiment("seeds", pee.STUDY.build().rows, _seed_of, runs=3)
+    seeds = toy("seeds", pee.STUDY.build().rows, _seed_of, runs=3)
     runs = [r for r in _load(run_sweep(seeds, tmp_path, workers=1, progress=False), tmp_path)]
     for k in range(3):  # row 1's seed of run k, in all three rows
         assert {r["row"]: r["metrics"]["seed"] for r in runs if r["run_index"] == k} == \

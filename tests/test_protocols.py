@@ -71,7 +71,7 @@ def test_the_gain_band_and_paper_bs_noise_free_reservoir_set_only_their_key():
                                          ("b-noise-free", "esn.noise_level", 0.0, "paper-b")):
         study = protocols.apply(name, registry.get(study_name), study_name)
         default = plan(registry.get(study_name))
-        for row in (r.row.id for r in default.rows[:3]):
+        for row in (r.id for r in default.rows[:3]):
             config = plan(study).config(row)
             assert config.to_dict()[key] == value != default.config(row).to_dict()[key]
             assert config.override({key: default.config(row).to_dict()[key]}) \

@@ -116,6 +116,6 @@ def test_a_studys_rows_quick_and_tiny_take_old_keys(fresh):
 
     old, new = study("rule.epochs", "rule"), study("method.epochs", "method")
     for kw in ({}, {"quick": True}, {"quick": True, "tiny": True}):
-        assert [p.config for p in plan(old, **kw).rows] == [p.config for p in plan(new, **kw).rows]
-    assert [p.config.method.epochs for p in plan(old, quick=True, tiny=True).rows] == [1, 1]
+        assert plan(old, **kw).configs == plan(new, **kw).configs
+    assert [c.method.epochs for c in plan(old, quick=True, tiny=True).configs.values()] == [1, 1]
     assert plan(old).config("a").method.epochs == 3

@@ -99,14 +99,14 @@ def test_curves_are_chains_of_segments_tested_on_a_log_grid():
     assert {r.seeds_of for r in chain[1:]} == {chain[0].id}
     costs = [exp.cost(r) for r in chain]
     assert costs == sorted(costs, reverse=True) and len(set(costs)) == len(costs)
-    assert max(study.cost(exp.config.config(r.id), rows[r.id]) for r in exp.rows
+    assert max(study.cost(exp.config(r.id), rows[r.id]) for r in exp.rows
                if r.params["learner"] != "fel") < 3600  # every RL run within an hour
     budget = set(exp.groups["budget"])
     assert "ppo-general-1000000" in budget and "sac-ymca-100000" in budget
     assert "ppo-ymca-1250000" in exp.groups["extend"] and not budget & set(
         exp.groups["search"])
-    assert exp.config.config("fel-general").movement.trajectory.startswith("set:babble")
-    assert exp.config.config("ppo-res-ymca-250000").actuation.feedback == "inertia-pd"
+    assert exp.config("fel-general").movement.trajectory.startswith("set:babble")
+    assert exp.config("ppo-res-ymca-250000").actuation.feedback == "inertia-pd"
     assert runs.test_steps(10_000) == [0, 1000, 1500, 2000, 3000, 5000, 7000, 10_000]
 
 

@@ -87,7 +87,7 @@ def test_a_quick_dynamic_row_carries_the_figures(tmp_path):
 
     p = plan(dynamic.STUDY, quick=True)
     cfg = p.config("2d-ymca-arm-ct")  # computed torque alone: no training, quick
-    (m,) = dynamic.STUDY.run(cfg, p.row("2d-ymca-arm-ct").row, [0])
+    (m,) = dynamic.STUDY.run(cfg, p.row("2d-ymca-arm-ct"), [0])
     for key in (*ROBOT_METRICS, *TORQUE_METRICS):
         assert isinstance(m[key], float) and math.isfinite(m[key]), key
     assert m["rms_error_deg"] <= m["peak_error_deg"]

@@ -3,15 +3,16 @@ test whose numbers and verdicts mean nothing; a full sweep says nothing of the k
 
 from __future__ import annotations
 
-import dataclasses
 import types
 
 import numpy as np
 import pytest
+from toy import toy
 
 from skinny_mj.cli.parser import main
 from skinny_mj.engine import registry
-from skinny_mj.engine.experiment import Experiment, Row
+from skinny_mj.engine.experiment import Row
+from skinny_mj.engine.plan import Experiment
 from skinny_mj.engine.stats import SMOKE_NOTE
 
 
@@ -19,11 +20,10 @@ def _fake() -> Experiment:
     def run_one(row: Row, seed: int) -> dict:
         return {"value": float(np.random.default_rng(seed).normal())}
 
-    def report(results, out) -> str:
+    def report(results, plan, out) -> str:
         return "- [does NOT hold] the fake claim"
 
-    exp = Experiment("fake", (Row("a"),), run_one, runs=1, table_columns=("value",))
-    return dataclasses.replace(exp, report=report)
+    return toy("fake", (Row("a"),), run_one, runs=1, columns=("value",), report=report)
 
 
 @pytest.mark.parametrize("quick", [True, False])

@@ -46,7 +46,7 @@ def test_study_builds_plans_runs_one_tiny_run_and_writes_its_table(name, tmp_pat
     quick = study.build(quick=True)
     assert full.name == quick.name == name
     assert quick.rows and quick.runs <= full.runs  # --quick may run another, smaller grid
-    exp = plan(study, quick=True, tiny=True).experiment()
+    exp = plan(study, quick=True, tiny=True)
     assert [r.id for r in exp.rows] == [r.id for r in quick.rows]  # same seeds
     if "movement" in study.takes:  # it changes the runs, never moves a row (or its seeds);
         moved = study.build(quick=True, movement="ymca@0.5")  # paper C adds one after
@@ -76,6 +76,6 @@ def test_a_study_refuses_an_option_it_does_not_take():
 
     study = Study(name="fixed-body", rows=(Row("a"),), metrics={"x": "wall_s"},
                   takes=("movement",))
-    assert study.build(movement="y").config.config("a").movement.trajectory == "y"
+    assert study.build(movement="y").config("a").movement.trajectory == "y"
     with pytest.raises(SkinnyInputError, match="takes no --body"):
         study.build(body=8)

@@ -41,17 +41,17 @@ def toy(**changes) -> Study:
 
 def test_rows_configs_params_groups_and_quick_are_derived():
     full = plan(toy())
-    assert [p.row.id for p in full.rows] == ["a", "b", "c"]  # q only in quick sweeps
+    assert [p.id for p in full.rows] == ["a", "b", "c"]  # q only in quick sweeps
     assert full.config("a").esn.n_reservoir == 30 and full.config("c").method.epochs == 3
-    assert full.row("b").params == {"k": 2, "tol": 0.1}
-    assert full.groups() == {"g": ("a", "b"), "all": ("a", "b", "c")}
+    assert full.run_row("b").params == {"k": 2, "tol": 0.1}
+    assert full.groups == {"g": ("a", "b"), "all": ("a", "b", "c")}
     quick = plan(toy(), quick=True)
-    assert [p.row.id for p in quick.rows] == ["a", "b", "c", "q"]
+    assert [p.id for p in quick.rows] == ["a", "b", "c", "q"]
     assert quick.config("b").esn.n_reservoir == 35 and quick.row("b").params["k"] == 3
     assert quick.config("c").method.epochs == 2  # Quick.overrides come after the row's
     exp = toy().build(quick=True)
     assert exp.runs == 2 and [r.runs for r in exp.rows] == [None, 1, None, None]
-    assert exp.rows[1].params == {"esn.n_reservoir": 35, "k": 3}  # what run files record
+    assert exp.rows[1].settings == {"esn.n_reservoir": 35, "k": 3}  # what run files record
     with pytest.raises(SkinnyInputError, match="seeds_of no row"):
         toy(quick=Quick(rows=("c",))).build(quick=True)  # c takes a's seeds: a must run
 
@@ -59,7 +59,7 @@ def test_rows_configs_params_groups_and_quick_are_derived():
 def test_options_are_overrides_of_the_base_and_refused_when_not_taken():
     exp = toy().build(movement="md_02.amc", asf=None, body=8, signals="joint")
     assert {(c.movement.trajectory, c.plant.dof, c.plant.signals) for c in
-            (exp.config.config(r.id) for r in exp.rows)} == {("md_02.amc", 8, "joint")}
+            (exp.config(r.id) for r in exp.rows)} == {("md_02.amc", 8, "joint")}
     with pytest.raises(SkinnyInputError, match="takes no --body"):
         toy(takes=("movement",)).build(body=8)
     with pytest.raises(SkinnyInputError, match="unknown config key"):
@@ -78,7 +78,7 @@ def test_an_own_option_derives_the_study_and_sets_no_config_key():
     study = toy(own_options={"movement": _with_movement})
     assert plan(study).to_dict() == plan(toy()).to_dict()  # not given: the study as it is
     moved = plan(study, movement="y", asf="s.asf", body=8)
-    assert [p.row.id for p in moved.rows] == ["a", "b", "c", "own"]
+    assert [p.id for p in moved.rows] == ["a", "b", "c", "own"]
     assert moved.params["moved"] == ("y", "s.asf") and moved.row("own").params["k"] == 9
     assert {moved.config(i).movement.trajectory for i in ("a", "own")} == \
         {TrainConfig().movement.trajectory}  # --movement set no config key
@@ -123,10 +123,10 @@ def test_quick_params_columns_and_the_studys_cost_memory_and_unavailable_hooks(t
                 preflight.Estimate({"x": runs * config.esn.n_reservoir}, {"x": "toy"}),
                 unavailable=lambda: {"c": "needs a package", "q": "is not in this sweep"})
     full, quick = study.build(), study.build(quick=True)
-    assert full.config.params == {"k": 0, "tol": 0.1} and full.table_columns == ("reservoir", "k")
-    assert quick.config.params == {"k": 0, "tol": 0.5} and quick.table_columns == ("k",)
-    assert quick.config.run_row("a").params == {"k": 1, "tol": 0.5}  # a row's own params win
-    assert json.loads(json.dumps(quick.config.to_dict()))["params"]["tol"] == 0.5
+    assert full.params == {"k": 0, "tol": 0.1} and full.table_columns == ("reservoir", "k")
+    assert quick.params == {"k": 0, "tol": 0.5} and quick.table_columns == ("k",)
+    assert quick.run_row("a").params == {"k": 1, "tol": 0.5}  # a row's own params win
+    assert json.loads(json.dumps(quick.to_dict()))["params"]["tol"] == 0.5
     assert [full.cost(r) for r in full.rows] == [31.0, 42.0, 204.0]
     assert full.unavailable == {"c": "needs a package"}  # of the rows this sweep has
     rows = {r.id: r for r in full.rows}

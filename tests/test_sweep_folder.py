@@ -14,9 +14,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from toy import toy
 
 from skinny_mj.engine import folder
-from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import Row, run_sweep
+from skinny_mj.engine.plan import Experiment
 from skinny_mj.errors import SkinnyInputError
 
 
@@ -25,8 +27,8 @@ def _run_one(row: Row, seed: int) -> dict:
 
 
 def _fake() -> Experiment:
-    return Experiment("fake", (Row("a", {"mu": 0.0}), Row("b", {"mu": 1.0})), _run_one,
-                      config={"k": 1}, runs=2, table_columns=("value",))
+    return toy("fake", (Row("a", params={"mu": 0.0}), Row("b", params={"mu": 1.0})), _run_one,
+                      params={"k": 1}, runs=2, columns=("value",))
 
 
 def _module() -> types.ModuleType:
@@ -168,7 +170,7 @@ def test_the_lock_is_held_while_the_sweep_runs_and_released_after(tmp_path):
         seen.append(folder.read_lock(tmp_path / folder.LOCK_NAME))
         return {"value": 1.0}
 
-    exp = Experiment("fake", (Row("a"),), run_one, runs=2)
+    exp = toy("fake", (Row("a"),), run_one, runs=2)
     run_sweep(exp, tmp_path, workers=1, progress=False)
     assert [h["pid"] for h in seen] == [os.getpid()] * 2
     assert seen[0]["host"] == socket.gethostname() and seen[0]["started_at"]
@@ -180,6 +182,6 @@ def test_the_lock_is_released_when_the_sweep_raises(tmp_path):
         raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        run_sweep(Experiment("fake", (Row("a"),), run_one, runs=1), tmp_path, workers=1,
+        run_sweep(toy("fake", (Row("a"),), run_one, runs=1), tmp_path, workers=1,
                   progress=False)
     assert not (tmp_path / folder.LOCK_NAME).exists()

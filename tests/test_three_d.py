@@ -11,9 +11,10 @@ import pytest
 from skinny_mj.experiments import paper_a
 from skinny_mj.experiments.three_d import report as three_d_report
 from skinny_mj.experiments.three_d import study as three_d
+from toy import toy
 
 from skinny_mj.engine import registry
-from skinny_mj.engine.experiment import Experiment, Row, run_sweep
+from skinny_mj.engine.experiment import Row, run_sweep
 from skinny_mj.engine.stats import load_runs
 from skinny_mj.errors import SkinnyInputError
 
@@ -24,7 +25,7 @@ def _draw(row: Row, seed: int) -> dict:
 
 def test_a_row_with_seeds_of_takes_its_twins_seeds_and_config_records_it(tmp_path):
     rows = (Row("a"), Row("b", seeds_of="a"), Row("c"))
-    exp = Experiment("pair", rows, _draw, runs=3, base_seed=5)
+    exp = toy("pair", rows, _draw, runs=3, base_seed=5)
     run_sweep(exp, tmp_path / "all", workers=1, progress=False)
     seeds = {r: sorted(x["seed"] for x in load_runs(tmp_path / "all") if x["row"] == r)
              for r in "abc"}
@@ -35,7 +36,7 @@ def test_a_row_with_seeds_of_takes_its_twins_seeds_and_config_records_it(tmp_pat
     run_sweep(exp, tmp_path / "b", rows="b", workers=1, progress=False)  # --rows: same seeds
     assert sorted(x["seed"] for x in load_runs(tmp_path / "b")) == seeds["a"]
     with pytest.raises(SkinnyInputError, match="seeds_of"):  # at build, not mid-sweep
-        Experiment("bad", (Row("a"), Row("b", seeds_of="z")), _draw)
+        toy("bad", (Row("a"), Row("b", seeds_of="z")), _draw)
 
 
 def test_rows_are_the_papers_own_on_both_bodies_the_3d_twin_on_the_2d_seeds():
@@ -47,22 +48,22 @@ def test_rows_are_the_papers_own_on_both_bodies_the_3d_twin_on_the_2d_seeds():
         p, dim, rid = row.params["paper"], row.params["dim"], row.params["row"]
         assert row.id == f"{p}-{dim}-{rid}" and rid in three_d.SUBSET[p]
         assert row.seeds_of == (None if dim == "2d" else f"{p}-2d-{rid}")
-        config = exp.config.config(row.id)
-        own, paper_row = three_d.paper_of(config, exp.config.run_row(row.id))
+        config = exp.config(row.id)
+        own, paper_row = three_d.paper_of(config, exp.run_row(row.id))
         assert paper_row.id == rid and own.name == three_d.PAPERS[p]
         assert dict(row.paper) == dict(paper_row.paper)  # the paper's numbers, if any
         if p == "a":  # paper A's own row on the row's body
-            trained = own.config.config(rid)
+            trained = own.config(rid)
             assert (trained.plant.dof, trained.plant.signals) == \
                 ((4, "joint") if dim == "2d" else (8, "cartesian"))
             assert trained == paper_a.STUDY.build(**({} if dim == "2d" else {
-                "body": 8, "signals": "cartesian"})).config.config(rid)
+                "body": 8, "signals": "cartesian"})).config(rid)
     assert set(exp.groups["3d"]) == {i for i in ids if "-3d-" in i}
     quick = three_d.STUDY.build(quick=True)
     assert [r.id for r in quick.rows[:6]] == [
         "a-2d-inverse-d0", "a-2d-serial-d4", "b-2d-phase0", "b-2d-phase90", "c-2d-ymca",
         "c-2d-mirror-left"]  # each sweep's own order: its seeds
-    body = three_d.STUDY.build(body=8, signals="joint").config
+    body = three_d.STUDY.build(body=8, signals="joint")
     assert body.config("a-3d-serial-d4").plant.signals == "joint"
     assert body.config("a-2d-serial-d4").plant.signals == "joint"
     with pytest.raises(SkinnyInputError, match="takes no --movement"):
@@ -158,7 +159,7 @@ def test_a_sweep_on_a_row_quick_does_not_keep_is_the_papers_row_under_its_quick_
 
     sweep = grid_study(["esn.spectral_radius=0.5,0.9"], study=three_d.STUDY,
                        row="a-3d-inverse-d10", quick=True).build()
-    config = sweep.config.config(sweep.rows[1].id)
+    config = sweep.config(sweep.rows[1].id)
     own = paper_a.STUDY.config("inverse-d10", body=8, signals="cartesian")
     assert config == own.override({**paper_a.STUDY.quick.overrides,
                                    "esn.spectral_radius": 0.9})

@@ -119,7 +119,7 @@ def report(results, plan, out_dir: Path) -> str:
     wall-time ratio, from the run files on disk."""
     out_dir = Path(out_dir)
     bodies = tuple(bd for bd, dof in BODIES.items()
-                   if any(p.config.plant.dof == dof for p in plan.rows))
+                   if any(c.plant.dof == dof for c in plan.configs.values()))
     clip = plan.base.movement.trajectory
     lines = ["what the movements ask of the motors (inverse dynamics of the desired motion):",
              *feasibility_table((YMCA, RECORDED, clip), bodies)]
@@ -135,7 +135,7 @@ def report(results, plan, out_dir: Path) -> str:
                              f"{hits} / {len(v)} runs, best {min(v):.4f}")
     lines += arm_report(out_dir, bodies)
     lines += learning_curves(results, tuple(f"{bd}-ymca-fel-arm" for bd in bodies))
-    rows = [p.row.id for p in plan.rows]
+    rows = [r.id for r in plan.rows]
     lines += general.report_lines(out_dir, tuple(rows), {bd: BODIES[bd] for bd in bodies})
     ratios = [x for r in rows for x in values(out_dir, r, "max_torque_ratio")]
     warns = [x for r in rows for x in values(out_dir, r, "warnings")]

@@ -23,8 +23,8 @@ def _stat(results: dict, row_id: str, metric: str) -> tuple[float, float, int, i
 
 def _grid(plan) -> tuple[list[str], list[float]]:
     """The movements (in the study's order) and u_error gains the sweep planned."""
-    movements = list(dict.fromkeys(p.row.group for p in plan.rows))
-    return movements, sorted({p.config.method.u_error_gain for p in plan.rows})
+    movements = list(dict.fromkeys(r.group for r in plan.rows))
+    return movements, sorted({c.method.u_error_gain for c in plan.configs.values()})
 
 
 def ratios(results: dict, plan) -> list[dict]:

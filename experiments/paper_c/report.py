@@ -29,7 +29,7 @@ from skinny_mj.plots import heatmap_png, learning_curve_png, pyplot, save_figure
 from skinny_mj.trajectories import get
 
 if TYPE_CHECKING:
-    from skinny_mj.engine.plan import Plan, Results
+    from skinny_mj.engine.plan import Experiment, Results
 
 
 def _runs(out_dir: Path) -> list[dict]:
@@ -201,7 +201,7 @@ def timing_lags(runs: list[dict], dof: int) -> dict[str, float]:
     return {k: float(np.mean(v)) for k, v in out.items()}
 
 
-def report(results: Results, plan: Plan, out_dir: Path) -> str:
+def report(results: Results, plan: Experiment, out_dir: Path) -> str:
     """The train x test heat maps, shoulder-vs-elbow figures, learning curves, claims of
     the sweep in ``out_dir`` (``plan``: what it ran; its body's DOFs)."""
     out_dir = Path(out_dir)

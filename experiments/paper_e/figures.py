@@ -19,7 +19,7 @@ from skinny_mj.experiments.paper_e.study import (
     TABLE_COLUMNS,
 )
 
-from skinny_mj.engine.plan import Plan
+from skinny_mj.engine.plan import Experiment
 from skinny_mj.engine.results import test_figures, test_motor_nrmse, test_position_nrmse
 from skinny_mj.engine.stats import load_runs, markdown_table
 from skinny_mj.io import atomic_write_text
@@ -35,9 +35,9 @@ def group_of(row_id: str) -> str:
     return "table" if row_id in TABLE_1 else row_id.split("-")[0]
 
 
-def _group_config(plan: Plan, group: str) -> TrainConfig | None:
+def _group_config(plan: Experiment, group: str) -> TrainConfig | None:
     """The config of the group's first row in this sweep (None: the group has none)."""
-    return next((p.config for p in plan.rows if p.row.group == group), None)
+    return next((plan.config(r.id) for r in plan.rows if r.group == group), None)
 
 
 def _ok_runs(out_dir: Path, group: str) -> list[dict]:
@@ -67,7 +67,7 @@ def movement_line(cfg: TrainConfig) -> str:
             f"(max {rep.max_excess_deg:.1f} deg)")
 
 
-def write_table(results: dict, out_dir: Path, plan: Plan) -> Path:
+def write_table(results: dict, out_dir: Path, plan: Experiment) -> Path:
     """table.md: the movement, then every row (Table 2 rows first), ours beside the paper."""
     text = (movement_line(plan.base) + "\n\n" + markdown_table(results, TABLE_COLUMNS) + "\n\n"
             "Fig. 3 rows: cycles = training cycles until y_used is within "
@@ -106,7 +106,7 @@ def fig3(out_dir: Path) -> Path | None:
     return save_figure(fig, out_dir / "fig3.png")
 
 
-def fig3_summary(out_dir: Path, plan: Plan) -> str:
+def fig3_summary(out_dir: Path, plan: Experiment) -> str:
     """Cycles each β needs (mean, min–max over runs) beside the paper's Table 1 count."""
     runs = _ok_runs(out_dir, "fig3")
     if not runs:
@@ -162,7 +162,7 @@ def fig3_proportion(runs: Sequence[dict]) -> str:
             "for any tolerance")
 
 
-def fig4(out_dir: Path, plan: Plan) -> Path | None:
+def fig4(out_dir: Path, plan: Experiment) -> Path | None:
     """Fig. 4: mean test position NRMSE vs reservoir size (original method, 5 reps)."""
     runs = _ok_runs(out_dir, "fig4")
     sizes = sorted({int(r["params"]["esn.n_reservoir"]) for r in runs})
@@ -179,7 +179,7 @@ def fig4(out_dir: Path, plan: Plan) -> Path | None:
                               title="Paper E, Figure 4 (the paper chose N = 200)", log_x=True)
 
 
-def fig5(out_dir: Path, plan: Plan) -> Path | None:
+def fig5(out_dir: Path, plan: Experiment) -> Path | None:
     """Fig. 5: mean test position NRMSE vs reservoir noise, (a) original (b) new β."""
     a, b = _group_config(plan, "fig5a"), _group_config(plan, "fig5b")
     if a is None or b is None:
@@ -298,7 +298,7 @@ def _size_line(out_dir: Path, ids: dict[str, float]) -> str:
             f"original method (Fig. 4, lowest mean position): ours {best[0]:g}")
 
 
-def median_recordings(out_dir: Path, plan: Plan, table_rows: Sequence[str]) -> list[str]:
+def median_recordings(out_dir: Path, plan: Experiment, table_rows: Sequence[str]) -> list[str]:
     """One ``exp<row>_median_seed<seed>.rrd`` per Table row: the run with the median test
     position NRMSE (lower middle for an even count), re-trained from its seed (runs are
     deterministic in (config, seed); the lines say whether the re-run matched)."""
@@ -343,7 +343,7 @@ def report(results, plan, out_dir: Path) -> str:
     fig4(out_dir, plan)
     fig5(out_dir, plan)
     fig6(out_dir)
-    rrd_lines = median_recordings(out_dir, plan, [p.row.id for p in plan.rows
-                                                       if p.row.group == "table"])
+    rrd_lines = median_recordings(out_dir, plan, [r.id for r in plan.rows
+                                                       if r.group == "table"])
     return "\n".join([claims(out_dir), "", fig3_summary(out_dir, plan),
                       "", *rrd_lines])

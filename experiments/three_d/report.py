@@ -22,7 +22,6 @@ from skinny_mj.experiments.paper_c import report as paper_c_report
 from skinny_mj.experiments.paper_c.study import MOVEMENTS
 from skinny_mj.experiments.three_d.study import DIMS, PAPERS, paper_experiment, row_id, subset
 
-from skinny_mj.engine.folder import recorded_config
 from skinny_mj.engine.stats import aggregate, load_runs, to_jsonable
 from skinny_mj.io import atomic_write_json, atomic_write_text
 from skinny_mj.plant import body
@@ -94,7 +93,7 @@ def write_views(out_dir: Path, runs: list[dict], quick: bool, dof: int,
             shutil.rmtree(view / "runs", ignore_errors=True)
             (view / "runs").mkdir(parents=True)
             atomic_write_json(view / "config.json", {
-                "experiment": exp.name, "config": to_jsonable(recorded_config(exp.config))})
+                "experiment": exp.name, "config": to_jsonable(exp.to_dict())})
             for rec in runs:
                 if rec["params"].get("paper") != p or rec["params"].get("dim") != dim:
                     continue

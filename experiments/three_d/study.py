@@ -47,8 +47,7 @@ from __future__ import annotations
 import functools
 
 from skinny_mj.engine import registry
-from skinny_mj.engine.experiment import Experiment
-from skinny_mj.engine.experiment import Row as EngineRow
+from skinny_mj.engine.plan import Experiment
 from skinny_mj.engine.study import Of, Quick, Row, Study
 from skinny_mj.training.config import TrainConfig
 
@@ -84,7 +83,7 @@ def paper_experiment(paper: str, dim: str, quick: bool, dof: int, signals: str) 
     return registry.get(PAPERS[paper]).build(quick=quick, **body)
 
 
-def paper_of(config: TrainConfig, row: Row) -> tuple[Experiment, EngineRow]:
+def paper_of(config: TrainConfig, row: Row) -> tuple[Experiment, Row]:
     """The paper's own sweep (on ``config``'s body) and row that ``row`` runs."""
     p = row.params
     exp = paper_experiment(p["paper"], p["dim"], p["quick"], config.plant.dof,

@@ -466,7 +466,7 @@ def _sweep_and_report(args: argparse.Namespace, module: Any, exp: Any, rows: Any
                             progress=_progress_on(args.quiet), options=options)
         cf.warn_if_rebuilt_differs(invocation, out)
         wall = time.perf_counter() - start
-        claims = exp.report(results, out) if exp.report is not None else ""
+        claims = exp.report(results, out)
         summary = (out / "table.md").read_text()
         if claims and options.get("quick"):  # a smoke test's verdicts mean nothing
             claims = f"{SMOKE_NOTE}\n\n{claims}"

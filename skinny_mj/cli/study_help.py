@@ -55,11 +55,10 @@ def _plain(text: str) -> str:
 
 def _config(exp: Any) -> Any:
     """What ``config.json`` records of a built study: its config and its rows."""
-    from skinny_mj.engine.folder import recorded_config
     from skinny_mj.engine.stats import to_jsonable
 
-    return to_jsonable({"config": recorded_config(exp.config),
-                        "rows": [(r.id, dict(r.params), r.runs) for r in exp.rows]})
+    return to_jsonable({"config": exp.to_dict(),
+                        "rows": [(r.id, r.settings, r.runs) for r in exp.rows]})
 
 
 def option_effects(module: Any, base: Any) -> dict[str, str]:

@@ -1,23 +1,24 @@
 """The experiment engine shared by every study: a sweep of (row, seed) runs.
 
-A study (:class:`skinny_mj.engine.study.Study`: a base config, rows of overrides) is planned
-into an :class:`Experiment` by :mod:`skinny_mj.engine.plan`; :func:`run_sweep` runs it in
-parallel (joblib/loky here, or a Dask cluster), writing one JSON file per finished run to
-``out/runs/<row>-<seed>.json``; :func:`aggregate` rebuilds ``results.json`` from those
-files only and :func:`markdown_table` sets our numbers beside the paper's.
+A study (:class:`skinny_mj.engine.study.Study`: a base config, rows of overrides) planned
+for one sweep is an :class:`Experiment` (:mod:`skinny_mj.engine.plan`); :func:`run_sweep`
+runs it in parallel (joblib/loky here, or a Dask cluster), writing one JSON file per
+finished run to ``out/runs/<row>-<seed>.json``; :func:`aggregate` rebuilds
+``results.json`` from those files only and :func:`markdown_table` sets our numbers beside
+the paper's.
 
 The contract
 ------------
-An :class:`Experiment` is the execution layer under a study. ``Study.build(*, quick=False,
-movement=None, asf=None, body=None, signals=None) -> Experiment`` takes exactly the options
-of ``skinny experiment`` (``--quick --movement --asf --body --signals``), each None meaning the
-study's default; every one of them that changes the runs is in ``Experiment.config`` (the
-plan: ``config.json`` records it and ``--resume`` refuses a different one), never in the
-name: the name is the study's whatever the movement, so the default output folder stays
-``results/<name>/<time>``.
+``Study.build(*, quick=False, movement=None, asf=None, body=None, signals=None) ->
+Experiment`` takes exactly the options of ``skinny experiment`` (``--quick --movement
+--asf --body --signals``), each None meaning the study's default; every one of them that
+changes the runs is in ``Experiment.to_dict()`` (``config.json`` records it and
+``--resume`` refuses a different one), never in the name: the name is the study's whatever
+the movement, so the default output folder stays ``results/<name>/<time>``.
 
-**An Experiment holds ALL its rows**, always; ``build`` never filters them. Selection
-is the engine's: ``run_sweep(..., rows=["5", "fig4"])`` takes row ids and group names
+**An Experiment holds ALL its rows** (the study's :class:`~skinny_mj.engine.study.Row`\ s,
+``--quick`` applied); ``build`` never filters them. Selection is the engine's:
+``run_sweep(..., rows=["5", "fig4"])`` takes row ids and group names
 (``Experiment.groups``: group name -> row ids, e.g. ``{"table": ("1", ..., "6")}``).
 A run's seed is ``run_seed(base_seed, row_id, run_index)``, ``row_id`` the row's (or its
 ``Row.seeds_of`` row's) id: a seed depends on what the row is called, never on where it
@@ -25,23 +26,22 @@ stands, so rows can be added, reordered and deleted without moving any other row
 numbers, and ``--rows`` reproduces the full sweep's files bit for bit. An unknown entry raises
 :class:`SkinnyInputError` naming the known ids and groups.
 
-**A run** is ``run_one(row, seed) -> Mapping`` of metrics (numbers are aggregated; other
-JSON-able values are kept in the run file only). It is shipped to worker processes with
-cloudpickle: bind the config with ``functools.partial``. Its outcome is one of:
+**A run** is ``Experiment.run_batch(row, seeds) -> list``: the row's seeds in lockstep,
+per seed a mapping of metrics (numbers are aggregated; other JSON-able values are kept in
+the run file only), a :class:`RunFailed` or another exception instance; the Experiment is
+shipped to worker processes with cloudpickle. A seed's outcome is one of:
 
-- it returns the metrics: status ``"ok"``;
-- it raises :class:`RunFailed` (the network diverged): status ``"failed"``. A diverged
+- its metrics: status ``"ok"``;
+- a :class:`RunFailed` (the network diverged): status ``"failed"``. A diverged
   run is data: it counts in ``failed / n`` and is left out of the means;
-- anything else raised (or a return value that is not a mapping of JSON-able values)
-  is a bug, not data: status ``"error"`` with the full traceback; the sweep finishes
-  the other runs, ``--resume`` runs it again, and ``skinny experiment`` exits 1.
+- anything else (or a value that is not a mapping of JSON-able values) is a bug, not
+  data: status ``"error"`` with the full traceback; the sweep finishes the other runs,
+  ``--resume`` runs it again, and ``skinny experiment`` exits 1.
 
-``run_batch(row, seeds) -> list`` (optional, the lockstep fast path) returns per seed
-the metrics mapping or a :class:`RunFailed` instance (any other exception instance
-there is that seed's error). If ``run_batch`` itself raises (or returns the wrong
-number of results), the engine runs that batch's seeds one by one with ``run_one`` and
-each of those records carries ``"fallback": "<ExcType>: <message> (batch of N seeds)"``
-and ``"fallback_traceback"``. Batched or not, the run files are the same.
+If ``run_batch`` itself raises (or returns the wrong number of results), the engine runs
+that batch's seeds one by one (``Experiment.run_one``, a batch of one seed) and each of
+those records carries ``"fallback": "<ExcType>: <message> (batch of N seeds)"`` and
+``"fallback_traceback"``. Batched or not, the run files are the same.
 
 **A run file** ``runs/<row>-<seed>.json`` (:func:`skinny_mj.engine.stats.load_run`
 validates it; a damaged file is an error naming it, hidden ``.*.tmp`` leftovers of
@@ -54,12 +54,13 @@ atomic writes are ignored)::
      "traceback": str (error only), "fallback", "fallback_traceback" (fell back only),
      "wall_s", "finished_at"}
 
-**config.json** records ``experiment``, ``config``, every row (``rows``: row, params,
-paper[, runs]), ``groups``, ``runs``, ``base_seed``, ``selection`` (``{"requested":
-[entries] | None, "rows": [ids run]}``), ``options`` (the CLI's quick, movement, asf,
-body, signals), ``started_at``, versions, and ``resumes`` (one ``{"at", "runs",
-"selection", "options"}`` per ``--resume``). ``--resume`` needs the same experiment,
-config, rows and base_seed; the selection and ``--runs`` may differ. It reruns
+**config.json** records ``experiment``, ``config`` (``Experiment.to_dict()``), every row
+(``rows``: row, params (:attr:`Row.settings <skinny_mj.engine.study.Row.settings>`, as in
+the run files), paper[, runs, seeds_of]), ``groups``, ``runs``, ``base_seed``,
+``selection`` (``{"requested": [entries] | None, "rows": [ids run]}``), ``options`` (the
+CLI's quick, movement, asf, body, signals), ``started_at``, versions, and ``resumes`` (one
+``{"at", "runs", "selection", "options"}`` per ``--resume``). ``--resume`` needs the same
+experiment, config, rows and base_seed; the selection and ``--runs`` may differ. It reruns
 errored runs and runs missing ones, never an ok or failed one.
 
 **results.json** (:func:`aggregate`, from the run files on disk only)::
@@ -91,15 +92,14 @@ import logging
 import os
 import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from skinny_mj.engine.folder import prepare_out_dir, sweep_lock
+from skinny_mj.engine.plan import Experiment
 from skinny_mj.engine.stats import aggregate, load_run, markdown_table
+from skinny_mj.engine.study import Row
 from skinny_mj.engine.sweep import (
-    SAFE_NAME,
-    Row,
     RunFailed,
     RunSpec,
     execute_batch,
@@ -117,58 +117,6 @@ _log = logging.getLogger(__name__)
 __all__ = ["Row", "Experiment", "RunFailed", "RunSpec", "run_seed", "select_rows",
            "run_sweep", "aggregate", "markdown_table", "execute_run", "execute_batch",
            "default_out_dir", "default_workers", "default_batch_size"]
-
-@dataclass(frozen=True)
-class Experiment:
-    """A sweep description: ALL the paper's rows (see the module docstring's contract).
-
-    ``config`` is a frozen dataclass (or a mapping) recorded in ``config.json``;
-    ``groups`` names sets of rows for ``run_sweep(rows=...)`` (group name -> row ids;
-    a group's name may not be a row id).
-    """
-
-    name: str
-    rows: tuple[Row, ...]
-    run_one: Callable[[Row, int], Mapping[str, Any]]
-    config: Any = None
-    runs: int = 10
-    base_seed: int = 0
-    table_columns: tuple[str, ...] | Mapping[str, str] | None = None
-    #: optional ``run_batch(row, seeds) -> list`` running one row's seeds in lockstep
-    #: (the fast path); element k is seed k's metrics dict, or a RunFailed for a run
-    #: that diverged. Must give the same metrics as ``run_one`` seed by seed.
-    run_batch: Callable[[Row, list[int]], list[Any]] | None = None
-    #: optional ``cost(row) -> float``: one run's relative cost (e.g. its control steps).
-    #: Only the schedule uses it: the costliest jobs start first (longest processing
-    #: time first), so a long row does not start last and keep the other workers idle.
-    cost: Callable[[Row], float] | None = None
-    groups: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
-    #: rows that cannot run on this machine -> why (an optional package missing): left out
-    #: of a sweep of every row (with a line saying so), refused when named in ``rows``
-    unavailable: Mapping[str, str] = field(default_factory=dict)
-    #: optional ``report(results, out_dir) -> str`` run after the sweep (a study's,
-    #: :mod:`skinny_mj.engine.plan`); None: no report
-    report: Callable[[Mapping[str, Any], Path], str] | None = None
-
-    def __post_init__(self) -> None:
-        if not SAFE_NAME.match(self.name):
-            raise SkinnyInputError(f"experiment name {self.name!r} must be a plain word")
-        ids = [r.id for r in self.rows]
-        if not ids or len(set(ids)) != len(ids):
-            raise SkinnyInputError(f"experiment {self.name!r} needs unique row ids, got {ids}")
-        if bad := [r.id for r in self.rows if r.seeds_of not in (None, *ids)]:
-            raise SkinnyInputError(f"experiment {self.name!r}: rows {bad}: seeds_of no row")
-        groups = {str(g): (m,) if isinstance(m, str) else tuple(m)
-                  for g, m in self.groups.items()}
-        for group, members in groups.items():
-            unknown = [m for m in members if m not in ids]
-            if group in ids or not members or unknown:
-                raise SkinnyInputError(
-                    f"experiment {self.name!r}: group {group!r} must name existing rows "
-                    f"and not be a row id itself (members {list(members)}, rows {ids})")
-        object.__setattr__(self, "rows", tuple(self.rows))
-        object.__setattr__(self, "groups", groups)
-
 
 def _entries(rows: Sequence[str] | str) -> list[str]:
     parts = rows.split(",") if isinstance(rows, str) else rows
@@ -274,10 +222,9 @@ def run_sweep(experiment: Experiment, out_dir: str | Path | None = None, *,
     scheduler : None (joblib), ``"local"`` (a Dask LocalCluster on 127.0.0.1) or a
         Dask scheduler address ``tcp://host:port``. Same run files either way.
     progress : tqdm bar over runs (with ETA) on stderr.
-    batch_size : with ``experiment.run_batch``, the most seeds of one row a worker runs
-        in lockstep; default :func:`default_batch_size` (whole rows when the rows
-        share out evenly over the workers). 0 disables the fast path (every run
-        through ``run_one``).
+    batch_size : the most seeds of one row a worker runs in lockstep; default
+        :func:`default_batch_size` (whole rows when the rows share out evenly over the
+        workers). 0: every run a job of its own (``Experiment.run_one``).
     options : recorded in ``config.json`` (the CLI's quick, movement, asf, body, signals).
 
     Returns
@@ -333,15 +280,13 @@ def _sweep(experiment: Experiment, out_dir: Path, selected: Sequence[Row], runs:
     jobs: list = specs
     fn: Callable[[Any], Any] = functools.partial(
         execute_run, experiment.run_one, experiment_name=experiment.name)
-    if experiment.run_batch is not None and batch_size != 0 and specs:
+    if batch_size != 0 and specs:
         size = batch_size or default_batch_size(len(selected), runs, workers)
         jobs = _batches(specs, size)
         fn = functools.partial(execute_batch, experiment.run_batch, experiment.run_one,
                                experiment_name=experiment.name)
-    if experiment.cost is not None:
-        cost = experiment.cost
-        jobs = sorted(jobs, key=lambda job: -sum(
-            cost(spec.row) for spec in (job if isinstance(job, list) else [job])))
+    jobs = sorted(jobs, key=lambda job: -sum(
+        experiment.cost(spec.row) for spec in (job if isinstance(job, list) else [job])))
     results_iter: Iterable[Any]
     if not jobs:
         results_iter = ()

@@ -12,7 +12,6 @@
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import datetime as _dt
 import json
 import logging
@@ -31,29 +30,19 @@ from skinny_mj.engine.sweep import SEEDING
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.io import atomic_write_json
 
-__all__ = ["LOCK_NAME", "config_dict", "recorded_config", "prepare_out_dir", "choose_out_dir",
+__all__ = ["LOCK_NAME", "config_dict", "prepare_out_dir", "choose_out_dir",
            "clear_sweep", "check_unlocked", "sweep_lock", "read_lock"]
 
 LOCK_NAME = "sweep.lock"
 _log = logging.getLogger(__name__)
 
 
-def recorded_config(cfg: Any) -> Any:
-    """An Experiment's config as ``config.json`` records it: its ``to_dict()`` (a
-    study's plan), a dataclass's fields, or the mapping itself."""
-    if hasattr(cfg, "to_dict"):
-        return cfg.to_dict()
-    if dataclasses.is_dataclass(cfg) and not isinstance(cfg, type):
-        return dataclasses.asdict(cfg)
-    return cfg
-
-
 def config_dict(experiment: Any, runs: int) -> dict[str, Any]:
     """What ``config.json`` records of ``experiment`` (see :mod:`skinny_mj.engine.experiment`)."""
     return to_jsonable({
         "experiment": experiment.name,
-        "config": recorded_config(experiment.config),
-        "rows": [{"row": r.id, "params": dict(r.params), "paper": dict(r.paper),
+        "config": experiment.to_dict(),
+        "rows": [{"row": r.id, "params": r.settings, "paper": dict(r.paper),
                   **{k: getattr(r, k) for k in ("runs", "seeds_of") if getattr(r, k) is not None}}
                  for r in experiment.rows],
         "groups": {g: list(m) for g, m in experiment.groups.items()},

@@ -27,7 +27,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from skinny_mj.engine.plan import plan
-from skinny_mj.engine.results import STANDARD_METRICS
+from skinny_mj.engine.results import STANDARD_METRICS, Shape
 from skinny_mj.engine.study import Row, Study
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
@@ -67,7 +67,7 @@ def _row_id(pairs: Sequence[tuple[str, str]]) -> str:
 
 
 def _study_row(study: Study, row: str, quick: bool) -> tuple[TrainConfig, Any, dict, int]:
-    """A study's row as the base: its config, its planned row (the row its run gets and
+    """A study's row as the base: its config, the study planned (the row its run gets and
     how it runs), the study's params (``quick``: as the study's ``--quick`` has them) and
     the runs per row (10, or the study's ``--quick`` runs)."""
     study.row(row)  # an unknown row: one line naming the study's rows
@@ -76,7 +76,7 @@ def _study_row(study: Study, row: str, quick: bool) -> tuple[TrainConfig, Any, d
     planned = plan(study, quick=quick)
     if study.unavailable is not None and row in (gone := study.unavailable()):
         raise SkinnyInputError(f"study {study.name!r}: row {row!r} {gone[row]}")
-    return (planned.config(row), planned.row(row), dict(planned.params),
+    return (planned.config(row), planned, dict(planned.params),
             study.quick.runs if quick else 10)
 
 
@@ -90,7 +90,7 @@ def grid_study(items: Sequence[str], *, study: Study | None = None, row: str | N
     if study is not None and base is not None:
         raise SkinnyInputError("--config and --study/--row are two bases: give one")
     if study is not None:
-        base, base_row, params, default_runs = _study_row(study, row, quick)
+        base, planned, params, default_runs = _study_row(study, row, quick)
     else:
         base = TrainConfig() if base is None else base
         if quick:
@@ -129,10 +129,11 @@ def grid_study(items: Sequence[str], *, study: Study | None = None, row: str | N
     if study is None:
         return Study(name=NAME, description=f"skinny sweep {what}", base=base, rows=tuple(rows),
                      metrics=METRICS, runs=runs, takes=())
+    run = planned.runners[row]
+    custom, shape = (None, run) if isinstance(run, Shape) else (run, None)
     return Study(name=NAME, description=f"skinny sweep {what}", base=base,
-                 rows=tuple(Row(r.id, r.overrides, params=base_row.runs_as.params,
-                                run_batch=base_row.custom, shape=base_row.shape)
-                            for r in rows),
+                 rows=tuple(Row(r.id, r.overrides, params=planned.runs_as[row].params,
+                                run_batch=custom, shape=shape) for r in rows),
                  metrics=study.metrics, columns=study.columns, runs=runs, takes=(),
                  params=params, trainings=study.trainings, cost=study.cost,
                  memory=study.memory)

@@ -18,7 +18,7 @@ def row_configs(module: Any, experiment: Any, row: Any) -> list[Any]:
     """The TrainConfigs one run of ``row`` trains, as the study says
     (:meth:`skinny_mj.engine.study.Study.train_configs`)."""
     fn = getattr(module, "train_configs", None)  # none: a test's stand-in, no estimate
-    out = {} if fn is None else fn(experiment.config, row)
+    out = {} if fn is None else fn(experiment, row)
     return [c for c in out.values() if isinstance(c, TrainConfig)]
 
 
@@ -36,12 +36,12 @@ def _steps(cfg: Any, cache: dict) -> tuple[int, str]:
 def row_estimate(module: Any, experiment: Any, row: Any, runs: int = 1,
                  cache: dict | None = None) -> Estimate | None:
     """Bytes one batch of ``runs`` lockstep runs of ``row`` needs: the module's own
-    ``estimate_bytes(config, row, runs)`` (an :class:`Estimate`; None: not this row),
+    ``estimate_bytes(experiment, row, runs)`` (an :class:`Estimate`; None: not this row),
     else the largest of its TrainConfigs' (see :func:`row_configs`); None when the
     module says nothing of the row."""
     cache = {} if cache is None else cache
     own = getattr(module, "estimate_bytes", None)
-    found = None if own is None else own(experiment.config, row, runs)
+    found = None if own is None else own(experiment, row, runs)
     if found is not None:
         return found
     ests = [train_estimate(cfg, one * cfg.movement.reps, one, runs, cause)
@@ -56,7 +56,7 @@ def sweep_estimate(module: Any, experiment: Any, rows: Sequence[Any], runs: int,
     and that row's id; None when the module says nothing of its rows."""
     cache: dict = {}
     best: tuple[Estimate, str] | None = None
-    lockstep = max(1, min(batch, runs)) if experiment.run_batch is not None else 1
+    lockstep = max(1, min(batch, runs))
     for row in rows:
         est = row_estimate(module, experiment, row, lockstep, cache)
         if est is not None and (best is None or est.total > best[0].total):

@@ -1,7 +1,6 @@
-"""What the engine derives from a :class:`~skinny_mj.engine.study.Study`: a :class:`Plan` (every
-kept row with its training configuration) and from it the engine's
-:class:`~skinny_mj.engine.experiment.Experiment` (rows, groups, the lockstep run, one run,
-cost, table columns, the report).
+"""A :class:`~skinny_mj.engine.study.Study` planned for one sweep: the :class:`Experiment`
+that :func:`~skinny_mj.engine.experiment.run_sweep` runs (every kept row with its training
+configuration, groups, the lockstep run, one run, cost, table columns, the report).
 
 A row's configuration is ``study.base`` with, in order, the options of ``skinny
 experiment`` (``--movement`` -> trajectory + asf, ``--body``, ``--signals``: those the
@@ -23,12 +22,10 @@ import dataclasses
 import functools
 import importlib
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from skinny_mj.engine.experiment import Experiment
-from skinny_mj.engine.experiment import Row as EngineRow
 from skinny_mj.engine.options import movement_changes
 from skinny_mj.engine.results import Metrics, Shape, default_run, read_metric
 from skinny_mj.engine.stats import load_runs
@@ -41,38 +38,13 @@ from skinny_mj.training.config import TrainConfig, relative_cost
 # reader only: the study module imports this one to build its sweep, not the other way round.
 Study = Row = RunBatch = Any
 
-__all__ = ["Plan", "Results", "plan", "train_metrics", "read_metric"]
+__all__ = ["Experiment", "Results", "plan", "train_metrics", "read_metric"]
 
 
 def train_metrics(config: TrainConfig, seeds: list[int], metrics: Metrics) -> list[Any]:
     """The default run of a row on its config alone, the standard test, ``metrics``
     read off each result (:func:`skinny_mj.engine.results.default_run`)."""
     return default_run(config, None, seeds, Shape(metrics))
-
-
-@dataclass(frozen=True)
-class _Runner:
-    """The Experiment's ``run_batch`` (shipped to worker processes): per row id its
-    config, the row its run gets (params with the study's) and its custom run or its
-    shape."""
-
-    rows: Mapping[str, tuple[TrainConfig, Row, RunBatch | None, Shape | None]]
-
-    def __call__(self, row: EngineRow, seeds: list[int]) -> list[Any]:
-        config, study_row, custom, shape = self.rows[row.id]
-        if custom is not None:
-            return list(custom(config, study_row, list(seeds)))
-        return default_run(config, study_row, list(seeds), shape)
-
-
-def _cost(plan: Plan, costs: dict[str, float], row: EngineRow) -> float:
-    """Row ``row``'s relative cost, worked out when the schedule first asks (a study's
-    own cost may load a movement: a study's ``--help`` builds the sweep but runs none)."""
-    if row.id not in costs:
-        p, cost = plan.row(row.id), plan.study.cost
-        costs[row.id] = relative_cost(p.config) if cost is None \
-            else cost(p.config, plan.run_row(row.id))
-    return costs[row.id]
 
 
 class Results(dict):
@@ -94,121 +66,139 @@ class Results(dict):
                 if isinstance(r["metrics"].get(metric), int | float)]
 
 
-@dataclass(frozen=True)
-class PlannedRow:
-    """A kept row (``--quick`` applied), its params (with the study's), the config its
-    runs train, the row its run gets (itself with its params, or the other study's row
-    of ``Row.of``) and how it runs: a custom ``run_batch`` or the default run's ``shape``."""
-
-    row: Row
-    params: Mapping[str, Any]
-    config: TrainConfig
-    runs_as: Row
-    custom: RunBatch | None
-    shape: Shape | None
-
-
 @dataclass(frozen=True, eq=False)
-class Plan:
-    """A study planned for one sweep: the base (options applied), the overrides after
-    every row's, and every kept row with its configuration."""
+class Experiment:
+    """A study planned for one sweep, what :func:`~skinny_mj.engine.experiment.run_sweep`
+    runs: the base (options applied), the overrides after every row's, every kept row
+    (``--quick`` applied, its runs capped at ``--quick``'s) and per row id its training
+    configuration (``configs``), the row its run gets (``runs_as``: the row with the
+    study's params, or the other study's row of ``Row.of``) and how it runs
+    (``runners``: a custom ``run_batch``, or the :class:`Shape` of the default run)."""
 
     study: Study
     base: TrainConfig
     after: Mapping[str, Any]
     quick: bool
-    rows: tuple[PlannedRow, ...]
+    rows: tuple[Row, ...]
+    configs: Mapping[str, TrainConfig]
+    runs_as: Mapping[str, Row]
+    runners: Mapping[str, RunBatch | Shape]
+    _costs: dict[str, float] = field(default_factory=dict, repr=False)
 
-    def row(self, row_id: str) -> PlannedRow:
-        for p in self.rows:
-            if p.row.id == row_id:
-                return p
-        raise SkinnyInputError(f"study {self.study.name!r}: no row {row_id!r} in this "
-                               f"sweep; rows: {', '.join(p.row.id for p in self.rows)}")
+    @property
+    def name(self) -> str:
+        return self.study.name
 
-    def config(self, row_id: str) -> TrainConfig:
-        """Row ``row_id``'s training configuration."""
-        return self.row(row_id).config
+    @property
+    def runs(self) -> int:
+        """Runs per row (a row's own ``runs`` aside)."""
+        return self.study.quick.runs if self.quick else self.study.runs
+
+    @property
+    def base_seed(self) -> int:
+        return self.study.base_seed
 
     @property
     def params(self) -> Mapping[str, Any]:
         """The study-wide parameters of its custom runs (``--quick``'s applied)."""
         return _study_params(self.study, self.quick)
 
-    def trainings(self, row_id: str) -> dict[str, TrainConfig]:
-        """What one run of the row trains: its shape's ``trainings`` (a custom run: the
-        study's) or the row's config."""
-        p = self.row(row_id)
-        trainings = self.study.trainings if p.shape is None else p.shape.trainings
-        if trainings is None:
-            return {"run": p.config}
-        return dict(trainings(p.config, p.runs_as))
+    @property
+    def table_columns(self) -> tuple[str, ...] | Mapping[str, str] | None:
+        study, quick = self.study, self.study.quick
+        columns = quick.columns if self.quick and quick.columns is not None else \
+            study.columns if study.columns is not None else \
+            () if callable(study.metrics) else tuple(study.metrics)
+        return columns or None
 
-    def to_dict(self) -> dict[str, Any]:
-        """What ``config.json`` records as ``config`` (``--resume`` needs it the same)."""
-        return {"study": self.study.name, "base": self.base.to_dict(),
-                "after_rows": dict(self.after), "params": dict(self.params),
-                "quick": self.quick}
-
+    @functools.cached_property
     def groups(self) -> dict[str, tuple[str, ...]]:
         """The rows' groups, then the study's (whose members may name groups), over the
         kept rows; a group left without rows is dropped."""
-        kept = [p.row.id for p in self.rows]
+        kept = [r.id for r in self.rows]
         out: dict[str, list[str]] = {}
-        for p in self.rows:
-            if p.row.group is not None:
-                out.setdefault(p.row.group, []).append(p.row.id)
+        for r in self.rows:
+            if r.group is not None:
+                out.setdefault(r.group, []).append(r.id)
         for name, members in self.study.groups.items():
             out[name] = [i for m in members for i in out.get(m, [m]) if i in kept]
         return {g: tuple(m) for g, m in out.items() if m}
 
+    @functools.cached_property
+    def unavailable(self) -> dict[str, str]:
+        """Kept rows this machine cannot run -> why: left out of a sweep of every row
+        (with a line saying so), refused when named in ``--rows``."""
+        gone = {} if self.study.unavailable is None else self.study.unavailable()
+        return {k: v for k, v in gone.items() if k in self.configs}
+
+    def row(self, row_id: str) -> Row:
+        for r in self.rows:
+            if r.id == row_id:
+                return r
+        raise SkinnyInputError(f"study {self.name!r}: no row {row_id!r} in this "
+                               f"sweep; rows: {', '.join(r.id for r in self.rows)}")
+
+    def config(self, row_id: str) -> TrainConfig:
+        """Row ``row_id``'s training configuration."""
+        self.row(row_id)  # an unknown row: one line naming the rows
+        return self.configs[row_id]
+
     def run_row(self, row_id: str) -> Row:
         """Row ``row_id`` with its params and the study's (what the study's ``cost`` and
         ``memory`` get; a row's own run gets the same, a row ``of`` another study that
-        study's row: :attr:`PlannedRow.runs_as`)."""
-        p = self.row(row_id)
-        return dataclasses.replace(p.row, params=p.params, quick={})
+        study's row: :attr:`runs_as`)."""
+        r = self.row(row_id)
+        return dataclasses.replace(r, params={**self.params, **r.params}, quick={})
 
-    def experiment(self) -> Experiment:
-        """The engine's Experiment of this plan."""
-        study = self.study
-        quick = study.quick
-        runs = quick.runs if self.quick else study.runs
+    def trainings(self, row_id: str) -> dict[str, TrainConfig]:
+        """What one run of the row trains: its shape's ``trainings`` (a custom run: the
+        study's) or the row's config."""
+        run, config = self.runners[row_id], self.config(row_id)
+        trainings = run.trainings if isinstance(run, Shape) else self.study.trainings
+        if trainings is None:
+            return {"run": config}
+        return dict(trainings(config, self.runs_as[row_id]))
 
-        def row_runs(r: Row) -> int | None:
-            return r.runs if r.runs is None or not self.quick else min(r.runs, quick.runs)
+    def to_dict(self) -> dict[str, Any]:
+        """What ``config.json`` records as ``config`` (``--resume`` needs it the same)."""
+        return {"study": self.name, "base": self.base.to_dict(),
+                "after_rows": dict(self.after), "params": dict(self.params),
+                "quick": self.quick}
 
-        engine_rows = tuple(
-            EngineRow(p.row.id, {**p.row.overrides, **p.row.params}, p.row.paper,
-                      row_runs(p.row), p.row.seeds_of) for p in self.rows)
-        runner = _Runner({p.row.id: (p.config, p.runs_as, p.custom, p.shape)
-                          for p in self.rows})
-        columns = quick.columns if self.quick and quick.columns is not None else \
-            study.columns if study.columns is not None else \
-            () if callable(study.metrics) else tuple(study.metrics)
-        kept = {p.row.id for p in self.rows}
-        unavailable = {} if study.unavailable is None else {
-            k: v for k, v in study.unavailable().items() if k in kept}
-        return Experiment(
-            name=study.name, rows=engine_rows, run_one=functools.partial(one_of_batch, runner),
-            config=self, runs=runs, base_seed=study.base_seed, table_columns=columns or None,
-            run_batch=runner, cost=functools.partial(_cost, self, {}), groups=self.groups(),
-            unavailable=unavailable, report=functools.partial(_report, self))
+    def run_batch(self, row: Row, seeds: list[int]) -> list[Any]:
+        """Row ``row``'s seeds run in lockstep: per seed a metrics dict or a RunFailed."""
+        run, config, runs_as = self.runners[row.id], self.configs[row.id], self.runs_as[row.id]
+        if isinstance(run, Shape):
+            return default_run(config, runs_as, list(seeds), run)
+        return list(run(config, runs_as, list(seeds)))
+
+    def run_one(self, row: Row, seed: int) -> Mapping[str, Any]:
+        """One run of row ``row``: the lockstep run of one seed (its RunFailed raised)."""
+        return one_of_batch(self.run_batch, row, seed)
+
+    def cost(self, row: Row) -> float:
+        """One run's relative cost, worked out when the schedule first asks (a study's
+        own cost may load a movement: a study's ``--help`` plans the sweep but runs none)."""
+        if row.id not in self._costs:
+            cost, config = self.study.cost, self.configs[row.id]
+            self._costs[row.id] = relative_cost(config) if cost is None \
+                else cost(config, self.run_row(row.id))
+        return self._costs[row.id]
+
+    def report(self, results: Mapping[str, Any], out_dir: str | Path) -> str:
+        """The study's report of the sweep's results in ``out_dir`` ("" without one)."""
+        report = self.study.report
+        if report is None:
+            return ""
+        if isinstance(report, str):
+            module, _, name = report.partition(":")
+            report = getattr(importlib.import_module(module), name or "report")
+        return report(Results(results, out_dir), self, Path(out_dir))
 
 
 def _study_params(study: Study, quick: bool) -> dict[str, Any]:
     """The study-wide parameters of its custom runs, ``--quick``'s over the study's."""
     return {**study.params, **(study.quick.params if quick else {})}
-
-
-def _report(plan: Plan, results: Mapping[str, Any], out_dir: str | Path) -> str:
-    report = plan.study.report
-    if report is None:
-        return ""
-    if isinstance(report, str):
-        module, _, name = report.partition(":")
-        report = getattr(importlib.import_module(module), name or "report")
-    return report(Results(results, out_dir), plan, Path(out_dir))
 
 
 def _expand(study: Study, entries: Iterable[str]) -> set[str]:
@@ -230,7 +220,7 @@ def _expand(study: Study, entries: Iterable[str]) -> set[str]:
 
 def plan(study: Study, *, quick: bool = False, tiny: bool = False,
          movement: str | None = None, asf: Any = None, body: str | int | None = None,
-         signals: str | None = None) -> Plan:
+         signals: str | None = None) -> Experiment:
     """Plan ``study`` for one sweep (see the module docstring); ``tiny``: also apply the
     study's ``tiny`` shrink (the contract test's)."""
     given = {"movement": movement, "body": body, "signals": signals}
@@ -250,15 +240,19 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
     if quick and study.quick.rows is not None:
         chosen = _expand(study, study.quick.rows)
         kept = [r for r in study.rows if r.id in chosen]
-    planned, others = [], {}
+    if bad := [r.id for r in kept if r.seeds_of not in (None, *(k.id for k in kept))]:
+        raise SkinnyInputError(f"study {study.name!r}: rows {bad}: seeds_of no row")
+    rows, configs, runs_as, runners, others = [], {}, {}, {}, {}
     for r in kept:
-        r = r.shrunk() if quick else r
+        if quick:
+            r = r.shrunk()
+            r = r if r.runs is None else dataclasses.replace(r, runs=min(r.runs, study.quick.runs))
+        rows.append(r)
         config = base.override({**r.overrides, **after})
         if tiny:  # the contract test's shrink: of its keys, those this row's config has
             have = set(overrides.keys(config))
             config = config.override({k: v for k, v in study.tiny.items()
                                       if overrides.canonical(config, k) in have})
-        params = {**_study_params(study, quick), **r.params}
         if r.of is not None:  # another study's row: that study's planned row runs
             body = {"body": config.plant.body, "signals": config.plant.signals} \
                 if r.of.on_body else {}  # by name: its MJCF (and MuJoCo) stays unread
@@ -267,12 +261,12 @@ def plan(study: Study, *, quick: bool = False, tiny: bool = False,
                 every = dataclasses.replace(r.of.study, quick=dataclasses.replace(
                     r.of.study.quick, rows=None))
                 others[key] = plan(every, quick=quick, tiny=tiny, **body)
-            other = others[key].row(r.of.row)
-            planned.append(PlannedRow(r, params, other.config, other.runs_as, other.custom,
-                                      other.shape))
+            other = others[key]
+            configs[r.id], runs_as[r.id] = other.config(r.of.row), other.runs_as[r.of.row]
+            runners[r.id] = other.runners[r.of.row]
             continue
-        custom = r.run_batch or study.run_batch
-        run_row = dataclasses.replace(r, params=params, quick={})
-        planned.append(PlannedRow(r, params, config, run_row, custom,
-                                  None if custom is not None else r.shape or study.shape))
-    return Plan(study, base, after, quick, tuple(planned))
+        configs[r.id] = config
+        runs_as[r.id] = dataclasses.replace(
+            r, params={**_study_params(study, quick), **r.params}, quick={})
+        runners[r.id] = r.run_batch or study.run_batch or r.shape or study.shape
+    return Experiment(study, base, after, quick, tuple(rows), configs, runs_as, runners)

@@ -57,8 +57,9 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from skinny_mj.engine.options import OPTION_KEYS
-from skinny_mj.engine.plan import Plan, Results, plan
+from skinny_mj.engine.plan import Experiment, Results, plan
 from skinny_mj.engine.results import Metrics, Shape, Tests, default_run
+from skinny_mj.engine.sweep import SAFE_NAME
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.result import STANDARD, Observer, Test
@@ -119,11 +120,21 @@ class Row:
     of: Of | None = None
 
     def __post_init__(self) -> None:
+        if not SAFE_NAME.match(self.id):
+            raise SkinnyInputError(f"row id {self.id!r} must be a plain file-name word")
+        if self.runs is not None and self.runs < 1:
+            raise SkinnyInputError(f"row {self.id!r}: runs must be >= 1, got {self.runs}")
         for name in ("overrides", "paper", "params", "quick"):
             object.__setattr__(self, name, _frozen(getattr(self, name)))
         if both := sorted(set(self.overrides) & set(self.params)):
             raise SkinnyInputError(f"row {self.id!r}: {both} both a config override and a "
                                    "study parameter")
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        """What sets this row apart, as its run files and ``config.json`` record it (their
+        ``params``): its overrides and its own params."""
+        return {**self.overrides, **self.params}
 
     def shrunk(self) -> Row:
         """This row under ``--quick``: its ``quick`` keys replace params or overrides."""
@@ -189,7 +200,7 @@ class Study:
     params: Mapping[str, Any] = field(default_factory=dict)
     run_batch: RunBatch | None = None
     trainings: Callable[[TrainConfig, Row], Mapping[str, TrainConfig]] | None = None
-    report: Callable[[Results, Plan, Path], str] | str | None = None
+    report: Callable[[Results, Experiment, Path], str] | str | None = None
     takes: tuple[str, ...] = OPTIONS
     tiny: Mapping[str, Any] = field(default_factory=lambda: dict(TINY))
     base_seed: int = 0
@@ -201,10 +212,14 @@ class Study:
     def __post_init__(self) -> None:
         object.__setattr__(self, "rows", tuple(self.rows))
         ids = [r.id for r in self.rows]
+        if not SAFE_NAME.match(self.name):
+            raise SkinnyInputError(f"study name {self.name!r} must be a plain file-name word")
         if not ids or len(set(ids)) != len(ids):
             raise SkinnyInputError(f"study {self.name!r} needs unique row ids, got {ids}")
-        known = {*ids, *(r.group for r in self.rows if r.group), *self.groups}
-        if bad := sorted({m for ms in self.groups.values() for m in ms} - known):
+        groups = {*(r.group for r in self.rows if r.group), *self.groups}
+        if bad := sorted(groups & set(ids)):
+            raise SkinnyInputError(f"study {self.name!r}: groups {bad} are row ids too")
+        if bad := sorted({m for ms in self.groups.values() for m in ms} - groups - set(ids)):
             raise SkinnyInputError(f"study {self.name!r}: groups name no row or group {bad}")
         if bad := sorted(set(self.takes) - set(OPTIONS)):
             raise SkinnyInputError(f"study {self.name!r}: takes {bad}; options are "
@@ -245,20 +260,19 @@ class Study:
 
     # -- what `skinny experiment`, the memory check and the study help call --
     def build(self, quick: bool = False, movement: str | None = None, asf: Any = None,
-              body: str | int | None = None, signals: str | None = None) -> Any:
-        """The :class:`~skinny_mj.engine.experiment.Experiment` of ``skinny experiment NAME``."""
+              body: str | int | None = None, signals: str | None = None) -> Experiment:
+        """The :class:`~skinny_mj.engine.plan.Experiment` of ``skinny experiment NAME``."""
         return plan(self, quick=quick, movement=movement, asf=asf, body=body,
-                    signals=signals).experiment()
+                    signals=signals)
 
-    def train_configs(self, config: Any, row: Any) -> dict[str, TrainConfig]:
-        """The training configurations one run of ``row`` trains (for the memory check):
-        ``config`` is the built Experiment's config (its :class:`Plan`)."""
-        return config.trainings(row.id)
+    def train_configs(self, experiment: Experiment, row: Row) -> dict[str, TrainConfig]:
+        """The training configurations one run of ``row`` of the built ``experiment``
+        trains (for the memory check)."""
+        return experiment.trainings(row.id)
 
-    def estimate_bytes(self, config: Any, row: Any, runs: int) -> Any:
-        """The memory check's estimate of ``runs`` lockstep runs of ``row`` (``config``:
-        the built Experiment's :class:`Plan`): the study's ``memory``, None without one."""
+    def estimate_bytes(self, experiment: Experiment, row: Row, runs: int) -> Any:
+        """The memory check's estimate of ``runs`` lockstep runs of ``row`` of the built
+        ``experiment``: the study's ``memory``, None without one."""
         if self.memory is None:
             return None
-        p = config.row(row.id)
-        return self.memory(p.config, config.run_row(row.id), runs)
+        return self.memory(experiment.config(row.id), experiment.run_row(row.id), runs)

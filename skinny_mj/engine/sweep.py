@@ -1,7 +1,7 @@
 """Helpers of the experiment engine (:mod:`skinny_mj.engine.experiment`, which re-exports the
 public names and documents the contract).
 
-Here: a table's :class:`Row` and one (row, run) pair's :class:`RunSpec`, one job's run
+Here: how a run is seeded, one (row, run) pair's :class:`RunSpec`, one job's run
 records (:func:`execute_run`, :func:`execute_batch`: a run's outcome -> ``"ok"``,
 ``"failed"`` or ``"error"``), and where the jobs run, joblib/loky on this
 machine (:func:`iter_joblib`) or a Dask cluster (:func:`iter_dask`), both yielding job
@@ -18,7 +18,7 @@ import re
 import time
 import traceback
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -27,7 +27,7 @@ from skinny_mj.engine.stats import to_jsonable
 from skinny_mj.errors import SkinnyEnvironmentError, SkinnyInputError
 from skinny_mj.threads import single_threaded
 
-__all__ = ["THREAD_ENV", "SEEDING", "SAFE_NAME", "run_seed", "stable_hash", "Row", "RunSpec",
+__all__ = ["THREAD_ENV", "SEEDING", "SAFE_NAME", "run_seed", "stable_hash", "RunSpec",
            "RunFailed", "one_of_batch", "execute_run", "execute_batch", "iter_joblib",
            "iter_dask"]
 
@@ -60,32 +60,12 @@ SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+=-]*$")
 
 
 @dataclass(frozen=True)
-class Row:
-    """One row of a paper's table: its id, the parameters that differ, the paper's values.
-
-    ``runs``: this row's run count if not the experiment's (``--runs N`` caps it at N);
-    ``seeds_of``: a row whose seeds this row takes (a paired comparison), None its own.
-    """
-
-    id: str
-    params: Mapping[str, Any] = field(default_factory=dict)
-    paper: Mapping[str, float] = field(default_factory=dict)
-    runs: int | None = None
-    seeds_of: str | None = None
-
-    def __post_init__(self) -> None:
-        if not SAFE_NAME.match(self.id):
-            raise SkinnyInputError(f"row id {self.id!r} must be a plain file-name word")
-        if self.runs is not None and self.runs < 1:
-            raise SkinnyInputError(f"row {self.id!r}: runs must be >= 1, got {self.runs}")
-
-
-@dataclass(frozen=True)
 class RunSpec:
-    """One (row, run) pair with its derived seed; ``row_index`` is the row's place in
-    the experiment's full ``rows``."""
+    """One (row, run) pair with its derived seed: ``row`` a
+    :class:`~skinny_mj.engine.study.Row`, ``row_index`` its place in the experiment's
+    ``rows``."""
 
-    row: Row
+    row: Any
     row_index: int
     run_index: int
     seed: int
@@ -101,7 +81,7 @@ class RunFailed(RuntimeError):
     other exception is a bug and is recorded as ``"error"``."""
 
 
-def one_of_batch(run_batch: Callable[[Row, list[int]], list[Any]], row: Row,
+def one_of_batch(run_batch: Callable[[Any, list[int]], list[Any]], row: Any,
                  seed: int) -> Mapping[str, Any]:
     """``run_one`` from a lockstep ``run_batch``: the batch of one seed, its
     :class:`RunFailed` (or any other exception instance) raised."""
@@ -114,7 +94,7 @@ def one_of_batch(run_batch: Callable[[Row, list[int]], list[Any]], row: Row,
 def _record(spec: RunSpec, experiment_name: str) -> dict[str, Any]:
     return {
         "experiment": experiment_name, "row": spec.row.id, "row_index": spec.row_index,
-        "run_index": spec.run_index, "seed": spec.seed, "params": to_jsonable(spec.row.params),
+        "run_index": spec.run_index, "seed": spec.seed, "params": to_jsonable(spec.row.settings),
         "paper": to_jsonable(spec.row.paper), "status": None, "metrics": {},
         "fail_reason": None, "error": None,
     }
@@ -157,7 +137,7 @@ def _stamp(record: dict[str, Any], wall_s: float) -> dict[str, Any]:
 
 
 @single_threaded
-def execute_run(run_one: Callable[[Row, int], Mapping[str, Any]], spec: RunSpec,
+def execute_run(run_one: Callable[[Any, int], Mapping[str, Any]], spec: RunSpec,
                 experiment_name: str) -> dict[str, Any]:
     """Run one (row, seed) and return its JSON-able record: ``"ok"``, ``"failed"`` (a
     :class:`RunFailed`) or ``"error"`` (any other exception, with its traceback)."""
@@ -172,8 +152,8 @@ def execute_run(run_one: Callable[[Row, int], Mapping[str, Any]], spec: RunSpec,
 
 
 @single_threaded
-def execute_batch(run_batch: Callable[[Row, list[int]], list[Any]],
-                  run_one: Callable[[Row, int], Mapping[str, Any]], specs: list[RunSpec],
+def execute_batch(run_batch: Callable[[Any, list[int]], list[Any]],
+                  run_one: Callable[[Any, int], Mapping[str, Any]], specs: list[RunSpec],
                   experiment_name: str) -> list[dict[str, Any]]:
     """Run several seeds of ONE row in lockstep and return one record per seed.
 
