@@ -33,6 +33,26 @@ def test_feasible_speeds_fit_the_limits_and_full_speed_does_not(dof):
                             rel_tol=0.02)
 
 
+@pytest.mark.parametrize("dof", [4, 8])
+def test_the_speed_curve_and_the_locally_retimed_clips(dof):
+    """The curve's columns run slowest first and include the feasible and full speeds; a
+    clip re-timed locally fits the limits and stays shorter than the clip slowed whole."""
+    from skinny_mj.experiments.dynamic import general
+
+    from skinny_mj.training.torque import feasibility
+
+    for clip in general.CLIPS:
+        cols = general.curve_columns(clip, dof)
+        speeds = [general.speed_of(c, dof) for c in cols]
+        assert speeds == sorted(speeds) and speeds[-1] == 1.0
+        assert f"{clip}-feasible" in cols and len(cols) == len(general.CURVE_SPEEDS) + 2
+        retimed = general.load_test(f"{clip}-retimed", dof)
+        assert bool(feasibility(dof, retimed)["feasible"])
+        assert len(general.load_test(clip, dof)) <= len(retimed) \
+            < len(general.load_test(f"{clip}-feasible", dof))
+    assert set(general.FLOOR_TESTS) < set(general.TESTS)
+
+
 def test_computed_torque_floor_is_lower_on_the_feasible_clip():
     import dataclasses
 
