@@ -36,7 +36,6 @@ from skinny_mj.engine.study import Shape, Test
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import TORQUE_METRICS
 from skinny_mj.training.result import RunResult
-from skinny_mj.training.feasible import load_movement  # NAME@feasible too
 
 #: Fastest speed (a factor of the clip's own, on a 0.01 grid from 0.6 down) at and below
 #: which no step of the clip's inverse dynamics exceeds a torque limit, per body (dof).
@@ -72,7 +71,9 @@ def speed_of(column: str, dof: int) -> float:
 @functools.lru_cache(maxsize=32)
 def load_test(column: str, dof: int):
     """Test column ``column``'s movement for body ``dof`` (cached)."""
-    return load_movement(TESTS[column][0], dof, speed=speed_of(column, dof))[0]
+    # training.feasible: NAME@feasible too (it loads MuJoCo, on first use)
+    return training.feasible.load_movement(TESTS[column][0], dof,
+                                           speed=speed_of(column, dof))[0]
 
 
 def _movement(column: str, config: TrainConfig):
