@@ -2,7 +2,9 @@
 
 ``python -m skinny_mj.experiments.generalization.models [--only NAME] [--work DIR]``
 runs, for every shipped name of :data:`skinny_mj.training.presets.SHIPPED`,
-``skinny train --preset general --dof D --signals S --seed 0`` and writes its
+``skinny train --preset general --dof D --signals S --seed 0`` (of
+:data:`~skinny_mj.training.presets.SHIPPED_TORQUE`: ``skinny train --preset general
+--actuation torque --dof D --seed 0``) and writes its
 ``model.npz`` (weights, config and training metadata, no pickle) compressed to
 ``skinny_mj/data/models/NAME.npz``: the arrays are the same, only smaller on disk. A
 model is reproduced from its own metadata (``config`` and ``training.seed``), which
@@ -20,7 +22,7 @@ import numpy as np
 
 from skinny_mj.cli import parser as cli
 from skinny_mj.io import atomic_path
-from skinny_mj.training.presets import SHIPPED
+from skinny_mj.training.presets import SHIPPED, SHIPPED_TORQUE
 
 #: The package-data folder of the shipped models (in a source checkout).
 MODELS_DIR = Path(__file__).resolve().parents[2] / "skinny_mj" / "data" / "models"
@@ -39,11 +41,15 @@ def train_shipped(name: str, work: Path, seed: int = 0) -> dict:
     """Train shipped model ``name`` with ``skinny train`` into ``work/name``: the wall and
     CPU seconds of the command, its metrics.json's test NRMSE and wall time, and the
     compressed file's size."""
-    dof, signals = SHIPPED[name]
+    if name in SHIPPED_TORQUE:
+        body = ["--actuation", "torque", "--dof", str(SHIPPED_TORQUE[name])]
+    else:
+        dof, signals = SHIPPED[name]
+        body = ["--dof", str(dof), "--signals", signals]
     out = work / name
     start, cpu = time.perf_counter(), time.process_time()
-    code = cli.main(["train", "--preset", "general", "--dof", str(dof), "--signals", signals,
-                 "--seed", str(seed), "--out", str(out), "--quiet"])
+    code = cli.main(["train", "--preset", "general", *body, "--seed", str(seed),
+                     "--out", str(out), "--quiet"])
     wall, cpu = time.perf_counter() - start, time.process_time() - cpu
     if code != 0:
         raise SystemExit(f"training {name} failed (exit {code}); see {out}/metrics.json")
@@ -56,12 +62,12 @@ def train_shipped(name: str, work: Path, seed: int = 0) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--only", choices=tuple(SHIPPED), action="append",
+    parser.add_argument("--only", choices=(*SHIPPED, *SHIPPED_TORQUE), action="append",
                         help="train only this model (repeatable; default: all)")
     parser.add_argument("--work", type=Path, default=Path("results/shipped_models"),
                         help="folder of the `skinny train` runs (default: %(default)s)")
     args = parser.parse_args(argv)
-    for name in args.only or SHIPPED:
+    for name in args.only or (*SHIPPED, *SHIPPED_TORQUE):
         print(json.dumps(train_shipped(name, args.work / time.strftime("%Y%m%d-%H%M%S"))),
               flush=True)
     return 0

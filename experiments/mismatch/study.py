@@ -190,12 +190,15 @@ def _switch_rows() -> tuple[Row, ...]:
 
 
 def _fd2_rows() -> tuple[Row, ...]:
-    """The ESN on the nominal arm with velocities by the second-order backward difference
-    of the encoder angles instead of the observer."""
-    return tuple(Row(f"{row.id}-fd2", {**row.overrides,
-                                        "actuation.sensing.velocity": "finite-difference-2"},
-                     group=row.group, quick=row.quick, params=row.params, shape=row.shape)
-                 for row in _rows() if row.id.endswith("-ymca-none-esn"))
+    """Group ``fd2``: velocities by the second-order backward difference of the encoder
+    angles instead of the observer, for every controller alone (and the payload switch's)
+    and the ESN on the nominal arm: each controller's better estimate of the two."""
+    fd2 = {"actuation.sensing.velocity": "finite-difference-2"}
+    return tuple(Row(f"{row.id}-fd2", {**row.overrides, **fd2}, group="fd2", quick=row.quick,
+                     params=row.params, shape=row.shape)
+                 for row in (*_rows(), *_switch_rows())
+                 if not row.id.endswith("-esn") or row.id.endswith("-ymca-none-esn")
+                 if "-switch-esn" not in row.id)
 
 
 ROWS = (*_rows(), *_fd2_rows(), *_switch_rows(),

@@ -217,12 +217,14 @@ def build_parser() -> argparse.ArgumentParser:
                    "On a torque body: the torque twin's general, one per body (joint "
                    "angles): 240 s of babbling at 0.5-4 rad/s (within the torque limits) then "
                    "YMCA, the inertia-scaled PD teacher (3D: poles at 20 rad/s, forgetting "
-                   "0.9), the forgetting readout")
+                   "0.9), the forgetting readout; trained ones ship (general-2d-torque, "
+                   "general-3d-torque)")
 
     p = sub.add_parser("test", help="run a saved model (K = 0) on a movement")
     p.add_argument("--model", type=Path, required=True, help="model.npz written by `skinny "
                    "train`, or a shipped general model: general-2d-joint, general-3d-joint, "
-                   "general-2d-cartesian, general-3d-cartesian")
+                   "general-2d-cartesian, general-3d-cartesian; on the torque bodies "
+                   "general-2d-torque, general-3d-torque")
     p.config_flags = "TEST_FLAGS"
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=_out_path, help="output folder (default: results/test/<time>)")

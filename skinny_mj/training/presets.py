@@ -93,8 +93,10 @@ SHIPPED: dict[str, tuple[int, str]] = {
 #: ``general`` for the torque bodies, per number of hinges: (one-line reason, the dotted
 #: TrainConfig keys). Joint-angle signals; the teacher and readout of the dynamic study's
 #: ``fel-arm`` rows (inertia-scaled PD, beta = 1, forgetting readout); 240 s of slow
-#: babbling, then YMCA, 3 learning cycles per epoch.
+#: babbling, then YMCA, 3 learning cycles per epoch; the robot's sensing with velocities
+#: from the model-based observer (the dynamic study's rows sense as an oracle instead).
 _TORQUE_FEL = {"actuation": "torque", "plant.signals": "joint",
+               "actuation.sensing.velocity": "observer",
                "actuation.feedback": "inertia-pd", "method.fit": "forgetting", "method.beta": 1.0,
                "movement.trajectory": "set:babble:seed=0,duration=240,vmin=0.5,vmax=4+ymca",
                "method.cycles": 3}
@@ -102,20 +104,25 @@ TORQUE_GENERAL: dict[int, tuple[str, dict[str, Any]]] = {
     4: ("torque twin, 2D, joint-angle signals, trained on 240 s of motor babbling at peak "
         "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
         "inertia-scaled PD teacher, beta = 1, 3 cycles x 30 epochs, readout on the normal "
-        "equations with forgetting: row 2d-general of `skinny experiment dynamic --rows "
-        "general` (unseen md_02 at 0.18x speed 0.0163, md_03 at 0.27x 0.0116, 10 seeds)",
+        "equations with forgetting, velocities from the model-based observer: the shipped "
+        "model general-2d-torque (seed 0: unseen md_02 at 0.18x speed 0.0133, md_03 at "
+        "0.27x 0.0104)",
         {"plant.body": "2d-torque", **_TORQUE_FEL, "method.epochs": 30}),
     8: ("torque twin, 3D, joint-angle signals, trained on 240 s of motor babbling at peak "
         "speeds 0.5-4 rad/s then YMCA (within the torque limits), FEL with the "
         "inertia-scaled PD teacher at poles of 20 rad/s, beta = 1, 3 cycles x 15 epochs, "
-        "readout on the normal equations with forgetting 0.9: row 3d-general of `skinny "
-        "experiment dynamic --rows general` (unseen md_02 at 0.45x speed 0.0189, "
-        "md_03 at 0.44x 0.0142, 10 seeds)",
+        "readout on the normal equations with forgetting 0.9, velocities from the "
+        "model-based observer: the shipped model general-3d-torque",
         {"plant.body": "3d-torque", **_TORQUE_FEL, "method.epochs": 15, "actuation.omega": 20.0,
          "method.fit.forgetting": 0.9}),
 }
 #: The same names for the torque bodies (``general``: the 2D body's).
 TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {"general": TORQUE_GENERAL[4]}
+#: The trained torque general models shipped beside :data:`SHIPPED`: name -> the body's
+#: number of hinges; each file is ``skinny train --preset general --actuation torque
+#: --dof D --seed 0``'s model.npz (the robot's sensing: encoder angles, velocities from
+#: them), compressed, with its training metadata.
+SHIPPED_TORQUE: dict[str, int] = {"general-2d-torque": 4, "general-3d-torque": 8}
 
 
 #: What ``skinny train`` runs on a torque body without ``--preset``, per number of hinges:
@@ -194,9 +201,9 @@ def model_name(dof: int, signals: str) -> str:
 
 
 def model_path(model: str | Path) -> Path:
-    """The file of a shipped model's name (:data:`SHIPPED`), else ``model`` as a path
-    (a file of that name in the current folder comes first)."""
+    """The file of a shipped model's name (:data:`SHIPPED`, :data:`SHIPPED_TORQUE`), else
+    ``model`` as a path (a file of that name in the current folder comes first)."""
     path = Path(model)
-    if str(model) in SHIPPED and not path.exists():
+    if str(model) in (*SHIPPED, *SHIPPED_TORQUE) and not path.exists():
         return Path(str(files("skinny_mj").joinpath("data", "models", f"{model}.npz")))
     return path
