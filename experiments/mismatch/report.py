@@ -19,7 +19,7 @@ from skinny_mj.experiments.mismatch.study import (
     MOVEMENTS,
     row_id,
 )
-from skinny_mj.experiments.mismatch.switch import LEARNERS, PRE
+from skinny_mj.experiments.mismatch.switch import LEARNERS, POST, PRE
 
 from skinny_mj.engine.stats import load_runs
 
@@ -49,29 +49,37 @@ def _cell(vals: list[float], degrees: list[float]) -> str:
 
 
 def _lookup(records, bd: str, m: str, ctl: str, suffix: str, metric: str,
-            mv: str = "ymca") -> list[float]:
+            mv: str = "ymca", variant: str = "") -> list[float]:
     if suffix == "_on":
         if m == "none":
-            return values(records, row_id(bd, "none", "esn", mv), metric)
-        return values(records, row_id(bd, "none", "esn", mv), f"{metric}_on_{m}")
-    return values(records, row_id(bd, m, ctl, mv), metric + suffix)
+            return values(records, row_id(bd, "none", "esn", mv) + variant, metric)
+        return values(records, row_id(bd, "none", "esn", mv) + variant, f"{metric}_on_{m}")
+    return values(records, row_id(bd, m, ctl, mv) + variant, metric + suffix)
 
 
-def mean(records, bd, m, ctl, suffix="", metric="position_nrmse", mv="ymca") -> float:
-    vals = _lookup(records, bd, m, ctl, suffix, metric, mv)
+def mean(records, bd, m, ctl, suffix="", metric="position_nrmse", mv="ymca",
+         variant="") -> float:
+    vals = _lookup(records, bd, m, ctl, suffix, metric, mv, variant)
     return float(np.mean(vals)) if vals else float("nan")
 
 
-def table(records: list[dict], bd: str, mv: str = "ymca") -> list[str]:
-    """Markdown: one line per mismatch, position NRMSE mean ± sd (RMS joint error, °)."""
+def best(records, bd, m, ctl, mv="ymca") -> float:
+    """``ctl``'s mean position NRMSE under the better of the two velocity estimates."""
+    return float(np.nanmin([mean(records, bd, m, ctl, mv=mv),
+                            mean(records, bd, m, ctl, mv=mv, variant="-fd2")]))
+
+
+def table(records: list[dict], bd: str, mv: str = "ymca", variant: str = "") -> list[str]:
+    """Markdown: one line per mismatch, position NRMSE mean ± sd (RMS joint error, °);
+    ``variant``: the rows' id suffix (``-fd2``: the second-order difference)."""
     lines = ["| mismatch | " + " | ".join(h for h, _, _ in COLUMNS) + " |",
              "|---|" + "---|" * len(COLUMNS)]
     for m in MISMATCHES:
-        cells = [_cell(_lookup(records, bd, m, c, s, "position_nrmse", mv),
-                       _lookup(records, bd, m, c, s, "rms_error_deg", mv))
+        cells = [_cell(_lookup(records, bd, m, c, s, "position_nrmse", mv, variant),
+                       _lookup(records, bd, m, c, s, "rms_error_deg", mv, variant))
                  for _, c, s in COLUMNS]
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
-    n = sorted({len(values(records, row_id(bd, m, c, mv), "position_nrmse"))
+    n = sorted({len(values(records, row_id(bd, m, c, mv) + variant, "position_nrmse"))
                 for m in MISMATCHES for c in CONTROLLERS} - {0})
     lines.append("")
     lines.append(f"Position NRMSE, mean ± sd over {'/'.join(map(str, n))} ok runs per row "
@@ -104,6 +112,11 @@ def goals(records: list[dict], bd: str, mv: str = "ymca") -> list[str]:
             continue
         out.append(f"- {m}: ESN K = 1 {k1:.4f}, nominal CT {ct:.4f} ({ct / k1:.2f}x; goal >= "
                    f"{GOAL_VS_CT}x), adaptive CT {ad:.4f} ({ad / k1:.2f}x)")
+        bct, bad = best(records, bd, m, "ct-nominal", mv), best(records, bd, m, "ct-adaptive", mv)
+        k0 = min(mean(records, bd, m, "esn", mv=mv), k1)
+        out.append(f"  each under its better velocity estimate: the ESN's better of K = 0 / 1 "
+                   f"{k0:.4f}, nominal CT {bct:.4f} ({bct / k0:.2f}x), adaptive CT {bad:.4f} "
+                   f"({bad / k0:.2f}x)")
     return out
 
 
@@ -111,7 +124,7 @@ def switch_table(records: list[dict]) -> list[str]:
     """Markdown: the payload switch per learner, mean position NRMSE per cycle."""
     lines = ["| controller | before | switch cycle | +1 | +2 | +3 | last | recover (cycles) |",
              "|---|---|---|---|---|---|---|---|"]
-    for learner in LEARNERS:
+    for learner in (*LEARNERS, *(f"{x}-fd2" for x in LEARNERS)):
         row = f"2d-ymca-switch-{learner}"
         curves = [r["metrics"]["curve"] for r in records
                   if r["row"] == row and r.get("status") == "ok"]
@@ -120,8 +133,11 @@ def switch_table(records: list[dict]) -> list[str]:
         c = np.mean(curves, axis=0)
         rec = values(records, row, "recover_cycles")
         cells = [np.mean(values(records, row, "pre_switch")), *c[PRE:PRE + 4], c[-1]]
+        never = sum(x > POST for x in rec)
+        recover = "never" if never == len(rec) else f"{np.median(rec):.0f} (median; never in " \
+            f"{never} of {len(rec)} runs)" if never else f"{np.median(rec):.0f} (median)"
         lines.append(f"| {learner} | " + " | ".join(f"{v:.4f}" for v in cells)
-                     + f" | {np.mean(rec):.1f} |")
+                     + f" | {recover} |")
     return lines
 
 
@@ -136,6 +152,10 @@ def report(results: dict, plan, out_dir: Path) -> str:
                 continue
             lines += [f"## {bd}, {movement}", "", *table(records, bd, mv), "",
                       *goals(records, bd, mv), ""]
+            if any(r["row"].startswith(f"{bd}-{mv}-") and r["row"].endswith("-fd2")
+                   and "-switch-" not in r["row"] for r in records):
+                lines += [f"### {bd}, {movement}, velocities by the second-order difference",
+                          "", *table(records, bd, mv, "-fd2"), ""]
     if any("-switch-" in r["row"] for r in records):
         lines += ["## Payload switched on mid-movement", "", *switch_table(records), ""]
     return "\n".join(lines) if lines else "no runs"
