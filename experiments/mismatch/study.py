@@ -196,7 +196,8 @@ def _fd2_rows() -> tuple[Row, ...]:
     fd2 = {"actuation.sensing.velocity": "finite-difference-2"}
     return tuple(Row(f"{row.id}-fd2", {**row.overrides, **fd2}, group="fd2", quick=row.quick,
                      params=row.params, shape=row.shape)
-                 for row in (*_rows(), *_switch_rows())
+                 for row in (*_rows(), *_switch_rows(),
+                             *(r for mv in MOVEMENTS if mv != "ymca" for r in _rows(mv)))
                  if not row.id.endswith("-esn") or row.id.endswith("-ymca-none-esn")
                  if "-switch-esn" not in row.id)
 
