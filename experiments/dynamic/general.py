@@ -33,6 +33,7 @@ from skinny_mj.experiments.claims import values
 from skinny_mj import training
 from skinny_mj.engine.results import train_failure
 from skinny_mj.engine.study import Shape, Test
+from skinny_mj.plots import pyplot, save_figure
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.imitation import TORQUE_METRICS
 from skinny_mj.training.result import RunResult
@@ -180,7 +181,40 @@ def report_lines(out_dir, rows: tuple[str, ...], bodies: dict[str, int]) -> list
                              f"{sum(x <= GOAL for x in v)} / {len(v)} runs; computed "
                              f"torque {_cell(ct)}; floor {_cell(floor)}")
         lines += speed_curve_lines(out_dir, mine, bd, dof)
+        if (png := speed_curve_png(out_dir, mine, bd, dof)) is not None:
+            lines.append(f"figure: {png}")
     return lines
+
+
+def speed_curve_png(out_dir, rows: list[str], bd: str, dof: int):
+    """``speed_<bd>.png``: per clip, position NRMSE (mean ± sd over runs) against the speed
+    the whole clip plays at, per row with the curve, the locally re-timed clip as a
+    marker at full speed; None without data."""
+    have = [r for r in rows if values(out_dir, r, f"md_02-x{CURVE_SPEEDS[0]:g}__position_nrmse")]
+    if not have:
+        return None
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(CLIPS), figsize=(9.6, 3.8), sharey=True)
+    for ax, clip in zip(axes, CLIPS, strict=True):
+        cols = curve_columns(clip, dof)
+        x = [speed_of(c, dof) for c in cols]
+        for k, r in enumerate(have):
+            runs = [values(out_dir, r, f"{c}__position_nrmse") for c in cols]
+            mean = [statistics.fmean(v) for v in runs]
+            sd = [statistics.stdev(v) if len(v) > 1 else 0.0 for v in runs]
+            line = ax.errorbar(x, mean, yerr=sd, marker="o", capsize=3, label=r)
+            timed = values(out_dir, r, f"{clip}-retimed__position_nrmse")
+            ax.plot([1.0], [statistics.fmean(timed)], marker="*", markersize=12,
+                    color=line[0].get_color(), linestyle="none",
+                    label="re-timed locally" if k == 0 else None)
+        ax.axhline(GOAL, color="grey", linestyle=":", label=f"goal {GOAL}")
+        ax.axvline(speed_of(f"{clip}-feasible", dof), color="grey", alpha=0.4)
+        ax.set(xlabel="speed of the whole clip (× its own)", title=f"{clip}, {bd}",
+               yscale="log")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("position NRMSE (K = 0)")
+    axes[-1].legend(fontsize=7)
+    return save_figure(fig, f"{out_dir}/speed_{bd}.png")
 
 
 def curve_columns(clip: str, dof: int) -> list[str]:
