@@ -8,7 +8,8 @@ import pytest
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
-from skinny_mj.training.presets import GENERAL, SHIPPED, model_path, preset_fields
+from skinny_mj.training.presets import (GENERAL, SHIPPED, SHIPPED_TORQUE, model_path,
+                                        preset_fields)
 from skinny_mj.trajectories import load_movement
 from skinny_mj.trajectories.babble import HOLD_S, LIMIT_MARGIN_RAD, babble
 
@@ -127,6 +128,33 @@ def test_shipped_model_loads_records_its_preset_and_imitates_a_clip(name):
     (still,) = evaluate(run_of(cfg, silent, np.asarray(meta["max_speed_rad_s"]), clip,
                                [run_streams(0).plant_seed]))
     assert outcome.position_nrmse < still.position_nrmse
+
+
+@pytest.mark.parametrize("name", list(SHIPPED_TORQUE))
+def test_shipped_torque_model_records_its_preset_and_imitates_a_clip(name):
+    """A shipped torque model is the torque preset's (its config, under the robot's
+    sensing), and on a clip it never saw it tracks better than the same arm with the
+    network silent (the commands zero: gravity takes the arm down)."""
+    from skinny_mj.training.config import Encoders, TrainConfig
+    from skinny_mj.training.loop import evaluate, run_of, run_streams
+
+    path, esn, meta = _shipped(name)
+    dof = SHIPPED_TORQUE[name]
+    assert path.is_file() and path.stat().st_size < 2_000_000
+    with np.load(path, allow_pickle=False) as data:
+        assert all(data[k].dtype != object for k in data.files)
+    assert (meta["dof"], meta["training"]["preset"]) == (dof, "general")
+    cfg = TrainConfig.from_dict(meta["config"])
+    assert cfg == TrainConfig().override(preset_fields("general", "torque", dof=dof))
+    assert cfg.actuation.kind == "torque" and isinstance(cfg.actuation.sensing, Encoders)
+    clip, _ = load_movement("md_03.amc@start=0,duration=1", dof, speed=0.5)
+    seeds = [run_streams(0).plant_seed]
+    speeds = np.asarray(meta["max_speed_rad_s"])
+    (outcome,) = evaluate(run_of(cfg, esn, speeds, clip, seeds))
+    silent = _shipped(name)[1]
+    silent.W_out[...] = 0.0
+    (still,) = evaluate(run_of(cfg, silent, speeds, clip, seeds))
+    assert not outcome.failed and outcome.position_nrmse < 0.5 * still.position_nrmse
 
 
 @pytest.mark.slow  # the CLI end to end (imports rerun for the recording)
