@@ -33,7 +33,7 @@ Controllers (all on the same sensed state):
   ``none`` row's ESN (trained on the nominal arm) is also tested on every changed plant
   (``*_on_<mismatch>``): the network trained on the nominal arm, tested on the changed one.
 
-Groups: ``clips`` (2D, the shipped clips re-timed to the torque limits, MOVEMENTS),
+Groups: ``clips`` and ``clips-3d`` (the shipped clips re-timed to the torque limits),
 ``2d`` and ``3d`` (the 3D body: the dynamic study's 3D recipe for the ESN, 500
 units, 6 learning cycles per epoch, the teacher at 20 rad/s, forgetting 0.9), and
 ``switch``: a 1 kg payload switched on mid-movement
@@ -96,11 +96,11 @@ COLUMNS = {**{k: TABLE_COLUMNS[k] for k in ("position_nrmse", "joint_nrmse", "rm
            **{k: TABLE_COLUMNS[k] for k in ("max_torque_ratio", "train_wall_s")}}
 
 
-#: The movements trained and tested on: YMCA (both bodies), and in 2D the shipped CMU
-#: clips re-timed locally to the nominal arm's torque limits (``NAME@feasible``: TOPP-RA,
-#: slower only where a torque would pass 0.9 of its limit), group ``clips``.
+#: The movements trained and tested on: YMCA, and the shipped CMU clips re-timed locally
+#: to the nominal arm's torque limits (``NAME@feasible``: TOPP-RA, slower only where a
+#: torque would pass 0.9 of its limit), groups ``clips`` (2D) and ``clips-3d``.
 MOVEMENTS = {"ymca": "ymca", "md02": "md_02.amc@feasible", "md03": "md_03.amc@feasible"}
-CLIP_BODIES = ("2d",)
+CLIP_BODIES = ("2d", "3d")
 
 
 def row_id(bd: str, mismatch: str, controller: str, movement: str = "ymca") -> str:
@@ -124,8 +124,8 @@ def _rows(movement: str = "ymca") -> tuple[Row, ...]:
                     {"test.washout_cycles": QUICK_ADAPT_CYCLES} if ctl == "ct-adaptive" else {}
                 params = {"also": tuple(k for k in MISMATCHES if k != "none")} \
                     if ctl == "esn" and m == "none" else {}
-                out.append(Row(row_id(bd, m, ctl, movement), over,
-                               group=bd if movement == "ymca" else "clips", quick=quick,
+                group = bd if movement == "ymca" else "clips" if bd == "2d" else f"clips-{bd}"
+                out.append(Row(row_id(bd, m, ctl, movement), over, group=group, quick=quick,
                                params=params, shape=ESN_SHAPE if ctl == "esn" else None))
     return tuple(out)
 
