@@ -1,12 +1,13 @@
 """The claims page's computed section, written from a scoring (:mod:`claims_score`).
 
 Between :data:`claims_score.BEGIN` and :data:`claims_score.END` of a results page: the
-count per reading column, the sweeps scored (the command that made each, its runs, its
-extract), then per paper one line per claim (its short statement, the thesis's sentence
-and line, its verdict under each reading column, the counted one in bold) and one line
-per claim and column with the deciding comparison's numbers and, for each claim that
-does not hold or is not testable, the measured reason. Nothing in it is typed: the page
-test recomputes it from the committed extracts and compares.
+count per reading column, the sweeps scored (one line per study: each reading with the
+command that made its sweep, the runs), then per paper one line per claim (its short
+statement, the thesis's sentence and line, its verdict under each reading column, the
+counted one in bold) and one line per claim and column with the deciding comparison's
+numbers and, for each claim that does not hold or is not testable, the measured reason.
+Nothing in it is typed: the page test recomputes it from the committed extracts and
+compares.
 """
 
 from __future__ import annotations
@@ -89,14 +90,24 @@ def readings_table() -> list[str]:
 
 
 def sources_table(scored: Mapping[str, Any]) -> list[str]:
+    """One line per study: each reading with the command(s) that made its sweep(s), and
+    the runs (``k sweeps, each ok / failed / errored`` when every sweep counted the same)."""
     if not scored["sources"]:
         return ["No sweep was given: every claim is not testable."]
-    lines = ["| study | reading | made by | runs: ok / failed / errored | extract |",
-             "|---|---|---|---|---|"]
-    for s in scored["sources"]:
-        r = s["runs"]
-        lines.append(f"| {s['study']} | {s['key']} | `{s['command']}` | {r.get('ok', 0)} / "
-                     f"{r.get('failed', 0)} / {r.get('error', 0)} | `{s['extract']}` |")
+    lines = ["| study | reading: the command that made each sweep "
+             "| runs: ok / failed / errored |", "|---|---|---|"]
+    studies = dict.fromkeys(s["study"] for s in scored["sources"])
+    for study in studies:
+        mine = [s for s in scored["sources"] if s["study"] == study]
+        made: dict[str, list[str]] = {}
+        for s in mine:
+            made.setdefault(s["key"], []).append(f"`{s['command']}`")
+        runs = [f"{s['runs'].get('ok', 0)} / {s['runs'].get('failed', 0)} / "
+                f"{s['runs'].get('error', 0)}" for s in mine]
+        same = len(runs) > 1 and len(set(runs)) == 1
+        runs_cell = f"{len(runs)} sweeps, each {runs[0]}" if same else ", ".join(runs)
+        sweeps = "<br>".join(f"{key}: {', '.join(cmds)}" for key, cmds in made.items())
+        lines.append(f"| {study} | {sweeps} | {runs_cell} |")
     return lines
 
 
@@ -131,7 +142,8 @@ def markdown(scored: Mapping[str, Any]) -> str:
     lines += [f"Computed by `skinny claims` (Welch's t-test, α = {ALPHA:g}, the mean; "
               "weak never counts). Count per reading column:", "", *count_table(scored), "",
               "The readings (experiments/claims_rules.py):", "", *readings_table(), "",
-              f"Sweeps scored (their extracts in `{EXTRACTS}/`):", "",
+              f"Sweeps scored (each one's extract in `{EXTRACTS}/`: "
+              "`<study>.<reading>.json`, a band's point i `<study>.<reading>.<i>.json`):", "",
               *sources_table(scored), ""]
     for paper in PAPERS:
         lines += paper_tables(scored, paper)

@@ -53,6 +53,21 @@ def test_no_fitted_or_measured_reading_is_counted(scored):
             assert not (fitted and col["counted"]), (claim["id"], col["column"])
 
 
+def test_the_sweeps_table_has_one_line_per_study_naming_every_sweep(scored):
+    lines = page.sources_table(scored)[2:]
+    studies = [s["study"] for s in scored["sources"]]
+    assert [line.split(" | ")[0].lstrip("| ") for line in lines] == list(dict.fromkeys(studies))
+    for s in scored["sources"]:
+        line = next(x for x in lines if x.startswith(f"| {s['study']} |"))
+        assert f"`{s['command']}`" in line and f"{s['key']}: " in line
+    runs = {"ok": 5, "failed": 1}
+    one = [{"study": "paper-a", "key": k, "command": f"skinny experiment paper-a {k}",
+            "runs": runs} for k in ("x", "y")]
+    assert page.sources_table({"sources": one})[2].endswith("| 2 sweeps, each 5 / 1 / 0 |")
+    one[1] = {**one[1], "runs": {"ok": 4}}
+    assert page.sources_table({"sources": one})[2].endswith("| 5 / 1 / 0, 4 / 0 / 0 |")
+
+
 # -- an independent re-scoring ------------------------------------------------------------
 ALPHA, CLOSE, STABLE = 0.05, 1.5, 0.9
 

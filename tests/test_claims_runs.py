@@ -164,7 +164,7 @@ def test_the_command_writes_the_extracts_and_the_page_and_rescores_them(tmp_path
     assert [p.name for p in extracts.iterdir()] == ["paper-e.recorded.json"]
     text = doc.read_text()
     assert text.startswith("# Claims\n\nProse.\n\n") and text.endswith("\n\nMore prose.\n")
-    assert "\nold\n" not in text and "| paper-e | recorded |" in text
+    assert "\nold\n" not in text and "| paper-e | recorded: `skinny experiment paper-e" in text
     assert not (tmp_path / "results").exists()  # --page alone writes no results folder
     before = text
     assert main(["claims", "--extracts", str(extracts), "--page", str(doc)]) == 0
