@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 hypothesis = pytest.importorskip("hypothesis")
-from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import HealthCheck, example, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 from skinny_mj.errors import SkinnyInputError  # noqa: E402
@@ -183,6 +183,7 @@ BVH_TEXT = (DATA / "arms.bvh").read_text()
 @FUZZ
 @given(asf=mutated_text(ASF_TEXT) | st.just(ASF_TEXT.encode()),
        amc=mutated_text(AMC_TEXT) | st.binary(max_size=200), dof=st.sampled_from([4, 8]))
+@example(asf=ASF_TEXT.encode(), amc=b"\xb9", dof=4)  # a digit (¹) that int() refuses
 def test_fuzz_asf_amc(asf, amc, dof):
     asf_path = _write(asf, ".asf")
     try:

@@ -173,7 +173,7 @@ def parse_amc(path: str | Path, skeleton: Skeleton) -> dict[str, np.ndarray]:
         tok = line.split()
         if tok[0].startswith(":"):
             continue
-        if len(tok) == 1 and tok[0].isdigit():
+        if len(tok) == 1 and tok[0].isdecimal():
             if frame_numbers and int(tok[0]) != frame_numbers[-1] + 1:
                 raise SkinnyInputError(
                     f"frame {int(tok[0])} follows frame {frame_numbers[-1]}: frames must be "
