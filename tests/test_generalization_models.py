@@ -8,8 +8,7 @@ import pytest
 
 from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
-from skinny_mj.training.presets import (GENERAL, SHIPPED, SHIPPED_TORQUE, model_path,
-                                        preset_fields)
+from skinny_mj.training.presets import GENERAL, SHIPPED, SHIPPED_TORQUE, model_path, preset_fields
 from skinny_mj.trajectories import load_movement
 from skinny_mj.trajectories.babble import HOLD_S, LIMIT_MARGIN_RAD, babble
 

@@ -5,9 +5,9 @@ Every row runs on the torque body (2D unless ``3d-``), YMCA, with the realistic 
 (``actuation.sensing=encoders``: encoder noise 5e-4 rad; joint velocities from the
 model-based observer, ``actuation.sensing.velocity=observer``, the torque recipe's) and
 controllers that know at most the nominal body (payload 0, masses x 1, no friction); the
-rows ``<body>-ymca-none-esn-fd2`` train the ESN on velocities by the second-order backward
-difference instead (what the observer is worth). Rows ``<body>-ymca-<mismatch>-<controller>``; the mismatch is the plant as it
-is, in training and test alike:
+rows ``*-fd2`` (group ``fd2``) sense velocities by the second-order backward difference
+instead. Rows ``<body>-<movement>-<mismatch>-<controller>``; the mismatch is the plant as
+it is, in training and test alike:
 
 - ``none``; ``payload0.5`` / ``payload1``: 0.5 / 1 kg at the right hand's centre of mass;
   ``mass+20`` / ``mass-20``: every arm link's mass and inertia x 1.2 / x 0.8;
