@@ -32,6 +32,7 @@ from skinny_mj.experiments.claims import values
 
 from skinny_mj import training
 from skinny_mj.engine.results import train_failure
+from skinny_mj.engine.stats import load_runs
 from skinny_mj.engine.study import Shape, Test
 from skinny_mj.plots import pyplot, save_figure
 from skinny_mj.training.config import TrainConfig
@@ -150,13 +151,14 @@ def _cell(v: list[float]) -> str:
 def report_lines(out_dir, rows: tuple[str, ...], bodies: dict[str, int]) -> list[str]:
     """A markdown table of the general rows swept (position NRMSE per test column, mean ±
     sd over the ok runs), each body's computed-torque floor first, then the goal per
-    preset row."""
+    preset row. The run files are read once."""
+    get = functools.partial(values, out_dir, runs=load_runs(out_dir))
     lines = []
     for bd, dof in bodies.items():
         mine = [r for r in rows if r.startswith(f"{bd}-general")]
         # the floor, then computed torque, then the learned rows
         mine.sort(key=lambda r: (not r.endswith("-floor"), not r.endswith("-arm-ct")))
-        if not any(values(out_dir, r, "train_wall_s") for r in mine):
+        if not any(get(r, "train_wall_s") for r in mine):
             continue
         head = " | ".join(f"{c} @ {speed_of(c, dof):g}" for c in FLOOR_TESTS)
         lines += [f"torque general, {bd}: position NRMSE per test column (the ESN alone, "
@@ -165,32 +167,32 @@ def report_lines(out_dir, rows: tuple[str, ...], bodies: dict[str, int]) -> list
                   "limits allow)",
                   f"| row | n | {head} |", "|---|---|" + "---|" * len(FLOOR_TESTS)]
         for r in mine:
-            n = len(values(out_dir, r, "train_wall_s"))
+            n = len(get(r, "train_wall_s"))
             if n:
-                cells = " | ".join(_cell(values(out_dir, r, f"{c}__position_nrmse"))
+                cells = " | ".join(_cell(get(r, f"{c}__position_nrmse"))
                                    for c in FLOOR_TESTS)
                 lines.append(f"| {r} | {n} | {cells} |")
         preset = f"{bd}-general"
         for c in CLIP_COLUMNS:
-            v = values(out_dir, preset, f"{c}__position_nrmse")
-            ct = values(out_dir, f"{bd}-general-arm-ct", f"{c}__position_nrmse")
-            floor = values(out_dir, f"{bd}-general-floor", f"{c}__position_nrmse")
+            v = get(preset, f"{c}__position_nrmse")
+            ct = get(f"{bd}-general-arm-ct", f"{c}__position_nrmse")
+            floor = get(f"{bd}-general-floor", f"{c}__position_nrmse")
             if v:
                 lines.append(f"goal {bd} torque general preset on unseen {c} (@ "
                              f"{speed_of(c, dof):g}) <= {GOAL}: {_cell(v)}, "
                              f"{sum(x <= GOAL for x in v)} / {len(v)} runs; computed "
                              f"torque {_cell(ct)}; floor {_cell(floor)}")
-        lines += speed_curve_lines(out_dir, mine, bd, dof)
-        if (png := speed_curve_png(out_dir, mine, bd, dof)) is not None:
+        lines += speed_curve_lines(get, mine, bd, dof)
+        if (png := speed_curve_png(get, f"{out_dir}/speed_{bd}.png", mine, bd, dof)) is not None:
             lines.append(f"figure: {png}")
     return lines
 
 
-def speed_curve_png(out_dir, rows: list[str], bd: str, dof: int):
-    """``speed_<bd>.png``: per clip, position NRMSE (mean ± sd over runs) against the speed
-    the whole clip plays at, per row with the curve, the locally re-timed clip as a
-    marker at full speed; None without data."""
-    have = [r for r in rows if values(out_dir, r, f"md_02-x{CURVE_SPEEDS[0]:g}__position_nrmse")]
+def speed_curve_png(get, path: str, rows: list[str], bd: str, dof: int):
+    """The figure at ``path``: per clip, position NRMSE (mean ± sd over runs) against the
+    speed the whole clip plays at, per row with the curve, the locally re-timed clip as a
+    marker at full speed; None without data. ``get(row, metric)``: the runs' values."""
+    have = [r for r in rows if get(r, f"{CLIPS[0]}-x{CURVE_SPEEDS[0]:g}__position_nrmse")]
     if not have:
         return None
     plt = pyplot()
@@ -199,11 +201,11 @@ def speed_curve_png(out_dir, rows: list[str], bd: str, dof: int):
         cols = curve_columns(clip, dof)
         x = [speed_of(c, dof) for c in cols]
         for k, r in enumerate(have):
-            runs = [values(out_dir, r, f"{c}__position_nrmse") for c in cols]
+            runs = [get(r, f"{c}__position_nrmse") for c in cols]
             mean = [statistics.fmean(v) for v in runs]
             sd = [statistics.stdev(v) if len(v) > 1 else 0.0 for v in runs]
             line = ax.errorbar(x, mean, yerr=sd, marker="o", capsize=3, label=r)
-            timed = values(out_dir, r, f"{clip}-retimed__position_nrmse")
+            timed = get(r, f"{clip}-retimed__position_nrmse")
             ax.plot([1.0], [statistics.fmean(timed)], marker="*", markersize=12,
                     color=line[0].get_color(), linestyle="none",
                     label="re-timed locally" if k == 0 else None)
@@ -214,7 +216,7 @@ def speed_curve_png(out_dir, rows: list[str], bd: str, dof: int):
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("position NRMSE (K = 0)")
     axes[-1].legend(fontsize=7)
-    return save_figure(fig, f"{out_dir}/speed_{bd}.png")
+    return save_figure(fig, path)
 
 
 def curve_columns(clip: str, dof: int) -> list[str]:
@@ -224,13 +226,14 @@ def curve_columns(clip: str, dof: int) -> list[str]:
     return sorted(cols, key=lambda c: speed_of(c, dof))
 
 
-def speed_curve_lines(out_dir, rows: list[str], bd: str, dof: int) -> list[str]:
+def speed_curve_lines(get, rows: list[str], bd: str, dof: int) -> list[str]:
     """Position NRMSE (and RMS joint error in degrees) against the clip's speed, per row
-    that has the curve's columns, and the clips re-timed locally to the limits."""
+    that has the curve's columns, and the clips re-timed locally to the limits.
+    ``get(row, metric)``: the runs' values."""
     lines = []
     for clip in CLIPS:
         cols = curve_columns(clip, dof)
-        have = [r for r in rows if values(out_dir, r, f"{cols[0]}__position_nrmse")]
+        have = [r for r in rows if get(r, f"{cols[0]}__position_nrmse")]
         if not have:
             continue
         lines += [f"torque general, {bd}, {clip}: position NRMSE (RMS joint error, deg) "
@@ -239,13 +242,13 @@ def speed_curve_lines(out_dir, rows: list[str], bd: str, dof: int) -> list[str]:
                   "| row | " + " | ".join(f"× {speed_of(c, dof):g}" for c in cols)
                   + " | retimed |", "|---|" + "---|" * (len(cols) + 1)]
         for r in have:
-            cells = [f"{_mean(values(out_dir, r, f'{c}__position_nrmse'))} "
-                     f"({_mean(values(out_dir, r, f'{c}__rms_error_deg'), 2)})"
+            cells = [f"{_mean(get(r, f'{c}__position_nrmse'))} "
+                     f"({_mean(get(r, f'{c}__rms_error_deg'), 2)})"
                      for c in (*cols, f"{clip}-retimed")]
             lines.append(f"| {r} | " + " | ".join(cells) + " |")
         preset = f"{bd}-general"
-        v = values(out_dir, preset, f"{clip}-retimed__position_nrmse")
-        deg = values(out_dir, preset, f"{clip}-retimed__rms_error_deg")
+        v = get(preset, f"{clip}-retimed__position_nrmse")
+        deg = get(preset, f"{clip}-retimed__rms_error_deg")
         if v:
             lines.append(f"goal {bd} torque general preset on unseen {clip} re-timed locally "
                          f"to the limits <= {GOAL} and <= {GOAL_DEG:g} deg RMS: {_cell(v)}, "
