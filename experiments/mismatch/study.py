@@ -45,6 +45,8 @@ mismatches and two switch rows, two epochs, one adaptation cycle).
 
 from __future__ import annotations
 
+import dataclasses
+
 from skinny_mj.experiments.dynamic.study import ARM_GOALS, TABLE_COLUMNS
 from skinny_mj.experiments.dynamic.study import metrics as dynamic_metrics
 from skinny_mj.experiments.mismatch import switch
@@ -189,21 +191,22 @@ def _switch_rows() -> tuple[Row, ...]:
     return tuple(out)
 
 
-def _fd2_rows() -> tuple[Row, ...]:
+def _fd2_rows(rows: tuple[Row, ...]) -> tuple[Row, ...]:
     """Group ``fd2``: velocities by the second-order backward difference of the encoder
-    angles instead of the observer, for every controller alone (and the payload switch's)
-    and the ESN on the nominal arm: each controller's better estimate of the two."""
+    angles instead of the observer, for every controller alone of ``rows`` (the payload
+    switch's too) and the ESN on the nominal arm: each controller's better estimate of the
+    two."""
     fd2 = {"actuation.sensing.velocity": "finite-difference-2"}
-    return tuple(Row(f"{row.id}-fd2", {**row.overrides, **fd2}, group="fd2", quick=row.quick,
-                     params=row.params, shape=row.shape)
-                 for row in (*_rows(), *_switch_rows(),
-                             *(r for mv in MOVEMENTS if mv != "ymca" for r in _rows(mv)))
+    return tuple(dataclasses.replace(row, id=f"{row.id}-fd2", group="fd2",
+                                     overrides={**row.overrides, **fd2})
+                 for row in rows
                  if not row.id.endswith("-esn") or row.id.endswith("-ymca-none-esn")
                  if "-switch-esn" not in row.id)
 
 
-ROWS = (*_rows(), *_fd2_rows(), *_switch_rows(),
-        *(r for mv in MOVEMENTS if mv != "ymca" for r in _rows(mv)))
+_YMCA, _SWITCH = _rows(), _switch_rows()
+_CLIPS = tuple(r for mv in MOVEMENTS if mv != "ymca" for r in _rows(mv))
+ROWS = (*_YMCA, *_fd2_rows((*_YMCA, *_SWITCH, *_CLIPS)), *_SWITCH, *_CLIPS)
 QUICK_ROWS = (*(row_id("2d", m, c) for m in ("none", "payload1", "delay")
                 for c in CONTROLLERS), "2d-ymca-switch-esn-rls", "2d-ymca-switch-ct-adaptive")
 STUDY = Study(
