@@ -22,7 +22,7 @@ import numpy as np
 
 from skinny_mj.cli import parser as cli
 from skinny_mj.io import atomic_path
-from skinny_mj.training.presets import SHIPPED, SHIPPED_TORQUE
+from skinny_mj.training.presets import SHIPPED, SHIPPED_NAMES, SHIPPED_TORQUE
 
 #: The package-data folder of the shipped models (in a source checkout).
 MODELS_DIR = Path(__file__).resolve().parents[2] / "skinny_mj" / "data" / "models"
@@ -62,12 +62,12 @@ def train_shipped(name: str, work: Path, seed: int = 0) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--only", choices=(*SHIPPED, *SHIPPED_TORQUE), action="append",
+    parser.add_argument("--only", choices=SHIPPED_NAMES, action="append",
                         help="train only this model (repeatable; default: all)")
     parser.add_argument("--work", type=Path, default=Path("results/shipped_models"),
                         help="folder of the `skinny train` runs (default: %(default)s)")
     args = parser.parse_args(argv)
-    for name in args.only or (*SHIPPED, *SHIPPED_TORQUE):
+    for name in args.only or SHIPPED_NAMES:
         print(json.dumps(train_shipped(name, args.work / time.strftime("%Y%m%d-%H%M%S"))),
               flush=True)
     return 0

@@ -15,7 +15,7 @@ from skinny_mj.errors import SkinnyInputError
 from skinny_mj.plant import body
 from skinny_mj.training.config import TrainConfig
 from skinny_mj.training.parts import network_sizes
-from skinny_mj.training.presets import SHIPPED, SHIPPED_TORQUE, model_path
+from skinny_mj.training.presets import SHIPPED_NAMES, model_path
 
 #: What reading a damaged .npz raises (zip errors, an empty file, a bad JSON config).
 _UNREADABLE = (OSError, ValueError, KeyError, TypeError, EOFError, NotImplementedError,
@@ -32,7 +32,7 @@ def read_model(model: str | Path) -> tuple[Path, ESN, dict[str, Any]]:
         raise SkinnyInputError("a folder, not a model file", path=path)
     if not path.is_file():
         raise SkinnyInputError("no such model file (shipped models: "
-                               f"{', '.join((*SHIPPED, *SHIPPED_TORQUE))})",
+                               f"{', '.join(SHIPPED_NAMES)})",
                                path=path)
     if not zipfile.is_zipfile(path):  # else numpy's "pickled data ... allow_pickle" advice
         raise SkinnyInputError("not a model written by `skinny train` (not an .npz archive)",

@@ -123,6 +123,8 @@ TORQUE_PRESETS: dict[str, tuple[str, dict[str, Any]]] = {"general": TORQUE_GENER
 #: --dof D --seed 0``'s model.npz (the robot's sensing: encoder angles, velocities from
 #: them), compressed, with its training metadata.
 SHIPPED_TORQUE: dict[str, int] = {"general-2d-torque": 4, "general-3d-torque": 8}
+#: Every shipped model's name.
+SHIPPED_NAMES: tuple[str, ...] = (*SHIPPED, *SHIPPED_TORQUE)
 
 
 #: What ``skinny train`` runs on a torque body without ``--preset``, per number of hinges:
@@ -204,6 +206,6 @@ def model_path(model: str | Path) -> Path:
     """The file of a shipped model's name (:data:`SHIPPED`, :data:`SHIPPED_TORQUE`), else
     ``model`` as a path (a file of that name in the current folder comes first)."""
     path = Path(model)
-    if str(model) in (*SHIPPED, *SHIPPED_TORQUE) and not path.exists():
+    if str(model) in SHIPPED_NAMES and not path.exists():
         return Path(str(files("skinny_mj").joinpath("data", "models", f"{model}.npz")))
     return path
