@@ -62,6 +62,16 @@ TESTS = {"md_02": ("md_02.amc", 1.0), "md_03": ("md_03.amc", 1.0),
 FLOOR_TESTS = ("md_02", "md_03", "md_02-feasible", "md_03-feasible", "ymca")
 #: The unseen clips' columns the preset's goal is read on.
 CLIP_COLUMNS = ("md_02", "md_03", "md_02-feasible", "md_03-feasible")
+#: The held-out choice (group ``held-out``): candidate settings of the torque general
+#: preset as it ships (the robot's sensing), per body, declared before any ran: name ->
+#: changes to the preset's keys. One is chosen on one clip re-timed locally to the limits
+#: (lowest mean position NRMSE) and scored on the other (:func:`held_out_lines`).
+HELD_OUT = {4: {"preset": {}, "epochs15": {"method.epochs": 15},
+                "omega10": {"actuation.omega": 10.0}, "forget0.9": {"method.fit.forgetting": 0.9}},
+            8: {"preset": {}, "epochs30": {"method.epochs": 30},
+                "omega10": {"actuation.omega": 10.0}, "forget0.8": {"method.fit.forgetting": 0.8}}}
+HELD_OUT_TESTS = ("md_02-retimed", "md_03-retimed", "md_02-feasible", "md_03-feasible")
+HELD_OUT_RUNS = 5
 
 
 def speed_of(column: str, dof: int) -> float:
@@ -183,6 +193,7 @@ def report_lines(out_dir, rows: tuple[str, ...], bodies: dict[str, int]) -> list
                              f"{sum(x <= GOAL for x in v)} / {len(v)} runs; computed "
                              f"torque {_cell(ct)}; floor {_cell(floor)}")
         lines += speed_curve_lines(get, mine, bd, dof)
+        lines += held_out_lines(get, bd, dof)
         if (png := speed_curve_png(get, f"{out_dir}/speed_{bd}.png", mine, bd, dof)) is not None:
             lines.append(f"figure: {png}")
     return lines
@@ -253,6 +264,37 @@ def speed_curve_lines(get, rows: list[str], bd: str, dof: int) -> list[str]:
             lines.append(f"goal {bd} torque general preset on unseen {clip} re-timed locally "
                          f"to the limits <= {GOAL} and <= {GOAL_DEG:g} deg RMS: {_cell(v)}, "
                          f"{_mean(deg, 2)} deg, {sum(x <= GOAL for x in v)} / {len(v)} runs")
+    return lines
+
+
+def held_out_lines(get, bd: str, dof: int) -> list[str]:
+    """The held-out choice (:data:`HELD_OUT`): each candidate's position NRMSE (RMS joint
+    error, deg) on the clips re-timed locally to the limits, then per direction the
+    candidate chosen on one clip and its score on the other, against the goal.
+    ``get(row, metric)``: the runs' values."""
+    names = [n for n in HELD_OUT[dof] if get(f"{bd}-heldout-{n}", "train_wall_s")]
+    if not names:
+        return []
+    cols = [f"{c}-retimed" for c in CLIPS]
+    lines = [f"torque general, {bd}, held-out choice: candidates of the preset (the robot's "
+             "sensing), position NRMSE (RMS joint error, deg) on the clips re-timed locally "
+             "to the limits, ESN alone (K = 0)",
+             "| candidate | n | " + " | ".join(cols) + " |", "|---|---|" + "---|" * len(cols)]
+    for n in names:
+        r = f"{bd}-heldout-{n}"
+        lines.append(f"| {n} | {len(get(r, 'train_wall_s'))} | " + " | ".join(
+            f"{_cell(get(r, f'{c}__position_nrmse'))} ({_mean(get(r, f'{c}__rms_error_deg'), 2)})"
+            for c in cols) + " |")
+    for chose, scored in (cols, cols[::-1]):
+        best = min(names, key=lambda n: statistics.fmean(
+            get(f"{bd}-heldout-{n}", f"{chose}__position_nrmse") or [float("inf")]))
+        v = get(f"{bd}-heldout-{best}", f"{scored}__position_nrmse")
+        deg = get(f"{bd}-heldout-{best}", f"{scored}__rms_error_deg")
+        if v:
+            lines.append(
+                f"goal {bd} held out: chosen on {chose} ({best}), scored on {scored} <= "
+                f"{GOAL} and <= {GOAL_DEG:g} deg RMS: {_cell(v)}, {_mean(deg, 2)} deg, "
+                f"{sum(x <= GOAL for x in v)} / {len(v)} runs")
     return lines
 
 

@@ -57,6 +57,7 @@ position NRMSE; earlier goals (limit-scaled PD teacher) <= 0.03 (2D) and <= 0.06
 
 from __future__ import annotations
 
+import dataclasses
 from typing import TYPE_CHECKING, Any
 
 from skinny_mj.experiments.dynamic import general
@@ -228,6 +229,23 @@ def _general_rows() -> tuple[Row, ...]:
                                                  BABBLE15, **ARM_FEL}))
     out.append(_general_row("2d-general", _oracle_preset(4), seeds_of="2d-general-first"))
     out.append(_general_row("3d-general", _oracle_preset(8)))
+    return (*out, *_held_out_rows())
+
+
+def _held_out_rows() -> tuple[Row, ...]:
+    """Group ``held-out``: the candidates of :data:`general.HELD_OUT` per body, the preset
+    as it ships (its sensing too) with the candidate's changes, on the first candidate's
+    seeds, tested on :data:`general.HELD_OUT_TESTS`."""
+    out = []
+    for bd, dof in BODIES.items():
+        first = None
+        for name, changes in general.HELD_OUT[dof].items():
+            keys = {**preset_fields("general", "torque", dof=dof), **changes}
+            row = _general_row(f"{bd}-heldout-{name}", {"actuation.sensing": "encoders", **keys})
+            out.append(dataclasses.replace(
+                row, seeds_of=first, group="held-out", runs=general.HELD_OUT_RUNS,
+                params={"tests": general.HELD_OUT_TESTS}))
+            first = first or row.id
     return tuple(out)
 
 
