@@ -14,6 +14,8 @@ from skinny_mj.experiments.mismatch.study import (
     GOAL_K0,
     GOAL_RATIO,
     GOAL_VS_CT,
+    LONG,
+    LONG_FACTOR,
     MISMATCHES,
     MODEL_ERROR,
     MOVEMENTS,
@@ -141,6 +143,26 @@ def switch_table(records: list[dict]) -> list[str]:
     return lines
 
 
+def long_table(records: list[dict], bd: str) -> list[str]:
+    """Markdown: the ESN alone (K = 0) on YMCA trained 15 and 4 x 15 epochs (group
+    ``long``, the same seeds), each against the nominal arm's error at its length."""
+    rows = [m for m in LONG.get(bd, ((), 0))[0]
+            if values(records, row_id(bd, m, "esn") + f"-x{LONG_FACTOR}", "position_nrmse")]
+    if not rows:
+        return []
+    base = {v: mean(records, bd, "none", "esn", variant=v) for v in ("", f"-x{LONG_FACTOR}")}
+    lines = [f"| mismatch | 15 epochs | × its nominal | {15 * LONG_FACTOR} epochs | × its "
+             "nominal |", "|---|---|---|---|---|"]
+    for m in rows:
+        cells = []
+        for v in base:
+            vals = _lookup(records, bd, m, "esn", "", "position_nrmse", variant=v)
+            deg = _lookup(records, bd, m, "esn", "", "rms_error_deg", variant=v)
+            cells += [_cell(vals, deg), f"{np.mean(vals) / base[v]:.2f}" if vals else "—"]
+        lines.append(f"| {m} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def report(results: dict, plan, out_dir: Path) -> str:
     """The table and the goals of each body with runs, and the payload switch."""
     records = load_runs(Path(out_dir))
@@ -156,6 +178,9 @@ def report(results: dict, plan, out_dir: Path) -> str:
                    and "-switch-" not in r["row"] for r in records):
                 lines += [f"### {bd}, {movement}, velocities by the second-order difference",
                           "", *table(records, bd, mv, "-fd2"), ""]
+    for bd in BODIES:
+        if long := long_table(records, bd):
+            lines += [f"## {bd}, YMCA, the ESN trained {LONG_FACTOR}x as long", "", *long, ""]
     if any("-switch-" in r["row"] for r in records):
         lines += ["## Payload switched on mid-movement", "", *switch_table(records), ""]
     return "\n".join(lines) if lines else "no runs"
