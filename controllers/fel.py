@@ -203,7 +203,7 @@ def train(
     learning = loop.learning(rule if rule.online else None)
 
     def handed(ro: Rollout, epoch: int) -> Cycle:  # what the cycle hands the rule
-        y_est = ro.y_est
+        y_est = ro.targets(loop.target_lead)
         return Cycle(ro.states, beta_target(y_est, ro.y_esn, beta), ~result.failed, epoch,
                      y_est, ro.y_esn)
 

@@ -83,6 +83,9 @@ class Loop:
     online : an :class:`Online` learner updated inside the loop, or None.
     delay_steps : steps by which the ESN's sensed input s_in lags s(t) (paper A); the
         feedback controller always sees the undelayed s(t).
+    target_lead : steps by which the error signal lags the arm (a sensing delay its teacher
+        knows of): FEL pairs command(t) with u_error(t + 1 + target_lead)
+        (:meth:`skinny_mj.controllers.rollout.Rollout.targets`); 0: u_error(t + 1).
     rule : the learning rule (:class:`skinny_mj.controllers.learning.LearningRule`) with
         which :func:`skinny_mj.controllers.fel.train` refits the readout; None: the
         thesis's fit of each learning cycle alone. One rule object serves one training (it
@@ -100,6 +103,7 @@ class Loop:
     forward: Forward | None = None
     online: Online | None = None
     delay_steps: int = 0
+    target_lead: int = 0
     rule: LearningRule | None = None
     buffers: dict | None = field(default=None, compare=False, repr=False)
 
@@ -108,6 +112,11 @@ class Loop:
             raise ValueError(f"inputs must be one of {INPUTS}, got {self.inputs!r}")
         if self.delay_steps < 0:
             raise ValueError(f"delay must be >= 0 steps, got {self.delay_steps}")
+        if self.target_lead < 0:
+            raise ValueError(f"target lead must be >= 0 steps, got {self.target_lead}")
+        if self.target_lead and self.online is not None:
+            raise ValueError("a per-step learner takes u_error(t + 1) as its target; a "
+                             "target lead needs a learning rule that fits the cycle")
 
     def with_buffers(self) -> Loop:
         """This loop with a fresh dict of reusable rollout arrays."""

@@ -71,7 +71,17 @@ class Rollout:
     def y_est(self) -> np.ndarray:
         """Estimated target y_est(t) = command(t) + u_error(t+1), (R, T-1, n_dof), less
         a hook's feed-forward (which the ESN does not make)."""
-        y = self.commands + self.u_error[:, 1:]
+        return self.targets(0)
+
+    def targets(self, lead: int) -> np.ndarray:
+        """FEL's target with the error ``lead`` steps later: command(t) + u_error(t + 1 +
+        lead) (the last ``lead`` steps take the cycle's last error), less a hook's
+        feed-forward, (R, T-1, n_dof). ``lead = 0``: :attr:`y_est`."""
+        error = self.u_error[:, 1 + lead:]
+        if lead:
+            last = np.repeat(self.u_error[:, -1:], min(lead, self.commands.shape[1]), axis=1)
+            error = np.concatenate([error, last], axis=1)[:, :self.commands.shape[1]]
+        y = self.commands + error
         return y if self.feedforward is None else y - self.feedforward
 
     @property

@@ -34,6 +34,9 @@ class ArmLoop(TorqueLoop):
     motion: DesiredMotion | None = None
     state_of: Callable[[np.ndarray], ArmState] | None = None
     dt: float = 0.02
+    #: steps by which the sensed state lags the arm: the law compares it with the desired
+    #: motion of step t - lag (0: of step t)
+    lag: int = 0
     #: (T, R, n) the feedback torque of each step of the last cycle, N m
     feedback_nm: np.ndarray = field(default=None, repr=False)  # type: ignore[assignment]
 
@@ -44,7 +47,7 @@ class ArmLoop(TorqueLoop):
 
     def u_error(self, t: int, desired: np.ndarray, sensed: np.ndarray, plant) -> np.ndarray:
         state = self.state_of(sensed)
-        step = min(t, len(self.motion.q_mid) - 1)
+        step = min(max(t - self.lag, 0), len(self.motion.q_mid) - 1)
         total, fb = arm_torque(self.law, state, self.motion, step, self.dt, self.gains)
         self.feedback_nm[t] = fb
         return total / self._limit

@@ -215,6 +215,11 @@ class Torque:
     zeta: float = 1.0  # ARM_LAWS' damping ratio
     gravity_feedforward: bool = False  # add qfrc_bias / limit to the command (not learned)
     velocity_inputs: bool = True  # [qd_d(t+1); qd(t)] / v_max as extra inputs
+    #: with a sensing delay of d steps, FEL's teacher (an arm law) compares the sensed
+    #: state with the desired state of the step it was sensed at, and FEL pairs command(t)
+    #: with that teacher's error d steps later, when the arm it moved is sensed (False:
+    #: the error of step t + 1, which then describes the arm d steps earlier)
+    align_delay: bool = True
     sensing: Sensing = field(default_factory=Encoders)
     model: str = "nominal"  # the controllers' model: "nominal" or "true" (oracle)
     payload_kg: float = 0.0  # point mass at the right hand's CoM (training and test plant)
@@ -237,6 +242,8 @@ class Torque:
              f"damping must be >= 0 N m s/rad, got {self.damping_nm_s_rad}"),
             (self.feedback in FEEDBACKS, f"feedback must be one of {FEEDBACKS}, "
                                          f"got {self.feedback!r}"),
+            (isinstance(self.align_delay, bool),
+             f"align_delay must be true or false, got {self.align_delay!r}"),
 
             (self.omega is None or _at_least(self.omega, 0),
              f"feedback omega must be >= 0 rad/s, got {self.omega}"),

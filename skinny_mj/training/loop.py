@@ -67,6 +67,7 @@ from skinny_mj.training.parts import (  # noqa: F401  (re-exported)
     true_commands_of,
 )
 from skinny_mj.training.perform import perform
+from skinny_mj.training.torque import teacher_lag
 from skinny_mj.training.result import (  # noqa: F401  (re-exported)
     STANDARD,
     Observer,
@@ -129,7 +130,8 @@ class Run:
         plain controller), the actuation's ``hook``, the forward model, the delay, and the
         learning rule FEL refits the readout with (None: each cycle alone)."""
         return Loop(self.cfg.inputs, feedback or FeedbackController(), hook, self.forward,
-                    delay_steps=self.cfg.plant.delay + self.actuation.sensing_delay, rule=rule)
+                    delay_steps=self.cfg.plant.delay + self.actuation.sensing_delay,
+                    target_lead=teacher_lag(self.cfg), rule=rule)
 
 
 @single_threaded

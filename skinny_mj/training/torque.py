@@ -152,6 +152,17 @@ def sensing_delay(act: Torque | None) -> int:
     return getattr(getattr(act, "sensing", None), "delay", 0)
 
 
+def teacher_lag(cfg: TrainConfig) -> int:
+    """Steps by which FEL's teacher compares the sensed state with an earlier desired
+    state, and FEL's target pairs a command with a later error: the sensing delay when
+    ``actuation.align_delay`` and FEL learns from an arm law's teacher, else 0."""
+    act = cfg.torque
+    if act is None or not act.align_delay or cfg.method.kind == "none" \
+            or act.feedback not in ARM_LAWS:
+        return 0
+    return sensing_delay(act)
+
+
 def home_mass(which: BodyLike) -> np.ndarray:
     """(n, n) M of the body's nominal torque twin at its home pose (every angle 0 or its
     range's nearest end: arms hanging, elbows straight), kg m^2: the constant-inertia
@@ -186,6 +197,8 @@ def hook_for(cfg: TrainConfig, trajectory, max_speed_rad_s: np.ndarray,
                       motion=desired_motion(which, trajectory, law == "id-pd"),
                       state_of=state_of, dt=trajectory.dt, sensing=sensing,
                       predict=_predictor(sensing, state_of))
+        if act.feedback != "adaptive-ct":
+            common["lag"] = teacher_lag(cfg)
         args = (controller(which, signals),
                 desired_velocities_rad_s(trajectory.angles, trajectory.dt),
                 np.asarray(max_speed_rad_s, float))
