@@ -148,3 +148,55 @@ def test_the_observer_needs_the_lockstep_plant():
     with pytest.raises(SkinnyInputError, match="observer"):
         TrainConfig().override({"actuation": "torque", "plant.backend": "env",
                                 "actuation.sensing.velocity": "observer"})
+
+
+def test_fel_target_with_a_lead_pairs_each_command_with_a_later_error():
+    from skinny_mj.controllers.rollout import Rollout
+
+    rng = np.random.default_rng(0)
+    commands, u_error = rng.normal(size=(2, 5, 3)), rng.normal(size=(2, 6, 3))
+    ro = Rollout(commands, commands, u_error, *(np.zeros((2, 6, 3)),) * 3,
+                 np.zeros((2, 5, 4)))
+    np.testing.assert_array_equal(ro.targets(0), ro.y_est)
+    np.testing.assert_array_equal(ro.targets(0), commands + u_error[:, 1:])
+    lead = ro.targets(2)
+    np.testing.assert_array_equal(lead[:, :3], commands[:, :3] + u_error[:, 3:])
+    np.testing.assert_array_equal(lead[:, 3:], commands[:, 3:] + u_error[:, -1:])
+
+
+def test_a_target_lead_refuses_a_per_step_learner():
+    from skinny_mj.controllers.loop import Loop
+
+    class Online:
+        def update(self, state, y_esn, y_est):
+            pass
+
+    with pytest.raises(ValueError, match="target lead"):
+        Loop(online=Online(), target_lead=1)
+    with pytest.raises(ValueError, match="target lead"):
+        Loop(target_lead=-1)
+
+
+def test_the_teacher_lags_by_the_sensing_delay_only_when_fel_learns_from_an_arm_law():
+    from skinny_mj.training.torque import teacher_lag
+
+    fel = TrainConfig().override({"actuation": "torque", "actuation.feedback": "inertia-pd",
+                                  "actuation.sensing.delay": 2})
+    assert teacher_lag(fel) == 2
+    assert teacher_lag(fel.override({"actuation.align_delay": False})) == 0
+    assert teacher_lag(fel.override({"method": "none", "test.gain": 1.0})) == 0
+    assert teacher_lag(fel.override({"actuation.sensing.delay": 0})) == 0
+    assert teacher_lag(fel.override({"actuation.feedback": "pd"})) == 0
+    assert teacher_lag(TrainConfig()) == 0
+
+
+def test_under_a_sensing_delay_the_aligned_target_learns_what_the_misaligned_one_cannot():
+    """One step of sensing delay on the torque body: FEL whose target pairs command(t)
+    with the error of the arm it moved learns YMCA; paired with the error of step t + 1
+    (which then describes the arm a step earlier) it does not."""
+    cfg = TrainConfig().override({"actuation": "torque", "actuation.feedback": "inertia-pd",
+                                  "method.beta": 1.0, "method.cycles": 3, "method.epochs": 8,
+                                  "method.fit": "forgetting", "actuation.sensing.delay": 1})
+    aligned = train(cfg, seed=0).test.position_nrmse
+    misaligned = train(cfg.override({"actuation.align_delay": False}), seed=0).test.position_nrmse
+    assert aligned < 0.25 * misaligned
