@@ -38,7 +38,7 @@ Groups: ``clips`` and ``clips-3d`` (the shipped clips re-timed to the torque lim
 units, 6 learning cycles per epoch, the teacher at 20 rad/s, forgetting 0.9), and
 ``switch``: a 1 kg payload switched on mid-movement
 (:mod:`skinny_mj.experiments.mismatch.switch`), ``long``: ESN rows trained 4x as long
-(:data:`LONG`).
+(:data:`LONG`) beside the rows they lengthen, ``delay-esn``: the ESN under the delay.
 
 Seeds come from the engine (each row's own). ``--quick``: a smoke test (one run, three
 mismatches and two switch rows, two epochs, one adaptation cycle).
@@ -205,9 +205,10 @@ def _fd2_rows(rows: tuple[Row, ...]) -> tuple[Row, ...]:
                  if "-switch-esn" not in row.id)
 
 
-#: Group ``long``: the ESN rows on YMCA with LONG_FACTOR x the epochs (K 1 -> 0 over 60), on
+#: Group ``x4``: the ESN rows on YMCA with LONG_FACTOR x the epochs (K 1 -> 0 over 60), on
 #: the seeds of the row each lengthens, per body: the mismatches and the runs per row
-#: (does the error within 1.3x of the nominal arm's need only longer training?)
+#: (does the error within 1.3x of the nominal arm's need only longer training?); group
+#: ``long``: those and the rows they lengthen
 LONG_FACTOR = 4
 LONG = {"2d": (("none", "payload0.5", "payload1", "mass-20", "friction", "delay"), 10),
         "3d": (("none", "payload1", "friction"), 5)}
@@ -220,7 +221,8 @@ def _long_rows(rows: tuple[Row, ...]) -> tuple[Row, ...]:
         for m in mismatches:
             row = by_id[row_id(bd, m, "esn")]
             out.append(dataclasses.replace(
-                row, id=f"{row.id}-x{LONG_FACTOR}", group="long", runs=runs, seeds_of=row.id,
+                row, id=f"{row.id}-x{LONG_FACTOR}", group=f"x{LONG_FACTOR}", runs=runs,
+                seeds_of=row.id,
                 params={}, overrides={**row.overrides,
                                       "method.epochs": EPOCHS * LONG_FACTOR}))
     return tuple(out)
@@ -228,11 +230,16 @@ def _long_rows(rows: tuple[Row, ...]) -> tuple[Row, ...]:
 
 _YMCA, _SWITCH = _rows(), _switch_rows()
 _CLIPS = tuple(r for mv in MOVEMENTS if mv != "ymca" for r in _rows(mv))
-ROWS = (*_YMCA, *_fd2_rows((*_YMCA, *_SWITCH, *_CLIPS)), *_SWITCH, *_CLIPS, *_long_rows(_YMCA))
+_LONG = _long_rows(_YMCA)
+ROWS = (*_YMCA, *_fd2_rows((*_YMCA, *_SWITCH, *_CLIPS)), *_SWITCH, *_CLIPS, *_LONG)
+#: ``long``: group ``x4`` and the rows it lengthens; ``delay-esn``: the ESN on every body
+#: and movement under the sensing delay
+GROUPS = {"long": (f"x{LONG_FACTOR}", *(r.seeds_of for r in _LONG)),
+          "delay-esn": tuple(r.id for r in ROWS if r.id.endswith("-delay-esn"))}
 QUICK_ROWS = (*(row_id("2d", m, c) for m in ("none", "payload1", "delay")
                 for c in CONTROLLERS), "2d-ymca-switch-esn-rls", "2d-ymca-switch-ct-adaptive")
 STUDY = Study(
-    name=NAME, description=__doc__, rows=ROWS, runs=10, takes=(),
+    name=NAME, description=__doc__, rows=ROWS, runs=10, takes=(), groups=GROUPS,
     base=TrainConfig().override({"actuation": "torque", "plant.signals": "cartesian",
                                  "actuation.sensing.velocity": "observer"}),
     metrics=dynamic_metrics, columns=COLUMNS,  # a controller alone: the dynamic study's
