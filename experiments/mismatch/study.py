@@ -211,7 +211,7 @@ def _fd2_rows(rows: tuple[Row, ...]) -> tuple[Row, ...]:
 #: ``long``: those and the rows they lengthen
 LONG_FACTOR = 4
 LONG = {"2d": (("none", "payload0.5", "payload1", "mass-20", "friction", "delay"), 10),
-        "3d": (("none", "payload1", "friction"), 5)}
+        "3d": (("none", "payload1", "friction", "delay"), 5)}
 
 
 def _long_rows(rows: tuple[Row, ...]) -> tuple[Row, ...]:
