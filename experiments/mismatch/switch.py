@@ -12,6 +12,11 @@ model) and stays for ``POST`` more cycles: a test the rows declare
   ``FORGETTING`` per step, P_0 from the last training cycle's states with ridge 1);
 - ``esn-rls-0.99``: the same with forgetting 0.99 per step (a memory of ~100 steps, 2 s;
   chosen after seeing ``esn-rls``'s slow recovery);
+- ``esn-refit``: the same ESN and K, its readout refitted after every cycle by its
+  training's own rule (the normal equations with forgetting 0.8 per cycle, the
+  statistics carried on from training): FEL's learning cycle, performed;
+- ``esn-refit-0.5``: the same with forgetting 0.5 per cycle (chosen after seeing
+  ``esn-refit``'s slow recovery);
 - ``esn-frozen``: the same ESN and K, its readout left as trained;
 - ``ct-adaptive``: adaptive computed torque (its estimate running from the first cycle);
 - ``ct-nominal``: computed torque on the nominal model.
@@ -30,7 +35,10 @@ from skinny_mj.engine.study import Shape
 from skinny_mj.training.result import Perform, RunResult
 
 PRE, POST, PAYLOAD_KG, GAIN, FORGETTING = 2, 8, 1.0, 0.5, 0.999
-LEARNERS = ("esn-rls", "esn-frozen", "ct-adaptive", "ct-nominal", "esn-rls-0.99")
+LEARNERS = ("esn-rls", "esn-frozen", "ct-adaptive", "ct-nominal", "esn-rls-0.99", "esn-refit",
+            "esn-refit-0.5")
+#: the forgetting per cycle of each refitting learner (None: its training's)
+REFIT = {"esn-refit": None, "esn-refit-0.5": 0.5}
 #: forgetting per step of each RLS learner
 RLS_FORGETTING = {"esn-rls": FORGETTING, "esn-rls-0.99": 0.99}
 
@@ -67,5 +75,6 @@ def shape(learner: str) -> Shape:
     cycle PRE."""
     esn = learner.startswith("esn")
     perform = Perform("switch", PRE + 1 + POST, GAIN if esn else 1.0, PRE,
-                      payload_kg=PAYLOAD_KG, rls_forgetting=RLS_FORGETTING.get(learner))
+                      payload_kg=PAYLOAD_KG, rls_forgetting=RLS_FORGETTING.get(learner),
+                      refit=learner in REFIT, refit_forgetting=REFIT.get(learner))
     return Shape(metrics, tests=(perform,), failure=failure)

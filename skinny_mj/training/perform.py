@@ -9,7 +9,8 @@ centre of mass, every arm link's mass and inertia x ``mass_scale``:
 :func:`skinny_mj.plant.perturb.mass_change`, in the running model) and stays changed to
 the end. The readout stays as trained, or (``rls_forgetting``) learns every control step
 by recursive least squares (:class:`skinny_mj.controllers.online.OnlineRLS`, P_0 from the
-last training cycle's states with ridge ``rls_lambda``). Its outcome, per run a
+last training cycle's states with ridge ``rls_lambda``), or (``refit``) is refitted after
+every cycle by the training's own rule, as in a learning cycle of FEL. Its outcome, per run a
 :class:`~skinny_mj.training.result.Performance` (the per-cycle curves), is the run's test
 of that name (``RunResult.tests[name]``). :func:`perform` takes it.
 """
@@ -21,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from skinny_mj.controllers import fel
+from skinny_mj.controllers.learning import Cycle, CycleFit, beta_target
 from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.controllers.online import OnlineRLS
 from skinny_mj.plant import body
@@ -56,9 +58,16 @@ def perform(run: Any, test: Perform, trained: Any) -> list[Performance]:
     """The R trained networks of ``run`` (a :class:`skinny_mj.training.loop.Run`; its
     ``trained`` :class:`~skinny_mj.training.loop.Training`) perform ``test``."""
     cfg, n_runs = run.cfg, len(run.seeds)
-    alive, online = np.ones(n_runs, bool), None
+    alive, online, rule = np.ones(n_runs, bool), None, None
     if trained.fel is not None:  # a network was trained: the runs that diverged are out
         alive = ~trained.fel.failed
+        if test.refit:
+            rule = trained.rule or CycleFit()
+            if test.refit_forgetting is not None:
+                if not hasattr(rule, "forgetting"):
+                    raise ValueError("refit_forgetting needs a readout fit with forgetting "
+                                     "(method.fit=forgetting)")
+                rule.forgetting = float(test.refit_forgetting)
         if test.rls_forgetting is not None:
             online = OnlineRLS(run.esn, test.rls_forgetting, test.rls_lambda,
                                states=np.array(trained.fel.last_rollout.states), runs=alive)
@@ -79,5 +88,9 @@ def perform(run: Any, test: Perform, trained: Any) -> list[Performance]:
         curve[alive, c] = position_nrmse(ro.true_signals, run.desired)[alive]
         angles = shape.normalize_angles(ro.angles[:, :, :dof])
         angle_curve[alive, c] = position_nrmse(angles, desired_angles)[alive]
+        if rule is not None:  # FEL's learning cycle, on this cycle of the performance
+            y_est = ro.targets(loop.target_lead)
+            target = beta_target(y_est, ro.y_esn, cfg.method.beta)
+            rule.fit(run.esn, Cycle(ro.states, target, alive.copy(), 0, y_est, ro.y_esn))
     change.undo()
     return [Performance(curve[r], angle_curve[r], not alive[r]) for r in range(n_runs)]

@@ -69,11 +69,19 @@ class Perform:
     mass_scale: float = 1.0
     rls_forgetting: float | None = None
     rls_lambda: float = 1.0
+    #: after every cycle, refit the readout on it by the training's own rule (method.fit,
+    #: its statistics carried on from training), FEL's target at ``gain``; with
+    #: ``refit_forgetting``, the forgetting rule's factor per cycle from then on
+    refit: bool = False
+    refit_forgetting: float | None = None
 
     def __post_init__(self) -> None:
         if not self.name or not 0 <= self.switch_cycle < self.cycles:
             raise ValueError(f"perform {self.name!r}: needs a name and a switch cycle in "
                              f"0..{self.cycles - 1}, got {self.switch_cycle}")
+        if self.refit and self.rls_forgetting is not None:
+            raise ValueError(f"perform {self.name!r}: learns by RLS or by refitting each "
+                             "cycle, not both")
 
 
 @dataclass
