@@ -108,3 +108,36 @@ def test_the_preset_row_is_what_skinny_train_preset_general_trains():
          "actuation.sensing=oracle"]))
     assert cfg3 == cli3
     assert (cfg3.plant.dof, cfg3.actuation.omega, cfg3.esn.n_reservoir) == (8, 20.0, 200)
+
+
+def test_the_held_out_preset_candidate_is_what_skinny_train_ships_and_the_choice_is_held_out():
+    """The held-out group's ``preset`` candidate is ``skinny train --preset general
+    --actuation torque`` as it ships (the robot's sensing); the other candidates change
+    only their declared keys; the report chooses on one clip and scores on the other."""
+    from skinny_mj.cli.config_files import train_config
+    from skinny_mj.cli.parser import build_parser
+    from skinny_mj.experiments.dynamic import general
+
+    cfg, row = _row("2d-heldout-preset")
+    cli, _ = train_config(build_parser().parse_args(
+        ["train", "--preset", "general", "--actuation", "torque"]))
+    assert cfg == cli and row.group == "held-out"
+    assert row.params["tests"] == general.HELD_OUT_TESTS
+    omega, other = _row("2d-heldout-omega10")
+    assert omega == cfg.override({"actuation.omega": 10.0})
+    assert other.seeds_of == "2d-heldout-preset"
+    # md_02: omega10 best; md_03: preset best -> each scored on the other clip
+    scores = {("2d-heldout-preset", "md_02-retimed"): [0.03], ("2d-heldout-preset",
+              "md_03-retimed"): [0.01], ("2d-heldout-omega10", "md_02-retimed"): [0.02],
+              ("2d-heldout-omega10", "md_03-retimed"): [0.04]}
+
+    def get(r, metric):
+        if metric == "train_wall_s":
+            return [1.0] if r in {"2d-heldout-preset", "2d-heldout-omega10"} else []
+        return scores.get((r, metric.split("__")[0]), [])
+
+    lines = general.held_out_lines(get, "2d", 4)
+    chose02 = next(ln for ln in lines if "chosen on md_02-retimed" in ln)
+    chose03 = next(ln for ln in lines if "chosen on md_03-retimed" in ln)
+    assert "(omega10), scored on md_03-retimed" in chose02 and ": 0.0400 ±" in chose02
+    assert "(preset), scored on md_02-retimed" in chose03 and ": 0.0300 ±" in chose03

@@ -35,11 +35,12 @@ def test_stiff_rows_are_their_base_with_the_stiffer_teacher_on_its_seeds():
     assert [seeds_of[r] for r in pairs] == ["3d-rec-fel-arm", "3d-ymca-fel-arm", "3d-rec-fel-arm"]
 
 
-def test_quick_leaves_out_the_stiff_rows_and_the_3d_preset():
+def test_quick_leaves_out_the_stiff_rows_the_held_out_choice_and_the_3d_preset():
     dynamic, p = _plan()
     quick = {r.id for r in _plan(quick=True)[1].rows}
     assert set(dynamic.QUICK_ROWS) == quick
-    assert {r.id for r in p.rows} - quick == {*p.groups["omega20"], "3d-general"}
+    assert {r.id for r in p.rows} - quick == {*p.groups["omega20"], *p.groups["held-out"],
+                                             "3d-general"}
 
 
 def test_the_stiffer_poles_make_the_teacher_alone_track_the_recorded_ymca_closer():

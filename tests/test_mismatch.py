@@ -70,3 +70,16 @@ def test_a_refitting_performance_learns_after_the_switch_and_a_frozen_one_does_n
     assert all(a != pytest.approx(b, rel=1e-6) for a, b in zip(fast[2:], refit[2:]))
     with pytest.raises(ValueError, match="not both"):
         Perform("p", 3, 0.5, 1, refit=True, rls_forgetting=0.99)
+
+
+def test_the_long_rows_lengthen_their_row_on_its_seeds_and_the_group_holds_both():
+    by_id = {r.id: r for r in study.ROWS}
+    for bd, (mismatches, runs) in study.LONG.items():
+        for m in mismatches:
+            short = by_id[study.row_id(bd, m, "esn")]
+            long = by_id[f"{short.id}-x{study.LONG_FACTOR}"]
+            assert long.seeds_of == short.id and long.runs == runs
+            assert long.overrides == {**short.overrides,
+                                      "method.epochs": study.EPOCHS * study.LONG_FACTOR}
+            assert short.id in study.GROUPS["long"]
+    assert all(r.endswith("-delay-esn") for r in study.GROUPS["delay-esn"])
