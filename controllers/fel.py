@@ -46,7 +46,7 @@ from skinny_mj.controllers.rollout import DEFAULT_LOOP, Rollout, rollout, run_me
 
 __all__ = ["INPUTS", "Loop", "Original", "New", "FELMethod", "Task", "Test", "Rollout",
            "rollout", "run_mean", "health", "train", "TrainResult", "evaluate", "EvalResult",
-           "beta_target"]
+           "beta_target", "learning_cycle"]
 
 #: FEL's observer: ``observe(epoch, cycle, ro, y_used)`` after every cycle
 Observer = Callable[[int, int, Rollout, "np.ndarray | None"], None]
@@ -148,6 +148,15 @@ def _mark_failures(esn: ESN, ro: Rollout, result: TrainResult, epoch: int) -> No
     esn.W_out[result.failed] = 0.0
 
 
+def learning_cycle(ro: Rollout, beta: float, runs: np.ndarray, epoch: int = 0,
+                   lead: int = 0) -> Cycle:
+    """What a learning cycle ``ro`` hands the rule: FEL's target (the error ``lead`` steps
+    later, :meth:`Rollout.targets`) blended with the networks' output by ``beta``, for the
+    runs ``runs``."""
+    y_est = ro.targets(lead)
+    return Cycle(ro.states, beta_target(y_est, ro.y_esn, beta), runs, epoch, y_est, ro.y_esn)
+
+
 def train(
     esn: ESN,
     plant: Plant,
@@ -203,9 +212,7 @@ def train(
     learning = loop.learning(rule if rule.online else None)
 
     def handed(ro: Rollout, epoch: int) -> Cycle:  # what the cycle hands the rule
-        y_est = ro.targets(loop.target_lead)
-        return Cycle(ro.states, beta_target(y_est, ro.y_esn, beta), ~result.failed, epoch,
-                     y_est, ro.y_esn)
+        return learning_cycle(ro, beta, ~result.failed, epoch, loop.target_lead)
 
     for epoch, gain in enumerate(gains):
         esn.reset()

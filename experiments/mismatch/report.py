@@ -11,6 +11,7 @@ from skinny_mj.experiments.mismatch.study import (
     BODIES,
     CLIP_BODIES,
     CONTROLLERS,
+    EPOCHS,
     GOAL_K0,
     GOAL_RATIO,
     GOAL_VS_CT,
@@ -151,8 +152,8 @@ def long_table(records: list[dict], bd: str) -> list[str]:
     if not rows:
         return []
     base = {v: mean(records, bd, "none", "esn", variant=v) for v in ("", f"-x{LONG_FACTOR}")}
-    lines = [f"| mismatch | 15 epochs | × its nominal | {15 * LONG_FACTOR} epochs | × its "
-             "nominal |", "|---|---|---|---|---|"]
+    lines = [f"| mismatch | {EPOCHS} epochs | × its nominal | {EPOCHS * LONG_FACTOR} epochs "
+             "| × its nominal |", "|---|---|---|---|---|"]
     for m in rows:
         cells = []
         for v in base:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from skinny_mj.controllers import fel
-from skinny_mj.controllers.learning import Cycle, CycleFit, beta_target
+from skinny_mj.controllers.learning import CycleFit
 from skinny_mj.controllers.metrics import position_nrmse
 from skinny_mj.controllers.online import OnlineRLS
 from skinny_mj.plant import body
@@ -89,8 +89,7 @@ def perform(run: Any, test: Perform, trained: Any) -> list[Performance]:
         angles = shape.normalize_angles(ro.angles[:, :, :dof])
         angle_curve[alive, c] = position_nrmse(angles, desired_angles)[alive]
         if rule is not None:  # FEL's learning cycle, on this cycle of the performance
-            y_est = ro.targets(loop.target_lead)
-            target = beta_target(y_est, ro.y_esn, cfg.method.beta)
-            rule.fit(run.esn, Cycle(ro.states, target, alive.copy(), 0, y_est, ro.y_esn))
+            rule.fit(run.esn, fel.learning_cycle(ro, cfg.method.beta, alive.copy(), 0,
+                                                 loop.target_lead))
     change.undo()
     return [Performance(curve[r], angle_curve[r], not alive[r]) for r in range(n_runs)]
