@@ -114,9 +114,10 @@ def test_the_held_out_preset_candidate_is_what_skinny_train_ships_and_the_choice
     """The held-out group's ``preset`` candidate is ``skinny train --preset general
     --actuation torque`` as it ships (the robot's sensing); the other candidates change
     only their declared keys; the report chooses on one clip and scores on the other."""
+    from skinny_mj.experiments.dynamic import general
+
     from skinny_mj.cli.config_files import train_config
     from skinny_mj.cli.parser import build_parser
-    from skinny_mj.experiments.dynamic import general
 
     cfg, row = _row("2d-heldout-preset")
     cli, _ = train_config(build_parser().parse_args(

@@ -53,8 +53,8 @@ def test_a_refitting_performance_learns_after_the_switch_and_a_frozen_one_does_n
     every cycle by its training's rule, and refitted with faster forgetting: alike in the
     first cycle, apart from the first refit on."""
     import pytest
-
     from skinny_mj.experiments.mismatch import switch
+
     from skinny_mj.training.result import Perform
 
     config = study.STUDY.base.override({**study.ESN, "plant.dof": 4, "movement.trajectory": "y",
@@ -66,8 +66,8 @@ def test_a_refitting_performance_learns_after_the_switch_and_a_frozen_one_does_n
         curves[learner] = out["curve"]
     frozen, refit, fast = curves["esn-frozen"], curves["esn-refit"], curves["esn-refit-0.5"]
     assert refit[0] == frozen[0] == fast[0]
-    assert all(a != pytest.approx(b, rel=1e-6) for a, b in zip(refit[1:], frozen[1:]))
-    assert all(a != pytest.approx(b, rel=1e-6) for a, b in zip(fast[2:], refit[2:]))
+    assert all(a != pytest.approx(b, rel=1e-6) for a, b in zip(refit[1:], frozen[1:], strict=True))
+    assert all(a != pytest.approx(b, rel=1e-6) for a, b in zip(fast[2:], refit[2:], strict=True))
     with pytest.raises(ValueError, match="not both"):
         Perform("p", 3, 0.5, 1, refit=True, rls_forgetting=0.99)
 

@@ -67,7 +67,6 @@ from skinny_mj.training.parts import (  # noqa: F401  (re-exported)
     true_commands_of,
 )
 from skinny_mj.training.perform import perform
-from skinny_mj.training.torque import teacher_lag
 from skinny_mj.training.result import (  # noqa: F401  (re-exported)
     STANDARD,
     Observer,
@@ -80,6 +79,7 @@ from skinny_mj.training.result import (  # noqa: F401  (re-exported)
     feedback_share,
     mean_abs_error,
 )
+from skinny_mj.training.torque import teacher_lag
 
 
 @dataclass
