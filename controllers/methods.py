@@ -40,10 +40,11 @@ def check_beta(beta: float) -> None:
         raise ValueError(f"beta must be in (0, 1], got {beta}")
 
 
-def _check(checks: list[tuple[bool, str]]) -> None:
+def check(checks: list[tuple[bool, str]], error: type[ValueError] = ValueError) -> None:
+    """Raise ``error`` with the message of the first check that is False."""
     for ok, message in checks:
         if not ok:
-            raise ValueError(message)
+            raise error(message)
 
 
 @dataclass(frozen=True)
@@ -59,7 +60,7 @@ class FELMethod:
     cycles: int | None = None
 
     def __post_init__(self) -> None:
-        _check([
+        check([
             (isinstance(self.epochs, int) and self.epochs >= 1,
              f"epochs must be >= 1, got {self.epochs}"),
             (self.gain_schedule in GAIN_SCHEDULES,
@@ -135,7 +136,7 @@ class TrueTarget:
 
     def __post_init__(self) -> None:
         check_beta(self.beta)
-        _check([
+        check([
             (isinstance(self.cycles, int) and self.cycles >= 1,
              f"true-target cycles must be >= 1, got {self.cycles}"),
             (_number(self.input_noise) and self.input_noise >= 0,

@@ -194,3 +194,14 @@ def test_each_general_preset_is_a_row_of_the_generalization_study():
         dof, signals = g.REPRESENTATIONS[rep]
         want = TrainConfig().override(preset_fields("general", dof=dof, signals=signals))
         assert full.config(row) == want, rep
+
+
+def test_the_cli_help_names_every_shipped_model():
+    # the parser imports no training code, so its help spells the names; they must match
+    from skinny_mj.cli.parser import build_parser
+    from skinny_mj.training.presets import SHIPPED_NAMES
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    for command in ("train", "test"):
+        text = "".join(sub.choices[command].format_help().split())  # wrapping may split a name
+        assert all(name in text for name in SHIPPED_NAMES), command

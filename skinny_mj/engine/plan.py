@@ -66,6 +66,16 @@ class Results(dict):
                 if isinstance(r["metrics"].get(metric), int | float)]
 
 
+def find_row(rows: Sequence[Row], row_id: str, where: str) -> Row:
+    """The row ``row_id`` of ``rows``; a SkinnyInputError saying ``where`` has none, with
+    the ids it has."""
+    for r in rows:
+        if r.id == row_id:
+            return r
+    raise SkinnyInputError(f"{where} has no row {row_id!r}; rows: "
+                           f"{', '.join(r.id for r in rows)}")
+
+
 @dataclass(frozen=True, eq=False)
 class Experiment:
     """A study planned for one sweep, what :func:`~skinny_mj.engine.experiment.run_sweep`
@@ -132,11 +142,8 @@ class Experiment:
         return {k: v for k, v in gone.items() if k in self.configs}
 
     def row(self, row_id: str) -> Row:
-        for r in self.rows:
-            if r.id == row_id:
-                return r
-        raise SkinnyInputError(f"study {self.name!r}: no row {row_id!r} in this "
-                               f"sweep; rows: {', '.join(r.id for r in self.rows)}")
+        """The kept row ``row_id`` (a SkinnyInputError naming the kept ids if there is none)."""
+        return find_row(self.rows, row_id, f"this sweep of study {self.name!r}")
 
     def config(self, row_id: str) -> TrainConfig:
         """Row ``row_id``'s training configuration."""

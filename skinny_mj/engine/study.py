@@ -57,7 +57,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from skinny_mj.engine.options import OPTION_KEYS
-from skinny_mj.engine.plan import Experiment, Results, plan
+from skinny_mj.engine.plan import Experiment, Results, find_row, plan
 from skinny_mj.engine.results import Metrics, Shape, Tests, default_run
 from skinny_mj.engine.sweep import SAFE_NAME
 from skinny_mj.errors import SkinnyInputError
@@ -238,11 +238,7 @@ class Study:
 
     def row(self, row_id: str) -> Row:
         """The row ``row_id`` (a SkinnyInputError naming the ids if there is none)."""
-        for r in self.rows:
-            if r.id == row_id:
-                return r
-        raise SkinnyInputError(f"study {self.name!r} has no row {row_id!r}; rows: "
-                               f"{', '.join(r.id for r in self.rows)}")
+        return find_row(self.rows, row_id, f"study {self.name!r}")
 
     def config(self, row_id: str, **options: Any) -> TrainConfig:
         """The training configuration of row ``row_id`` (full, not quick), with the

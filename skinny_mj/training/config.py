@@ -94,14 +94,12 @@ BACKENDS = ("batch", "env")
 DEFAULT_NOISE = {"original": 0.03, "new": 0.2, "true-target": 0.2, "none": 0.0}
 
 
+def _refuse(checks: list[tuple[bool, str]]) -> None:
+    methods.check(checks, SkinnyInputError)
+
+
 def _at_least(value: float, low: float) -> bool:
     return isinstance(value, int | float) and math.isfinite(value) and value >= low
-
-
-def _check(checks: list[tuple[bool, str]]) -> None:
-    for ok, message in checks:
-        if not ok:
-            raise SkinnyInputError(message)
 
 
 @dataclass(frozen=True)
@@ -120,7 +118,7 @@ class Plant:
             raise SkinnyInputError(f"plant.body is a body's name, got {self.body!r}")
         body_of(self.body)
         check_signals(self.signals)
-        _check([
+        _refuse([
             (_at_least(self.sensor_noise, 0) and self.sensor_noise <= MAX_SENSOR_NOISE,
              f"sensor noise must be in [0, {MAX_SENSOR_NOISE:g}], got {self.sensor_noise}"),
             (isinstance(self.delay, int) and self.delay >= 0,
@@ -169,7 +167,7 @@ class Encoders:
     observer_beta: float = 0.5
 
     def __post_init__(self) -> None:
-        _check([
+        _refuse([
             (_at_least(self.encoder_noise, 0),
              f"encoder noise must be >= 0 rad, got {self.encoder_noise}"),
             (self.velocity in VELOCITY_SENSING,
@@ -231,7 +229,7 @@ class Torque:
     test_friction_nm: float = 0.0  # Coulomb friction added to every arm joint at test
 
     def __post_init__(self) -> None:
-        _check([
+        _refuse([
             (self.model in MODELS, f"model must be one of {MODELS}, got {self.model!r}"),
             (_at_least(self.payload_kg, 0), f"payload must be >= 0 kg, got {self.payload_kg}"),
             (_at_least(self.mass_scale, 0) and self.mass_scale > 0,
@@ -270,7 +268,7 @@ class Movement:
     retarget: str = "angles"  # motion capture: by joint angles, or "positions"
 
     def __post_init__(self) -> None:
-        _check([
+        _refuse([
             (_at_least(self.speed, 0) and 0 < self.speed <= 10,
              f"speed must be in (0, 10], got {self.speed}"),
             (isinstance(self.reps, int) and self.reps >= 1, f"reps must be >= 1, got {self.reps}"),
@@ -320,7 +318,7 @@ class _FEL(methods.FELMethod):
 
     def __post_init__(self) -> None:
         _input_checked(super().__post_init__)  # the schedule's (and β's) own checks
-        _check([
+        _refuse([
             (_at_least(self.u_error_gain, 0) and self.u_error_gain > 0,
              f"u_error gain must be > 0, got {self.u_error_gain}"),
             (_at_least(self.u_error_damping, 0),
@@ -382,7 +380,7 @@ class Forward:
     sharing: str | None = None
 
     def __post_init__(self) -> None:
-        _check([
+        _refuse([
             (self.kind in self.KINDS, f"forward must be one of {self.KINDS}, got {self.kind!r}"),
             (isinstance(self.reservoir, int) and self.reservoir >= 1,
              f"forward reservoir must be >= 1, got {self.reservoir}"),
@@ -450,7 +448,7 @@ class TrainConfig:
             return
         fel, torque, fwd = isinstance(self.method, FEL_METHODS), self.torque, self.forward
         sharing = getattr(fwd, "sharing", None)
-        _check(
+        _refuse(
             [
                 (
                     self.esn.n_inputs is None and self.esn.n_outputs is None,
