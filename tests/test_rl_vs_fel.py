@@ -187,3 +187,21 @@ def test_an_rl_curve_continues_from_its_checkpoint(learner, tmp_path):
     with pytest.raises(SkinnyInputError, match="earlier segment"):
         runs.rl_segment(learner, 1.0, YMCA, 5, cols, (300, 450), tmp_path / "none",
                         quick=True)
+
+
+def test_the_ratio_table_takes_the_fewest_steps_and_the_least_cpu_and_states_bounds():
+    def curve(errors, steps_per, cpu_per):
+        return [{"steps": k * steps_per, "cpu_s": k * cpu_per, "nrmse": e, "deg": 10 * e}
+                for k, e in enumerate(errors)]
+
+    found = {("fel", "ymca"): [curve([0.3, 0.04, 0.03], 1000, 1.0)] * 2,
+             ("sac", "ymca"): [curve([0.3, 0.04, 0.015], 2000, 100.0)] * 2,  # fewer steps
+             ("ppo", "ymca"): [curve([0.3, 0.2, 0.04, 0.015], 5000, 1.0),  # less CPU
+                               curve([0.3, 0.2, 0.04, 0.009], 5000, 1.0)]}
+    text = report.ratio_table(found)
+    assert ("| ymca | 0.05 | 1,000, 1.0 | SAC, 2,000, 100.0; least CPU: PPO, 10,000, 2.0 "
+            "| 2.0, 2.0 |") in text
+    # FEL never reached 0.02 in its 2,000 steps: RL's steps are a bound on the ratio
+    assert "| ymca | 0.02 | 0/2 seeds | SAC, 4,000, 200.0; least CPU: PPO, 15,000, 3.0 " \
+           "| < 2.00 (no FEL by 2,000) |" in text
+    assert "| ymca | 0.01 | 0/2 seeds | not in every seed (PPO 1/2 seeds) | — |" in text

@@ -105,7 +105,7 @@ def curves_png(path: Path, found: dict, x: str) -> Path | None:
         ax.set_xlabel("env steps" if x == "steps" else "training CPU time (s)")
     for ax in axes[0]:
         if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=7, loc="lower left")
+            ax.legend(fontsize=7, loc="upper right")  # the curves start high on the left
     return save_figure(fig, path)
 
 
@@ -149,7 +149,8 @@ def reach_table(found: dict) -> str:
 
 
 def ratio_table(found: dict) -> str:
-    """ESN + FEL (K = 0) against the best RL learner per score and threshold."""
+    """ESN + FEL (K = 0) against the best RL learner per score and threshold: the one
+    with the fewest env steps to it in every seed, and the one with the least CPU."""
     lines = ["| score | threshold | ESN + FEL: env steps, CPU s | best RL: learner, env "
              "steps, CPU s | RL / FEL: env steps, CPU |", "|---|---|---|---|---|"]
     for score in dict.fromkeys(s for _, s in found):
@@ -157,19 +158,29 @@ def ratio_table(found: dict) -> str:
         rl = {lr: c for (lr, s), c in found.items() if s == score and not lr.startswith("fel")}
         for th in THRESHOLDS:
             f = reach(fel, th) if fel else (0, None, None)
-            best = min(((lr, *reach(c, th)) for lr, c in rl.items()
-                        if reach(c, th)[0] == len(c)), key=lambda t: t[2], default=None)
+            every = [(lr, *reach(c, th)) for lr, c in rl.items() if reach(c, th)[0] == len(c)]
+            best = min(every, key=lambda t: t[2], default=None)  # the fewest env steps
+            quick = min(every, key=lambda t: t[3], default=None)  # the least CPU
             fel_cell = "—" if not fel else (
                 f"{f[1]:,.0f}, {f[2]:,.1f}" if f[0] == len(fel) else
                 f"{f[0]}/{len(fel)} seeds")
-            rl_cell = "none reached" if best is None else \
-                f"{LEARNERS[best[0]][0]}, {best[2]:,.0f}, {best[3]:,.1f}"
+            some = [f"{LEARNERS[lr][0]} {n}/{len(c)}" for lr, c in rl.items()
+                    if 0 < (n := reach(c, th)[0]) < len(c)]
+            rl_cell = (f"{LEARNERS[best[0]][0]}, {best[2]:,.0f}, {best[3]:,.1f}"
+                       + ("" if quick[0] == best[0] else
+                          f"; least CPU: {LEARNERS[quick[0]][0]}, {quick[2]:,.0f}, "
+                          f"{quick[3]:,.1f}") if best
+                       else f"not in every seed ({', '.join(some)} seeds)" if some
+                       else "none reached")
             fel_all = bool(fel) and f[0] == len(fel)
             if best is not None and fel_all:
-                ratio = f"{best[2] / f[1]:,.1f}, {best[3] / f[2]:,.1f}"
+                ratio = f"{best[2] / f[1]:,.1f}, {quick[3] / f[2]:,.1f}"
             elif fel_all and rl:  # a bound: no RL curve got there within its budget
                 most = max(max(c[-1]["steps"] for c in curves) for curves in rl.values())
                 ratio = f"> {most / f[1]:,.1f} (no RL by {most:,})"
+            elif best is not None and fel:  # a bound: FEL did not get there in its budget
+                budget = max(c[-1]["steps"] for c in fel)
+                ratio = f"< {best[2] / budget:,.2f} (no FEL by {budget:,})"
             else:
                 ratio = "—"
             lines.append(f"| {score} | {th:g} | {fel_cell} | {rl_cell} | {ratio} |")
