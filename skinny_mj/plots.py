@@ -28,12 +28,14 @@ def pyplot():
     return plt
 
 
-def save_figure(fig, path: str | Path) -> Path:
-    """Write ``fig`` as a PNG atomically (temp file + rename), close it, return the path."""
+def save_figure(fig, path: str | Path,
+                rect: tuple[float, float, float, float] | None = None) -> Path:
+    """Write ``fig`` as a PNG atomically (temp file + rename), close it, return the path;
+    ``rect``: the part of the figure the axes are laid out in (room for a figure legend)."""
     plt = pyplot()
     path = Path(path)
     try:
-        fig.tight_layout()
+        fig.tight_layout(rect=rect)
         with atomic_path(path) as tmp:
             fig.savefig(tmp, format="png", dpi=DPI)
     finally:
