@@ -167,20 +167,23 @@ def ratio_table(found: dict) -> str:
         rl = {lr: c for (lr, s), c in found.items() if s == score and not lr.startswith("fel")}
         for th in THRESHOLDS:
             f = reach(fel, th) if fel else (0, None, None)
-            every = [(lr, *reach(c, th)) for lr, c in rl.items() if reach(c, th)[0] == len(c)]
+            reached = {lr: reach(c, th) for lr, c in rl.items()}  # lr -> (seeds, steps, cpu)
+            every = [(lr, *r) for lr, r in reached.items() if r[0] == len(rl[lr])]
             best = min(every, key=lambda t: t[2], default=None)  # the fewest env steps
             quick = min(every, key=lambda t: t[3], default=None)  # the least CPU
             fel_cell = "—" if not fel else (
                 f"{f[1]:,.0f}, {f[2]:,.1f}" if f[0] == len(fel) else
                 f"{f[0]}/{len(fel)} seeds")
-            some = [f"{LEARNERS[lr][0]} {n}/{len(c)}" for lr, c in rl.items()
-                    if 0 < (n := reach(c, th)[0]) < len(c)]
-            rl_cell = (f"{LEARNERS[best[0]][0]}, {best[2]:,.0f}, {best[3]:,.1f}"
-                       + ("" if quick[0] == best[0] else
-                          f"; least CPU: {LEARNERS[quick[0]][0]}, {quick[2]:,.0f}, "
-                          f"{quick[3]:,.1f}") if best
-                       else f"not in every seed ({', '.join(some)} seeds)" if some
-                       else "none reached")
+            some = [f"{LEARNERS[lr][0]} {r[0]}/{len(rl[lr])}" for lr, r in reached.items()
+                    if 0 < r[0] < len(rl[lr])]
+            if best is not None:
+                rl_cell = f"{LEARNERS[best[0]][0]}, {best[2]:,.0f}, {best[3]:,.1f}"
+                if quick[0] != best[0]:
+                    rl_cell += (f"; least CPU: {LEARNERS[quick[0]][0]}, {quick[2]:,.0f}, "
+                                f"{quick[3]:,.1f}")
+            else:
+                rl_cell = f"not in every seed ({', '.join(some)} seeds)" if some else \
+                    "none reached"
             fel_all = bool(fel) and f[0] == len(fel)
             if best is not None and fel_all:
                 ratio = f"{best[2] / f[1]:,.1f}, {quick[3] / f[2]:,.1f}"
