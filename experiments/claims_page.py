@@ -19,9 +19,8 @@ from typing import Any
 from skinny_mj.experiments.claims_rules import ALPHA, READINGS
 from skinny_mj.experiments.claims_score import BEGIN, END, counts
 
+from skinny_mj import io
 from skinny_mj.engine.stats import SMOKE_NOTE
-from skinny_mj.errors import SkinnyInputError
-from skinny_mj.io import atomic_write_text
 
 PAPERS = {"E": "Paper E — the new β training method (2D, Cartesian)",
           "S": "Paper E §5.1 — why the new method works (Figs. 7–10)",
@@ -152,10 +151,7 @@ def markdown(scored: Mapping[str, Any]) -> str:
 
 def page_section(page: str) -> str | None:
     """The computed section of a results page (markers included), None without one."""
-    start, end = page.find(BEGIN), page.find(END)
-    if start < 0 or end < start:
-        return None
-    return page[start:end + len(END)] + "\n"
+    return io.page_section(page, BEGIN, END)
 
 
 def page_matches(page: str, scored: Mapping[str, Any]) -> bool:
@@ -165,11 +161,4 @@ def page_matches(page: str, scored: Mapping[str, Any]) -> bool:
 
 def write_page(path: Path, scored: Mapping[str, Any]) -> None:
     """Replace the computed section of the page at ``path`` (it must have the markers)."""
-    page = Path(path).read_text()
-    old = page_section(page)
-    if old is None:
-        raise SkinnyInputError(f"no computed section: put the lines {BEGIN} and {END} where "
-                               "the table goes", path=path)
-    start, end = page.find(BEGIN), page.find(END) + len(END)
-    rest = page[end + 1:] if page[end:end + 1] == "\n" else page[end:]
-    atomic_write_text(Path(path), page[:start] + markdown(scored) + rest)
+    io.write_page_section(path, BEGIN, END, markdown(scored))

@@ -1,4 +1,5 @@
-"""Atomic file writes: results, recordings and caches appear whole or not at all."""
+"""Atomic file writes: results, recordings and caches appear whole or not at all; and a
+page's computed section (between two marker lines) rewritten in place."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from skinny_mj.controllers._io import atomic_path as _atomic_path
+from skinny_mj.errors import SkinnyInputError
 
 # One implementation for the whole project: controllers/ may not import skinny_mj,
 # so the context manager lives there and is re-exported here.
@@ -30,3 +32,34 @@ def atomic_write_json(
     """Write ``obj`` as indented JSON (NaN is refused: a result is a number or absent)."""
     text = json.dumps(obj, indent=2, sort_keys=False, allow_nan=False, default=default)
     return atomic_write_text(path, text + "\n")
+
+
+def page_section(page: str, begin: str, end: str) -> str | None:
+    """The section of ``page`` from the line ``begin`` to the line ``end`` (markers and
+    the final newline included); None when the page lacks either marker."""
+    start, stop = page.find(begin), page.find(end)
+    if start < 0 or stop < start:
+        return None
+    return page[start:stop + len(end)] + "\n"
+
+
+def read_page_with_section(path: str | Path, begin: str, end: str) -> str:
+    """The page at ``path``, refused (:class:`SkinnyInputError`, one line) when it cannot
+    be read or lacks the section (:func:`page_section`) a command is to rewrite."""
+    try:
+        page = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise SkinnyInputError(f"cannot read the page ({exc.strerror})", path=path) from None
+    if page_section(page, begin, end) is None:
+        raise SkinnyInputError(f"no computed section: put the lines {begin} and {end} where "
+                               "the table goes", path=path)
+    return page
+
+
+def write_page_section(path: str | Path, begin: str, end: str, section: str) -> Path:
+    """Replace the section (:func:`page_section`) of the page at ``path`` with ``section``
+    (markers included); the rest of the page is kept byte for byte."""
+    page = read_page_with_section(path, begin, end)
+    start, stop = page.find(begin), page.find(end) + len(end)
+    rest = page[stop + 1:] if page[stop:stop + 1] == "\n" else page[stop:]
+    return atomic_write_text(path, page[:start] + section + rest)

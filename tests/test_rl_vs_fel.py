@@ -8,6 +8,7 @@ from __future__ import annotations
 import itertools
 import json
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,6 +24,7 @@ from skinny_mj.experiments.rl_vs_fel.tracking import (  # noqa: E402
 
 from skinny_mj.engine.experiment import run_sweep  # noqa: E402
 from skinny_mj.errors import SkinnyInputError  # noqa: E402
+from skinny_mj.io import page_section  # noqa: E402
 from skinny_mj.training import loop as training  # noqa: E402
 from skinny_mj.training.config import TrainConfig  # noqa: E402
 
@@ -205,3 +207,39 @@ def test_the_ratio_table_takes_the_fewest_steps_and_the_least_cpu_and_states_bou
     assert "| ymca | 0.02 | 0/2 seeds | SAC, 4,000, 200.0; least CPU: PPO, 15,000, 3.0 " \
            "| < 2.00 (no FEL by 2,000) |" in text
     assert "| ymca | 0.01 | 0/2 seeds | not in every seed (PPO 1/2 seeds) | — |" in text
+
+
+def test_the_results_page_shows_the_tables_of_its_committed_data_files():
+    """docs/results/rl-vs-fel.md carries its two tables as the report makes them from the
+    data files beside it, so a page edited by hand or left behind new data fails here."""
+    root = Path(__file__).resolve().parents[1]
+    found = report.series(data.load(root / data.DEFAULT_DATA))
+    assert {learner for learner, _ in found} >= {"fel", "ppo", "ppo-res", "sac", "sac-res"}
+    page = (root / "docs" / "results" / "rl-vs-fel.md").read_text(encoding="utf-8")
+    assert page_section(page, report.BEGIN, report.END) == report.page_tables(found), (
+        "docs/results/rl-vs-fel.md differs from the tables of docs/results/rl-vs-fel-data: "
+        "rerun `python -m skinny_mj.experiments.rl_vs_fel.report --page "
+        "docs/results/rl-vs-fel.md`")
+
+
+def test_the_report_rewrites_only_the_pages_section_and_refuses_a_page_without_one(
+        tmp_path):
+    """``--page``: the tables replace the section between the markers, the rest of the page
+    is kept; a page without the markers is refused before any figure is drawn."""
+    records = [{"curve": "ppo-ymca", "learner": "ppo", "regime": "ymca", "seed": 1,
+                "scores": {"ymca": ["ymca"]},
+                "points": [{"steps": s, "cpu_s": s / 1000, "tests": {"ymca": {
+                    "position_nrmse": e, "rms_error_deg": 100 * e}}}
+                    for s, e in ((0, 0.3), (1000, 0.04), (2000, 0.015))]}]
+    page = tmp_path / "page.md"
+    page.write_text(f"# title\n\ntext\n\n{report.BEGIN}\nstale table\n{report.END}\n\nafter\n")
+    report.write(records, tmp_path / "figs", page=page)
+    text = page.read_text()
+    assert text.startswith("# title\n\ntext\n\n") and text.endswith("\n\nafter\n")
+    assert "stale table" not in text and "| ymca | PPO | 1 | 2,000 |" in text
+    assert not (tmp_path / "figs" / "rl-vs-fel_tables.md").exists()
+    bare = tmp_path / "bare.md"
+    bare.write_text("# no section\n")
+    with pytest.raises(SkinnyInputError, match="no computed section"):
+        report.write(records, tmp_path / "none", page=bare)
+    assert bare.read_text() == "# no section\n" and not (tmp_path / "none").exists()

@@ -13,10 +13,11 @@ curves' data files (:mod:`skinny_mj.experiments.rl_vs_fel.data`), never by train
   (the fewest mean env steps among those whose every seed reached it).
 
 After a sweep, :func:`report` exports its curves into ``<out>/data`` and writes these
-there. The results page regenerates from the committed data files::
+there. The results page's figures and tables (between :data:`BEGIN` and :data:`END`)
+regenerate from the committed data files::
 
     python -m skinny_mj.experiments.rl_vs_fel.report docs/results/rl-vs-fel-data \\
-        --out docs/results
+        --out docs/results --page docs/results/rl-vs-fel.md
 """
 
 from __future__ import annotations
@@ -29,7 +30,8 @@ import numpy as np
 from skinny_mj.experiments.rl_vs_fel import data as data_mod
 from skinny_mj.experiments.rl_vs_fel.runs import mean_error
 
-from skinny_mj.io import atomic_write_text
+from skinny_mj.errors import SkinnyInputError
+from skinny_mj.io import atomic_write_text, read_page_with_section, write_page_section
 from skinny_mj.plots import pyplot, save_figure
 
 LEARNERS = {"fel": ("ESN + FEL", "tab:blue", "-"), "fel-k1": ("ESN + FEL, K = 1", "tab:blue",
@@ -37,6 +39,8 @@ LEARNERS = {"fel": ("ESN + FEL", "tab:blue", "-"), "fel-k1": ("ESN + FEL, K = 1"
             "ppo": ("PPO", "tab:orange", "-"), "ppo-res": ("residual PPO", "tab:orange", "--"),
             "sac": ("SAC", "tab:green", "-"), "sac-res": ("residual SAC", "tab:green", "--")}
 THRESHOLDS = (0.05, 0.02, 0.01)
+#: The markers around the tables in the results page (``--page``).
+BEGIN, END = "<!-- rl-vs-fel tables: begin -->", "<!-- rl-vs-fel tables: end -->"
 
 
 def series(records: list[dict]) -> dict[tuple[str, str], list[list[dict]]]:
@@ -199,9 +203,23 @@ def ratio_table(found: dict) -> str:
     return "\n".join(lines)
 
 
-def write(records: list[dict], out: Path, prefix: str = "rl-vs-fel") -> str:
-    """The figures (``<prefix>_steps.png``, ``<prefix>_cpu.png``) and tables
-    (``<prefix>_tables.md``) of ``records`` in ``out``; returns the tables' text."""
+def tables(found: dict) -> str:
+    """The reach and ratio tables of ``found`` (:func:`series`), one blank line apart."""
+    return "\n\n".join([reach_table(found), ratio_table(found)])
+
+
+def page_tables(found: dict) -> str:
+    """The results page's section: :func:`tables` between :data:`BEGIN` and :data:`END`."""
+    return f"{BEGIN}\n\n{tables(found)}\n\n{END}\n"
+
+
+def write(records: list[dict], out: Path, prefix: str = "rl-vs-fel", *,
+          page: Path | None = None) -> str:
+    """The figures (``<prefix>_steps.png``, ``<prefix>_cpu.png``) of ``records`` in
+    ``out``, and their tables in ``<prefix>_tables.md`` there or, given ``page``, in that
+    page's section (:func:`page_tables`); returns the tables' text."""
+    if page is not None:  # refused before the figures are drawn, not after
+        read_page_with_section(page, BEGIN, END)
     out.mkdir(parents=True, exist_ok=True)
     found = series(records)
     if not found:
@@ -211,8 +229,12 @@ def write(records: list[dict], out: Path, prefix: str = "rl-vs-fel") -> str:
         png = curves_png(out / f"{prefix}_{name}.png", found, x)
         if png is not None:
             lines.append(f"figure: {png.name}")
-    text = "\n\n".join([reach_table(found), ratio_table(found)])
-    atomic_write_text(out / f"{prefix}_tables.md", text + "\n")
+    text = tables(found)
+    if page is None:
+        atomic_write_text(out / f"{prefix}_tables.md", text + "\n")
+    else:
+        write_page_section(page, BEGIN, END, page_tables(found))
+        lines.append(f"tables: {page}")
     return "\n".join([*lines, "", text])
 
 
@@ -229,9 +251,16 @@ def main(argv: list[str] | None = None) -> None:
         prog="python -m skinny_mj.experiments.rl_vs_fel.report",
         description="The rl-vs-fel figures and tables from its curves' data files.")
     parser.add_argument("data", type=Path, nargs="?", default=data_mod.DEFAULT_DATA)
-    parser.add_argument("--out", type=Path, default=Path("docs/results"))
+    parser.add_argument("--out", type=Path, default=Path("docs/results"),
+                        help="the figures' folder (default docs/results)")
+    parser.add_argument("--page", type=Path, default=None,
+                        help=f"write the tables into this page, between its lines {BEGIN} "
+                             f"and {END} (default: <out>/rl-vs-fel_tables.md)")
     args = parser.parse_args(argv)
-    print(write(data_mod.load(args.data), args.out))
+    try:
+        print(write(data_mod.load(args.data), args.out, page=args.page))
+    except SkinnyInputError as exc:
+        parser.exit(2, f"{parser.prog}: {exc}\n")
 
 
 if __name__ == "__main__":

@@ -15,7 +15,7 @@ from pathlib import Path
 from skinny_mj.engine import registry
 from skinny_mj.engine.stats import to_jsonable
 from skinny_mj.errors import SkinnyInputError
-from skinny_mj.io import atomic_write_json, atomic_write_text
+from skinny_mj.io import atomic_write_json, atomic_write_text, read_page_with_section
 from skinny_mj.preflight import check_new_file, check_writable, new_folder, timestamp
 
 DEFAULT_PARENT = Path("results") / "claims"
@@ -39,9 +39,8 @@ def cmd_claims(args: argparse.Namespace) -> int:
     if bool(args.sources) == bool(args.extracts):
         raise SkinnyInputError("give the sweeps (--from STUDY[:READINGS]=FOLDER, repeated) "
                                "or a folder of their extracts (--extracts DIR), one of them")
-    if args.page is not None and page.page_section(_read(args.page)) is None:
-        raise SkinnyInputError(f"no computed section: put the lines {scorer.BEGIN} and "
-                               f"{scorer.END} where the table goes", path=args.page)
+    if args.page is not None:  # refused before the scoring, not after it
+        read_page_with_section(args.page, scorer.BEGIN, scorer.END)
     if args.out is not None:  # refused before the scoring, not after it
         if args.out.exists() and not args.out.is_dir():
             raise SkinnyInputError("--out is a file, not a folder; choose a folder",
@@ -71,13 +70,6 @@ def cmd_claims(args: argparse.Namespace) -> int:
         print("smoke test (--quick): these verdicts mean nothing about the claims; score "
               "full sweeps for those")
     return 0
-
-
-def _read(path: Path) -> str:
-    try:
-        return Path(path).read_text()
-    except OSError as exc:
-        raise SkinnyInputError(f"cannot read the page ({exc.strerror})", path=path) from None
 
 
 def _write_extracts(folder: Path, sweeps, runs) -> None:
