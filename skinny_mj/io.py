@@ -34,13 +34,17 @@ def atomic_write_json(
     return atomic_write_text(path, text + "\n")
 
 
+def _section_span(page: str, begin: str, end: str) -> tuple[int, int] | None:
+    """Where the section from ``begin`` to the end of ``end`` lies in ``page``, or None."""
+    start, stop = page.find(begin), page.find(end)
+    return None if start < 0 or stop < start else (start, stop + len(end))
+
+
 def page_section(page: str, begin: str, end: str) -> str | None:
     """The section of ``page`` from the line ``begin`` to the line ``end`` (markers and
     the final newline included); None when the page lacks either marker."""
-    start, stop = page.find(begin), page.find(end)
-    if start < 0 or stop < start:
-        return None
-    return page[start:stop + len(end)] + "\n"
+    span = _section_span(page, begin, end)
+    return None if span is None else page[span[0]:span[1]] + "\n"
 
 
 def read_page_with_section(path: str | Path, begin: str, end: str) -> str:
@@ -50,7 +54,7 @@ def read_page_with_section(path: str | Path, begin: str, end: str) -> str:
         page = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise SkinnyInputError(f"cannot read the page ({exc.strerror})", path=path) from None
-    if page_section(page, begin, end) is None:
+    if _section_span(page, begin, end) is None:
         raise SkinnyInputError(f"no computed section: put the lines {begin} and {end} where "
                                "the table goes", path=path)
     return page
@@ -60,6 +64,6 @@ def write_page_section(path: str | Path, begin: str, end: str, section: str) -> 
     """Replace the section (:func:`page_section`) of the page at ``path`` with ``section``
     (markers included); the rest of the page is kept byte for byte."""
     page = read_page_with_section(path, begin, end)
-    start, stop = page.find(begin), page.find(end) + len(end)
+    start, stop = _section_span(page, begin, end)
     rest = page[stop + 1:] if page[stop:stop + 1] == "\n" else page[stop:]
     return atomic_write_text(path, page[:start] + section + rest)

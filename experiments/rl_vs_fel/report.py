@@ -208,9 +208,10 @@ def tables(found: dict) -> str:
     return "\n\n".join([reach_table(found), ratio_table(found)])
 
 
-def page_tables(found: dict) -> str:
-    """The results page's section: :func:`tables` between :data:`BEGIN` and :data:`END`."""
-    return f"{BEGIN}\n\n{tables(found)}\n\n{END}\n"
+def page_tables(text: str) -> str:
+    """The results page's section: the tables ``text`` (:func:`tables`) between
+    :data:`BEGIN` and :data:`END`."""
+    return f"{BEGIN}\n\n{text}\n\n{END}\n"
 
 
 def write(records: list[dict], out: Path, prefix: str = "rl-vs-fel", *,
@@ -233,7 +234,7 @@ def write(records: list[dict], out: Path, prefix: str = "rl-vs-fel", *,
     if page is None:
         atomic_write_text(out / f"{prefix}_tables.md", text + "\n")
     else:
-        write_page_section(page, BEGIN, END, page_tables(found))
+        write_page_section(page, BEGIN, END, page_tables(text))
         lines.append(f"tables: {page}")
     return "\n".join([*lines, "", text])
 
